@@ -1,0 +1,1 @@
+"""Choosing measurement poses: observability indices, candidates, tabu search, bounds. Pure functions."""
