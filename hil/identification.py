@@ -90,6 +90,7 @@ class FitResult:
     used: np.ndarray  # (m,) bool
     rejected: list[RejectedPose] = field(default_factory=list)
     correlated: list[Correlation] = field(default_factory=list)
+    baseline: Geometry | None = None  # nominal arm with only the tracker pose and SMR fitted
     seconds: float = 0.0
     source: str = ""
     sha256: str = ""
@@ -239,6 +240,7 @@ def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
     first = np.array([i for i in idx if i in range(N_PARAMETERS)[TRACKER_SLICE]
                       or i in range(N_PARAMETERS)[SMR_SLICE]])
     state, iterations, _ = _levenberg_marquardt(state, meas.q, meas.p, first, max_iter)
+    baseline = state.geometry
     rejected: list[RejectedPose] = []
     max_reject = min(m // 5, m - minimum_poses(n))
     while True:
@@ -275,9 +277,9 @@ def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
     return FitResult(
         geometry=state.geometry, robot=robot, indices=idx, values=values, std=std, covariance=cov,
         rms=float(np.sqrt(np.mean(norms**2))), max_error=float(norms.max()),
-        sigma=float(np.sqrt(sigma2 / 1.0)), initial_rms=initial_rms, iterations=iterations,
+        sigma=float(np.sqrt(sigma2)), initial_rms=initial_rms, iterations=iterations,
         condition=cond, residuals=res, used=used, rejected=rejected, correlated=correlated,
-        seconds=time.perf_counter() - t0, source=meas.source, sha256=meas.sha256)
+        baseline=baseline, seconds=time.perf_counter() - t0, source=meas.source, sha256=meas.sha256)
 
 
 @dataclass(frozen=True)
