@@ -17,6 +17,7 @@ class ReplyFault(enum.Enum):
 
     DROP = "drop"  # never send it
     STALL = "stall"  # send part, pause, send the rest
+    DELAY = "delay"  # pause, then send the whole reply (it arrives stale if the client gave up)
     GARBLE = "garble"  # overwrite bytes with noise that is not printable ASCII
     WRONG_TRID = "wrong_trid"  # answer with another transaction id
     BAD_CRC = "bad_crc"  # wrong checksum (or a bogus one if the request had none)
@@ -44,7 +45,11 @@ class FaultInjector:
 
     # --- reply faults
     def queue(self, kind: ReplyFault, seconds: float = 0.0, split: float = 0.5) -> None:
-        """Apply ``kind`` to the next reply not yet claimed by an earlier queued fault."""
+        """Apply ``kind`` to the next reply not yet claimed by an earlier queued fault.
+
+        ``seconds`` is the pause of STALL/DELAY; ``split`` the fraction sent before a STALL pause
+        or before a TRUNCATE cut.
+        """
         if not 0.0 < split < 1.0:
             raise ValueError("split must be in (0, 1)")
         if not 0.0 <= seconds < 3600:
@@ -59,6 +64,10 @@ class FaultInjector:
     def stall_next_reply(self, seconds: float, split: float = 0.5) -> None:
         """The next reply stops after ``split`` of its bytes for ``seconds``."""
         self.queue(ReplyFault.STALL, seconds, split)
+
+    def delay_next_reply(self, seconds: float) -> None:
+        """The next reply leaves, complete, only after ``seconds``."""
+        self.queue(ReplyFault.DELAY, seconds)
 
     def garble_next_reply(self) -> None:
         """The next reply carries line noise."""

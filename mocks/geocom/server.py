@@ -113,6 +113,8 @@ class _Session:
             return False
         if fault is not None and fault.kind is ReplyFault.DROP:
             return True
+        if fault is not None and fault.kind is ReplyFault.DELAY:
+            self._wait(fault.seconds)
         data = _apply_fault(reply, fault, self._rand) if fault else reply
         if fault is not None and fault.kind is ReplyFault.TRUNCATE:
             self._write(data[: max(1, int(len(data) * fault.split))])
