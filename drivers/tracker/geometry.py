@@ -50,5 +50,7 @@ def cartesian_to_polar(xyz: ArrayLike) -> tuple[float, float, float]:
     if d == 0.0:
         raise ValueError("the tracker's own centre has no direction")
     hz = math.atan2(x, y) % TWO_PI
+    if hz >= TWO_PI:  # -tiny % 2π rounds to exactly 2π
+        hz = 0.0
     v = math.acos(max(-1.0, min(1.0, z / d)))
     return hz, v, d

@@ -28,7 +28,8 @@ class NoiseSpec:
         """A noisy (hz, v, d) around the true one."""
         e_hz, e_v = rng.normal(0.0, self.angle_sigma_rad, 2)
         e_d = rng.normal(0.0, self.distance_sigma_m)
-        return (hz + e_hz) % (2 * np.pi), v + e_v, d + e_d
+        hz_noisy = (hz + e_hz) % (2 * np.pi)
+        return (0.0 if hz_noisy >= 2 * np.pi else hz_noisy), v + e_v, d + e_d
 
 
 NOISELESS = NoiseSpec(0.0, 0.0)

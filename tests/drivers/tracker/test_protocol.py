@@ -214,7 +214,9 @@ _value = st.one_of(
     st.integers(0, 65535), st.one_of(st.none(), st.integers(0, 32767)), st.integers(0, 65535),
     st.lists(_value, max_size=8), st.booleans(),
 )
-def test_fuzz_valid_replies_round_trip(rc_com: int, trid: int | None, rc: int, values: list[str], crc: bool) -> None:
+def test_fuzz_valid_replies_round_trip(
+    rc_com: int, trid: int | None, rc: int, values: list[str], crc: bool
+) -> None:
     head = f"%R1P,{rc_com}" + ("" if trid is None else f",{trid}") + f":{rc}"
     frame = (head + "".join("," + v for v in values)).encode("ascii")
     if crc:
