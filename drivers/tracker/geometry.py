@@ -52,5 +52,5 @@ def cartesian_to_polar(xyz: ArrayLike) -> tuple[float, float, float]:
     hz = math.atan2(x, y) % TWO_PI
     if hz >= TWO_PI:  # -tiny % 2π rounds to exactly 2π
         hz = 0.0
-    v = math.acos(max(-1.0, min(1.0, z / d)))
+    v = math.atan2(math.hypot(x, y), z)  # stable near the zenith, unlike acos(z/d)
     return hz, v, d

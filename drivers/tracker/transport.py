@@ -18,6 +18,13 @@ from drivers.tracker.errors import ConnectionLost, TrackerError, TrackerTimeout
 
 log = logging.getLogger(__name__)
 
+try:  # a vanished pty makes pyserial's ioctl/tcflush raise termios.error, which is not an OSError
+    import termios
+
+    _PORT_ERRORS: tuple[type[BaseException], ...] = (serial.SerialException, OSError, termios.error)
+except ImportError:  # pragma: no cover - Windows
+    _PORT_ERRORS = (serial.SerialException, OSError)
+
 PARITIES = {"N": serial.PARITY_NONE, "E": serial.PARITY_EVEN, "O": serial.PARITY_ODD}
 
 
@@ -89,7 +96,7 @@ class SerialTransport:
         if port is not None:
             try:
                 port.close()
-            except (serial.SerialException, OSError):  # already gone: nothing left to release
+            except _PORT_ERRORS:  # already gone: nothing left to release
                 log.debug("error while closing %s", self.config.url, exc_info=True)
 
     def __enter__(self) -> SerialTransport:
@@ -113,7 +120,7 @@ class SerialTransport:
             port.flush()
         except serial.SerialTimeoutException as exc:
             raise ConnectionLost(f"write to {self.config.url} timed out") from exc
-        except (serial.SerialException, OSError) as exc:
+        except _PORT_ERRORS as exc:
             raise ConnectionLost(f"write to {self.config.url} failed: {exc}") from exc
 
     def discard_input(self) -> None:
@@ -122,7 +129,7 @@ class SerialTransport:
         self._buffer.clear()
         try:
             port.reset_input_buffer()
-        except (serial.SerialException, OSError) as exc:
+        except _PORT_ERRORS as exc:
             raise ConnectionLost(f"{self.config.url}: {exc}") from exc
 
     def read_line(self, deadline: float) -> bytes:
@@ -147,6 +154,6 @@ class SerialTransport:
             try:
                 waiting = port.in_waiting
                 chunk = port.read(max(1, min(waiting, 4096)))
-            except (serial.SerialException, OSError) as exc:
+            except _PORT_ERRORS as exc:
                 raise ConnectionLost(f"tracker link {self.config.url} lost: {exc}") from exc
             self._buffer.extend(chunk)

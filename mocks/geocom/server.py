@@ -30,7 +30,7 @@ from mocks.geocom.target import TargetSource
 
 log = logging.getLogger(__name__)
 
-_POLL_S = 0.05  # how quickly link threads notice stop()
+_POLL_S = 0.02  # how quickly link threads notice stop()
 
 
 @dataclass(frozen=True)
