@@ -13,7 +13,7 @@ class TrackerError(Exception):
     """Base of every error the tracker driver raises on purpose."""
 
 
-class ConnectionLost(TrackerError):  # noqa: N818 - DESIGN.md's names
+class ConnectionLost(TrackerError):
     """The serial device or socket could not be opened, or vanished (unplugged, closed, EOF)."""
 
 
@@ -21,11 +21,11 @@ class LinkError(TrackerError):
     """A transient link fault; the protocol layer has already arranged to resynchronise."""
 
 
-class TrackerTimeout(LinkError):  # noqa: N818 - DESIGN.md's names
+class TrackerTimeout(LinkError):
     """No complete, matching reply arrived before the deadline."""
 
 
-class GarbledReply(LinkError):  # noqa: N818 - DESIGN.md's names
+class GarbledReply(LinkError):
     """A reply line started like GeoCOM but could not be decoded (noise, truncation, bad escapes)."""
 
 
@@ -50,11 +50,11 @@ class GeoComError(TrackerError):
         self.rpc = rpc
 
 
-class TargetLost(GeoComError):  # noqa: N818 - DESIGN.md's names
+class TargetLost(GeoComError):
     """No distance to the SMR: rc 1285/1292/1294/8710/8725 or lock status 0 (no code says "beam broken")."""
 
 
-class UnstablePoint(TrackerError):  # noqa: N818 - DESIGN.md's names
+class UnstablePoint(TrackerError):
     """The samples of one point spread more than the configured stability threshold."""
 
     def __init__(self, message: str, spread_m: tuple[float, float, float]) -> None:
