@@ -29,6 +29,7 @@ from hil.events import (
     Event,
     EventBus,
     PhaseChanged,
+    PointMeasured,
     PoseReached,
     PoseStarted,
     Resumed,
@@ -152,6 +153,7 @@ class Engine:
     check_model: Geometry | None = None  # nominal model (+ SMR guess) for keep-in checks
     suspend_timeout: float = 600.0
     max_retries: int = 5  # suspensions of the same pose visit before giving up
+    deviation: Callable[[PoseRecord], float | None] | None = None  # for PointMeasured events
 
     def __post_init__(self) -> None:
         self.state = IDLE
@@ -297,6 +299,13 @@ class Engine:
         self.emit(PoseReached(campaign=self.campaign, index=group.index, role=group.role,
                               q=record.q.tolist(), q_spread=record.q_spread.tolist(),
                               seconds=record.seconds))
+        dev = self.deviation(record) if self.deviation is not None else None
+        # The store is a critical subscriber: this returns only once the point is committed.
+        self.emit(PointMeasured(campaign=self.campaign, index=record.index, role=record.role,
+                                q=record.q.tolist(), p=record.p.tolist(),
+                                p_spread=record.p_spread.tolist(), samples=record.samples,
+                                deviation=dev, q_spread=record.q_spread.tolist(),
+                                target=record.target.tolist()))
         self.records.append(record)
         self.current = None
         return record

@@ -84,6 +84,15 @@ class PhaseChanged(Event):
 
 
 @dataclass(frozen=True, kw_only=True)
+class PlanReady(Event):
+    """The poses the campaign will visit (saved so that a resumed run visits the same ones)."""
+
+    poses: list[dict[str, Any]]  # {"index": i, "role": r, "q": [6 floats]}
+    tracker: dict[str, Any] | None = None  # tracker pose estimate used to plan ({"xyz","rpy"})
+    selection: dict[str, Any] = field(default_factory=dict)  # index value, % of bound, method...
+
+
+@dataclass(frozen=True, kw_only=True)
 class PoseStarted(Event):
     index: int
     role: str  # bootstrap, calibration, validation
@@ -108,6 +117,8 @@ class PointMeasured(Event):
     p_spread: list[float]
     samples: int
     deviation: float | None = None  # distance from the nominal model's prediction (m), if known
+    q_spread: list[float] = field(default_factory=list)
+    target: list[float] = field(default_factory=list)
 
 
 @dataclass(frozen=True, kw_only=True)
