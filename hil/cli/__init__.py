@@ -7,7 +7,9 @@ traceback at the user:
 * 0 — success;
 * 1 — the job ran but failed (e.g. a calibration that does not pass its acceptance threshold);
 * 2 — bad input (a file, a flag, a config value), with one line naming what is wrong;
-* 3 — an unexpected internal error (one line; ``--debug`` shows the traceback).
+* 3 — a hardware fault (robot or tracker) ended the run;
+* 4 — the run was aborted;
+* 70 — an unexpected internal error (one line; ``--debug`` shows the traceback).
 """
 
 from __future__ import annotations
@@ -33,7 +35,9 @@ COMMAND_MODULES: tuple[str, ...] = (
 EXIT_OK = 0
 EXIT_FAILED = 1
 EXIT_BAD_INPUT = 2
-EXIT_INTERNAL = 3
+EXIT_HARDWARE = 3
+EXIT_ABORTED = 4
+EXIT_INTERNAL = 70
 
 
 class _Parser(argparse.ArgumentParser):
@@ -57,7 +61,10 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; returns the process exit code."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # usage errors, --help and --version end here, not in the caller
+        return exc.code if isinstance(exc.code, int) else EXIT_BAD_INPUT
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return EXIT_BAD_INPUT

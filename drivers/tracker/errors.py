@@ -1,0 +1,62 @@
+"""Typed errors of the tracker driver.
+
+Callers (the campaign engine's suspenders, the CLI) decide what to do from the *type* alone: a
+`TargetLost` pauses a run until the beam is back, a `LinkError` is worth one retry after the link
+resynchronised, a `ConnectionLost` is not. `drivers` never imports `hil`, so these do not derive
+from `hil.errors`; the orchestrator maps them.
+"""
+
+from __future__ import annotations
+
+
+class TrackerError(Exception):
+    """Base of every error the tracker driver raises on purpose."""
+
+
+class ConnectionLost(TrackerError):
+    """The serial device or socket could not be opened, or vanished (unplugged, closed, EOF)."""
+
+
+class LinkError(TrackerError):
+    """A transient link fault; the protocol layer has already arranged to resynchronise."""
+
+
+class TrackerTimeout(LinkError):
+    """No complete, matching reply arrived before the deadline."""
+
+
+class GarbledReply(LinkError):
+    """A reply line started like GeoCOM but could not be decoded (noise, truncation, bad escapes)."""
+
+
+class ChecksumError(LinkError):
+    """CRC-16 is enabled and the reply's checksum is missing or wrong (GRC_COM_CLNT_RX_CHECKSUM_ERROR)."""
+
+
+class ProtocolError(TrackerError):
+    """The instrument answered with a communication-layer error (RC_COM != 0), e.g. unknown RPC."""
+
+    def __init__(self, message: str, rc_com: int = 0) -> None:
+        super().__init__(message)
+        self.rc_com = rc_com
+
+
+class GeoComError(TrackerError):
+    """The RPC ran and returned a non-OK return code that is not a lost target."""
+
+    def __init__(self, message: str, rc: int, rpc: int) -> None:
+        super().__init__(message)
+        self.rc = rc
+        self.rpc = rpc
+
+
+class TargetLost(GeoComError):
+    """No distance to the SMR: rc 1285/1292/1294/8710/8725 or lock status 0 (no code says "beam broken")."""
+
+
+class UnstablePoint(TrackerError):
+    """The samples of one point spread more than the configured stability threshold."""
+
+    def __init__(self, message: str, spread_m: tuple[float, float, float]) -> None:
+        super().__init__(message)
+        self.spread_m = spread_m

@@ -1,0 +1,67 @@
+"""`hil identify`: calibrated model from a measurements CSV."""
+
+from __future__ import annotations
+
+import argparse
+
+from hil.cli._common import mm, print_json, triplet_or_none
+from hil.identification import FitResult, identify, validate
+from hil.measurements import read_measurements
+from hil.model_file import model_document, write_json
+from hil.robots import ROBOT_NAMES, get_robot
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("identify", help="identify a calibrated model from measurements",
+                       description="Fit the kinematic parameters of a UR arm to SMR positions measured "
+                                   "by a tracker (CSV q1..q6,x,y,z) and write a hil-model/1 JSON.")
+    p.add_argument("--robot", required=True, help=f"robot type ({', '.join(ROBOT_NAMES)})")
+    p.add_argument("--measurements", required=True, metavar="M.csv", help="measurements CSV")
+    p.add_argument("--smr", metavar="X,Y,Z", help="rough SMR offset in the flange frame (m)")
+    p.add_argument("--validation", metavar="V.csv", help="held-out measurements to validate on")
+    p.add_argument("--no-reject", action="store_true", help="keep every pose (no outlier rejection)")
+    p.add_argument("--json", action="store_true", help="print the fit summary as JSON")
+    p.add_argument("--out", required=True, metavar="model.json", help="model file to write")
+    p.set_defaults(func=run)
+
+
+def summary(fit: FitResult) -> dict:
+    """The fit figures a user looks at first."""
+    return {
+        "robot": fit.robot, "poses": len(fit.used), "used": int(fit.used.sum()),
+        "parameters": len(fit.indices), "initial_rms": fit.initial_rms, "rms": fit.rms,
+        "max": fit.max_error, "sigma": fit.sigma, "iterations": fit.iterations,
+        "condition": fit.condition, "seconds": fit.seconds,
+        "rejected": [{"pose": r.index, "line": r.line, "residual": r.residual} for r in fit.rejected],
+        "correlated": [{"a": c.a, "b": c.b, "rho": c.rho} for c in fit.correlated],
+    }
+
+
+def run(args: argparse.Namespace) -> int:
+    robot = get_robot(args.robot).name
+    smr = triplet_or_none(args.smr, "--smr")
+    meas = read_measurements(args.measurements)
+    held_out = read_measurements(args.validation) if args.validation else None
+    fit = identify(meas, robot, smr, reject_outliers=not args.no_reject)
+    validation = validate(fit.geometry, held_out).as_dict() if held_out is not None else None
+    write_json(args.out, model_document(fit, validation))
+    info = summary(fit)
+    if validation is not None:
+        info["validation"] = validation
+    if args.json:
+        print_json(info)
+        return 0
+    print(f"{robot}: {info['used']}/{info['poses']} poses, {info['parameters']} parameters, "
+          f"{fit.iterations} iterations, condition {fit.condition:.1f}, {fit.seconds * 1e3:.0f} ms")
+    print(f"  after tracker alignment  RMS {mm(fit.initial_rms)}")
+    print(f"  calibrated fit           RMS {mm(fit.rms)}  max {mm(fit.max_error)}  "
+          f"noise σ {fit.sigma * 1e6:.1f} µm/axis")
+    if validation is not None:
+        print(f"  validation ({validation['count']} poses)  RMS {mm(validation['rms'])}  "
+              f"max {mm(validation['max'])}")
+    for r in fit.rejected:
+        print(f"  rejected pose {r.index} (line {r.line}): residual {mm(r.residual)}")
+    for c in fit.correlated[:10]:
+        print(f"  correlated: {c.a} ~ {c.b}  ρ = {c.rho:+.3f}")
+    print(f"wrote {args.out}")
+    return 0

@@ -1,0 +1,33 @@
+"""`hil validate`: errors of a model on measurements it was not fitted to."""
+
+from __future__ import annotations
+
+import argparse
+
+from hil.cli._common import mm, print_json
+from hil.identification import validate
+from hil.measurements import read_measurements
+from hil.model_file import load_geometry
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("validate", help="check a model against held-out measurements",
+                       description="Distances between a model's predicted SMR positions and measured "
+                                   "ones (CSV q1..q6,x,y,z). Exit code 1 when --max-rms is exceeded.")
+    p.add_argument("--model", required=True, metavar="model.json")
+    p.add_argument("--measurements", required=True, metavar="V.csv")
+    p.add_argument("--max-rms", type=float, metavar="METRES", help="acceptance threshold on the RMS")
+    p.add_argument("--json", action="store_true", help="print the statistics as JSON")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    geometry, _ = load_geometry(args.model)
+    stats = validate(geometry, read_measurements(args.measurements))
+    passed = args.max_rms is None or stats.rms <= args.max_rms
+    if args.json:
+        print_json({**stats.as_dict(), "max_rms": args.max_rms, "passed": passed})
+    else:
+        print(f"{stats.count} poses: mean {mm(stats.mean)}  RMS {mm(stats.rms)}  max {mm(stats.max)}"
+              + ("" if args.max_rms is None else ("  PASS" if passed else "  FAIL")))
+    return 0 if passed else 1

@@ -1,0 +1,186 @@
+"""Events: what a campaign tells the outside world, as frozen dataclasses.
+
+The engine never prints; it emits these to subscribers. The store is a *critical* subscriber (a
+failure to record stops the run); the CLI's JSON-lines printer, progress bar, TUI and live plots are
+non-critical (a failure is logged and the run goes on). Every event serialises to one JSON object
+with an ``"event"`` key naming its type, which is also what ``--json`` prints one per line.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, fields
+from typing import Any, ClassVar
+
+import numpy as np
+
+log = logging.getLogger(__name__)
+
+
+def _plain(value: Any) -> Any:
+    """JSON-ready copy of a value: arrays and tuples become lists, non-finite floats become None."""
+    if isinstance(value, np.ndarray):
+        return _plain(value.tolist())
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, np.generic):
+        return _plain(value.item())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+@dataclass(frozen=True, kw_only=True)
+class Event:
+    """Base of every event: which campaign, and when (Unix time, seconds)."""
+
+    campaign: str
+    t: float = field(default_factory=time.time)
+    registry: ClassVar[dict[str, type[Event]]] = {}
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        Event.registry[cls.__name__] = cls
+
+    @property
+    def name(self) -> str:
+        return type(self).__name__
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"event": self.name, **{f.name: _plain(getattr(self, f.name)) for f in fields(self)}}
+
+    @staticmethod
+    def from_dict(data: dict[str, Any]) -> Event:
+        """Rebuild an event from `to_dict` output (the store reads its log back this way)."""
+        kind = Event.registry[data["event"]]
+        names = {f.name for f in fields(kind)}
+        return kind(**{k: v for k, v in data.items() if k in names})
+
+
+@dataclass(frozen=True, kw_only=True)
+class RunStarted(Event):
+    robot: str
+    station: str
+    poses: int  # poses planned (calibration + validation)
+    resumed: bool = False
+    measured: int = 0  # poses already measured (a resumed run)
+
+
+@dataclass(frozen=True, kw_only=True)
+class StateChanged(Event):
+    state: str  # idle, running, paused, suspended, stopping, aborted, done
+    previous: str
+
+
+@dataclass(frozen=True, kw_only=True)
+class PhaseChanged(Event):
+    phase: str  # connect, bootstrap, select, measure, identify, validate, export, report
+    detail: str = ""
+
+
+@dataclass(frozen=True, kw_only=True)
+class PoseStarted(Event):
+    index: int
+    role: str  # bootstrap, calibration, validation
+    target: list[float]
+
+
+@dataclass(frozen=True, kw_only=True)
+class PoseReached(Event):
+    index: int
+    role: str
+    q: list[float]  # joint angles averaged over the samples
+    q_spread: list[float]
+    seconds: float  # motion + settle time
+
+
+@dataclass(frozen=True, kw_only=True)
+class PointMeasured(Event):
+    index: int
+    role: str
+    q: list[float]
+    p: list[float]  # SMR in the tracker frame (m)
+    p_spread: list[float]
+    samples: int
+    deviation: float | None = None  # distance from the nominal model's prediction (m), if known
+
+
+@dataclass(frozen=True, kw_only=True)
+class PoseSkipped(Event):
+    index: int
+    role: str
+    reason: str
+
+
+@dataclass(frozen=True, kw_only=True)
+class Suspended(Event):
+    kind: str  # beam_lost, protective_stop, connection_lost, tracker_unplugged, ...
+    message: str  # what the operator should do
+
+
+@dataclass(frozen=True, kw_only=True)
+class Resumed(Event):
+    kind: str
+    waited: float  # seconds
+
+
+@dataclass(frozen=True, kw_only=True)
+class ModelIdentified(Event):
+    rms: float
+    max: float
+    iterations: int
+    rejected: list[int]
+    model: dict[str, Any]
+
+
+@dataclass(frozen=True, kw_only=True)
+class ValidationDone(Event):
+    before: dict[str, Any]
+    after: dict[str, Any]
+    passed: bool
+
+
+@dataclass(frozen=True, kw_only=True)
+class Message(Event):
+    level: str  # info, warning, error
+    text: str
+
+
+@dataclass(frozen=True, kw_only=True)
+class RunFinished(Event):
+    status: str  # accepted, rejected, aborted, failed
+    detail: str = ""
+    result: dict[str, Any] = field(default_factory=dict)
+
+
+Subscriber = Callable[[Event], None]
+
+
+class EventBus:
+    """Delivers events to subscribers: critical ones first (their failure propagates), then others."""
+
+    def __init__(self) -> None:
+        self._critical: list[Subscriber] = []
+        self._others: list[Subscriber] = []
+
+    def subscribe(self, fn: Subscriber, critical: bool = False) -> None:
+        (self._critical if critical else self._others).append(fn)
+
+    def unsubscribe(self, fn: Subscriber) -> None:
+        for group in (self._critical, self._others):
+            if fn in group:
+                group.remove(fn)
+
+    def emit(self, event: Event) -> None:
+        for fn in self._critical:
+            fn(event)
+        for fn in list(self._others):
+            try:
+                fn(event)
+            except Exception:  # a display must never stop a measurement
+                log.exception("event subscriber %r failed on %s", fn, event.name)
