@@ -17,13 +17,14 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from drivers.robot import RobotConfig, URRobot  # noqa: E402
-from mocks.ur.testing import start_sim  # noqa: E402
+from drivers.robot import RobotConfig, URRobot
+from mocks.ur.testing import start_sim
 
 
 def _stats(xs: list[float]) -> str:
     a = np.asarray(xs) * 1e3
-    return f"median {np.median(a):.3f} ms, p99 {np.percentile(a, 99):.3f} ms, max {a.max():.3f} ms (n={a.size})"
+    return (f"median {np.median(a):.3f} ms, p99 {np.percentile(a, 99):.3f} ms, "
+            f"max {a.max():.3f} ms (n={a.size})")
 
 
 def main() -> int:

@@ -206,7 +206,7 @@ class URRobot:
         target = self.validate_target(q)
         v = cfg.speed if speed is None else min(speed, cfg.speed)
         a = cfg.acceleration if acceleration is None else min(acceleration, cfg.acceleration)
-        c, r = self._require()
+        c, _r = self._require()
         self.check_status()
         self._abort.clear()
         with self._cmd_lock:
@@ -288,7 +288,8 @@ class URRobot:
                 time.sleep(0.0005)
         arr = np.asarray(rows)
         spread = arr.std(axis=0, ddof=1) if samples > 1 else np.zeros(6)
-        return JointReading(q=arr.mean(axis=0), spread=spread, samples=samples, timestamp=float(last_ts or 0.0))
+        return JointReading(q=arr.mean(axis=0), spread=spread, samples=samples,
+                            timestamp=float(last_ts or 0.0))
 
     def tcp_pose(self) -> np.ndarray:
         """The controller's actual TCP pose [x, y, z, rx, ry, rz] (nominal kinematics)."""

@@ -52,7 +52,8 @@ class ArmConfig:
     rate_hz: float = 500.0
     encoder_noise: float = 2e-6  # rad, standard deviation of actual_q around the true joints
     seed: int = 0
-    q_home: np.ndarray = field(default_factory=lambda: np.array([0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0]))
+    q_home: np.ndarray = field(
+        default_factory=lambda: np.array([0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0]))
 
 
 class SimArm:
@@ -118,7 +119,8 @@ class SimArm:
 
     @property
     def can_move(self) -> bool:
-        return self.robot_mode == RobotMode.RUNNING and self.safety_mode in (SafetyMode.NORMAL, SafetyMode.REDUCED)
+        return (self.robot_mode == RobotMode.RUNNING
+                and self.safety_mode in (SafetyMode.NORMAL, SafetyMode.REDUCED))
 
     @property
     def runtime_state(self) -> RuntimeState:

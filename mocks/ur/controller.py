@@ -68,7 +68,8 @@ class SimConfig:
     max_speed: list[float] | None = None
     remote_control: bool = True
     speed_slider: float = 1.0
-    fk_factory: str | None = None  # "module:function", called with the robot name -> FK callable
+    fk_factory: str | None = "mocks.ur.hil_model:nominal_fk"  # "module:function"(robot) -> FK callable;
+    # None: the standard-DH fallback of mocks.ur.kin
     faults: list[dict[str, Any]] = field(default_factory=list)  # injected right after start
 
     def to_dict(self) -> dict[str, Any]:
@@ -93,6 +94,12 @@ class SimController:
         robot = config.robot.lower()
         rate = config.rate_hz or (125.0 if robot in _CB3 else 500.0)
         arm_cfg = ArmConfig(robot=robot, rate_hz=rate, encoder_noise=config.encoder_noise, seed=config.seed)
+        try:
+            from mocks.ur.hil_model import limits
+
+            arm_cfg.lower, arm_cfg.upper, arm_cfg.max_speed = limits(robot)
+        except (ImportError, ValueError, KeyError):
+            log.debug("no hil catalog entry for %s: default limits", robot)
         if config.q_home is not None:
             arm_cfg.q_home = np.array(config.q_home, dtype=float)
         if config.lower is not None:

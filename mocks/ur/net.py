@@ -9,6 +9,7 @@ controller looks like from the client.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import socket
 import threading
@@ -63,10 +64,8 @@ class TcpService:
             conns = list(self._conns)
             self._conns.clear()
         for c in conns:
-            try:
+            with contextlib.suppress(OSError):
                 c.shutdown(socket.SHUT_RDWR)
-            except OSError:
-                pass
             c.close()
 
     def connection_count(self) -> int:
@@ -126,10 +125,8 @@ class TcpService:
         finally:
             with self._lock:
                 self._conns.discard(conn)
-            try:
+            with contextlib.suppress(OSError):
                 conn.close()
-            except OSError:
-                pass
             self.on_close(conn)
 
     def alive(self, conn: socket.socket) -> bool:

@@ -5,7 +5,8 @@
   simulator can share its clock and ``true_joints()``), reports the bound ports through `ready`, and
   blocks until stopped (event, SIGTERM or SIGINT).
 * `SimProcess` runs `serve` in a child Python process (a fresh interpreter: never fork a process that
-  has ur_rtde threads, and no ``__main__`` guard needed in the caller) and talks to it through the JSON-lines control channel: ``inject``, ``state``, ``stop``.
+  has ur_rtde threads, and no ``__main__`` guard needed in the caller) and talks to it through the
+  JSON-lines control channel: ``inject``, ``state``, ``stop``.
   Extra services for the child are named as ``"module:function"`` so they cross the process boundary.
 """
 

@@ -13,6 +13,7 @@ real controller then reads stale registers 6..11 (the upstream bug the driver wo
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import socket
 import struct
@@ -94,10 +95,8 @@ class RtdeServer(TcpService):
                 self._close(c.sock)
 
     def _close(self, sock: socket.socket) -> None:
-        try:
+        with contextlib.suppress(OSError):
             sock.shutdown(socket.SHUT_RDWR)
-        except OSError:
-            pass
 
     # ------------------------------------------------------------------ requests in
     def handle(self, conn: socket.socket) -> None:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -76,7 +78,7 @@ def test_trapezoid_is_monotonic_and_ends_at_the_distance(d: float, v: float, a: 
     ts = np.linspace(0, T, 50)
     s = [trapezoid_fraction(t, d, v, a) for t in ts]
     assert s[0] == 0.0 and s[-1] == pytest.approx(1.0)
-    assert all(b >= a_ - 1e-12 for a_, b in zip(s, s[1:], strict=False))
+    assert all(b >= a_ - 1e-12 for a_, b in itertools.pairwise(s))
     # speed never exceeds v (finite differences along the profile)
     speeds = np.diff(np.array(s) * d) / np.diff(ts)
     assert np.max(speeds) <= v * 1.01 + 1e-9
