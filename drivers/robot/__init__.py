@@ -1,0 +1,50 @@
+"""The UR robot driver (over ur_rtde) and the robot protocol the orchestrator programs against."""
+
+from drivers.robot.errors import (
+    ConnectionLost,
+    EmergencyStop,
+    JointLimitViolation,
+    KeepInZoneViolation,
+    MotionAborted,
+    MotionTimeout,
+    NotInRemoteControl,
+    ProgramStopped,
+    ProtectiveStop,
+    RobotConnectionError,
+    RobotError,
+    RobotNotReady,
+    RobotUnreachable,
+    SafetyStop,
+    SpeedSliderReduced,
+    TargetRejected,
+    UnsupportedVersion,
+)
+from drivers.robot.model import JointReading, KeepInZone, Robot, RobotConfig, RobotInfo
+from drivers.robot.ur import ServoStream, URRobot
+
+__all__ = [
+    "ConnectionLost",
+    "EmergencyStop",
+    "JointLimitViolation",
+    "JointReading",
+    "KeepInZone",
+    "KeepInZoneViolation",
+    "MotionAborted",
+    "MotionTimeout",
+    "NotInRemoteControl",
+    "ProgramStopped",
+    "ProtectiveStop",
+    "Robot",
+    "RobotConfig",
+    "RobotConnectionError",
+    "RobotError",
+    "RobotInfo",
+    "RobotNotReady",
+    "RobotUnreachable",
+    "SafetyStop",
+    "ServoStream",
+    "SpeedSliderReduced",
+    "TargetRejected",
+    "URRobot",
+    "UnsupportedVersion",
+]

@@ -1,0 +1,96 @@
+"""Plain data and the robot protocol the orchestrator programs against.
+
+The protocol is what a campaign engine needs from an arm: open/close, move to joints under limits and
+wait until steady, read the joints averaged over samples, stop. `URRobot` implements it over ur_rtde;
+tests can substitute any object with the same methods.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+TWO_PI = 2 * math.pi
+
+
+@dataclass(frozen=True)
+class RobotInfo:
+    """What the controller says about itself at connect."""
+
+    model: str  # e.g. "UR5e"
+    serial: str
+    software_version: str  # e.g. "5.15.0.12345"
+    version: tuple[int, int, int, int]
+    series: str  # "e" or "cb3"
+    rate_hz: float
+
+
+@dataclass(frozen=True)
+class JointReading:
+    """Joint angles averaged over `samples` controller cycles, with their spread (standard deviation)."""
+
+    q: np.ndarray
+    spread: np.ndarray
+    samples: int
+    timestamp: float
+
+
+@dataclass(frozen=True)
+class KeepInZone:
+    """Axis-aligned box (controller base frame, metres) the TCP must stay inside."""
+
+    lower: tuple[float, float, float]
+    upper: tuple[float, float, float]
+
+    def contains(self, p: np.ndarray) -> bool:
+        return bool(np.all(np.asarray(p[:3]) >= self.lower) and np.all(np.asarray(p[:3]) <= self.upper))
+
+
+@dataclass(frozen=True)
+class RobotConfig:
+    """How to reach and drive the arm. Limits are the driver's own, tighter than the controller's."""
+
+    host: str
+    speed: float = 0.5  # rad/s of the leading joint
+    acceleration: float = 1.0  # rad/s^2
+    joint_lower: tuple[float, ...] = (-TWO_PI,) * 6
+    joint_upper: tuple[float, ...] = (TWO_PI,) * 6
+    keep_in: KeepInZone | None = None
+    tcp_offset: tuple[float, ...] = (0.0,) * 6  # pose of the TCP in the flange frame (for the keep-in check)
+    keep_in_checks: int = 8  # points along the joint-space path checked against the keep-in zone
+    connect_timeout: float = 5.0
+    move_timeout: float = 120.0  # real seconds for one move_to, settling included
+    settle_timeout: float = 5.0  # real seconds to become steady after the profile ends
+    settle_tolerance: float = 1e-4  # rad: |actual - target| to call the arm arrived
+    steady_velocity: float = 1e-3  # rad/s: below this the arm is steady
+    min_speed_fraction: float = 1.0  # speed slider below this raises SpeedSliderReduced
+    poll_interval: float = 0.005
+    rtde_frequency: float = -1.0  # -1: the controller's rate (500 Hz e-series, 125 Hz CB3)
+    allowed_versions: tuple[tuple[int, int], ...] = field(default=((3, 15), (5, 6)))
+
+    def __post_init__(self) -> None:
+        if len(self.joint_lower) != 6 or len(self.joint_upper) != 6:
+            raise ValueError("joint limits need 6 values each")
+        if not 0 < self.speed <= 3.14 or not 0 < self.acceleration <= 40:
+            raise ValueError("speed must be in (0, 3.14] rad/s and acceleration in (0, 40] rad/s^2")
+
+
+@runtime_checkable
+class Robot(Protocol):
+    """What the orchestrator needs from an arm."""
+
+    info: RobotInfo | None
+
+    def open(self) -> RobotInfo: ...
+
+    def close(self) -> None: ...
+
+    def move_to(self, q: np.ndarray, *, speed: float | None = None,
+                acceleration: float | None = None) -> JointReading: ...
+
+    def read_joints(self, samples: int = 1) -> JointReading: ...
+
+    def stop(self) -> None: ...

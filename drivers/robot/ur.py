@@ -1,0 +1,349 @@
+"""The Universal Robots driver over ur_rtde — the same code for the simulator, URSim and a real arm.
+
+Design choices, and why:
+
+* No I/O in the constructor; `open()` connects. Before the ur_rtde constructors (which hold the GIL and
+  have no timeout) it runs bounded pre-flight checks (`drivers.robot.probe`) and turns every refusal
+  into a typed error: unreachable, unsupported version, local control, protective/emergency stop,
+  not running.
+* Targets are validated before any motion and refused — never clamped — outside the joint limits or
+  when the TCP would leave the keep-in zone (checked at points along the joint-space path with the
+  controller's own FK).
+* Moves are sent asynchronously and watched from Python: safety bits, program state, link state and
+  speed slider are polled every few milliseconds, so a protective stop, an e-stop or a dropped link
+  surfaces within a cycle as ProtectiveStop / EmergencyStop / ConnectionLost instead of a bare False.
+  On any error of its own (timeout, slider, abort) the driver stops the arm before raising.
+* `getForwardKinematics(q)` with a zero TCP offset reads stale registers in ur_rtde 1.6.5, so the
+  driver always passes a non-zero offset.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from typing import Any
+
+import numpy as np
+
+from drivers.robot.errors import (
+    ConnectionLost,
+    EmergencyStop,
+    JointLimitViolation,
+    KeepInZoneViolation,
+    MotionAborted,
+    MotionTimeout,
+    NotInRemoteControl,
+    ProgramStopped,
+    ProtectiveStop,
+    RobotError,
+    RobotNotReady,
+    RobotUnreachable,
+    SpeedSliderReduced,
+    UnsupportedVersion,
+)
+from drivers.robot.model import JointReading, RobotConfig, RobotInfo
+from drivers.robot.probe import DashboardLine, rtde_version
+
+log = logging.getLogger(__name__)
+
+PROTECTIVE_STOPPED_BIT = 2
+EMERGENCY_STOPPED_BIT = 7
+RUNTIME_PLAYING = 2
+STOP_DECEL = 4.0  # rad/s^2 used when the driver stops the arm itself
+_TINY_TCP = (0.0, 0.0, 0.0, 0.0, 0.0, 1e-12)  # non-zero on purpose (see module docstring)
+
+
+class URRobot:
+    """A UR arm driven through ur_rtde. ``with URRobot(RobotConfig(host)) as robot: robot.move_to(q)``."""
+
+    def __init__(self, config: RobotConfig) -> None:
+        self.config = config
+        self.info: RobotInfo | None = None
+        self._c: Any = None  # rtde_control.RTDEControlInterface
+        self._r: Any = None  # rtde_receive.RTDEReceiveInterface
+        self._cmd_lock = threading.Lock()
+        self._abort = threading.Event()
+
+    # ------------------------------------------------------------------ connection
+    def open(self) -> RobotInfo:
+        """Connect: pre-flight checks, then the ur_rtde receive and control interfaces."""
+        cfg = self.config
+        version = rtde_version(cfg.host, cfg.connect_timeout)
+        major, minor = version[0], version[1]
+        if not any(major == vmaj and minor >= vmin for vmaj, vmin in cfg.allowed_versions):
+            allowed = ", ".join(f"{a}.{b}+" for a, b in cfg.allowed_versions)
+            raise UnsupportedVersion(f"controller software {'.'.join(map(str, version))} is not supported "
+                                     f"(supported: {allowed})")
+        with DashboardLine(cfg.host, cfg.connect_timeout) as dash:
+            status = dash.status(major, minor)
+        self._check_dashboard(status.remote_control, status.safety, status.robot_mode)
+        series = "e" if major >= 5 else "cb3"
+        model = status.model + ("e" if series == "e" and status.model[-1:].isdigit()
+                                and status.model not in ("UR20", "UR30") else "")
+        try:
+            import rtde_control
+            import rtde_receive
+
+            self._r = rtde_receive.RTDEReceiveInterface(cfg.host, cfg.rtde_frequency)
+            self._c = rtde_control.RTDEControlInterface(cfg.host, cfg.rtde_frequency)
+        except RuntimeError as exc:
+            self.close()
+            text = str(exc)
+            if "remote control" in text:
+                raise NotInRemoteControl(f"{cfg.host}: {text}") from exc
+            raise RobotUnreachable(f"{cfg.host}: ur_rtde could not connect: {text}") from exc
+        rate = 500.0 if series == "e" else 125.0
+        self.info = RobotInfo(model=model, serial=status.serial,
+                              software_version=status.polyscope_version or ".".join(map(str, version)),
+                              version=version, series=series, rate_hz=rate)
+        log.info("connected to %s %s (serial %s, software %s)", cfg.host, model, status.serial,
+                 self.info.software_version)
+        return self.info
+
+    @staticmethod
+    def _check_dashboard(remote: bool | None, safety: str, robot_mode: str) -> None:
+        if remote is False:
+            raise NotInRemoteControl("the teach pendant is in local control; switch it to remote control")
+        if "PROTECTIVE_STOP" in safety:
+            raise ProtectiveStop("a protective stop is active; inspect the cause, then unlock it")
+        if "EMERGENCY" in safety:
+            raise EmergencyStop(f"an emergency stop is active ({safety})")
+        if safety not in ("NORMAL", "REDUCED"):
+            raise RobotNotReady(f"safety status is {safety}")
+        if robot_mode != "RUNNING":
+            raise RobotNotReady(f"robot mode is {robot_mode}; power on and release the brakes")
+
+    def close(self) -> None:
+        """Disconnect (the control script is stopped so the arm is left idle)."""
+        c, r = self._c, self._r
+        self._c = self._r = None
+        if c is not None:
+            try:
+                if c.isConnected():
+                    c.stopScript()
+                c.disconnect()
+            except RuntimeError as exc:
+                log.debug("closing the control interface: %s", exc)
+        if r is not None:
+            try:
+                r.disconnect()
+            except RuntimeError as exc:
+                log.debug("closing the receive interface: %s", exc)
+
+    def reconnect(self) -> RobotInfo:
+        """Close and open again (after a protective stop was unlocked, a link drop, ...)."""
+        self.close()
+        return self.open()
+
+    def __enter__(self) -> URRobot:
+        self.open()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # ------------------------------------------------------------------ status
+    def _require(self) -> tuple[Any, Any]:
+        if self._c is None or self._r is None:
+            raise ConnectionLost("not connected; call open()")
+        return self._c, self._r
+
+    def check_status(self) -> None:
+        """Raise the typed error for the current controller state, if any is wrong."""
+        c, r = self._require()
+        if not r.isConnected() or not c.isConnected():
+            raise ConnectionLost(f"lost the RTDE link to {self.config.host}")
+        bits = int(r.getSafetyStatusBits())
+        if bits & (1 << EMERGENCY_STOPPED_BIT):
+            raise EmergencyStop("emergency stop")
+        if bits & (1 << PROTECTIVE_STOPPED_BIT):
+            raise ProtectiveStop("protective stop")
+        if int(r.getRuntimeState()) != RUNTIME_PLAYING:
+            raise ProgramStopped("the control program is not running on the controller")
+        frac = float(r.getTargetSpeedFraction())
+        if frac < self.config.min_speed_fraction - 1e-9:
+            raise SpeedSliderReduced(f"speed slider at {frac:.0%} (< {self.config.min_speed_fraction:.0%})")
+
+    # ------------------------------------------------------------------ validation
+    def validate_target(self, q: Sequence[float]) -> np.ndarray:
+        """The target as an array, or a TargetRejected error (joint limits, keep-in zone)."""
+        cfg = self.config
+        qa = np.asarray(q, dtype=float)
+        if qa.shape != (6,) or not np.all(np.isfinite(qa)):
+            raise JointLimitViolation(f"target must be 6 finite joint angles, got {q!r}")
+        lo, hi = np.asarray(cfg.joint_lower), np.asarray(cfg.joint_upper)
+        bad = np.flatnonzero((qa < lo) | (qa > hi))
+        if bad.size:
+            j = int(bad[0])
+            raise JointLimitViolation(f"joint {j + 1} target {qa[j]:.4f} rad is outside "
+                                      f"[{lo[j]:.4f}, {hi[j]:.4f}]")
+        if cfg.keep_in is not None:
+            c, r = self._require()
+            q0 = np.asarray(r.getActualQ(), dtype=float)
+            tcp = list(cfg.tcp_offset) if any(cfg.tcp_offset) else list(_TINY_TCP)
+            for s in np.linspace(0.0, 1.0, max(cfg.keep_in_checks, 2)):
+                qs = q0 + s * (qa - q0)
+                with self._cmd_lock:
+                    pose = c.getForwardKinematics(qs.tolist(), tcp)
+                if len(pose) < 3 or not cfg.keep_in.contains(np.asarray(pose)):
+                    where = "at the target" if s == 1.0 else f"at {s:.0%} of the way"
+                    raise KeepInZoneViolation(f"TCP {np.round(pose[:3], 4).tolist()} leaves the keep-in "
+                                              f"zone {where}")
+        return qa
+
+    # ------------------------------------------------------------------ motion
+    def move_to(self, q: Sequence[float], *, speed: float | None = None,
+                acceleration: float | None = None, samples: int = 1) -> JointReading:
+        """Move (movej) to `q`, wait until steady, return the joints read there.
+
+        Raises TargetRejected before moving, the safety/link errors while moving, MotionTimeout when
+        the arm does not settle within the configured timeouts (after stopping it).
+        """
+        cfg = self.config
+        target = self.validate_target(q)
+        v = cfg.speed if speed is None else min(speed, cfg.speed)
+        a = cfg.acceleration if acceleration is None else min(acceleration, cfg.acceleration)
+        c, _r = self._require()
+        self.check_status()
+        self._abort.clear()
+        with self._cmd_lock:
+            accepted = c.moveJ(target.tolist(), v, a, True)
+        if not accepted:
+            self.check_status()
+            raise ProgramStopped("the controller did not accept the move")
+        self._watch_motion(target)
+        return self.read_joints(samples)
+
+    def _watch_motion(self, target: np.ndarray) -> None:
+        cfg = self.config
+        c, r = self._require()
+        t0 = time.monotonic()
+        deadline = t0 + cfg.move_timeout
+        profile_done_at: float | None = None
+        while True:
+            try:
+                self.check_status()
+            except (SpeedSliderReduced, ProgramStopped):
+                self._stop_quietly()
+                raise
+            if self._abort.is_set():
+                raise MotionAborted("stopped by request")
+            now = time.monotonic()
+            if profile_done_at is None and int(c.getAsyncOperationProgress()) < 0:
+                profile_done_at = now
+            if profile_done_at is not None:
+                qa = np.asarray(r.getActualQ())
+                qd = np.asarray(r.getActualQd())
+                if (np.max(np.abs(qa - target)) < cfg.settle_tolerance
+                        and np.max(np.abs(qd)) < cfg.steady_velocity):
+                    return
+                if now - profile_done_at > cfg.settle_timeout:
+                    self._stop_quietly()
+                    raise MotionTimeout(f"not steady at the target {cfg.settle_timeout} s after the motion "
+                                        f"(error {np.max(np.abs(qa - target)):.2e} rad)")
+            if now > deadline:
+                self._stop_quietly()
+                raise MotionTimeout(f"move not finished within {cfg.move_timeout} s")
+            time.sleep(cfg.poll_interval)
+
+    def stop(self, deceleration: float = STOP_DECEL) -> None:
+        """Stop the arm now (any motion, any thread); a move_to in progress raises MotionAborted."""
+        self._abort.set()
+        c = self._c
+        if c is None:
+            return
+        with self._cmd_lock:
+            c.stopJ(deceleration, False)
+
+    def _stop_quietly(self) -> None:
+        try:
+            if self._c is not None and self._c.isConnected():
+                with self._cmd_lock:
+                    self._c.stopJ(STOP_DECEL, False)
+        except RuntimeError as exc:
+            log.warning("could not stop the arm: %s", exc)
+
+    # ------------------------------------------------------------------ reading
+    def read_joints(self, samples: int = 1, timeout: float = 2.0) -> JointReading:
+        """Joint angles averaged over `samples` distinct controller cycles, with their spread."""
+        if samples < 1:
+            raise ValueError("samples must be >= 1")
+        _, r = self._require()
+        rows: list[list[float]] = []
+        last_ts = None
+        deadline = time.monotonic() + timeout + samples / 100.0
+        while len(rows) < samples:
+            if not r.isConnected():
+                raise ConnectionLost(f"lost the RTDE link to {self.config.host}")
+            ts = float(r.getTimestamp())
+            if ts != last_ts:
+                rows.append(list(r.getActualQ()))
+                last_ts = ts
+            elif time.monotonic() > deadline:
+                raise ConnectionLost("the controller stopped sending data")
+            else:
+                time.sleep(0.0005)
+        arr = np.asarray(rows)
+        spread = arr.std(axis=0, ddof=1) if samples > 1 else np.zeros(6)
+        return JointReading(q=arr.mean(axis=0), spread=spread, samples=samples,
+                            timestamp=float(last_ts or 0.0))
+
+    def tcp_pose(self) -> np.ndarray:
+        """The controller's actual TCP pose [x, y, z, rx, ry, rz] (nominal kinematics)."""
+        _, r = self._require()
+        return np.asarray(r.getActualTCPPose(), dtype=float)
+
+    # ------------------------------------------------------------------ streaming
+    @contextmanager
+    def servo(self, *, lookahead: float = 0.1, gain: float = 300.0) -> Iterator[ServoStream]:
+        """A servo loop at the controller rate; the arm is stopped (servoStop) when the block exits."""
+        c, r = self._require()
+        self.check_status()
+        stream = ServoStream(self, c, r, lookahead, gain)
+        try:
+            yield stream
+        finally:
+            try:
+                if c.isConnected():
+                    with self._cmd_lock:
+                        c.servoStop(STOP_DECEL)
+            except RuntimeError as exc:
+                log.warning("servoStop failed: %s", exc)
+
+
+class ServoStream:
+    """One servo session: ``step(q)`` sends a servoJ target and waits for the next period."""
+
+    def __init__(self, robot: URRobot, c: Any, r: Any, lookahead: float, gain: float) -> None:
+        self.robot, self._c, self._r = robot, c, r
+        self.lookahead, self.gain = lookahead, gain
+        self.dt = 1.0 / (robot.info.rate_hz if robot.info else 500.0)
+        self.periods: list[float] = []
+        self._t_last: float | None = None
+        self._n = 0
+
+    def step(self, q: Sequence[float], *, pose: bool = False) -> None:
+        """Send one target (joints, or a TCP pose with ``pose=True``) and keep the loop period."""
+        qa = self.robot.validate_target(q) if not pose else np.asarray(q, dtype=float)
+        t_start = self._c.initPeriod()
+        now = time.perf_counter()
+        if self._t_last is not None:
+            self.periods.append(now - self._t_last)
+        self._t_last = now
+        with self.robot._cmd_lock:
+            if pose:
+                ok = self._c.servoL(qa.tolist(), 0.0, 0.0, self.dt, self.lookahead, self.gain)
+            else:
+                ok = self._c.servoJ(qa.tolist(), 0.0, 0.0, self.dt, self.lookahead, self.gain)
+        self._n += 1
+        if not ok or self._n % 10 == 0:
+            self.robot.check_status()
+            if not ok:
+                raise RobotError("the controller refused a servo command")
+        self._c.waitPeriod(t_start)
+
+    def actual_q(self) -> np.ndarray:
+        return np.asarray(self._r.getActualQ(), dtype=float)

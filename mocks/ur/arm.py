@@ -1,0 +1,406 @@
+"""The simulated arm and controller state: joints, motion, safety, program, RTDE registers.
+
+One `SimArm` is the single source of truth of a simulated controller. The protocol servers (RTDE,
+dashboard, script) and the fault-injection channel only call its methods; a tick thread advances it at
+the controller rate (500 Hz e-series, 125 Hz CB3) on the shared `SimClock`. Everything is guarded by
+one re-entrant lock, so it is safe to read ``true_joints()`` from another service in the same process
+(the tracker simulator looks at the *true* joints: what the encoders read, minus their noise).
+
+Encoder noise is added to ``actual_q`` only; ``actual_TCP_pose`` is computed from ``actual_q`` with the
+*nominal* kinematics, as a real controller does not know the arm's hidden errors.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+from mocks.ur.clock import SimClock
+from mocks.ur.kin import FkFn, matrix_to_pose, pose_to_matrix
+from mocks.ur.motion import Decelerate, JointMove, LinearMove, MotionError
+from mocks.ur.status import RobotBit, RobotMode, RuntimeState, SafetyBit, SafetyMode
+
+log = logging.getLogger(__name__)
+
+PROTECTIVE_STOP_UNLOCK_DELAY = 5.0  # simulated seconds, as on PolyScope 5
+SAFETY_STOP_DECEL = 8.0  # rad/s^2 of the fastest joint in a category-1/2 stop
+PROGRAM_STOP_DECEL = 4.0
+
+
+class Program(Protocol):
+    """A running program (the ur_rtde control script, or a small custom script)."""
+
+    name: str
+
+    def tick(self, arm: SimArm, now: float) -> bool:
+        """Advance one controller cycle; False when the program has ended."""
+        ...
+
+
+@dataclass
+class ArmConfig:
+    """Static properties of the simulated robot."""
+
+    robot: str = "ur5e"
+    lower: np.ndarray = field(default_factory=lambda: np.full(6, -2 * np.pi))
+    upper: np.ndarray = field(default_factory=lambda: np.full(6, 2 * np.pi))
+    max_speed: np.ndarray = field(default_factory=lambda: np.array([3.14, 3.14, 3.14, 3.14, 3.14, 3.14]))
+    rate_hz: float = 500.0
+    encoder_noise: float = 2e-6  # rad, standard deviation of actual_q around the true joints
+    seed: int = 0
+    q_home: np.ndarray = field(
+        default_factory=lambda: np.array([0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0]))
+
+
+class SimArm:
+    """Controller state machine. All public methods are thread-safe."""
+
+    def __init__(self, config: ArmConfig, fk: FkFn, clock: SimClock) -> None:
+        self.config = config
+        self.clock = clock
+        self._fk = fk
+        self.lock = threading.RLock()
+        self._rng = np.random.default_rng(config.seed)
+        self.q = np.array(config.q_home, dtype=float)
+        self.qd = np.zeros(6)
+        self.qdd = np.zeros(6)
+        self.q_target = self.q.copy()
+        self.actual_q = self.q.copy()
+        self.motion: Any = None
+        self.tcp = np.zeros(6)
+        self.robot_mode = RobotMode.RUNNING
+        self.safety_mode = SafetyMode.NORMAL
+        self.estop_latched = False
+        self.protective_stop_at: float | None = None
+        self.safety_popup = False
+        self.program: Program | None = None
+        self.program_paused = False
+        self.remote_control = True
+        self.speed_slider = 1.0
+        self.last_error = ""
+        self.in_int = [0] * 48
+        self.in_double = [0.0] * 48
+        self.out_int = [0] * 48
+        self.out_double = [0.0] * 48
+        self.inputs: dict[str, Any] = {}
+        self._t_last = clock.now()
+        self._t_start = self._t_last
+        self.timestamp = 0.0
+        self.steady_since: float | None = self._t_last
+        self.snapshot: dict[str, Any] = {}
+        self.listeners: list[Any] = []  # callables(event: str, **info) told about safety events
+        self._refresh_snapshot()
+
+    # ----------------------------------------------------------------- kinematics
+    def fk_flange(self, q: np.ndarray) -> np.ndarray:
+        return self._fk(np.asarray(q, dtype=float))
+
+    def fk_tcp(self, q: np.ndarray, tcp: np.ndarray | None = None) -> np.ndarray:
+        off = self.tcp if tcp is None else np.asarray(tcp, dtype=float)
+        return self._fk(np.asarray(q, dtype=float)) @ pose_to_matrix(off)
+
+    # ----------------------------------------------------------------- readers
+    def true_joints(self) -> np.ndarray:
+        """The physical joint angles (no encoder noise): what the world/tracker simulator should use."""
+        with self.lock:
+            return self.q.copy()
+
+    def is_steady(self) -> bool:
+        with self.lock:
+            return self.motion is None and bool(np.max(np.abs(self.qd)) < 1e-6)
+
+    @property
+    def powered(self) -> bool:
+        return self.robot_mode in (RobotMode.IDLE, RobotMode.RUNNING, RobotMode.POWER_ON)
+
+    @property
+    def can_move(self) -> bool:
+        return (self.robot_mode == RobotMode.RUNNING
+                and self.safety_mode in (SafetyMode.NORMAL, SafetyMode.REDUCED))
+
+    @property
+    def runtime_state(self) -> RuntimeState:
+        if self.program is None:
+            return RuntimeState.STOPPED
+        return RuntimeState.PAUSED if self.program_paused else RuntimeState.PLAYING
+
+    def safety_bits(self) -> int:
+        m = self.safety_mode
+        bits = 0
+        if m == SafetyMode.NORMAL:
+            bits |= 1 << SafetyBit.NORMAL_MODE
+        if m == SafetyMode.REDUCED:
+            bits |= 1 << SafetyBit.REDUCED_MODE
+        if m == SafetyMode.PROTECTIVE_STOP:
+            bits |= (1 << SafetyBit.PROTECTIVE_STOPPED) | (1 << SafetyBit.STOPPED_DUE_TO_SAFETY)
+        if m == SafetyMode.ROBOT_EMERGENCY_STOP:
+            bits |= (1 << SafetyBit.ROBOT_EMERGENCY_STOPPED) | (1 << SafetyBit.EMERGENCY_STOPPED)
+            bits |= 1 << SafetyBit.STOPPED_DUE_TO_SAFETY
+        if m == SafetyMode.SYSTEM_EMERGENCY_STOP:
+            bits |= (1 << SafetyBit.SYSTEM_EMERGENCY_STOPPED) | (1 << SafetyBit.EMERGENCY_STOPPED)
+            bits |= 1 << SafetyBit.STOPPED_DUE_TO_SAFETY
+        return bits
+
+    def robot_bits(self) -> int:
+        bits = 0
+        if self.powered:
+            bits |= 1 << RobotBit.POWER_ON
+        if self.runtime_state == RuntimeState.PLAYING:
+            bits |= 1 << RobotBit.PROGRAM_RUNNING
+        return bits
+
+    # ----------------------------------------------------------------- motion API (used by programs)
+    def start_movej(self, q: np.ndarray, v: float, a: float) -> Any:
+        q = np.asarray(q, dtype=float)
+        if not self._within_limits(q):
+            self.protective_stop("movej target outside the joint limits")
+            return None
+        self.motion = JointMove(self.q, q, v, a, self.config.max_speed)
+        self.q_target = self.motion.target.copy()
+        return self.motion
+
+    def start_movel(self, T: np.ndarray, v: float, a: float) -> Any:
+        try:
+            self.motion = LinearMove(self.fk_tcp, self.q, T, v, a)
+        except MotionError as exc:
+            self.program_error(str(exc))
+            return None
+        if not self._within_limits(self.motion.target):
+            self.motion = None
+            self.protective_stop("movel target outside the joint limits")
+            return None
+        self.q_target = self.motion.target.copy()
+        return self.motion
+
+    def start_stop(self, a: float) -> Any:
+        self.motion = Decelerate(self.qd, a if a > 0 else 4.0)
+        return self.motion
+
+    def program_error(self, message: str) -> None:
+        """A runtime error in the program: the program stops and the arm brakes."""
+        log.info("program error: %s", message)
+        self.last_error = message
+        self.stop_program(decel=PROGRAM_STOP_DECEL)
+
+    # ----------------------------------------------------------------- program / safety control
+    def load_program(self, program: Program) -> bool:
+        """Start a program sent to the script port; refused unless powered, in remote and not stopped."""
+        with self.lock:
+            if not self.remote_control:
+                log.info("program %s refused: not in remote control", program.name)
+                return False
+            if not self.can_move:
+                log.info("program %s refused: robot mode %s, safety %s", program.name,
+                         self.robot_mode.name, self.safety_mode.name)
+                return False
+            self.program = program
+            self.program_paused = False
+            return True
+
+    def stop_program(self, decel: float = PROGRAM_STOP_DECEL) -> None:
+        with self.lock:
+            self.program = None
+            self.program_paused = False
+            if self.motion is not None or np.any(np.abs(self.qd) > 0):
+                self.motion = Decelerate(self.qd, decel)
+
+    def protective_stop(self, reason: str = "injected") -> None:
+        with self.lock:
+            if self.safety_mode in (SafetyMode.ROBOT_EMERGENCY_STOP, SafetyMode.SYSTEM_EMERGENCY_STOP):
+                return
+            log.info("protective stop: %s", reason)
+            self.last_error = f"protective stop: {reason}"
+            self.safety_mode = SafetyMode.PROTECTIVE_STOP
+            self.protective_stop_at = self.clock.now()
+            self.safety_popup = True
+            self.stop_program(decel=SAFETY_STOP_DECEL)
+            self._notify("protective_stop", reason=reason)
+
+    def unlock_protective_stop(self) -> tuple[bool, str]:
+        with self.lock:
+            if self.safety_mode != SafetyMode.PROTECTIVE_STOP:
+                return True, "Protective stop releasing"
+            assert self.protective_stop_at is not None
+            if self.clock.now() - self.protective_stop_at < PROTECTIVE_STOP_UNLOCK_DELAY:
+                return False, ("Cannot unlock protective stop until 5s after occurrence. "
+                               "Always inspect cause of protective stop before unlocking")
+            self.safety_mode = SafetyMode.NORMAL
+            self.protective_stop_at = None
+            return True, "Protective stop releasing"
+
+    def emergency_stop(self, system: bool = False) -> None:
+        with self.lock:
+            log.info("emergency stop")
+            self.last_error = "emergency stop"
+            self.estop_latched = True
+            self.safety_mode = SafetyMode.SYSTEM_EMERGENCY_STOP if system else SafetyMode.ROBOT_EMERGENCY_STOP
+            self.stop_program(decel=SAFETY_STOP_DECEL)
+            self._notify("emergency_stop")
+
+    def release_emergency_stop(self) -> None:
+        """Twist the e-stop button out: safety returns to normal, the arm stays powered off."""
+        with self.lock:
+            if not self.estop_latched:
+                return
+            self.estop_latched = False
+            self.safety_mode = SafetyMode.NORMAL
+            self.robot_mode = RobotMode.POWER_OFF
+
+    def power_on(self) -> None:
+        with self.lock:
+            if not self.estop_latched and self.robot_mode in (RobotMode.POWER_OFF, RobotMode.BOOTING):
+                self.robot_mode = RobotMode.IDLE
+
+    def power_off(self) -> None:
+        with self.lock:
+            self.stop_program(decel=SAFETY_STOP_DECEL)
+            self.robot_mode = RobotMode.POWER_OFF
+
+    def brake_release(self) -> None:
+        with self.lock:
+            if self.robot_mode in (RobotMode.IDLE, RobotMode.POWER_ON):
+                self.robot_mode = RobotMode.RUNNING
+
+    def set_speed_slider(self, fraction: float) -> None:
+        with self.lock:
+            self.speed_slider = float(min(max(fraction, 0.0), 1.0))
+
+    def set_remote_control(self, on: bool) -> None:
+        with self.lock:
+            self.remote_control = bool(on)
+
+    def set_joints(self, q: np.ndarray) -> None:
+        """Teleport the arm (test setup only): no motion, no velocity."""
+        with self.lock:
+            self.q = np.asarray(q, dtype=float).copy()
+            self.q_target = self.q.copy()
+            self.qd = np.zeros(6)
+            self.motion = None
+            self._refresh_snapshot()
+
+    def _notify(self, event: str, **info: Any) -> None:
+        for cb in list(self.listeners):
+            try:
+                cb(event, **info)
+            except Exception:  # a listener must not break the controller
+                log.exception("listener failed on %s", event)
+
+    def _within_limits(self, q: np.ndarray) -> bool:
+        return bool(np.all(q >= self.config.lower - 1e-9) and np.all(q <= self.config.upper + 1e-9))
+
+    # ----------------------------------------------------------------- inputs
+    def write_inputs(self, names: list[str], values: list[Any]) -> None:
+        """Values of an RTDE input data package (registers and IO)."""
+        with self.lock:
+            for name, val in zip(names, values, strict=True):
+                if name.startswith("input_int_register_"):
+                    self.in_int[int(name[19:])] = int(val)
+                elif name.startswith("input_double_register_"):
+                    self.in_double[int(name[22:])] = float(val)
+                else:
+                    self.inputs[name] = val
+            mask = self.inputs.pop("speed_slider_mask", 0)
+            if mask and "speed_slider_fraction" in self.inputs:
+                self.set_speed_slider(float(self.inputs["speed_slider_fraction"]))
+
+    # ----------------------------------------------------------------- the cycle
+    def tick(self) -> None:
+        """One controller cycle: program step, motion step, safety checks, new RTDE snapshot."""
+        with self.lock:
+            now = self.clock.now()
+            dt = max(now - self._t_last, 0.0)
+            self._t_last = now
+            self.timestamp = now - self._t_start
+            if self.program is not None and not self.program_paused:
+                try:
+                    alive = self.program.tick(self, now)
+                except MotionError as exc:
+                    self.program_error(str(exc))
+                    alive = True
+                if not alive:
+                    self.program = None
+            q_old = self.q
+            qd_old = self.qd
+            if self.motion is not None and dt > 0:
+                scale = self.speed_slider if not isinstance(self.motion, Decelerate) else 1.0
+                try:
+                    self.q = self.motion.step(dt * scale, self.q)
+                except MotionError as exc:
+                    self.motion = None
+                    self.program_error(str(exc))
+                if self.motion is not None and self.motion.done:
+                    if self.motion.target is not None:
+                        self.q = np.array(self.motion.target, dtype=float)
+                    self.motion = None
+            if dt > 0:
+                self.qd = (self.q - q_old) / dt
+                self.qdd = (self.qd - qd_old) / dt
+            if not self._within_limits(self.q) and self.safety_mode == SafetyMode.NORMAL:
+                self.protective_stop("joint position limit violated")
+            if not self.can_move and self.motion is not None and not isinstance(self.motion, Decelerate):
+                self.motion = Decelerate(self.qd, SAFETY_STOP_DECEL)
+            self._refresh_snapshot()
+
+    def _refresh_snapshot(self) -> None:
+        noise = self._rng.normal(0.0, self.config.encoder_noise, 6) if self.config.encoder_noise > 0 else 0.0
+        self.actual_q = self.q + noise
+        T_act = self.fk_tcp(self.actual_q)
+        T_tgt = self.fk_tcp(self.q_target if self.motion is not None else self.q)
+        zeros6 = [0.0] * 6
+        snap: dict[str, Any] = {
+            "timestamp": self.timestamp,
+            "target_q": (self.q_target if self.motion is not None else self.q).tolist(),
+            "target_qd": self.qd.tolist(),
+            "target_qdd": self.qdd.tolist(),
+            "target_current": zeros6,
+            "target_moment": zeros6,
+            "actual_q": self.actual_q.tolist(),
+            "actual_qd": self.qd.tolist(),
+            "actual_qdd": self.qdd.tolist(),
+            "actual_current": zeros6,
+            "actual_current_as_torque": zeros6,
+            "actual_moment": zeros6,
+            "joint_control_output": zeros6,
+            "actual_TCP_pose": matrix_to_pose(T_act).tolist(),
+            "actual_TCP_speed": zeros6,
+            "actual_TCP_force": zeros6,
+            "target_TCP_pose": matrix_to_pose(T_tgt).tolist(),
+            "target_TCP_speed": zeros6,
+            "actual_digital_input_bits": 0,
+            "joint_temperatures": [30.0] * 6,
+            "actual_execution_time": 0.2,
+            "robot_mode": int(self.robot_mode),
+            "joint_mode": [253 if self.robot_mode == RobotMode.RUNNING else 255] * 6,
+            "safety_mode": int(self.safety_mode),
+            "safety_status": int(self.safety_mode),
+            "actual_tool_accelerometer": [0.0, 0.0, -9.81],
+            "speed_scaling": self.speed_slider if self.can_move else 0.0,
+            "target_speed_fraction": self.speed_slider,
+            "actual_momentum": 0.0,
+            "actual_main_voltage": 48.0,
+            "actual_robot_voltage": 48.0 if self.powered else 0.0,
+            "actual_robot_current": 0.5 if self.powered else 0.0,
+            "actual_joint_voltage": [48.0] * 6,
+            "actual_digital_output_bits": 0,
+            "runtime_state": int(self.runtime_state),
+            "robot_status_bits": self.robot_bits(),
+            "safety_status_bits": self.safety_bits(),
+            "standard_analog_input0": 0.0,
+            "standard_analog_input1": 0.0,
+            "standard_analog_output0": 0.0,
+            "standard_analog_output1": 0.0,
+            "ft_raw_wrench": zeros6,
+            "payload": 0.0,
+            "payload_cog": [0.0, 0.0, 0.0],
+            "payload_inertia": zeros6,
+            "output_bit_registers0_to_31": 0,
+            "output_bit_registers32_to_63": 0,
+        }
+        for i in range(48):
+            snap[f"output_int_register_{i}"] = self.out_int[i]
+            snap[f"output_double_register_{i}"] = self.out_double[i]
+        self.snapshot = snap

@@ -1,0 +1,248 @@
+"""The whole simulated controller: arm model, clock, tick thread and its protocol servers.
+
+`SimController` is the in-process object; `mocks.ur.process` runs one in its own process (the ur_rtde
+Python constructors hold the GIL, so client and simulator must never share an interpreter). Faults go
+through `inject(name, **args)`, the single entry point shared by tests, ``hil sim`` options and the
+JSON-lines control channel:
+
+=========================  ===============================================================
+``protective_stop``        safety protective stop (also mid-move); program stops, arm brakes
+``emergency_stop``         robot e-stop (``system=True`` for a system e-stop)
+``release_emergency_stop`` twist the button out: safety normal, arm powered off
+``drop_connection``        close every client link; ``refuse_s`` seconds of refused reconnects;
+                           ``stop_program`` (default True) as an RTDE watchdog would
+``stall``                  ``on=True``: stop sending RTDE data (clients time out after 2.5 s)
+``remote_control``         ``on=False``: local control (dashboard refuses, programs refused)
+``stop_program``           the program stops (someone pressed stop on the pendant)
+``speed_slider``           ``fraction`` in [0, 1]
+``power_off`` / ``power_on`` / ``brake_release``
+``set_joints``             ``q``: teleport the arm (test setup)
+``clear``                  everything back to normal, arm running, program stopped
+=========================  ===============================================================
+"""
+
+from __future__ import annotations
+
+import importlib
+import logging
+import threading
+import time
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from mocks.ur.arm import ArmConfig, SimArm
+from mocks.ur.clock import SimClock
+from mocks.ur.dashboard import DashboardServer
+from mocks.ur.kin import FkFn, dh_fk_factory
+from mocks.ur.rtde_server import RtdeServer
+from mocks.ur.script_server import ScriptServer
+from mocks.ur.status import RobotMode, SafetyMode
+
+log = logging.getLogger(__name__)
+
+_CB3 = {"ur3", "ur5", "ur10"}
+
+
+@dataclass
+class SimConfig:
+    """Everything needed to build a simulated controller; plain data so it crosses process boundaries."""
+
+    address: str = "127.0.0.1"
+    robot: str = "ur5e"
+    speed: float = 1.0
+    version: tuple[int, int, int, int] = (5, 15, 0, 12345)
+    serial: str = "20235500001"
+    model: str | None = None  # dashboard "get robot model"; default from `robot`
+    rtde_port: int = 30004
+    dashboard_port: int = 29999
+    script_port: int = 30003
+    control_port: int | None = 0  # JSON-lines fault channel; 0 = any free port, None = off
+    rate_hz: float | None = None  # default 500 (e-series) / 125 (CB3)
+    encoder_noise: float = 2e-6
+    seed: int = 0
+    q_home: list[float] | None = None
+    lower: list[float] | None = None
+    upper: list[float] | None = None
+    max_speed: list[float] | None = None
+    remote_control: bool = True
+    speed_slider: float = 1.0
+    fk_factory: str | None = "mocks.ur.hil_model:nominal_fk"  # "module:function"(robot) -> FK callable;
+    # None: the standard-DH fallback of mocks.ur.kin
+    faults: list[dict[str, Any]] = field(default_factory=list)  # injected right after start
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def resolve_fk(config: SimConfig) -> FkFn:
+    """The nominal FK for the config: its factory if given, else the standard-DH fallback."""
+    if config.fk_factory:
+        mod, _, fn = config.fk_factory.partition(":")
+        factory = getattr(importlib.import_module(mod), fn)
+        return factory(config.robot)
+    return dh_fk_factory(config.robot)
+
+
+class SimController:
+    """Arm + clock + RTDE/dashboard/script servers + the tick thread. Use as a context manager."""
+
+    def __init__(self, config: SimConfig, fk: FkFn | None = None, clock: SimClock | None = None) -> None:
+        self.config = config
+        self.clock = clock if clock is not None else SimClock(config.speed)
+        robot = config.robot.lower()
+        rate = config.rate_hz or (125.0 if robot in _CB3 else 500.0)
+        arm_cfg = ArmConfig(robot=robot, rate_hz=rate, encoder_noise=config.encoder_noise, seed=config.seed)
+        try:
+            from mocks.ur.hil_model import limits
+
+            arm_cfg.lower, arm_cfg.upper, arm_cfg.max_speed = limits(robot)
+        except (ImportError, ValueError, KeyError):
+            log.debug("no hil catalog entry for %s: default limits", robot)
+        if config.q_home is not None:
+            arm_cfg.q_home = np.array(config.q_home, dtype=float)
+        if config.lower is not None:
+            arm_cfg.lower = np.array(config.lower, dtype=float)
+        if config.upper is not None:
+            arm_cfg.upper = np.array(config.upper, dtype=float)
+        if config.max_speed is not None:
+            arm_cfg.max_speed = np.array(config.max_speed, dtype=float)
+        self.arm = SimArm(arm_cfg, fk if fk is not None else resolve_fk(config), self.clock)
+        self.arm.remote_control = config.remote_control
+        self.arm.speed_slider = config.speed_slider
+        model = config.model or robot.upper().rstrip("E")
+        host = config.address
+        self.rtde = RtdeServer(self.arm, host, config.rtde_port, tuple(config.version))  # type: ignore[arg-type]
+        self.dashboard = DashboardServer(self.arm, host, config.dashboard_port, model=model,
+                                         serial=config.serial, version=tuple(config.version))  # type: ignore[arg-type]
+        self.script = ScriptServer(self.arm, host, config.script_port)
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.tick_count = 0
+        self.late_ticks = 0
+
+    # ----------------------------------------------------------------- lifecycle
+    def start(self) -> SimController:
+        """Bind every port (raises OSError on a clash, before anything runs) and start ticking."""
+        started = []
+        try:
+            for srv in (self.rtde, self.dashboard, self.script):
+                srv.start()
+                started.append(srv)
+        except OSError:
+            for srv in started:
+                srv.stop()
+            raise
+        self._thread = threading.Thread(target=self._run, name="ur-sim-tick", daemon=True)
+        self._thread.start()
+        for fault in self.config.faults:
+            args = dict(fault)
+            self.inject(args.pop("name"), **args)
+        return self
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
+        for srv in (self.rtde, self.dashboard, self.script):
+            srv.stop()
+
+    def __enter__(self) -> SimController:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    def _run(self) -> None:
+        period = 1.0 / self.arm.config.rate_hz
+        deadline = time.monotonic()
+        while not self._stop.is_set():
+            self.arm.tick()
+            self.rtde.broadcast(self.tick_count)
+            self.tick_count += 1
+            deadline += period
+            delay = deadline - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+            elif delay < -10 * period:  # fell far behind (loaded CI machine): do not burst to catch up
+                self.late_ticks += 1
+                deadline = time.monotonic()
+
+    # ----------------------------------------------------------------- readers for other services
+    def true_joints(self) -> np.ndarray:
+        """The arm's physical joint angles (thread-safe), for a world/tracker simulator."""
+        return self.arm.true_joints()
+
+    def state(self) -> dict[str, Any]:
+        """A JSON-friendly summary of the controller (for tests and the control channel)."""
+        a = self.arm
+        with a.lock:
+            return {
+                "q": a.q.tolist(),
+                "actual_q": a.actual_q.tolist(),
+                "moving": a.motion is not None,
+                "robot_mode": a.robot_mode.name,
+                "safety_mode": a.safety_mode.name,
+                "runtime_state": a.runtime_state.name,
+                "program": a.program.name if a.program else None,
+                "remote_control": a.remote_control,
+                "speed_slider": a.speed_slider,
+                "tcp": a.tcp.tolist(),
+                "time": self.clock.now(),
+                "speed": self.clock.speed,
+                "last_error": a.last_error,
+                "programs_received": self.script.programs_received,
+                "rtde_connections": self.rtde.connection_count(),
+                "late_ticks": self.late_ticks,
+            }
+
+    # ----------------------------------------------------------------- faults
+    def inject(self, name: str, **args: Any) -> dict[str, Any]:
+        """Apply one fault or setup action (see the module docstring); returns the new state."""
+        a = self.arm
+        if name == "protective_stop":
+            a.protective_stop(str(args.get("reason", "injected")))
+        elif name == "emergency_stop":
+            a.emergency_stop(system=bool(args.get("system", False)))
+        elif name == "release_emergency_stop":
+            a.release_emergency_stop()
+        elif name == "drop_connection":
+            if args.get("stop_program", True):
+                a.stop_program(decel=8.0)
+            refuse = float(args.get("refuse_s", 0.0))
+            for srv in (self.rtde, self.dashboard, self.script):
+                srv.drop(refuse)
+        elif name == "stall":
+            self.rtde.stalled = bool(args.get("on", True))
+        elif name == "remote_control":
+            a.set_remote_control(bool(args.get("on", True)))
+        elif name == "stop_program":
+            a.stop_program()
+        elif name == "speed_slider":
+            a.set_speed_slider(float(args["fraction"]))
+        elif name == "power_off":
+            a.power_off()
+        elif name == "power_on":
+            a.power_on()
+        elif name == "brake_release":
+            a.brake_release()
+        elif name == "set_joints":
+            a.set_joints(np.array(args["q"], dtype=float))
+        elif name == "set_speed":
+            self.clock.speed = float(args["speed"])
+        elif name == "dashboard_unresponsive":
+            self.dashboard.unresponsive = bool(args.get("on", True))
+        elif name == "clear":
+            with a.lock:
+                a.estop_latched = False
+                a.safety_mode = SafetyMode.NORMAL
+                a.protective_stop_at = None
+                a.robot_mode = RobotMode.RUNNING
+                a.remote_control = True
+                a.speed_slider = 1.0
+                self.rtde.stalled = False
+                self.dashboard.unresponsive = False
+        else:
+            raise ValueError(f"unknown fault {name!r}")
+        return self.state()

@@ -1,0 +1,206 @@
+"""Running a simulated controller in its own process, composable with other simulated services.
+
+* `serve(config, services=..., ready=..., stop_event=...)` builds a `SimController` in *this* process,
+  starts it plus any extra services (each built by a factory from the controller, so a tracker
+  simulator can share its clock and ``true_joints()``), reports the bound ports through `ready`, and
+  blocks until stopped (event, SIGTERM or SIGINT).
+* `SimProcess` runs `serve` in a child Python process (a fresh interpreter: never fork a process that
+  has ur_rtde threads, and no ``__main__`` guard needed in the caller) and talks to it through the
+  JSON-lines control channel: ``inject``, ``state``, ``stop``.
+  Extra services for the child are named as ``"module:function"`` so they cross the process boundary.
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import logging
+import os
+import selectors
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import Any, Protocol
+
+from mocks.ur.control_channel import ControlClient, ControlServer
+from mocks.ur.controller import SimConfig, SimController
+
+log = logging.getLogger(__name__)
+
+
+class Service(Protocol):
+    """Anything started next to the controller in the same process (e.g. a tracker simulator)."""
+
+    def start(self) -> Any: ...
+
+    def stop(self) -> None: ...
+
+
+ServiceFactory = Callable[[SimController], Service]
+
+
+def _import(spec: str) -> Any:
+    mod, _, name = spec.partition(":")
+    return getattr(importlib.import_module(mod), name)
+
+
+def serve(
+    config: SimConfig,
+    *,
+    services: Sequence[ServiceFactory | str] = (),
+    ready: Callable[[dict[str, Any]], None] | None = None,
+    stop_event: threading.Event | None = None,
+) -> None:
+    """Run a simulated controller (and `services`) in this process until `stop_event` or a signal."""
+    stop = stop_event or threading.Event()
+    controller = SimController(config)
+    controller.start()
+    running: list[Any] = [controller]
+    info: dict[str, Any] = {"address": config.address, "rtde_port": controller.rtde.port,
+                            "dashboard_port": controller.dashboard.port,
+                            "script_port": controller.script.port, "control_port": None, "services": []}
+    try:
+        if config.control_port is not None:
+            ctl = ControlServer(controller, config.address, config.control_port)
+            ctl.start()
+            running.append(ctl)
+            info["control_port"] = ctl.port
+        for factory in services:
+            fn = _import(factory) if isinstance(factory, str) else factory
+            svc = fn(controller)
+            result = svc.start()
+            running.append(svc)
+            info["services"].append(result if isinstance(result, dict) else repr(svc))
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGTERM, signal.SIGINT):
+                signal.signal(sig, lambda *_: stop.set())
+        if ready is not None:
+            ready(info)
+        while not stop.wait(0.2):
+            pass
+    finally:
+        for svc in reversed(running):
+            try:
+                svc.stop()
+            except Exception:
+                log.exception("stopping %r failed", svc)
+
+
+READY_PREFIX = "UR-SIM-READY "
+
+
+def child_main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the child process: ``python -m mocks.ur CONFIG_JSON [SERVICE...]``.
+
+    Prints one line ``UR-SIM-READY {info json}`` (or ``UR-SIM-READY {"error": ...}``) on stdout.
+    """
+    args = list(sys.argv[1:] if argv is None else argv)
+    level = int(os.environ.get("UR_SIM_LOG_LEVEL", logging.WARNING))
+    logging.basicConfig(level=level, format="ur-sim %(levelname)s %(name)s: %(message)s", stream=sys.stderr)
+    raw = json.loads(args[0])
+    raw["version"] = tuple(raw.get("version", (5, 15, 0, 0)))
+    config = SimConfig(**raw)
+
+    def ready(info: dict[str, Any]) -> None:
+        sys.stdout.write(READY_PREFIX + json.dumps(info) + "\n")
+        sys.stdout.flush()
+
+    try:
+        serve(config, services=args[1:], ready=ready)
+    except Exception as exc:
+        ready({"error": f"{type(exc).__name__}: {exc}"})
+        return 1
+    return 0
+
+
+class SimStartError(RuntimeError):
+    """The simulator process could not start (e.g. its ports are taken)."""
+
+
+def _project_root() -> str:
+    return str(Path(__file__).resolve().parents[2])
+
+
+class SimProcess:
+    """A simulated controller in a child process. ``with SimProcess(cfg) as sim: sim.inject(...)``."""
+
+    def __init__(self, config: SimConfig, services: Sequence[str] = (), *,
+                 start_timeout: float = 20.0, log_level: int = logging.WARNING) -> None:
+        if config.control_port is None:
+            config = replace(config, control_port=0)
+        self.config = config
+        self.services = list(services)
+        self.start_timeout = start_timeout
+        self.log_level = log_level
+        self.info: dict[str, Any] = {}
+        self._proc: subprocess.Popen[str] | None = None
+        self._client: ControlClient | None = None
+
+    @property
+    def address(self) -> str:
+        return self.config.address
+
+    def start(self) -> SimProcess:
+        env = dict(os.environ)
+        root = _project_root()
+        env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+        env["UR_SIM_LOG_LEVEL"] = str(self.log_level)
+        cmd = [sys.executable, "-m", "mocks.ur", json.dumps(self.config.to_dict()), *self.services]
+        self._proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
+                                      env=env, cwd=root)
+        assert self._proc.stdout is not None
+        line = ""
+        with selectors.DefaultSelector() as sel:
+            sel.register(self._proc.stdout, selectors.EVENT_READ)
+            deadline = time.monotonic() + self.start_timeout
+            while not line.startswith(READY_PREFIX):
+                left = deadline - time.monotonic()
+                if left <= 0 or not sel.select(left):
+                    self.stop()
+                    raise SimStartError(f"simulator on {self.address} did not start within "
+                                        f"{self.start_timeout} s")
+                line = self._proc.stdout.readline()
+                if not line:
+                    self.stop()
+                    raise SimStartError(f"simulator on {self.address} exited during start")
+        info = json.loads(line[len(READY_PREFIX):])
+        if "error" in info:
+            self.stop()
+            raise SimStartError(f"simulator on {self.address}: {info['error']}")
+        self.info = info
+        self._client = ControlClient(self.address, int(info["control_port"]))
+        return self
+
+    def inject(self, fault: str, **args: Any) -> dict[str, Any]:
+        """Inject a fault (see `mocks.ur.controller`); returns the simulator state after it."""
+        assert self._client is not None, "simulator not started"
+        return self._client.call(fault, **args)
+
+    def state(self) -> dict[str, Any]:
+        assert self._client is not None, "simulator not started"
+        return self._client.state()
+
+    def stop(self, timeout: float = 5.0) -> None:
+        proc, self._proc = self._proc, None
+        if proc is None:
+            return
+        if proc.poll() is None:
+            proc.terminate()
+            try:
+                proc.wait(timeout)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait(timeout)
+        if proc.stdout is not None:
+            proc.stdout.close()
+
+    def __enter__(self) -> SimProcess:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()

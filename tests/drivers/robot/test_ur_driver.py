@@ -1,0 +1,207 @@
+"""The robot driver against the simulated controller: motion, refusals, and every fault as a typed error."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Iterator
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from drivers.robot import (
+    ConnectionLost,
+    EmergencyStop,
+    JointLimitViolation,
+    KeepInZone,
+    KeepInZoneViolation,
+    MotionAborted,
+    NotInRemoteControl,
+    ProgramStopped,
+    ProtectiveStop,
+    RobotConfig,
+    RobotUnreachable,
+    SpeedSliderReduced,
+    UnsupportedVersion,
+    URRobot,
+)
+from mocks.ur.controller import SimConfig
+from mocks.ur.process import SimProcess
+from mocks.ur.testing import random_loopback, start_sim
+
+Q_A = [0.2, -1.3, 1.3, -1.5, -1.5, 0.3]
+Q_FAR = [-1.2, -1.9, 1.9, -1.0, -1.2, -0.8]
+
+
+def config(sim: SimProcess, **kw: object) -> RobotConfig:
+    return RobotConfig(host=sim.address, speed=1.0, acceleration=2.0, **kw)  # type: ignore[arg-type]
+
+
+@pytest.fixture
+def robot(sim: SimProcess) -> Iterator[URRobot]:
+    rob = URRobot(config(sim))
+    rob.open()
+    try:
+        yield rob
+    finally:
+        rob.close()
+
+
+def inject_later(sim: SimProcess, delay: float, fault: str, **args: object) -> threading.Timer:
+    t = threading.Timer(delay, lambda: sim.inject(fault, **args))
+    t.start()
+    return t
+
+
+def assert_arm_stopped(sim: SimProcess) -> None:
+    end = time.monotonic() + 3.0
+    while sim.state()["moving"]:
+        assert time.monotonic() < end, "the arm is still moving"
+        time.sleep(0.01)
+    q0 = sim.state()["q"]
+    time.sleep(0.05)
+    assert sim.state()["q"] == q0
+
+
+def test_constructor_does_no_io() -> None:
+    URRobot(RobotConfig(host="127.254.254.254"))  # nothing listens there; must not raise
+
+
+def test_open_reads_identity(robot: URRobot) -> None:
+    assert robot.info is not None
+    assert robot.info.model == "UR5e" and robot.info.serial == "20235500001"
+    assert robot.info.software_version.startswith("5.15.0") and robot.info.rate_hz == 500.0
+
+
+def test_move_to_settles_and_reads_averaged_joints(robot: URRobot, sim: SimProcess) -> None:
+    reading = robot.move_to(Q_A, samples=20)
+    assert reading.samples == 20
+    assert np.allclose(reading.q, Q_A, atol=2e-6)
+    assert np.all(reading.spread > 0) and np.all(reading.spread < 1e-5)  # encoder noise, ~2 µrad
+    assert np.allclose(sim.state()["q"], Q_A, atol=1e-12)
+
+
+def test_out_of_limits_target_is_refused_without_moving(sim: SimProcess) -> None:
+    with URRobot(config(sim, joint_lower=(-3.0,) * 6, joint_upper=(3.0,) * 6)) as rob:
+        q_before = sim.state()["q"]
+        with pytest.raises(JointLimitViolation, match="joint 2"):
+            rob.move_to([0.0, -3.2, 1.0, 0.0, 0.0, 0.0])
+        with pytest.raises(JointLimitViolation):
+            rob.move_to([0.0, float("nan"), 1.0, 0.0, 0.0, 0.0])
+        assert sim.state()["q"] == q_before and not sim.state()["moving"]
+
+
+def test_keep_in_zone_is_checked_along_the_path(sim: SimProcess) -> None:
+    zone = KeepInZone(lower=(-1.0, -1.0, 0.2), upper=(1.0, 1.0, 1.5))
+    with URRobot(config(sim, keep_in=zone)) as rob:
+        rob.move_to(Q_A)  # inside
+        q_before = sim.state()["q"]
+        with pytest.raises(KeepInZoneViolation):
+            rob.move_to([0.2, -0.2, 0.2, -1.5, -1.5, 0.3])  # arm stretched low: TCP below z = 0.2
+        assert sim.state()["q"] == q_before
+
+
+def test_protective_stop_mid_move(robot: URRobot, sim: SimProcess) -> None:
+    inject_later(sim, 0.05, "protective_stop")
+    with pytest.raises(ProtectiveStop):
+        robot.move_to(Q_FAR)
+    assert_arm_stopped(sim)
+    assert not np.allclose(sim.state()["q"], Q_FAR, atol=1e-3)
+
+
+def test_emergency_stop_mid_move(robot: URRobot, sim: SimProcess) -> None:
+    inject_later(sim, 0.05, "emergency_stop")
+    with pytest.raises(EmergencyStop):
+        robot.move_to(Q_FAR)
+    assert_arm_stopped(sim)
+
+
+def test_dropped_connection_mid_move(robot: URRobot, sim: SimProcess) -> None:
+    inject_later(sim, 0.05, "drop_connection", refuse_s=3.0)
+    with pytest.raises(ConnectionLost):
+        robot.move_to(Q_FAR)
+    assert_arm_stopped(sim)
+
+
+def test_program_stopped_mid_move(robot: URRobot, sim: SimProcess) -> None:
+    inject_later(sim, 0.05, "stop_program")
+    with pytest.raises(ProgramStopped):
+        robot.move_to(Q_FAR)
+    assert_arm_stopped(sim)
+
+
+def test_speed_slider_below_100_percent(robot: URRobot, sim: SimProcess) -> None:
+    sim.inject("speed_slider", fraction=0.5)
+    with pytest.raises(SpeedSliderReduced):
+        robot.move_to(Q_FAR)
+    assert not sim.state()["moving"]
+    sim.inject("speed_slider", fraction=1.0)
+    inject_later(sim, 0.05, "speed_slider", fraction=0.3)
+    with pytest.raises(SpeedSliderReduced):
+        robot.move_to(Q_A)
+    assert_arm_stopped(sim)  # the driver stopped it itself
+
+
+def test_stop_from_another_thread_aborts_the_move(robot: URRobot, sim: SimProcess) -> None:
+    threading.Timer(0.05, robot.stop).start()
+    with pytest.raises(MotionAborted):
+        robot.move_to(Q_FAR)
+    assert_arm_stopped(sim)
+
+
+def test_not_in_remote_control_at_open(sim: SimProcess) -> None:
+    sim.inject("remote_control", on=False)
+    with pytest.raises(NotInRemoteControl):
+        URRobot(config(sim)).open()
+
+
+def test_protective_stop_active_at_open_then_reconnect_after_unlock(sim: SimProcess) -> None:
+    sim.inject("protective_stop")
+    rob = URRobot(config(sim))
+    with pytest.raises(ProtectiveStop):
+        rob.open()
+    time.sleep(0.6)  # past the 5 s (simulated) unlock delay
+    from drivers.robot.probe import DashboardLine
+
+    with DashboardLine(sim.address, 2.0) as dash:
+        assert dash.ask("unlock protective stop") == "Protective stop releasing"
+    rob.open()
+    try:
+        rob.move_to(Q_A)
+    finally:
+        rob.close()
+
+
+def test_emergency_stop_active_at_open(sim: SimProcess) -> None:
+    sim.inject("emergency_stop")
+    with pytest.raises(EmergencyStop):
+        URRobot(config(sim)).open()
+
+
+def test_unreachable() -> None:
+    with pytest.raises(RobotUnreachable):
+        URRobot(RobotConfig(host=random_loopback(), connect_timeout=1.0)).open()
+
+
+def test_unsupported_version() -> None:
+    s = start_sim(SimConfig(version=(5, 4, 0, 0)))
+    try:
+        with pytest.raises(UnsupportedVersion, match="5.4.0"):
+            URRobot(config(s)).open()
+        with pytest.raises(UnsupportedVersion):
+            URRobot(replace(config(s), allowed_versions=((10, 0),))).open()
+    finally:
+        s.stop()
+
+
+def test_servo_stream_follows_a_trajectory(robot: URRobot, sim: SimProcess) -> None:
+    robot.move_to(Q_A)
+    traj = [np.array(Q_A) + np.array([0.3, 0, 0, 0, 0, 0]) * (i / 150) for i in range(151)]
+    with robot.servo(lookahead=0.05, gain=1000) as stream:
+        for q in traj:
+            stream.step(q)
+    assert len(stream.periods) == 150
+    assert 0.0015 < float(np.median(stream.periods)) < 0.003
+    time.sleep(0.1)
+    assert np.allclose(robot.read_joints(5).q, traj[-1], atol=5e-3)
