@@ -118,7 +118,9 @@ class Suspender:
     clear: Callable[[], bool]
     message: str
     poll: float = 0.5
+    backoff: float = 1.0  # the poll interval grows by this factor (reconnects back off)
     timeout: float | None = None  # None: the engine's suspend_timeout
+    max_poll: float = 10.0
 
 
 @dataclass
@@ -339,6 +341,7 @@ class Engine:
                             message=f"{suspender.message} ({exc})"))
         limit = suspender.timeout if suspender.timeout is not None else self.suspend_timeout
         start = time.monotonic()
+        poll = suspender.poll
         while True:
             if self._abort.is_set():
                 raise RunAborted(f"aborted while suspended ({suspender.kind})")
@@ -350,7 +353,8 @@ class Engine:
             if time.monotonic() - start > limit:
                 raise SuspendTimeout(f"{suspender.kind} did not clear within {limit:.0f} s: "
                                      f"{suspender.message}") from exc
-            time.sleep(suspender.poll)
+            self._abort.wait(poll)
+            poll = min(poll * suspender.backoff, suspender.max_poll)
         waited = time.monotonic() - start
         self.stats.suspended += waited
         self._set_state(RUNNING)

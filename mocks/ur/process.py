@@ -45,8 +45,14 @@ ServiceFactory = Callable[[SimController], Service]
 
 
 def _import(spec: str) -> Any:
-    mod, _, name = spec.partition(":")
-    return getattr(importlib.import_module(mod), name)
+    """A factory from ``"module:function"`` or ``"module:function {json kwargs}"``."""
+    target, _, kwargs = spec.partition(" ")
+    mod, _, name = target.partition(":")
+    fn = getattr(importlib.import_module(mod), name)
+    if not kwargs.strip():
+        return fn
+    options = json.loads(kwargs)
+    return lambda controller: fn(controller, **options)
 
 
 def serve(

@@ -1,0 +1,56 @@
+"""The simulated station: the tracker simulator and the world, started next to the robot simulator.
+
+`station_service` is a service factory for `mocks.ur.process.serve` (it runs in the robot
+simulator's process, because ur_rtde's client must not share an interpreter with the controller, and
+the tracker must see the simulated arm's true joints). It loads the hidden truth (or draws a random
+realistic one by seed), puts the arm at a start pose facing the tracker and serves GeoCOM on a pty
+and on TCP at the controller's loopback address.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from hil.model_file import load_truth, truth_document
+from hil.synthetic import Noise, random_truth
+from mocks.geocom.instrument import InstrumentConfig
+from mocks.geocom.server import GeoComSimulator, LinkConfig, SimulatorConfig
+from mocks.world import World
+
+
+class StationService:
+    """The tracker simulator and its world, as one service of the robot simulator's process."""
+
+    def __init__(self, simulator: GeoComSimulator, world: World, truth_doc: dict[str, Any],
+                 home: np.ndarray) -> None:
+        self.simulator = simulator
+        self.world = world
+        self.truth_doc = truth_doc
+        self.home = home
+
+    def start(self) -> dict[str, Any]:
+        self.simulator.start()
+        return {"tracker_url": self.simulator.url, "tracker_pty": self.simulator.pty_path,
+                "truth": self.truth_doc, "home": self.home.tolist()}
+
+    def stop(self) -> None:
+        self.simulator.stop()
+
+
+def station_service(controller: Any, truth: str | None = None, seed: int = 0,
+                    acceptance_angle: float = 30.0, baudrate: int | None = None,
+                    tracker_port: int = 0) -> StationService:
+    """Build the world and the tracker simulator around a running `SimController`."""
+    rng = np.random.default_rng(seed)
+    if truth:
+        geometry, noise = load_truth(truth)
+    else:
+        geometry, noise = random_truth(controller.config.robot, rng), Noise()
+    world = World(geometry, controller.true_joints, acceptance_angle)
+    home = world.home_pose(rng)
+    controller.inject("set_joints", q=home.tolist())
+    config = SimulatorConfig(instrument=InstrumentConfig(seed=seed), link=LinkConfig(baudrate=baudrate),
+                             address=controller.config.address, port=tracker_port)
+    return StationService(GeoComSimulator(world, config), world, truth_document(geometry, noise), home)
