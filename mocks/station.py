@@ -54,3 +54,26 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
     config = SimulatorConfig(instrument=InstrumentConfig(seed=seed), link=LinkConfig(baudrate=baudrate),
                              address=controller.config.address, port=tracker_port)
     return StationService(GeoComSimulator(world, config), world, truth_document(geometry, noise), home)
+
+
+def station_spec(truth: str | None = None, seed: int = 0, acceptance_angle: float = 30.0,
+                 baudrate: int | None = None) -> str:
+    """The service spec that puts the world and the tracker into the robot simulator's process."""
+    import json
+
+    options = {"truth": truth, "seed": seed, "acceptance_angle": acceptance_angle, "baudrate": baudrate}
+    return "mocks.station:station_service " + json.dumps(options)
+
+
+def start_station(robot: str = "ur5e", truth: str | None = None, speed: float = 1.0, seed: int = 0,
+                  acceptance_angle: float = 30.0, baudrate: int | None = None) -> Any:
+    """Start the whole simulated station in its own process on a free loopback address.
+
+    Returns the running `mocks.ur.process.SimProcess`; ``.info["services"][0]`` holds the tracker's
+    URL and pty and the hidden truth. The caller must `stop()` it.
+    """
+    from mocks.ur.controller import SimConfig
+    from mocks.ur.testing import start_sim
+
+    spec = station_spec(truth, seed, acceptance_angle, baudrate)
+    return start_sim(SimConfig(robot=robot, speed=speed, seed=seed), services=[spec])

@@ -25,13 +25,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def station_spec(truth: str | None, seed: int, acceptance_angle: float, baud: int | None) -> str:
-    """The service spec that puts the world and the tracker into the robot simulator's process."""
-    options = {"truth": truth, "seed": seed, "acceptance_angle": acceptance_angle, "baudrate": baud}
-    return "mocks.station:station_service " + json.dumps(options)
-
-
 def run(args: argparse.Namespace) -> int:
+    from mocks.station import station_spec
     from mocks.ur.cli_entry import config_from_args
     from mocks.ur.process import serve
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 import random
 import time
+from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any
 
@@ -24,14 +25,15 @@ def random_loopback() -> str:
     return f"127.{_rng.randint(16, 254)}.{_rng.randint(0, 254)}.{_rng.randint(2, 254)}"
 
 
-def start_sim(config: SimConfig | None = None, *, attempts: int = 5, **overrides: Any) -> SimProcess:
+def start_sim(config: SimConfig | None = None, *, attempts: int = 5, services: Sequence[str] = (),
+              **overrides: Any) -> SimProcess:
     """Start a simulator process on a free random loopback address; the caller must `stop()` it."""
     base = config or SimConfig()
     last: Exception | None = None
     for _ in range(attempts):
         cfg = replace(base, address=random_loopback(), **overrides)
         try:
-            return SimProcess(cfg).start()
+            return SimProcess(cfg, services).start()
         except SimStartError as exc:
             last = exc
             if "Address already in use" not in str(exc) and "Errno 98" not in str(exc):

@@ -1,0 +1,144 @@
+"""Running one campaign end to end: devices, engine, plan, events in and result out.
+
+Shared by the headless CLI and the TUI so both behave the same: it opens the station's devices,
+emits `RunStarted`, runs the calibration plan on the engine with the station's suspenders, and
+always emits `RunFinished` (accepted, rejected, aborted or failed) and closes the devices — whatever
+happened in between.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import secrets
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from hil import __version__
+from hil.campaign import CampaignResult, ChoosePoses, ResumeState, calibration_plan
+from hil.config import StationConfig
+from hil.engine import Clock, Engine, RealClock, RunAborted
+from hil.errors import InputError
+from hil.events import EventBus, RunFinished, RunStarted
+from hil.geometry import Geometry
+from hil.kinematics import Kinematics
+from hil.plans import PoseRecord
+from hil.robots import get_robot
+from hil.station import HARDWARE_ERRORS, Devices, open_devices, suspenders
+
+
+def new_campaign_id() -> str:
+    """A short, sortable, unique campaign id: UTC date-time plus 4 random hex digits."""
+    return _dt.datetime.now(_dt.UTC).strftime("%Y%m%d-%H%M%S-") + secrets.token_hex(2)
+
+
+@dataclass
+class RunOutcome:
+    """How a run ended, for exit codes and the result file."""
+
+    status: str  # accepted, rejected, aborted, failed
+    campaign: str
+    result: CampaignResult | None = None
+    error: BaseException | None = None
+    robot_info: dict[str, Any] = field(default_factory=dict)
+    tracker_info: dict[str, Any] = field(default_factory=dict)
+    timing: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def exit_code(self) -> int:
+        """0 accepted, 1 rejected, 3 hardware fault, 4 aborted (bad input raises before a run)."""
+        if self.status == "accepted":
+            return 0
+        if self.status == "rejected":
+            return 1
+        if self.status == "aborted":
+            return 4
+        return 3
+
+
+def _nominal_deviation(config: StationConfig, tracker_estimate: Callable[[], Any]
+                       ) -> Callable[[PoseRecord], float | None]:
+    """Distance of each measured point from the nominal model's prediction (shown live)."""
+    robot = config.robot["type"]
+    smr = config.smr["offset"]
+
+    def deviation(record: PoseRecord) -> float | None:
+        tracker = tracker_estimate()
+        if tracker is None:
+            return None
+        p = Kinematics(Geometry.nominal(robot, smr, tracker)).points(record.q)[0]
+        return float(np.linalg.norm(p - record.p))
+
+    return deviation
+
+
+def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | None = None,
+                 campaign: str | None = None, resume: ResumeState | None = None,
+                 clock: Clock | None = None, devices: Devices | None = None,
+                 engine_ready: Callable[[Engine], None] | None = None,
+                 validation_cycles: int = 1) -> RunOutcome:
+    """Run one calibration campaign on the configured (or given) devices; never raises for hardware.
+
+    Bad input (config, unsafe targets found before motion) still raises InputError. `engine_ready`
+    receives the engine before it starts, so a UI can pause or abort it from another thread.
+    """
+    bus = bus or EventBus()
+    campaign = campaign or new_campaign_id()
+    outcome = RunOutcome("failed", campaign)
+    spec = get_robot(config.robot["type"])
+    try:
+        devices = devices or open_devices(config)
+    except HARDWARE_ERRORS as exc:
+        outcome.error = exc
+        bus.emit(RunFinished(campaign=campaign, status="failed", detail=f"connect: {exc}"))
+        return outcome
+    info = getattr(devices.robot, "info", None)
+    outcome.robot_info = ({"model": info.model, "serial": info.serial, "software": info.software_version}
+                          if info is not None else {})
+    ident = getattr(devices.tracker, "identity", None)
+    outcome.tracker_info = ({"name": ident.name, "serial": ident.serial_number,
+                             "firmware": ".".join(map(str, ident.firmware))} if ident is not None else {})
+    estimate: dict[str, Any] = {"tracker": None}
+    engine = Engine(
+        devices.robot, devices.tracker, campaign, spec, bus=bus, suspenders=suspenders(devices),
+        clock=clock or RealClock(), suspend_timeout=config.timeouts["suspend"],
+        keep_in=(np.array(config.keep_in["min"]), np.array(config.keep_in["max"])),
+        check_model=Geometry.nominal(spec, config.smr["offset"]),
+        deviation=_nominal_deviation(config, lambda: estimate["tracker"]))
+    if engine_ready is not None:
+        engine_ready(engine)
+    planned = (config.campaign["calibration_poses"]
+               + config.campaign["validation_poses"] * validation_cycles)
+    bus.emit(RunStarted(campaign=campaign, robot=spec.name, station=config.station["name"],
+                        poses=planned, resumed=resume is not None,
+                        measured=len(resume.records) if resume else 0))
+
+    def track_estimate(event: Any) -> None:
+        if type(event).__name__ == "PlanReady" and event.tracker:
+            estimate["tracker"] = Geometry.from_dict(
+                {**Geometry.nominal(spec).to_dict(), "tracker": event.tracker}).tracker
+
+    bus.subscribe(track_estimate)
+    try:
+        result: CampaignResult = engine.run(
+            calibration_plan(config, choose, campaign, resume, validation_cycles))
+        outcome.result = result
+        outcome.status = "accepted" if result.passed else "rejected"
+        detail = (f"validation RMS {result.after.rms * 1e3:.4f} mm "
+                  f"{'<=' if result.passed else '>'} {config.campaign['acceptance'] * 1e3:.4f} mm")
+    except (RunAborted, KeyboardInterrupt) as exc:
+        outcome.status, outcome.error, detail = "aborted", exc, str(exc) or "interrupted"
+    except InputError as exc:  # an unsafe target found before moving: bad input, not a fault
+        bus.emit(RunFinished(campaign=campaign, status="failed", detail=str(exc)))
+        raise
+    except Exception as exc:  # hardware faults, suspensions that never cleared, failed fits
+        outcome.status, outcome.error, detail = "failed", exc, f"{type(exc).__name__}: {exc}"
+    finally:
+        bus.unsubscribe(track_estimate)
+        outcome.timing = engine.stats.as_dict()
+        devices.close()
+    bus.emit(RunFinished(campaign=campaign, status=outcome.status, detail=detail,
+                         result={"software": __version__}))
+    return outcome
