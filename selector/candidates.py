@@ -217,10 +217,11 @@ def aim_wrist(model: PoseModel, q: np.ndarray, constraints: Constraints, rng: np
 
     Uniform joint sampling wastes over 90 % of its draws on an SMR facing away from the tracker. For
     fixed q1–q4 and q6 the opening axis is a(q5) = A·cos q5 + B·sin q5 + C (joint 5 rotates about the z
-    axis of its frame, `PoseModel.frames`' convention), so a(q5)·u ≥ cos θ holds on an interval of q5 around the best value,
-    which is where q5 is drawn (u, the direction to the tracker, is taken at the original q5; the exact
-    check afterwards removes the few that the wrist's own motion pushes out). Rows with no such interval
-    keep their q5 and fail the acceptance check. The rest of the distribution stays uniform.
+    axis of its frame, `PoseModel.frames`' convention), so a(q5)·u ≥ cos θ holds on an interval of q5
+    around the best value, which is where q5 is drawn (u, the direction to the tracker, is taken at the
+    original q5; the exact check afterwards removes those that the wrist's own motion pushes out).
+    Rows with no such interval keep their q5 and fail the acceptance check. The rest of the distribution
+    stays uniform.
     """
     c = constraints
     tracker = np.asarray(c.tracker, float)
