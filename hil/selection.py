@@ -37,7 +37,7 @@ from hil.robots import get_robot
 from selector.arm import ArmShape
 from selector.bound import d_optimal_bound
 from selector.candidates import Constraints, generate_candidates
-from selector.indices import parse_index, scale_columns
+from selector.indices import SCALINGS, parse_index, scale_columns
 from selector.order import order_poses, travel_time
 from selector.search import METHODS, check_count, select
 from selector.tabu import TabuSettings
@@ -130,6 +130,9 @@ def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str
     constraints = constraints or Constraints()
     try:
         index = parse_index(index)
+        if scaling not in SCALINGS:
+            raise selector.SelectorError(f"unknown column scaling {scaling!r}: choose one of "
+                                         f"{', '.join(SCALINGS)}")
         if method not in METHODS:
             raise selector.SelectorError(f"unknown method {method!r}: choose one of {', '.join(METHODS)}")
         model = SelectionModel(robot, smr, constraints.tracker)

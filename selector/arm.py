@@ -87,16 +87,22 @@ def segment_distance(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndar
     c = np.einsum("...i,...i->...", d1, r)
     b = np.einsum("...i,...i->...", d1, d2)
     eps = 1e-12
+    a_ok, e_ok = a > eps, e > eps
+    a_safe, e_safe = np.where(a_ok, a, 1.0), np.where(e_ok, e, 1.0)
     denom = a * e - b * b
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.where(denom > eps, np.clip((b * f - c * e) / np.where(denom > eps, denom, 1.0), 0, 1), 0.0)
-        s = np.where(a <= eps, 0.0, s)
-        t = np.where(e > eps, (b * s + f) / np.where(e > eps, e, 1.0), 0.0)
-        # t outside [0, 1]: clamp it and recompute s for the clamped t.
-        t_c = np.clip(t, 0.0, 1.0)
-        s_new = np.where(a > eps, np.clip((t_c * b - c) / np.where(a > eps, a, 1.0), 0.0, 1.0), 0.0)
-        s = np.where((t < 0.0) | (t > 1.0), s_new, s)
-        t = t_c
+    # General case: closest points of the infinite lines, s clamped (s = 0 for parallel lines).
+    s = np.where(denom > eps * a_safe * e_safe, np.clip((b * f - c * e) / np.where(denom > 0, denom, 1.0),
+                                                        0.0, 1.0), 0.0)
+    t = (b * s + f) / e_safe
+    # t outside [0, 1]: clamp it and recompute s for the clamped t.
+    s_low, s_high = np.clip(-c / a_safe, 0.0, 1.0), np.clip((b - c) / a_safe, 0.0, 1.0)
+    s = np.where(t < 0.0, s_low, np.where(t > 1.0, s_high, s))
+    t = np.clip(t, 0.0, 1.0)
+    # Degenerate segments (points).
+    s = np.where(~e_ok, np.clip(-c / a_safe, 0.0, 1.0), s)
+    t = np.where(~e_ok, 0.0, t)
+    t = np.where(~a_ok, np.clip(f / e_safe, 0.0, 1.0), t)
+    s = np.where(~a_ok, 0.0, s)
     c1 = p1 + d1 * s[..., None]
     c2 = p2 + d2 * t[..., None]
     return np.linalg.norm(c1 - c2, axis=-1)

@@ -272,8 +272,9 @@ def generate_candidates(model: PoseModel, count: int, constraints: Constraints |
     kept_smr: list[np.ndarray] = []
     found = sampled = 0
     rate = 0.5  # acceptance guess until the first batch tells
+    hopeless = max(10 * batch, 50_000)  # draws without a single survivor after which we give up
     aim = ("acceptance" in constraints.enabled() and hi[4] - lo[4] >= 2 * math.pi - 1e-9)
-    while found < count and sampled < max_samples:
+    while found < count and sampled < max_samples and not (found == 0 and sampled >= hopeless):
         size = int(min(max_samples - sampled, max(batch, 1.2 * (count - found) / max(rate, 1e-3))))
         q = lo + (hi - lo) * rng.random((size, 6))
         if aim:

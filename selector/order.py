@@ -76,6 +76,8 @@ def _or_opt(D: np.ndarray, path: np.ndarray, fixed_first: bool) -> tuple[np.ndar
     best_delta, best_path = -1e-12, None
     for length in (1, 2, 3):
         for s in range(first, n - length + 1):
+            if n - length < 1:
+                break
             run = path[s:s + length]
             rest = np.concatenate([path[:s], path[s + length:]])
             prev = path[s - 1] if s > 0 else -1
@@ -123,6 +125,9 @@ def order_poses(Q: np.ndarray, speeds: np.ndarray, start: np.ndarray | None = No
     n = len(Q)
     if n == 0:
         return np.zeros(0, dtype=int), 0.0
+    if n <= 2 and start is None:
+        perm = np.arange(n)
+        return perm, travel_time(Q, speeds)
     pts = Q if start is None else np.vstack([np.asarray(start, float)[None], Q])
     D = time_matrix(pts, speeds)
     fixed = start is not None

@@ -28,6 +28,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "fk",
     "export",
     "synth",
+    "select",
 )
 
 EXIT_OK = 0
