@@ -26,6 +26,7 @@ from hil.selection import parse_constraints, select_poses
 from selector.candidates import CONSTRAINT_NAMES
 from selector.indices import INDEX_NAMES, SCALINGS
 from selector.search import METHODS
+from selector.tabu import TabuSettings
 
 DEFAULT_SMR = "0,0,0.045"
 
@@ -103,8 +104,6 @@ def run(args: argparse.Namespace) -> int:
         settings["tracker_range"] = rng
     start = _numbers(args.start, 6, "--start")
     constraints = parse_constraints(tracker=tracker, disabled=disabled, **settings)
-    from selector.tabu import TabuSettings
-
     report = select_poses(args.robot, args.count, candidates=args.candidates, index=args.index,
                           method=args.method, seed=args.seed, smr=smr, constraints=constraints,
                           scaling=args.scaling, start=None if start is None else np.array(start),
