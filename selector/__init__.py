@@ -1,1 +1,50 @@
-"""Choosing measurement poses: observability indices, candidates, tabu search, bounds. Pure functions."""
+"""Choosing measurement poses: observability indices, candidates, tabu search, bounds. Pure functions.
+
+The package implements method 000 (see ``shared/seeds/README.md``): the identification Jacobian of the
+identifiable parameters is stacked over the chosen poses and an observability index of it is maximised
+by an outer loop of random restarts around a tabu search, with redundant-pose removal. Around it:
+
+* `indices` — O1…O5 and column scaling;
+* `information` — the information matrix of a pose set with low-rank (determinant lemma) swap scores;
+* `tabu` — the patent method; `exchange` — the DETMAX baseline; `random_selection` — the naive one;
+* `bound` — the D-optimal approximate-design bound (multiplicative algorithm with a duality certificate);
+* `candidates` / `arm` — feasible configurations under joint, workspace, visibility, singularity and
+  self-collision constraints;
+* `order` — the visiting order that minimises travel time.
+
+Nothing here does I/O or imports `hil`: the kinematic model arrives as an argument satisfying
+`selector.model.PoseModel`.
+"""
+
+from selector.bound import Bound, d_optimal_bound
+from selector.candidates import CandidateSet, Constraints, generate_candidates
+from selector.errors import CountError, NoCandidatesError, SelectorError, UnknownIndexError
+from selector.exchange import exchange_select
+from selector.indices import INDEX_NAMES, observability, parse_index
+from selector.order import order_poses, travel_time
+from selector.search import Selection, minimum_poses, random_select, select
+from selector.tabu import TabuSettings, tabu_select
+
+__all__ = [
+    "INDEX_NAMES",
+    "Bound",
+    "CandidateSet",
+    "Constraints",
+    "CountError",
+    "NoCandidatesError",
+    "Selection",
+    "SelectorError",
+    "TabuSettings",
+    "UnknownIndexError",
+    "d_optimal_bound",
+    "exchange_select",
+    "generate_candidates",
+    "minimum_poses",
+    "observability",
+    "order_poses",
+    "parse_index",
+    "random_select",
+    "select",
+    "tabu_select",
+    "travel_time",
+]

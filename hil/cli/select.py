@@ -1,0 +1,116 @@
+"""`hil select`: choose the measurement poses of a calibration (method 000), JSON out.
+
+    hil select --robot ur5e --count 30 [--candidates 20000] [--index O1] [--method tabu|exchange|random]
+               [--seed S] [--tracker X,Y,Z] [--smr X,Y,Z] [--out poses.json] [constraint options]
+
+The JSON (``hil-poses/1``) has robot, index, value, bound (O1's D-optimal bound), percent_of_bound,
+method, seconds (the selection itself), poses (6-lists in radians, in visiting order), the travel time
+ordered vs unordered, the candidate statistics and every constraint setting used. Without --out it goes
+to stdout. Bad input is one line on stderr and exit code 2, and nothing is written.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from typing import Any
+
+import numpy as np
+
+from hil.errors import InputError
+from hil.geometry import parse_triplet
+from hil.measurements import atomic_write_text
+from hil.selection import parse_constraints, select_poses
+from selector.candidates import CONSTRAINT_NAMES
+from selector.indices import INDEX_NAMES, SCALINGS
+from selector.search import METHODS
+from selector.tabu import TabuSettings
+
+DEFAULT_SMR = "0,0,0.045"
+
+
+def register(sub: Any) -> None:
+    """Add the ``select`` subcommand to the dispatcher's subparsers."""
+    p = sub.add_parser("select", help="choose optimal measurement poses (JSON out)",
+                       description=__doc__.split("\n\n")[0])
+    p.add_argument("--robot", required=True, help="robot type, e.g. ur5e")
+    p.add_argument("--count", required=True, type=int, help="number of poses to choose")
+    p.add_argument("--candidates", type=int, default=20_000, help="candidate configurations (20000)")
+    p.add_argument("--index", default="O1", help=f"observability index: {', '.join(INDEX_NAMES)} (O1)")
+    p.add_argument("--method", default="tabu", help=f"{', '.join(METHODS)} (tabu)")
+    p.add_argument("--seed", type=int, default=0, help="random seed; equal seeds give equal output (0)")
+    p.add_argument("--tracker", help="tracker position X,Y,Z in the robot base frame (m); without it the "
+                                     "range, acceptance and line-of-sight constraints are off")
+    p.add_argument("--smr", default=DEFAULT_SMR,
+                   help=f"SMR centre in the flange frame X,Y,Z (m) ({DEFAULT_SMR})")
+    p.add_argument("--scaling", default="expected", help=f"column scaling for O2–O5: {', '.join(SCALINGS)}")
+    p.add_argument("--keep-in", help="SMR keep-in box XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (m, base frame)")
+    p.add_argument("--floor", type=float, default=0.0, help="height of the mounting surface (m) (0)")
+    p.add_argument("--range", dest="tracker_range", help="tracker distance MIN,MAX (m) (0.8,20)")
+    p.add_argument("--half-angle", type=float, default=30.0, help="SMR acceptance half-angle (deg) (30)")
+    p.add_argument("--wrist-margin", type=float, default=10.0, help="min |q5| from 0/π (deg) (10)")
+    p.add_argument("--elbow-margin", type=float, default=10.0, help="min |q3| from 0/π (deg) (10)")
+    p.add_argument("--shoulder-margin", type=float, default=0.05,
+                   help="min distance of the wrist point from the shoulder singularity (m) (0.05)")
+    p.add_argument("--disable", action="append", default=[],
+                   help=f"switch constraints off (comma list; repeatable): {', '.join(CONSTRAINT_NAMES)}")
+    p.add_argument("--start", help="current joint configuration q1..q6 (rad): the route starts there")
+    p.add_argument("--prune", action="store_true",
+                   help="drop redundant poses of the result (the patent's step 5): may return fewer")
+    p.add_argument("--out", help="output JSON file (default: stdout)")
+    p.set_defaults(func=run)
+
+
+def _numbers(text: str | None, n: int, name: str) -> tuple[float, ...] | None:
+    if text is None:
+        return None
+    parts = [s.strip() for s in str(text).split(",")]
+    try:
+        values = tuple(float(s) for s in parts)
+    except ValueError:
+        raise InputError(f"{name}: expected {n} comma-separated numbers, got {text!r}") from None
+    if len(values) != n or not all(math.isfinite(v) for v in values):
+        raise InputError(f"{name}: expected {n} finite comma-separated numbers, got {text!r}")
+    return values
+
+
+def _finite(value: float, name: str) -> float:
+    if not math.isfinite(value):
+        raise InputError(f"{name}: must be a finite number")
+    return value
+
+
+def run(args: argparse.Namespace) -> int:
+    """Validate everything, select, then write the JSON (nothing is written on bad input)."""
+    if args.candidates < 1:
+        raise InputError(f"--candidates must be at least 1, got {args.candidates}")
+    tracker = None if args.tracker is None else tuple(parse_triplet(args.tracker, "--tracker"))
+    smr = parse_triplet(args.smr, "--smr")
+    disabled = [s.strip() for item in args.disable for s in item.split(",") if s.strip()]
+    settings: dict[str, Any] = {
+        "floor": _finite(args.floor, "--floor"),
+        "half_angle_deg": _finite(args.half_angle, "--half-angle"),
+        "wrist_margin_deg": _finite(args.wrist_margin, "--wrist-margin"),
+        "elbow_margin_deg": _finite(args.elbow_margin, "--elbow-margin"),
+        "shoulder_margin": _finite(args.shoulder_margin, "--shoulder-margin"),
+    }
+    box = _numbers(args.keep_in, 6, "--keep-in")
+    if box is not None:
+        settings["keep_in_lower"], settings["keep_in_upper"] = box[:3], box[3:]
+    rng = _numbers(args.tracker_range, 2, "--range")
+    if rng is not None:
+        settings["tracker_range"] = rng
+    start = _numbers(args.start, 6, "--start")
+    constraints = parse_constraints(tracker=tracker, disabled=disabled, **settings)
+    report = select_poses(args.robot, args.count, candidates=args.candidates, index=args.index,
+                          method=args.method, seed=args.seed, smr=smr, constraints=constraints,
+                          scaling=args.scaling, start=None if start is None else np.array(start),
+                          settings=TabuSettings(prune=True) if args.prune else None)
+    text = json.dumps(report, indent=2) + "\n"
+    if args.out:
+        atomic_write_text(args.out, text)
+    else:
+        sys.stdout.write(text)
+    return 0

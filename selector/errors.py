@@ -1,0 +1,23 @@
+"""Errors the selector raises on purpose.
+
+The selector must not import `hil`, so it has its own `ValueError` subclasses; the glue in
+``hil.selection`` turns them into ``hil.errors.InputError`` (exit code 2 on the command line).
+"""
+
+from __future__ import annotations
+
+
+class SelectorError(ValueError):
+    """A request the selector cannot satisfy (bad count, unknown index, no candidates…)."""
+
+
+class UnknownIndexError(SelectorError):
+    """An observability index name that is not O1…O5."""
+
+
+class CountError(SelectorError):
+    """A pose count too small to identify the parameters, or larger than the candidate set."""
+
+
+class NoCandidatesError(SelectorError):
+    """The constraints left no (or too few) candidate configurations."""
