@@ -30,6 +30,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "fk",
     "export",
     "synth",
+    "history",
 )
 
 EXIT_OK = 0

@@ -94,6 +94,11 @@ def _dumps(value: Any) -> str:
     return json.dumps(value, separators=(",", ":"), default=default)
 
 
+def _dumps_or_null(value: Any) -> str | None:
+    """JSON text, or SQL NULL for None (so "absent" is queryable as IS NULL)."""
+    return None if value is None else _dumps(value)
+
+
 def _loads(text: str | None) -> Any:
     return None if text is None else json.loads(text)
 
@@ -113,7 +118,8 @@ def _optional_vector(value: Any, n: int, what: str) -> tuple[float, ...] | None:
 
 
 def _tuple(text: str | None) -> tuple[float, ...] | None:
-    return None if text is None else tuple(json.loads(text))
+    value = _loads(text)
+    return None if value is None else tuple(value)
 
 
 def _sha(value: Any) -> str:
@@ -339,7 +345,7 @@ class Store:
                 "INSERT INTO campaigns (id, station, robot, robot_type, config, config_hash, plan, "
                 "status, software, created, updated) VALUES (?, ?, ?, ?, ?, ?, ?, 'created', ?, ?, ?)",
                 (cid, station_id, robot_id, info.type, _dumps(values), config_hash(values),
-                 None if plan is None else _dumps(plan), __version__, now, now))
+                 _dumps_or_null(plan), __version__, now, now))
         return cid
 
     def set_status(self, campaign: str, status: str, detail: str | None = None,
@@ -353,7 +359,7 @@ class Store:
         cur = conn.execute(
             "UPDATE campaigns SET status = ?, detail = COALESCE(?, detail), "
             "result = COALESCE(?, result), updated = ? WHERE id = ?",
-            (status, detail, None if result is None else _dumps(result), now, campaign))
+            (status, detail, _dumps_or_null(result), now, campaign))
         if cur.rowcount == 0:
             raise StoreError(f"{self.path}: no campaign {campaign!r}")
 
@@ -517,8 +523,10 @@ class Store:
             "INSERT INTO measurements (campaign, pose, role, q, q_spread, p, p_spread, samples, "
             "deviation, t) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?) "
             "ON CONFLICT (campaign, pose, t) DO NOTHING RETURNING id",
-            (campaign, int(index), role, _dumps(qv), _dumps(_optional_vector(q_spread, 6, "q_spread")),
-             _dumps(_vector(p, 3, f"pose {index} p")), _dumps(_optional_vector(p_spread, 3, "p_spread")),
+            (campaign, int(index), role, _dumps(qv),
+             _dumps_or_null(_optional_vector(q_spread, 6, "q_spread")),
+             _dumps(_vector(p, 3, f"pose {index} p")),
+             _dumps_or_null(_optional_vector(p_spread, 3, "p_spread")),
              int(samples), _finite_or_none(deviation), float(t))).fetchone()
         if row is None:  # already recorded (the direct call and then its event)
             return int(conn.execute("SELECT id FROM measurements WHERE campaign = ? AND pose = ? "
@@ -653,7 +661,7 @@ class Store:
             "created) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (campaign, sha256) DO NOTHING "
             "RETURNING id",
             (campaign, model, _dumps(before), _dumps(after), int(bool(passed)),
-             _finite_or_none(after.get("rms")), None if details is None else _dumps(details), sha,
+             _finite_or_none(after.get("rms")), _dumps_or_null(details), sha,
              now)).fetchone()
         self._touch(conn, campaign, now)
         if row is None:
