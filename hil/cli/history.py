@@ -63,18 +63,23 @@ def _open(args: argparse.Namespace) -> Store:
     return Store.open(resolve_path(args.db, config), create=False)
 
 
-def _when(t: float | None) -> str:
-    return "-" if t is None else time.strftime("%Y-%m-%d %H:%M", time.localtime(t))
+def _when(t: float | None, fmt: str = "%Y-%m-%d %H:%M") -> str:
+    return "-" if t is None else time.strftime(fmt, time.localtime(t))
 
 
 def _mm(value: float | None) -> str:
     return "-" if value is None else mm(value)
 
 
+# 79 columns: fits the 80x24 terminal. The id already says when the campaign was created, so the
+# table shows the last activity instead (a "running" campaign idle for days was killed).
+_ROW = "{:<20} {:<14} {:<10} {:<5} {:<9} {:>7} {:>8}"
+
+
 def _history_line(c: CampaignSummary) -> str:
-    poses = f"{c.measured}/{c.planned}"
-    return (f"{c.id:<20}  {_when(c.created):<16}  {c.station[:12]:<12}  {c.robot:<6}  "
-            f"{c.status:<9}  {poses:>7}  {_mm(c.validation_rms):>9}")
+    rms = "-" if c.validation_rms is None else f"{c.validation_rms * 1e3:.3f}"
+    return _ROW.format(c.id, _when(c.updated, "%y-%m-%d %H:%M"), c.station[:10], c.robot[:5],
+                       c.status[:9], f"{c.measured}/{c.planned}", rms)
 
 
 def run_history(args: argparse.Namespace) -> int:
@@ -89,8 +94,7 @@ def run_history(args: argparse.Namespace) -> int:
     if not rows:
         print(f"no campaigns in {where}")
         return 0
-    print(f"{'ID':<20}  {'CREATED':<16}  {'STATION':<12}  {'ROBOT':<6}  {'STATUS':<9}  "
-          f"{'POSES':>7}  {'VAL. RMS':>9}")
+    print(_ROW.format("ID", "UPDATED", "STATION", "ROBOT", "STATUS", "POSES", "VAL [mm]"))
     for r in rows:
         print(_history_line(r))
     return 0
@@ -142,7 +146,7 @@ def _show_text(rec: CampaignRecord) -> list[str]:
             lines.append("  plan        " + ", ".join(f"{k} {v}" for k, v in shown.items()))
     lines.append("  poses       " + (", ".join(f"{roles[r]} {r}" for r in ROLES if roles[r]) or "none")
                  + f"; {s.measured} measured, {s.skipped} skipped, {pending} pending")
-    lines.append(f"  measurements {len(rec.measurements)} recorded")
+    lines.append(f"  points      {len(rec.measurements)} recorded")
     model = rec.model
     if model is not None:
         fit: dict[str, Any] = model.doc.get("fit") or {}
