@@ -256,9 +256,12 @@ class Store:
                 migrate(conn, where)
         except sqlite3.DatabaseError as exc:
             conn.close()
-            if "locked" in str(exc) or "busy" in str(exc):
-                raise StoreError(f"{where}: {exc}") from None
-            raise InputError(f"{where}: not a hil database ({exc})") from None
+            text = str(exc)
+            if "locked" in text or "busy" in text:
+                raise StoreError(f"{where}: {text}") from None
+            if "not a database" in text or "malformed" in text:
+                raise InputError(f"{where}: not a hil database ({text})") from None
+            raise InputError(f"{where}: cannot open: {text}") from None
         except BaseException:
             conn.close()
             raise
@@ -367,7 +370,7 @@ class Store:
         conn.execute("UPDATE campaigns SET updated = max(updated, ?) WHERE id = ?", (now, campaign))
 
     def find_resumable(self, config: Any = None, robot_serial: str | None = None, *,
-                       config_hash_: str | None = None) -> str | None:
+                       config_sha256: str | None = None) -> str | None:
         """The newest unfinished campaign run with the same configuration, or None.
 
         Unfinished means a status outside `FINISHED` (so a killed run, and one ended by a hardware
@@ -376,14 +379,14 @@ class Store:
         resuming another arm's campaign would mix two robots' measurements. With a serial, only a
         campaign of that serial matches.
         """
-        if config_hash_ is None:
+        if config_sha256 is None:
             if config is None:
                 raise ValueError("find_resumable needs a config or a config hash")
-            config_hash_ = config_hash(config.as_dict() if hasattr(config, "as_dict") else config)
+            config_sha256 = config_hash(config.as_dict() if hasattr(config, "as_dict") else config)
         finished = sorted(FINISHED)
         sql = ("SELECT c.id FROM campaigns c LEFT JOIN robots r ON r.id = c.robot "
                f"WHERE c.config_hash = ? AND c.status NOT IN ({', '.join('?' * len(finished))})")
-        params: list[Any] = [config_hash_, *finished]
+        params: list[Any] = [config_sha256, *finished]
         if robot_serial:
             sql += " AND r.serial = ?"
             params.append(robot_serial)

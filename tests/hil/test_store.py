@@ -375,7 +375,7 @@ def test_resume_queries(store):
     assert store.find_resumable(config, ROBOT.serial) == killed
     assert store.find_resumable(config, "another-arm") is None  # never resume another robot's run
     assert store.find_resumable(cfg("cell-2")) == other
-    assert store.find_resumable(config_hash_=config_hash(config)) == killed
+    assert store.find_resumable(config_sha256=config_hash(config)) == killed
     # where the database lives does not change the campaign
     assert store.find_resumable(cfg(store__path="/elsewhere.db")) == killed
     assert store.find_resumable(cfg(campaign__samples=9)) is None
