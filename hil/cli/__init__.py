@@ -32,6 +32,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "synth",
     "select",
     "sim",
+    "history",
 )
 
 EXIT_OK = 0

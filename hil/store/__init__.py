@@ -1,0 +1,43 @@
+"""The durable store: every campaign, pose, measurement, model, validation and event, in SQLite.
+
+"The store is the truth" (DESIGN.md): each measurement is committed before the next move, a killed
+run resumes from what is here, and ``hil history`` / ``hil show`` read it. See `hil.store.core` for
+the durability and threading rules, `hil.store.schema` for the tables and their upgrade steps, and
+`hil.store.paths` for where the file lives.
+"""
+
+from hil.store.core import Store, StoreError, UnknownCampaignError, new_campaign_id
+from hil.store.paths import ENV_VAR, default_path, resolve_path
+from hil.store.records import (
+    FINISHED,
+    ROLES,
+    CampaignRecord,
+    CampaignSummary,
+    Measurement,
+    ModelRecord,
+    PlannedPose,
+    RobotInfo,
+    ValidationRecord,
+)
+from hil.store.schema import SCHEMA_VERSION, config_hash
+
+__all__ = [
+    "ENV_VAR",
+    "FINISHED",
+    "ROLES",
+    "SCHEMA_VERSION",
+    "CampaignRecord",
+    "CampaignSummary",
+    "Measurement",
+    "ModelRecord",
+    "PlannedPose",
+    "RobotInfo",
+    "Store",
+    "StoreError",
+    "UnknownCampaignError",
+    "ValidationRecord",
+    "config_hash",
+    "default_path",
+    "new_campaign_id",
+    "resolve_path",
+]
