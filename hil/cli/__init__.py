@@ -30,6 +30,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "fk",
     "export",
     "synth",
+    "report",
 )
 
 EXIT_OK = 0

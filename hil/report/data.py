@@ -243,8 +243,10 @@ def report_data_from(
     """
     from hil.model_file import model_document, software_versions
 
-    cfg = config.as_dict() if isinstance(config, StationConfig) else {k: dict(v) if isinstance(v, Mapping)
-                                                                      else v for k, v in config.items()}
+    if isinstance(config, StationConfig):
+        cfg: dict[str, Any] = config.as_dict()
+    else:
+        cfg = {k: dict(v) if isinstance(v, Mapping) else v for k, v in config.items()}
     if accept_rms is None:
         try:
             accept_rms = float(cfg["campaign"]["acceptance"])
@@ -340,8 +342,17 @@ def report_data_from_result(doc: Mapping[str, Any], source: str = "result") -> R
 
     Older or offline results without the ``per_pose`` block give a report without the per-pose
     plots; everything else is read from the embedded model. Missing required keys are InputErrors
-    naming the key.
+    naming the key; any other malformed content is an InputError naming the file, never a crash.
     """
+    try:
+        return _from_result(doc, source)
+    except InputError:
+        raise
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise InputError(f"{source}: malformed result ({type(exc).__name__}: {exc})") from None
+
+
+def _from_result(doc: Mapping[str, Any], source: str) -> ReportData:
     if doc.get("format") != RESULT_FORMAT:
         raise InputError(f"{source}: field 'format' is {doc.get('format')!r}, expected {RESULT_FORMAT}")
 
@@ -378,8 +389,8 @@ def report_data_from_result(doc: Mapping[str, Any], source: str = "result") -> R
     hashes = dict(doc.get("hashes") or {})
     if not hashes and isinstance(model.get("input"), Mapping) and model["input"].get("sha256"):
         hashes = {"calibration measurements": str(model["input"]["sha256"])}
-    cal_before = _error_set(None, pc.get("before"), "per_pose.calibration.before") if pc.get("before") else None
-    cal_after = _error_set(None, pc.get("after"), "per_pose.calibration.after") if pc.get("after") else None
+    cal_before, cal_after = (_error_set(None, pc[k], f"{source}: per_pose.calibration.{k}")
+                             if pc.get(k) else None for k in ("before", "after"))
     used = np.asarray(pc["used"], dtype=bool) if pc.get("used") else None
     lines = np.asarray(pc["lines"], dtype=int) if pc.get("lines") else None
     config = doc.get("config") or {}

@@ -199,8 +199,8 @@ def _parameters(d: ReportData) -> str:
     note = ('<p class="muted">Deviations from the nominal geometry as 6-D placement errors of each '
             "joint origin and the flange (translations in mm, rotations in mrad), the SMR centre in the "
             "flange frame and the tracker pose in the robot base frame. σ is one standard deviation; "
-            "|value|/σ below about 3 means the deviation is not distinguishable from noise (not shown for the "
-            "SMR and tracker, which are placements rather than errors).</p>")
+            "|value|/σ below about 3 means the deviation is not distinguishable from noise (not shown "
+            "for the SMR and tracker, which are placements rather than errors).</p>")
     return note + _table(["parameter", "value", "σ", "unit", "|value|/σ"], rows, "num")
 
 
@@ -311,7 +311,8 @@ h3 { font-size: 15px; margin: 18px 0 6px; }
 .tile .value { font-size: 17px; margin: 2px 0; }
 .tile .note { font-size: 12px; }
 table { border-collapse: collapse; margin: 6px 0 12px; font-size: 13px; }
-th, td { border-bottom: 1px solid var(--line); padding: 3px 10px 3px 0; text-align: left; vertical-align: top; }
+th, td { border-bottom: 1px solid var(--line); padding: 3px 10px 3px 0; text-align: left;
+  vertical-align: top; }
 thead th { border-bottom: 2px solid #9aa4b1; }
 table.num td { font-variant-numeric: tabular-nums; }
 table.num td + td { text-align: right; }
