@@ -16,6 +16,7 @@ import base64
 import io
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
@@ -38,11 +39,11 @@ def _figure(height: float, **kw: object) -> Figure:
     return fig
 
 
-def _style(ax: object) -> None:
-    ax.spines[["top", "right"]].set_visible(False)  # type: ignore[attr-defined]
-    ax.tick_params(labelsize=8)  # type: ignore[attr-defined]
-    ax.grid(axis="y", color="#e3e6ea", linewidth=0.6)  # type: ignore[attr-defined]
-    ax.set_axisbelow(True)  # type: ignore[attr-defined]
+def _style(ax: Axes) -> None:
+    ax.spines[["top", "right"]].set_visible(False)
+    ax.tick_params(labelsize=8)
+    ax.grid(axis="y", color="#e3e6ea", linewidth=0.6)
+    ax.set_axisbelow(True)
 
 
 def png(fig: Figure) -> bytes:
@@ -57,13 +58,13 @@ def data_uri(png_bytes: bytes) -> str:
     return "data:image/png;base64," + base64.b64encode(png_bytes).decode("ascii")
 
 
-def _pose_ticks(ax: object, n: int, labels: np.ndarray | None = None) -> None:
+def _pose_ticks(ax: Axes, n: int, labels: np.ndarray | None = None) -> None:
+    """At most ~25 pose labels: 1-based pose numbers, or the input file lines when known."""
     step = max(1, int(np.ceil(n / 25)))
     ticks = np.arange(0, n, step)
-    ax.set_xticks(ticks)  # type: ignore[attr-defined]
-    ax.set_xticklabels([str(int(labels[i])) if labels is not None else str(i + 1)  # type: ignore[attr-defined]
-                        for i in ticks])
-    ax.set_xlim(-0.7, n - 0.3)  # type: ignore[attr-defined]
+    ax.set_xticks(ticks)
+    ax.set_xticklabels([str(int(labels[i])) if labels is not None else str(i + 1) for i in ticks])
+    ax.set_xlim(-0.7, n - 0.3)
 
 
 def errors_per_pose(before: ErrorSet | None, after: ErrorSet, *, accept_rms: float | None = None,

@@ -150,11 +150,12 @@ def _validation(d: ReportData) -> str:
     else:
         parts.append('<p class="muted">Per-pose validation errors were not recorded in this result; '
                      "only the summary figures are shown.</p>")
-    if a.vectors is not None:
+    if a.vectors is not None and a.per_pose:
         parts.append(_figure(plots.per_axis(a.vectors), "per-axis validation errors after calibration",
                              "Signed x, y, z errors (tracker frame) of each held-out pose after "
                              "calibration, and their spread per axis."))
-    elif d.calibration_after is not None and d.calibration_after.vectors is not None:
+    elif (d.calibration_after is not None and d.calibration_after.vectors is not None
+          and d.calibration_after.per_pose):
         parts.append(_figure(plots.per_axis(d.calibration_after.vectors, xlabel="calibration pose",
                                             lines=d.calibration_lines),
                              "per-axis calibration residuals",
