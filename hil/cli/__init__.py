@@ -33,6 +33,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "select",
     "sim",
     "history",
+    "report",
 )
 
 EXIT_OK = 0

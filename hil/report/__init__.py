@@ -1,0 +1,44 @@
+"""Campaign reports: the self-contained HTML report and the JSON result for a plant's MES.
+
+Typical use at the end of a campaign::
+
+    data = report_data_from(fit, before, after, config, campaign=cid, calibration=meas,
+                            validation=held_out, times=times, events=log)
+    write_report(data, "report.html")
+    write_json("result.json", mes_result(data))
+
+`report_data_from_result` rebuilds the same `ReportData` from a saved result (``hil report``).
+"""
+
+from hil.report.data import (
+    RESULT_FORMAT,
+    ErrorSet,
+    FitSummary,
+    Observability,
+    Parameter,
+    ReportData,
+    RobotInfo,
+    Suspension,
+    report_data_from,
+    report_data_from_result,
+    summarise_events,
+)
+from hil.report.mes import mes_result
+from hil.report.render import render_html, write_report
+
+__all__ = [
+    "RESULT_FORMAT",
+    "ErrorSet",
+    "FitSummary",
+    "Observability",
+    "Parameter",
+    "ReportData",
+    "RobotInfo",
+    "Suspension",
+    "mes_result",
+    "render_html",
+    "report_data_from",
+    "report_data_from_result",
+    "summarise_events",
+    "write_report",
+]

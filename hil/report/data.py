@@ -1,0 +1,433 @@
+"""What a calibration report shows, as one typed value (`ReportData`), and the ways to build it.
+
+The report and the MES result are both rendered from a `ReportData`, never from live objects, so
+that a report can be rebuilt later from a saved result file (`report_data_from_result`) and look the
+same as the one written at the end of the campaign. The engine builds it with `report_data_from`
+from what it has at hand: the `FitResult`, the validation statistics, the station config and
+whatever optional extras it collected (ISO 9283 figures, observability, time breakdown, events).
+
+Units: metres and radians everywhere in this module; formatting to mm / mrad happens in the renderer.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from hil.config import StationConfig
+from hil.errors import InputError
+from hil.events import Event, Message, PoseSkipped, Resumed, Suspended
+from hil.identification import Correlation, ErrorStats, FitResult, RejectedPose
+from hil.kinematics import Kinematics
+from hil.measurements import Measurements
+
+RESULT_FORMAT = "hil-result/1"
+
+
+@dataclass(frozen=True)
+class ErrorSet:
+    """Per-pose position errors (measured − predicted, metres) of one model on one pose set.
+
+    ``vectors`` (m, 3) when the per-axis errors are known, otherwise only ``norms`` (m,) — an
+    `ErrorStats` carries only distances, and an old result file may carry nothing per pose
+    (``norms`` empty, the summary figures then come from ``summary``).
+    """
+
+    norms: np.ndarray
+    vectors: np.ndarray | None = None
+    summary: Mapping[str, float] | None = None  # count/mean/rms/max when norms are not available
+
+    @classmethod
+    def of_vectors(cls, vectors: np.ndarray) -> ErrorSet:
+        v = np.asarray(vectors, dtype=float).reshape(-1, 3)
+        return cls(np.linalg.norm(v, axis=1), v)
+
+    @classmethod
+    def of_stats(cls, stats: ErrorStats, vectors: np.ndarray | None = None) -> ErrorSet:
+        if vectors is not None:
+            return cls.of_vectors(vectors)
+        return cls(np.asarray(stats.errors, dtype=float))
+
+    def _stat(self, key: str) -> float:
+        if len(self.norms):
+            e = self.norms
+            return float({"mean": e.mean(), "rms": np.sqrt(np.mean(e**2)), "max": e.max()}[key])
+        if self.summary is not None and key in self.summary:
+            return float(self.summary[key])
+        return math.nan
+
+    @property
+    def count(self) -> int:
+        if len(self.norms) or self.summary is None:
+            return len(self.norms)
+        return int(self.summary.get("count", 0))
+
+    @property
+    def mean(self) -> float:
+        return self._stat("mean")
+
+    @property
+    def rms(self) -> float:
+        return self._stat("rms")
+
+    @property
+    def max(self) -> float:
+        return self._stat("max")
+
+    @property
+    def per_pose(self) -> bool:
+        """Whether per-pose errors are known (else only the summary figures)."""
+        return len(self.norms) > 0
+
+    def as_dict(self) -> dict[str, float | int]:
+        return {"count": self.count, "mean": self.mean, "rms": self.rms, "max": self.max}
+
+
+@dataclass(frozen=True)
+class FitSummary:
+    """The identification's own figures (calibration poses, metres)."""
+
+    rms: float
+    max: float
+    sigma: float
+    initial_rms: float
+    iterations: int
+    condition: float
+    poses: int
+    used: int
+    seconds: float = 0.0
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One identified parameter: deviation from nominal (m or rad; the SMR offset is absolute)."""
+
+    name: str
+    value: float
+    std: float
+
+
+@dataclass(frozen=True)
+class Observability:
+    """How informative the chosen calibration poses are (the selector's index and its bound)."""
+
+    index: str  # O1..O5
+    value: float
+    bound: float | None = None  # relaxation upper bound for this pose count, if known
+    method: str = ""  # tabu, exchange, random, ...
+
+    @property
+    def percent(self) -> float | None:
+        if self.bound is None or not self.bound or not math.isfinite(self.bound):
+            return None
+        return 100.0 * self.value / self.bound
+
+
+@dataclass(frozen=True)
+class Suspension:
+    """A time the campaign stopped by itself (lost beam, protective stop, ...) and how long for."""
+
+    kind: str
+    message: str
+    waited: float | None = None  # seconds; None if it never resumed
+    t: float | None = None  # Unix time it started
+
+
+@dataclass(frozen=True)
+class RobotInfo:
+    """The arm as the controller reports it."""
+
+    model: str  # catalog type, e.g. "ur5e"
+    serial: str = ""
+    software: str = ""  # controller software version
+
+
+@dataclass(frozen=True)
+class ReportData:
+    """Everything one campaign report shows. Built by `report_data_from` or from a result file."""
+
+    campaign: str
+    station: str
+    robot: RobotInfo
+    accept_rms: float  # acceptance threshold on the validation RMS (m)
+    passed: bool
+    validation_before: ErrorSet  # nominal arm (tracker + SMR fitted) on the validation poses
+    validation_after: ErrorSet  # calibrated model on the validation poses
+    fit: FitSummary
+    parameters: tuple[Parameter, ...]
+    calibration_before: ErrorSet | None = None  # baseline residuals on the calibration poses
+    calibration_after: ErrorSet | None = None  # calibrated residuals on the calibration poses
+    calibration_used: np.ndarray | None = None  # (m,) bool: not rejected as outliers
+    calibration_lines: np.ndarray | None = None  # (m,) input file lines
+    correlated: tuple[Correlation, ...] = ()
+    rejected: tuple[RejectedPose, ...] = ()
+    iso9283: Mapping[str, float] | None = None  # e.g. {"AP": m, "RP": m} on repeated poses
+    observability: Observability | None = None
+    config: Mapping[str, Any] = field(default_factory=dict)  # StationConfig.as_dict()
+    hashes: Mapping[str, str] = field(default_factory=dict)  # what -> sha256 of the input data
+    software: Mapping[str, str] = field(default_factory=dict)
+    times: Mapping[str, float] | None = None  # seconds: motion, settle, measure, compute, ...
+    suspensions: tuple[Suspension, ...] = ()
+    notes: tuple[str, ...] = ()  # warnings, skipped poses
+    started: str | None = None  # ISO 8601
+    finished: str | None = None
+    model: Mapping[str, Any] | None = None  # the hil-model/1 document, for the MES result
+
+
+def _iso(t: float | str | _dt.datetime | None) -> str | None:
+    """ISO 8601 (UTC, seconds) from Unix time, a datetime or a string (kept as given)."""
+    if t is None or isinstance(t, str):
+        return t
+    if isinstance(t, _dt.datetime):
+        return t.isoformat(timespec="seconds")
+    return _dt.datetime.fromtimestamp(float(t), _dt.UTC).isoformat(timespec="seconds")
+
+
+def summarise_events(events: Iterable[Event]) -> tuple[tuple[Suspension, ...], tuple[str, ...]]:
+    """Suspensions (each paired with the Resumed that ended it) and notes worth a reader's eye."""
+    suspensions: list[Suspension] = []
+    open_: dict[str, int] = {}
+    notes: list[str] = []
+    for ev in events:
+        if isinstance(ev, Suspended):
+            open_[ev.kind] = len(suspensions)
+            suspensions.append(Suspension(ev.kind, ev.message, None, ev.t))
+        elif isinstance(ev, Resumed) and ev.kind in open_:
+            i = open_.pop(ev.kind)
+            s = suspensions[i]
+            suspensions[i] = Suspension(s.kind, s.message, float(ev.waited), s.t)
+        elif isinstance(ev, PoseSkipped):
+            notes.append(f"{ev.role} pose {ev.index} skipped: {ev.reason}")
+        elif isinstance(ev, Message) and ev.level in ("warning", "error"):
+            notes.append(f"{ev.level}: {ev.text}")
+    return tuple(suspensions), tuple(notes)
+
+
+def report_data_from(
+    fit: FitResult,
+    validation_before: ErrorStats,
+    validation_after: ErrorStats,
+    config: StationConfig | Mapping[str, Any],
+    *,
+    campaign: str,
+    robot: RobotInfo | None = None,
+    started: float | str | _dt.datetime | None = None,
+    finished: float | str | _dt.datetime | None = None,
+    accept_rms: float | None = None,
+    calibration: Measurements | None = None,
+    validation: Measurements | None = None,
+    iso9283: Mapping[str, float] | None = None,
+    observability: Observability | None = None,
+    times: Mapping[str, float] | None = None,
+    events: Iterable[Event] = (),
+    hashes: Mapping[str, str] | None = None,
+    model: Mapping[str, Any] | None = None,
+) -> ReportData:
+    """Assemble a `ReportData` from what the campaign engine has at the end of a run.
+
+    Only the fit, the two validation statistics, the config and a campaign id are required; the
+    rest makes the report richer when the engine has it:
+
+    * ``calibration`` (the measurements the fit used) adds the per-pose residuals *before*
+      calibration (the fit's baseline geometry) and the file lines of every pose;
+    * ``validation`` (the held-out measurements) adds per-axis validation errors — without it the
+      per-axis plot falls back to the calibration residuals;
+    * ``accept_rms`` defaults to the config's ``campaign.acceptance``;
+    * ``hashes`` is merged over the fit's own input digest (and the validation data's);
+    * ``model`` defaults to ``model_document(fit, validation_after.as_dict())``.
+    """
+    from hil.model_file import model_document, software_versions
+
+    if isinstance(config, StationConfig):
+        cfg: dict[str, Any] = config.as_dict()
+    else:
+        cfg = {k: dict(v) if isinstance(v, Mapping) else v for k, v in config.items()}
+    if accept_rms is None:
+        try:
+            accept_rms = float(cfg["campaign"]["acceptance"])
+        except (KeyError, TypeError, ValueError):
+            raise InputError("report: no acceptance threshold (config campaign.acceptance)") from None
+    station = str(cfg.get("station", {}).get("name", "")) if isinstance(cfg.get("station"), Mapping) else ""
+    if robot is None:
+        robot = RobotInfo(fit.robot)
+
+    cal_before = cal_after = None
+    lines = None
+    if calibration is not None and len(calibration) == len(fit.residuals):
+        if fit.baseline is not None:
+            cal_before = ErrorSet.of_vectors(calibration.p - Kinematics(fit.baseline).points(calibration.q))
+        lines = np.asarray(calibration.lines, dtype=int)
+    cal_after = ErrorSet.of_vectors(fit.residuals)
+
+    v_before = v_after = None
+    if validation is not None and len(validation) == validation_after.count:
+        if fit.baseline is not None:
+            v_before = validation.p - Kinematics(fit.baseline).points(validation.q)
+        v_after = validation.p - Kinematics(fit.geometry).points(validation.q)
+
+    digests = {}
+    if fit.sha256:
+        digests["calibration measurements"] = fit.sha256
+    if validation is not None and validation.sha256:
+        digests["validation measurements"] = validation.sha256
+    digests.update(hashes or {})
+
+    suspensions, notes = summarise_events(events)
+    after = ErrorSet.of_stats(validation_after, v_after)
+    return ReportData(
+        campaign=campaign,
+        station=station,
+        robot=robot,
+        accept_rms=float(accept_rms),
+        passed=bool(after.rms <= accept_rms),
+        validation_before=ErrorSet.of_stats(validation_before, v_before),
+        validation_after=after,
+        fit=FitSummary(rms=fit.rms, max=fit.max_error, sigma=fit.sigma, initial_rms=fit.initial_rms,
+                       iterations=fit.iterations, condition=fit.condition, poses=len(fit.used),
+                       used=int(np.sum(fit.used)), seconds=fit.seconds),
+        parameters=tuple(Parameter(n, float(v), float(s))
+                         for n, v, s in zip(fit.names, fit.values, fit.std, strict=True)),
+        calibration_before=cal_before,
+        calibration_after=cal_after,
+        calibration_used=np.asarray(fit.used, dtype=bool).copy(),
+        calibration_lines=lines,
+        correlated=tuple(fit.correlated),
+        rejected=tuple(fit.rejected),
+        iso9283=dict(iso9283) if iso9283 else None,
+        observability=observability,
+        config=cfg,
+        hashes=digests,
+        software=software_versions(),
+        times=dict(times) if times else None,
+        suspensions=suspensions,
+        notes=notes,
+        started=_iso(started),
+        finished=_iso(finished),
+        model=model if model is not None else model_document(fit, validation_after.as_dict()),
+    )
+
+
+# --- reading a saved result back -------------------------------------------------------------------
+
+def _num(value: Any, where: str) -> float:
+    if value is None:
+        return math.nan
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise InputError(f"{where}: must be a number, got {value!r}")
+    return float(value)
+
+
+def _error_set(block: Any, per_pose: Any, where: str) -> ErrorSet:
+    """An ErrorSet from a summary dict and an optional per-pose list (vectors or distances)."""
+    if per_pose:
+        arr = np.asarray(per_pose, dtype=float)
+        if arr.ndim == 2 and arr.shape[1] == 3:
+            return ErrorSet.of_vectors(arr)
+        if arr.ndim == 1:
+            return ErrorSet(arr)
+        raise InputError(f"{where}: per-pose errors must be a list of numbers or of [x, y, z]")
+    if not isinstance(block, Mapping):
+        raise InputError(f"{where}: missing validation figures")
+    return ErrorSet(np.zeros(0), summary={k: _num(block.get(k), f"{where}.{k}")
+                                          for k in ("count", "mean", "rms", "max")})
+
+
+def report_data_from_result(doc: Mapping[str, Any], source: str = "result") -> ReportData:
+    """Rebuild the `ReportData` of a saved ``hil-result/1`` document (see `mes_result`).
+
+    Older or offline results without the ``per_pose`` block give a report without the per-pose
+    plots; everything else is read from the embedded model. Missing required keys are InputErrors
+    naming the key; any other malformed content is an InputError naming the file, never a crash.
+    """
+    try:
+        return _from_result(doc, source)
+    except InputError:
+        raise
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise InputError(f"{source}: malformed result ({type(exc).__name__}: {exc})") from None
+
+
+def _from_result(doc: Mapping[str, Any], source: str) -> ReportData:
+    if doc.get("format") != RESULT_FORMAT:
+        raise InputError(f"{source}: field 'format' is {doc.get('format')!r}, expected {RESULT_FORMAT}")
+
+    def need(d: Mapping[str, Any], key: str, where: str) -> Any:
+        if not isinstance(d, Mapping) or key not in d:
+            raise InputError(f"{source}: missing field '{where}{key}'")
+        return d[key]
+
+    model = need(doc, "model", "")
+    fit_block = need(model, "fit", "model.")
+    validation = need(doc, "validation", "")
+    per_pose = doc.get("per_pose") or {}
+    pv = per_pose.get("validation") or {}
+    pc = per_pose.get("calibration") or {}
+    robot_model = str(doc.get("robot") or model.get("robot") or "")
+    accept = _num(need(doc, "accept_rms", ""), f"{source}: accept_rms")
+    params = tuple(Parameter(str(need(p, "name", "model.parameters[].")),
+                             _num(p.get("value"), f"{source}: model.parameters.value"),
+                             _num(p.get("std"), f"{source}: model.parameters.std"))
+                   for p in need(model, "parameters", "model."))
+    fit = FitSummary(**{k: _num(fit_block.get(src), f"{source}: model.fit.{src}") for k, src in (
+        ("rms", "rms"), ("max", "max"), ("sigma", "sigma"), ("initial_rms", "initial_rms"),
+        ("condition", "condition"), ("seconds", "seconds"))},
+        iterations=int(_num(fit_block.get("iterations", 0), f"{source}: model.fit.iterations")),
+        poses=int(_num(fit_block.get("poses", 0), f"{source}: model.fit.poses")),
+        used=int(_num(fit_block.get("used", 0), f"{source}: model.fit.used")))
+    obs = doc.get("observability")
+    observability = None
+    if isinstance(obs, Mapping) and "index" in obs:
+        observability = Observability(str(obs["index"]), _num(obs.get("value"), "observability.value"),
+                                      None if obs.get("bound") is None
+                                      else _num(obs["bound"], "observability.bound"),
+                                      str(obs.get("method", "")))
+    hashes = dict(doc.get("hashes") or {})
+    if not hashes and isinstance(model.get("input"), Mapping) and model["input"].get("sha256"):
+        hashes = {"calibration measurements": str(model["input"]["sha256"])}
+    cal_before, cal_after = (_error_set(None, pc[k], f"{source}: per_pose.calibration.{k}")
+                             if pc.get(k) else None for k in ("before", "after"))
+    used = np.asarray(pc["used"], dtype=bool) if pc.get("used") else None
+    lines = np.asarray(pc["lines"], dtype=int) if pc.get("lines") else None
+    config = doc.get("config") or {}
+    station = doc.get("station")
+    station = str(station) if station is not None else str((config.get("station") or {}).get("name", ""))
+    return ReportData(
+        campaign=str(doc.get("campaign") or ""),
+        station=station,
+        robot=RobotInfo(robot_model, str(doc.get("robot_serial") or ""),
+                        str(doc.get("robot_software") or "")),
+        accept_rms=accept,
+        passed=bool(need(doc, "passed", "")),
+        validation_before=_error_set(need(validation, "before", "validation."), pv.get("before"),
+                                     f"{source}: validation.before"),
+        validation_after=_error_set(need(validation, "after", "validation."), pv.get("after"),
+                                    f"{source}: validation.after"),
+        fit=fit,
+        parameters=params,
+        calibration_before=cal_before,
+        calibration_after=cal_after,
+        calibration_used=used,
+        calibration_lines=lines,
+        correlated=tuple(Correlation(str(c["a"]), str(c["b"]), _num(c.get("rho"), "rho"))
+                         for c in fit_block.get("correlated", [])),
+        rejected=tuple(RejectedPose(int(r["pose"]), int(r["line"]), _num(r.get("residual"), "residual"),
+                                    _num(r.get("p_value"), "p_value"))
+                       for r in fit_block.get("rejected", [])),
+        iso9283=validation.get("iso9283") or None,
+        observability=observability,
+        config=config,
+        hashes=hashes,
+        software=dict(doc.get("software") or model.get("software") or {}),
+        times=doc.get("times") or None,
+        suspensions=tuple(Suspension(str(s.get("kind", "")), str(s.get("message", "")), s.get("waited"),
+                                     s.get("t")) for s in doc.get("suspensions") or []),
+        notes=tuple(str(n) for n in doc.get("notes") or []),
+        started=doc.get("started"),
+        finished=doc.get("finished"),
+        model=model,
+    )

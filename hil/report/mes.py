@@ -1,0 +1,110 @@
+"""The JSON result a plant's MES (manufacturing execution system) reads after each campaign.
+
+An MES maps fields by name into its own database, so the keys below are a contract: new keys may be
+added, none is renamed or removed within ``hil-result/1``. Non-finite numbers are written as
+``null`` (JSON has no NaN).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from hil.report.data import RESULT_FORMAT, ErrorSet, ReportData
+
+
+def _plain(value: Any) -> Any:
+    """JSON-ready copy: arrays and tuples become lists, numpy scalars floats, NaN/inf null."""
+    if isinstance(value, np.ndarray):
+        return _plain(value.tolist())
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, np.generic):
+        return _plain(value.item())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def _per_pose(errors: ErrorSet | None) -> list[Any] | None:
+    if errors is None or not errors.per_pose:
+        return None
+    return (errors.vectors if errors.vectors is not None else errors.norms).tolist()
+
+
+def mes_result(data: ReportData) -> dict[str, Any]:
+    """The ``hil-result/1`` document of a campaign (lengths in metres, times in seconds).
+
+    Keys (stable within ``hil-result/1``; readers must ignore keys they do not know):
+
+    * ``format``: ``"hil-result/1"``
+    * ``campaign``: campaign id; ``station``: station name
+    * ``robot``: catalog type (``"ur5e"``); ``robot_serial``, ``robot_software``: as the controller
+      reports them (``""`` when unknown)
+    * ``passed``: bool, validation RMS ≤ ``accept_rms`` (metres)
+    * ``started``, ``finished``: ISO 8601 or null
+    * ``validation``: ``{"before": S, "after": S, "iso9283": {"AP": m, "RP": m, ...} | null}``
+      where S is ``{"count", "mean", "rms", "max"}``; *before* is the nominal arm (only the tracker
+      pose and SMR fitted), *after* the calibrated model, both on held-out poses
+    * ``fit``: ``{"rms", "max", "sigma", "initial_rms", "iterations", "condition", "poses", "used",
+      "rejected_lines"}`` (a summary; the full block is in ``model.fit``)
+    * ``observability``: ``{"index", "value", "bound", "percent", "method"}`` or null
+    * ``times``: ``{"motion", "settle", "measure", "compute", ...}`` seconds, or null
+    * ``suspensions``: list of ``{"kind", "message", "waited", "t"}``; ``notes``: list of strings
+    * ``hashes``: ``{what: sha256}`` of the input data; ``software``: ``{package: version}``
+    * ``config``: the station configuration as validated
+    * ``model``: the full ``hil-model/1`` document (geometry, parameters, covariance, fit, ...)
+    * ``per_pose``: ``{"validation": {"before", "after"}, "calibration": {"before", "after",
+      "used", "lines"}}`` — per-pose errors as ``[x, y, z]`` lists (or distances), so the HTML
+      report can be rebuilt from this file (``hil report``); entries may be null
+    """
+    obs = data.observability
+    return _plain({
+        "format": RESULT_FORMAT,
+        "campaign": data.campaign,
+        "station": data.station,
+        "robot": data.robot.model,
+        "robot_serial": data.robot.serial,
+        "robot_software": data.robot.software,
+        "passed": bool(data.passed),
+        "accept_rms": data.accept_rms,
+        "started": data.started,
+        "finished": data.finished,
+        "validation": {
+            "before": data.validation_before.as_dict(),
+            "after": data.validation_after.as_dict(),
+            "iso9283": dict(data.iso9283) if data.iso9283 else None,
+        },
+        "fit": {
+            "rms": data.fit.rms, "max": data.fit.max, "sigma": data.fit.sigma,
+            "initial_rms": data.fit.initial_rms, "iterations": data.fit.iterations,
+            "condition": data.fit.condition, "poses": data.fit.poses, "used": data.fit.used,
+            "rejected_lines": [r.line for r in data.rejected],
+        },
+        "observability": None if obs is None else {
+            "index": obs.index, "value": obs.value, "bound": obs.bound, "percent": obs.percent,
+            "method": obs.method,
+        },
+        "times": dict(data.times) if data.times else None,
+        "suspensions": [{"kind": s.kind, "message": s.message, "waited": s.waited, "t": s.t}
+                        for s in data.suspensions],
+        "notes": list(data.notes),
+        "hashes": dict(data.hashes),
+        "software": dict(data.software),
+        "config": dict(data.config),
+        "model": dict(data.model) if data.model is not None else None,
+        "per_pose": {
+            "validation": {"before": _per_pose(data.validation_before),
+                           "after": _per_pose(data.validation_after)},
+            "calibration": {
+                "before": _per_pose(data.calibration_before),
+                "after": _per_pose(data.calibration_after),
+                "used": None if data.calibration_used is None else data.calibration_used.tolist(),
+                "lines": None if data.calibration_lines is None else data.calibration_lines.tolist(),
+            },
+        },
+    })

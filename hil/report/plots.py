@@ -1,0 +1,166 @@
+"""The report's figures, drawn with matplotlib and returned as PNG bytes.
+
+Figures are built on `matplotlib.figure.Figure` with the Agg canvas directly, not through pyplot:
+no global backend switch, no display needed, nothing kept alive between reports, and safe to call
+from the engine's worker thread. User-supplied text (station names…) never goes into a figure, so
+nothing here needs escaping (matplotlib would otherwise read ``$…$`` as mathtext).
+
+Lengths are plotted in millimetres. Before-calibration errors are millimetres and after-calibration
+errors tens of micrometres, so the per-pose comparison uses a logarithmic axis and the histograms
+get one panel each.
+"""
+
+from __future__ import annotations
+
+import base64
+import io
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.patches import Patch
+from matplotlib.ticker import FuncFormatter
+
+from hil.report.data import ErrorSet
+
+BEFORE = "#a3acb9"  # grey: the uncalibrated arm
+AFTER = "#1f6fb4"  # blue: the calibrated model
+REJECTED = "#d62728"
+THRESHOLD = "#d62728"
+AXES = ("#d62728", "#2ca02c", "#1f77b4")  # x, y, z in the usual RGB order
+DPI = 144
+WIDTH = 9.0  # inches; the HTML scales images to the page width
+
+
+def _figure(height: float, **kw: object) -> Figure:
+    fig = Figure(figsize=(WIDTH, height), dpi=DPI, layout="constrained", **kw)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _style(ax: Axes) -> None:
+    ax.spines[["top", "right"]].set_visible(False)
+    ax.tick_params(labelsize=8)
+    ax.grid(axis="y", color="#e3e6ea", linewidth=0.6)
+    ax.set_axisbelow(True)
+
+
+def png(fig: Figure) -> bytes:
+    """The figure as PNG bytes (white background, so it prints and shows in dark viewers)."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=DPI, facecolor="white")
+    return buf.getvalue()
+
+
+def data_uri(png_bytes: bytes) -> str:
+    """A ``data:`` URI embedding PNG bytes, for a self-contained ``<img src>``."""
+    return "data:image/png;base64," + base64.b64encode(png_bytes).decode("ascii")
+
+
+def _pose_ticks(ax: Axes, n: int, labels: np.ndarray | None = None) -> None:
+    """At most ~25 pose labels: 1-based pose numbers, or the input file lines when known."""
+    step = max(1, int(np.ceil(n / 25)))
+    ticks = np.arange(0, n, step)
+    ax.set_xticks(ticks)
+    ax.set_xticklabels([str(int(labels[i])) if labels is not None else str(i + 1) for i in ticks])
+    ax.set_xlim(-0.7, n - 0.3)
+
+
+def errors_per_pose(before: ErrorSet | None, after: ErrorSet, *, accept_rms: float | None = None,
+                    rejected: np.ndarray | None = None, lines: np.ndarray | None = None,
+                    xlabel: str = "validation pose") -> bytes:
+    """Grouped bars of each pose's error before and after calibration, on a log axis (mm).
+
+    Dashed lines mark each RMS, a red line the acceptance threshold (on the RMS); poses the fit
+    rejected as outliers (`rejected`, a bool mask) are drawn in red and left out of the "after"
+    RMS, which is then the fit RMS.
+    """
+    n = len(after.norms)
+    fig = _figure(3.1)
+    ax = fig.add_subplot()
+    _style(ax)
+    x = np.arange(n)
+    both = before is not None and len(before.norms) == n
+    w = 0.4 if both else 0.7
+    handles = []
+    if both:
+        ax.bar(x - w / 2, before.norms * 1e3, w, color=BEFORE, label="before")
+        ax.axhline(before.rms * 1e3, color="#6b7684", ls="--", lw=1)
+        handles.append(Patch(color=BEFORE, label=f"before (RMS {before.rms * 1e3:.3f} mm)"))
+    colors = np.full(n, AFTER, dtype=object)
+    if rejected is not None and np.any(rejected):
+        colors[np.asarray(rejected, dtype=bool)] = REJECTED
+    ax.bar(x + (w / 2 if both else 0), after.norms * 1e3, w, color=list(colors))
+    kept = after.norms if rejected is None else after.norms[~np.asarray(rejected, dtype=bool)]
+    rms_after = float(np.sqrt(np.mean(kept**2))) if kept.size else float("nan")
+    ax.axhline(rms_after * 1e3, color=AFTER, ls="--", lw=1)
+    used = " over used poses" if rejected is not None and np.any(rejected) else ""
+    handles.append(Patch(color=AFTER, label=f"after (RMS {rms_after * 1e3:.3f} mm{used})"))
+    if rejected is not None and np.any(rejected):
+        handles.append(Patch(color=REJECTED, label="rejected outlier"))
+    if accept_rms is not None:
+        ax.axhline(accept_rms * 1e3, color=THRESHOLD, ls=":", lw=1.4)
+        handles.append(Patch(color=THRESHOLD, label=f"acceptance RMS {accept_rms * 1e3:.3f} mm"))
+    values = np.r_[after.norms, before.norms if both else []] * 1e3
+    positive = values[values > 0]
+    if positive.size:
+        ax.set_yscale("log")
+        lo = positive.min() / 2
+        hi = max(positive.max(), (accept_rms or 0) * 1e3) * 2
+        ax.set_ylim(lo, hi)
+        ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.set_ylabel("3-D error (mm, log scale)", fontsize=9)
+    ax.set_xlabel(xlabel + (" (input line)" if lines is not None else ""), fontsize=9)
+    _pose_ticks(ax, n, lines)
+    ax.legend(handles=handles, fontsize=8, ncols=len(handles), loc="lower center",
+              bbox_to_anchor=(0.5, 1.0), frameon=False)
+    return png(fig)
+
+
+def histograms(before: ErrorSet | None, after: ErrorSet, *, accept_rms: float | None = None) -> bytes:
+    """Histograms of the validation errors before and after calibration, one panel each (mm)."""
+    sets = [("before calibration", before, BEFORE), ("after calibration", after, AFTER)]
+    sets = [s for s in sets if s[1] is not None and s[1].per_pose]
+    fig = _figure(2.6)
+    axes = fig.subplots(1, len(sets), squeeze=False)[0]
+    for ax, (title, errors, color) in zip(axes, sets, strict=True):
+        _style(ax)
+        e = errors.norms * 1e3
+        bins = int(np.clip(np.sqrt(len(e)) * 1.5, 5, 30))
+        ax.hist(e, bins=bins, color=color, edgecolor="white", linewidth=0.5)
+        ax.axvline(errors.rms * 1e3, color="#333", ls="--", lw=1)
+        if accept_rms is not None and title.startswith("after"):
+            ax.axvline(accept_rms * 1e3, color=THRESHOLD, ls=":", lw=1.4)
+        ax.set_title(f"{title}: {len(e)} poses, RMS {errors.rms * 1e3:.3f} mm (dashed)", fontsize=9)
+        ax.set_xlabel("3-D error (mm)", fontsize=9)
+        ax.set_ylabel("poses", fontsize=9)
+        ax.set_xlim(left=0)
+    return png(fig)
+
+
+def per_axis(vectors: np.ndarray, *, xlabel: str = "validation pose",
+             lines: np.ndarray | None = None) -> bytes:
+    """Signed x, y, z errors (mm) of each pose after calibration, and their spread per axis."""
+    v = np.asarray(vectors, dtype=float).reshape(-1, 3) * 1e3
+    n = len(v)
+    fig = _figure(2.9)
+    left, right = fig.subplots(1, 2, width_ratios=[5, 1], sharey=True)
+    _style(left)
+    _style(right)
+    x = np.arange(n)
+    w = 0.27
+    for k, (name, color) in enumerate(zip("xyz", AXES, strict=True)):
+        left.bar(x + (k - 1) * w, v[:, k], w, color=color, label=name)
+    left.axhline(0, color="#555", lw=0.6)
+    left.set_ylabel("error (mm)", fontsize=9)
+    left.set_xlabel(xlabel + (" (input line)" if lines is not None else ""), fontsize=9)
+    _pose_ticks(left, n, lines)
+    left.legend(fontsize=8, ncols=3, loc="lower center", bbox_to_anchor=(0.5, 1.0), frameon=False)
+    box = right.boxplot([v[:, 0], v[:, 1], v[:, 2]], tick_labels=["x", "y", "z"], widths=0.6,
+                        patch_artist=True, medianprops={"color": "black"})
+    for patch, color in zip(box["boxes"], AXES, strict=True):
+        patch.set_facecolor(color)
+        patch.set_alpha(0.55)
+    right.set_title("spread", fontsize=9)
+    return png(fig)

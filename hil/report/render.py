@@ -1,0 +1,371 @@
+"""The campaign report as ONE self-contained HTML file.
+
+A report is archived with the robot and opened years later, offline, on whatever machine is at
+hand, or printed and signed: so it carries everything inside (plots as base64 PNG ``data:`` URIs,
+inline CSS, no script, no font or stylesheet links) and prints cleanly (figures and tables are not
+split across pages, colours are kept). Every piece of text that came from outside (station name,
+config values, event messages…) is HTML-escaped. The markup is also well-formed XML (void elements
+self-closed, only XML's five entities), so it can be checked and post-processed with XML tools.
+
+Built with the standard library (`html.escape` and f-strings) — a template engine would be one more
+dependency for a single page.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import html
+import math
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from hil import __version__
+from hil.measurements import atomic_write_text
+from hil.report import plots
+from hil.report.data import ErrorSet, ReportData
+
+_ANGLE_SUFFIXES = (".rx", ".ry", ".rz")
+
+
+def esc(value: Any) -> str:
+    """HTML-escaped text of any value (quotes too, so it is safe in attributes)."""
+    return html.escape(str(value), quote=True)
+
+
+def _finite(v: float | None) -> bool:
+    return v is not None and isinstance(v, int | float) and math.isfinite(v)
+
+
+def fmt_mm(v: float | None, digits: int = 3) -> str:
+    """Metres as millimetres (µm resolution by default); an em dash when unknown."""
+    return f"{v * 1e3:.{digits}f} mm" if _finite(v) else "—"
+
+
+def fmt_num(v: float | None, spec: str = ".4g") -> str:
+    return format(v, spec) if _finite(v) else "—"
+
+
+def parameter_unit(name: str) -> tuple[str, float]:
+    """Display unit and scale of an identification parameter: rotations in mrad, lengths in mm."""
+    return ("mrad", 1e3) if name.endswith(_ANGLE_SUFFIXES) else ("mm", 1e3)
+
+
+def _table(head: Sequence[str], rows: Iterable[Sequence[str]], cls: str = "") -> str:
+    """A table from already-escaped cell HTML."""
+    th = "".join(f"<th>{h}</th>" for h in head)
+    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in row) + "</tr>" for row in rows)
+    attr = f' class="{cls}"' if cls else ""
+    return f"<table{attr}><thead><tr>{th}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def _kv(rows: Iterable[tuple[str, str]]) -> str:
+    """A two-column key/value table (both cells already escaped)."""
+    body = "".join(f"<tr><th>{k}</th><td>{v}</td></tr>" for k, v in rows)
+    return f'<table class="kv"><tbody>{body}</tbody></table>'
+
+
+def _figure(png_bytes: bytes, alt: str, caption: str) -> str:
+    return (f'<figure><img src="{plots.data_uri(png_bytes)}" alt="{esc(alt)}" />'
+            f"<figcaption>{esc(caption)}</figcaption></figure>")
+
+
+def _section(ident: str, title: str, body: str) -> str:
+    return f'<section id="{ident}"><h2>{esc(title)}</h2>{body}</section>'
+
+
+def _config_value(v: Any) -> str:
+    if v is None:
+        return "—"
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        return format(v, "g")
+    if isinstance(v, list | tuple):
+        return ", ".join(_config_value(x) for x in v)
+    return str(v)
+
+
+def _header(d: ReportData, generated: str) -> str:
+    verdict = "PASS" if d.passed else "FAIL"
+    cmp = "≤" if d.passed else ">"
+    robot = " ".join(x for x in (d.robot.model.upper(), d.robot.serial and f"serial {d.robot.serial}") if x)
+    when = " → ".join(x for x in (d.started, d.finished) if x) or "—"
+    return f"""<header>
+<div class="title"><h1>Kinematic calibration report</h1>
+<p class="sub">{esc(robot)} · station {esc(d.station or "—")} · campaign {esc(d.campaign or "—")}</p>
+<p class="sub">{esc(when)}</p></div>
+<div class="verdict {verdict.lower()}"><div class="big">{verdict}</div>
+<div>validation RMS {esc(fmt_mm(d.validation_after.rms))} {cmp} acceptance {esc(fmt_mm(d.accept_rms))}</div>
+</div></header>
+<p class="generated">Generated {esc(generated)} by hil {esc(__version__)}.</p>"""
+
+
+def _improvement(before: ErrorSet, after: ErrorSet) -> str:
+    if _finite(before.rms) and _finite(after.rms) and after.rms > 0:
+        return f"{before.rms / after.rms:.0f}× lower RMS"
+    return ""
+
+
+def _summary(d: ReportData) -> str:
+    b, a, f = d.validation_before, d.validation_after, d.fit
+    tiles = [
+        ("Validation RMS", f"{fmt_mm(b.rms)} → <b>{fmt_mm(a.rms)}</b>", _improvement(b, a)),
+        ("Validation max", f"{fmt_mm(b.max)} → <b>{fmt_mm(a.max)}</b>", f"{a.count} held-out poses"),
+        ("Fit RMS", f"<b>{fmt_mm(f.rms)}</b>", f"max {fmt_mm(f.max)}, noise σ {fmt_mm(f.sigma, 4)}"),
+        ("Poses", f"<b>{f.used}</b> used / {f.poses - f.used} rejected", f"{f.poses} calibration poses"),
+        ("Iterations", f"<b>{f.iterations}</b>", f"{f.seconds:.2f} s compute" if _finite(f.seconds) else ""),
+        ("Condition number", f"<b>{fmt_num(f.condition, '.1f')}</b>",
+         "column-normalised Jacobian"),
+    ]
+    if d.iso9283:
+        for key, value in d.iso9283.items():
+            tiles.append((f"ISO 9283 {esc(key)}", f"<b>{fmt_mm(value)}</b>", "repeated validation poses"))
+    if d.observability is not None:
+        o = d.observability
+        pct = f"{o.percent:.1f} % of bound" if o.percent is not None else "bound unknown"
+        tiles.append((f"Observability {esc(o.index)}", f"<b>{fmt_num(o.value)}</b>", pct))
+    cells = "".join(f'<div class="tile"><div class="label">{label}</div><div class="value">{value}</div>'
+                    f'<div class="note">{note}</div></div>' for label, value, note in tiles)
+    return f'<div class="tiles">{cells}</div>'
+
+
+def _validation(d: ReportData) -> str:
+    b, a = d.validation_before, d.validation_after
+    rows = [(label, str(s.count), fmt_mm(s.mean), fmt_mm(s.rms), fmt_mm(s.max))
+            for label, s in (("before calibration (nominal arm)", b), ("after calibration", a))]
+    parts = [_table(["model", "poses", "mean", "RMS", "max"], [[esc(c) for c in r] for r in rows])]
+    if d.iso9283:
+        parts.append("<h3>ISO 9283</h3>" + _kv((esc(k), esc(fmt_mm(v))) for k, v in d.iso9283.items()))
+    if a.per_pose:
+        before = b if b.per_pose and len(b.norms) == len(a.norms) else None
+        parts.append(_figure(plots.errors_per_pose(before, a, accept_rms=d.accept_rms),
+                             "validation error per pose, before and after calibration",
+                             "3-D error of each held-out pose, before (grey) and after (blue) "
+                             "calibration. Dashed: RMS; dotted red: acceptance threshold on the RMS."))
+        parts.append(_figure(plots.histograms(before, a, accept_rms=d.accept_rms),
+                             "histograms of validation errors",
+                             "Distribution of the validation errors before and after calibration."))
+    else:
+        parts.append('<p class="muted">Per-pose validation errors were not recorded in this result; '
+                     "only the summary figures are shown.</p>")
+    if a.vectors is not None and a.per_pose:
+        parts.append(_figure(plots.per_axis(a.vectors), "per-axis validation errors after calibration",
+                             "Signed x, y, z errors (tracker frame) of each held-out pose after "
+                             "calibration, and their spread per axis."))
+    elif (d.calibration_after is not None and d.calibration_after.vectors is not None
+          and d.calibration_after.per_pose):
+        parts.append(_figure(plots.per_axis(d.calibration_after.vectors, xlabel="calibration pose",
+                                            lines=d.calibration_lines),
+                             "per-axis calibration residuals",
+                             "Signed x, y, z residuals (tracker frame) of each calibration pose after "
+                             "the fit (per-axis validation errors were not recorded)."))
+    return "".join(parts)
+
+
+def _calibration(d: ReportData) -> str:
+    f = d.fit
+    parts = [_kv([
+        ("poses measured", esc(f.poses)), ("poses used", esc(f.used)),
+        ("RMS before the fit (tracker aligned, SMR at its guess)", esc(fmt_mm(f.initial_rms))),
+        ("fit RMS / max", esc(f"{fmt_mm(f.rms)} / {fmt_mm(f.max)}")),
+        ("estimated noise σ (per axis)", esc(fmt_mm(f.sigma, 4))),
+        ("iterations", esc(f.iterations)), ("condition number", esc(fmt_num(f.condition, ".2f"))),
+    ])]
+    after = d.calibration_after
+    if after is not None and after.per_pose:
+        before = d.calibration_before
+        if before is not None and len(before.norms) != len(after.norms):
+            before = None
+        rejected = None if d.calibration_used is None else ~d.calibration_used
+        parts.append(_figure(plots.errors_per_pose(before, after, rejected=rejected,
+                                                   lines=d.calibration_lines, xlabel="calibration pose"),
+                             "calibration residual per pose",
+                             "Residual of each calibration pose with the nominal arm (grey, only the "
+                             "tracker pose and SMR fitted) and with the calibrated model (blue); "
+                             "rejected outliers in red."))
+    return "".join(parts)
+
+
+def _parameters(d: ReportData) -> str:
+    rows = []
+    for p in d.parameters:
+        unit, scale = parameter_unit(p.name)
+        # The SMR offset and tracker pose are absolute placements, not errors: no significance.
+        placement_error = p.name.startswith(("joint", "flange"))
+        ratio = abs(p.value) / p.std if placement_error and _finite(p.std) and p.std > 0 else math.nan
+        rows.append([esc(p.name), esc(fmt_num(p.value * scale, ".4f")), esc(fmt_num(p.std * scale, ".4f")),
+                     esc(unit), esc(fmt_num(ratio, ".1f"))])
+    note = ('<p class="muted">Deviations from the nominal geometry as 6-D placement errors of each '
+            "joint origin and the flange (translations in mm, rotations in mrad), the SMR centre in the "
+            "flange frame and the tracker pose in the robot base frame. σ is one standard deviation; "
+            "|value|/σ below about 3 means the deviation is not distinguishable from noise (not shown "
+            "for the SMR and tracker, which are placements rather than errors).</p>")
+    return note + _table(["parameter", "value", "σ", "unit", "|value|/σ"], rows, "num")
+
+
+def _correlated(d: ReportData) -> str:
+    if not d.correlated:
+        return '<p class="muted">No pair of parameters is strongly correlated.</p>'
+    return _table(["parameter", "parameter", "correlation ρ"],
+                  [[esc(c.a), esc(c.b), esc(f"{c.rho:+.4f}")] for c in d.correlated], "num")
+
+
+def _rejected(d: ReportData) -> str:
+    if not d.rejected:
+        return '<p class="muted">No pose was rejected as an outlier.</p>'
+    return ('<p class="muted">Poses removed by the leave-one-out F test (Bonferroni, α = 1 %); '
+            "the line is the row of the measurement file.</p>"
+            + _table(["pose", "file line", "residual", "p-value"],
+                     [[esc(r.index), esc(r.line), esc(fmt_mm(r.residual)), esc(f"{r.p_value:.2e}")]
+                      for r in d.rejected], "num"))
+
+
+def _observability(d: ReportData) -> str:
+    o = d.observability
+    if o is None:
+        return '<p class="muted">Not recorded for this campaign.</p>'
+    pct = o.percent
+    rows = [("index", esc(o.index)), ("value", esc(fmt_num(o.value))),
+            ("upper bound (D-optimal relaxation)", esc(fmt_num(o.bound)))]
+    if pct is not None:
+        width = max(0.0, min(100.0, pct))
+        rows.append(("% of bound", f'{esc(f"{pct:.1f} %")} <span class="meter"><span '
+                                   f'style="width: {width:.1f}%"></span></span>'))
+    if o.method:
+        rows.append(("selection method", esc(o.method)))
+    return _kv(rows)
+
+
+def _campaign(d: ReportData) -> str:
+    parts = []
+    if d.times:
+        total = sum(v for v in d.times.values() if _finite(v))
+        colors = ["#1f6fb4", "#7fb3e0", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b"]
+        bar = "".join(f'<span style="width: {100 * v / total:.2f}%; background: {colors[i % 6]}" '
+                      f'title="{esc(k)}"></span>'
+                      for i, (k, v) in enumerate(d.times.items()) if _finite(v) and total > 0)
+        rows = [[f'<span class="swatch" style="background: {colors[i % 6]}"></span>{esc(k)}',
+                 esc(f"{v:.1f} s"), esc(f"{100 * v / total:.1f} %" if total > 0 else "—")]
+                for i, (k, v) in enumerate(d.times.items()) if _finite(v)]
+        rows.append(["<b>total</b>", f"<b>{esc(f'{total:.1f} s')}</b>", ""])
+        parts.append("<h3>Wall time</h3>" + f'<div class="stack">{bar}</div>'
+                     + _table(["phase", "time", "share"], rows, "num"))
+    parts.append("<h3>Suspensions</h3>")
+    if d.suspensions:
+        parts.append(_table(["kind", "message", "waited"],
+                            [[esc(s.kind), esc(s.message),
+                              esc(f"{s.waited:.1f} s" if _finite(s.waited) else "never resumed")]
+                             for s in d.suspensions]))
+    else:
+        parts.append('<p class="muted">None: the campaign ran without interruption.</p>')
+    if d.notes:
+        parts.append("<h3>Notes</h3><ul>" + "".join(f"<li>{esc(n)}</li>" for n in d.notes) + "</ul>")
+    return "".join(parts)
+
+
+def _config(config: Mapping[str, Any]) -> str:
+    if not config:
+        return '<p class="muted">Not recorded.</p>'
+    rows = []
+    for section, values in config.items():
+        if isinstance(values, Mapping):
+            rows += [(esc(f"{section}.{k}"), esc(_config_value(v))) for k, v in values.items()]
+        else:
+            rows.append((esc(section), esc(_config_value(values))))
+    return _kv(rows)
+
+
+def _provenance(d: ReportData) -> str:
+    robot = [("model", esc(d.robot.model or "—")), ("serial number", esc(d.robot.serial or "—")),
+             ("controller software", esc(d.robot.software or "—"))]
+    software = [(esc(k), esc(v)) for k, v in d.software.items()]
+    hashes = [(esc(k), f"<code>{esc(v)}</code>") for k, v in d.hashes.items()]
+    return ("<h3>Robot</h3>" + _kv(robot)
+            + "<h3>Software</h3>" + (_kv(software) if software else '<p class="muted">Not recorded.</p>')
+            + "<h3>Data hashes (sha256)</h3>"
+            + (_kv(hashes) if hashes else '<p class="muted">Not recorded.</p>'))
+
+
+CSS = """
+:root { --ok: #1a7f37; --bad: #c62828; --muted: #5f6b7a; --line: #d8dde3; }
+* { box-sizing: border-box; }
+body { font: 14px/1.45 system-ui, -apple-system, "Segoe UI", Roboto, "Helvetica Neue", Arial, sans-serif;
+  color: #1d2430; margin: 0 auto; max-width: 1000px; padding: 24px; }
+header { display: flex; gap: 24px; align-items: stretch; justify-content: space-between;
+  border-bottom: 2px solid #1d2430; padding-bottom: 12px; }
+h1 { font-size: 24px; margin: 0 0 4px; }
+h2 { font-size: 18px; border-bottom: 1px solid var(--line); padding-bottom: 4px; margin-top: 28px; }
+h3 { font-size: 15px; margin: 18px 0 6px; }
+.sub, .generated, .muted, figcaption, .note { color: var(--muted); }
+.sub { margin: 2px 0; }
+.generated { font-size: 12px; margin: 6px 0 0; }
+.verdict { min-width: 260px; text-align: center; color: white; border-radius: 8px; padding: 10px 16px; }
+.verdict .big { font-size: 44px; font-weight: 800; letter-spacing: 0.08em; line-height: 1.1; }
+.verdict.pass { background: var(--ok); }
+.verdict.fail { background: var(--bad); }
+.tiles { display: grid; grid-template-columns: repeat(auto-fill, minmax(220px, 1fr)); gap: 10px;
+  margin-top: 16px; }
+.tile { border: 1px solid var(--line); border-radius: 6px; padding: 8px 12px; }
+.tile .label { font-size: 12px; text-transform: uppercase; letter-spacing: 0.04em; color: var(--muted); }
+.tile .value { font-size: 17px; margin: 2px 0; }
+.tile .note { font-size: 12px; }
+table { border-collapse: collapse; margin: 6px 0 12px; font-size: 13px; }
+th, td { border-bottom: 1px solid var(--line); padding: 3px 10px 3px 0; text-align: left;
+  vertical-align: top; }
+thead th { border-bottom: 2px solid #9aa4b1; }
+table.num td { font-variant-numeric: tabular-nums; }
+table.num td + td { text-align: right; }
+table.kv th { font-weight: 600; padding-right: 24px; }
+code { font-size: 12px; word-break: break-all; }
+figure { margin: 12px 0 18px; }
+figure img { width: 100%; height: auto; display: block; }
+figcaption { font-size: 12px; margin-top: 2px; }
+.meter { display: inline-block; width: 160px; height: 10px; background: #e8ebef; vertical-align: middle;
+  margin-left: 8px; border-radius: 2px; }
+.meter span { display: block; height: 100%; background: var(--ok); border-radius: 2px; }
+.stack { display: flex; height: 16px; max-width: 600px; border-radius: 3px; overflow: hidden; }
+.stack span { display: block; height: 100%; }
+.swatch { display: inline-block; width: 10px; height: 10px; margin-right: 6px; }
+* { -webkit-print-color-adjust: exact; print-color-adjust: exact; }
+@page { size: A4; margin: 14mm; }
+@media print {
+  body { padding: 0; max-width: none; font-size: 11px; }
+  figure, table, .tile, header { break-inside: avoid; }
+  h2, h3 { break-after: avoid; }
+}
+"""
+
+
+def render_html(data: ReportData, *, generated: str | None = None) -> str:
+    """The whole report as one self-contained HTML (and well-formed XML) document.
+
+    `generated` is the timestamp printed in the report (default: now, UTC); tests pass a fixed one.
+    """
+    if generated is None:
+        generated = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
+    title = f"Calibration {data.robot.model} {data.robot.serial} {data.campaign}".strip()
+    sections = [
+        _section("validation", "Validation on held-out poses", _validation(data)),
+        _section("calibration", "Calibration fit", _calibration(data)),
+        _section("parameters", "Identified parameters", _parameters(data)),
+        _section("correlated", "Correlated parameters", _correlated(data)),
+        _section("rejected", "Rejected poses", _rejected(data)),
+        _section("observability", "Observability of the pose set", _observability(data)),
+        _section("campaign", "Campaign", _campaign(data)),
+        _section("config", "Station configuration", _config(data.config)),
+        _section("provenance", "Robot, software and data", _provenance(data)),
+    ]
+    return ("<!DOCTYPE html>\n"
+            '<html lang="en"><head><meta charset="utf-8" />'
+            '<meta name="viewport" content="width=device-width, initial-scale=1" />'
+            f"<title>{esc(title)}</title><style>{CSS}</style></head>\n<body>"
+            + _header(data, generated) + _summary(data) + "\n".join(sections)
+            + "</body></html>\n")
+
+
+def write_report(data: ReportData, path: str | os.PathLike[str], *, generated: str | None = None) -> Path:
+    """Render the report and write it atomically (a reader never sees half a file); returns the path."""
+    atomic_write_text(path, render_html(data, generated=generated))
+    return Path(path)
