@@ -29,9 +29,17 @@ import numpy as np
 import pinocchio as pin
 
 from hil.config import StationConfig
+from hil.errors import InputError
 from hil.events import ModelIdentified, PlanReady, ValidationDone
 from hil.geometry import Geometry, look_at_tracker, pose_to_dict
-from hil.identification import ErrorStats, FitResult, align_tracker, identify, validate
+from hil.identification import (
+    ErrorStats,
+    FitResult,
+    IdentificationError,
+    align_tracker,
+    identify,
+    validate,
+)
 from hil.kinematics import Kinematics
 from hil.measurements import Measurements
 from hil.model_file import model_document
@@ -162,7 +170,9 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
         yield Phase("bootstrap", "locating the tracker from small moves around the start pose")
         start = np.asarray((yield ReadJoints(config.robot["joint_samples"])).q, float)
         for k, q in enumerate(bootstrap_targets(start, camp["bootstrap_poses"])):
-            records[(BOOTSTRAP, k)] = yield acquire(k, BOOTSTRAP, q, **visit)
+            record = yield acquire(k, BOOTSTRAP, q, **visit)
+            if record is not None:  # None: the visit was skipped (the engine said why)
+                records[(BOOTSTRAP, k)] = record
         boot = [r for (role, _), r in sorted(records.items()) if role == BOOTSTRAP]
         tracker = align_tracker(Geometry.nominal(robot, smr_guess),
                                 measurements_of(boot, "bootstrap")).tracker
@@ -179,8 +189,9 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
                                       exclude=np.zeros((0, 6)), **base))
         val = choose(SelectionRequest(VALIDATION, camp["validation_poses"], seed=camp["seed"] + 1,
                                       exclude=cal.poses, start=cal.poses[-1], **base))
-        planned = [(i, CALIBRATION, q) for i, q in enumerate(cal.poses)]
-        n = len(planned)
+        first = 1 + max((i for _, i in records), default=-1)  # one numbering across roles
+        planned = [(first + i, CALIBRATION, q) for i, q in enumerate(cal.poses)]
+        n = first + len(planned)
         for cycle in range(validation_cycles):
             planned += [(n + cycle * len(val.poses) + i, VALIDATION, q) for i, q in enumerate(val.poses)]
         selection = {"calibration": cal.info, "validation": val.info}
@@ -194,12 +205,17 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     todo = [(i, r, q) for i, r, q in planned if (r, i) not in records]
     yield Phase("measure", f"{len(todo)} of {len(planned)} poses to measure")
     for i, role, q in todo:
-        records[(role, i)] = yield acquire(i, role, q, **visit)
+        record = yield acquire(i, role, q, **visit)
+        if record is not None:
+            records[(role, i)] = record
 
     # --- identify and validate -----------------------------------------------------------------
     yield Phase("identify")
     fit_records = [r for (role, _), r in sorted(records.items()) if role in (BOOTSTRAP, CALIBRATION)]
-    fit = identify(measurements_of(fit_records, f"campaign {campaign}"), robot, smr_guess)
+    try:
+        fit = identify(measurements_of(fit_records, f"campaign {campaign}"), robot, smr_guess)
+    except InputError as exc:  # too many poses skipped: the run failed, the input was fine
+        raise IdentificationError(f"cannot identify from the measured poses: {exc}") from None
     yield Emit(ModelIdentified(campaign=campaign, rms=fit.rms, max=fit.max_error,
                                iterations=fit.iterations, rejected=[r.line for r in fit.rejected],
                                model=model_document(fit)))

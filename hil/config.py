@@ -106,6 +106,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "move": Key("float", 60.0, _positive),
         "measure": Key("float", 10.0, _positive),
         "suspend": Key("float", 600.0, _positive, "longest wait for a suspender to clear (s)"),
+        "relock": Key("float", 30.0, _positive, "longest wait for a lost beam before the pose is skipped"),
     },
     "store": {
         "path": Key("str", "", help="SQLite database (default: the user's data directory)"),

@@ -31,6 +31,7 @@ from hil.events import (
     PhaseChanged,
     PointMeasured,
     PoseReached,
+    PoseSkipped,
     PoseStarted,
     Resumed,
     StateChanged,
@@ -65,6 +66,21 @@ class RunAborted(HilError):
 
 class SuspendTimeout(HilError):
     """A suspender did not clear within its time limit."""
+
+
+class UnsafePathError(HilError):
+    """No safe way to a (safe) target from where the arm is: the pose is skipped."""
+
+
+def _transit(q: np.ndarray) -> np.ndarray:
+    """The upright posture above `q`'s base angle, wrist angles kept."""
+    out = np.array(q, dtype=float)
+    out[1], out[2] = -np.pi / 2, 0.0
+    return out
+
+
+class PoseSkippedError(HilError):
+    """A pose visit was given up (its suspender clears by skipping, e.g. a beam that never returns)."""
 
 
 class Clock(Protocol):
@@ -121,6 +137,7 @@ class Suspender:
     backoff: float = 1.0  # the poll interval grows by this factor (reconnects back off)
     timeout: float | None = None  # None: the engine's suspend_timeout
     max_poll: float = 10.0
+    on_timeout: str = "fail"  # "fail": the run fails; "skip": the pose visit is skipped
 
 
 @dataclass
@@ -156,6 +173,7 @@ class Engine:
     suspend_timeout: float = 600.0
     max_retries: int = 5  # suspensions of the same pose visit before giving up
     deviation: Callable[[PoseRecord], float | None] | None = None  # for PointMeasured events
+    home: np.ndarray | None = None  # a safe pose to route through when a direct path is unsafe
 
     def __post_init__(self) -> None:
         self.state = IDLE
@@ -218,6 +236,8 @@ class Engine:
         """Execute `plan` to its end; returns the plan's return value."""
         t0 = self.clock.monotonic()
         self._set_state(RUNNING)
+        if self.home is not None:
+            self._last_q = np.asarray(self.home, dtype=float)
         reply: Any = None
         try:
             mark = self.clock.monotonic()
@@ -263,10 +283,10 @@ class Engine:
         clock = self.clock
         t = clock.monotonic()
         if isinstance(step, Move):
-            q = np.asarray(step.q, dtype=float)
-            check_target(q, self.spec, self.keep_in, self.check_model, self._last_q)
-            result = self.robot.move_to(q, speed=step.speed, acceleration=step.acceleration)
-            self._last_q = q
+            result = None
+            for target in self._route(np.asarray(step.q, dtype=float)):
+                result = self.robot.move_to(target, speed=step.speed, acceleration=step.acceleration)
+                self._last_q = target
             self.stats.motion += clock.monotonic() - t
             return result
         if isinstance(step, Settle):
@@ -283,13 +303,50 @@ class Engine:
             return result
         raise TypeError(f"the engine cannot execute {step!r}")
 
-    def _acquire(self, group: Acquire) -> PoseRecord:
+    def _route(self, q: np.ndarray) -> list[np.ndarray]:
+        """Targets to move through to reach `q` safely.
+
+        The target itself must be safe (joint limits, keep-in box), else InputError: the plan is wrong.
+        If the straight joint-space path from where the arm is leaves the box, two detours are tried:
+        through the home pose, then through the upright transit posture (q2 = −π/2, q3 = 0, a
+        floor-mounted arm's highest) above the current and the target base angles. If every leg of
+        none of them is safe, `UnsafePathError`: the pose is skipped, never approached. Nothing is
+        ever clamped.
+        """
+        check_target(q, self.spec, self.keep_in, self.check_model)
+        if self._last_q is None:
+            return [q]
+        here = self._last_q
+        routes = [[q]]
+        if self.home is not None:
+            routes.append([np.asarray(self.home, dtype=float), q])
+        routes.append([_transit(here), _transit(q), q])
+        for route in routes:
+            try:
+                start = here
+                for target in route:
+                    check_target(target, self.spec, self.keep_in, self.check_model, start)
+                    start = target
+                return route
+            except HilError:
+                continue
+        raise UnsafePathError(f"no safe path from {np.round(here, 3).tolist()} to "
+                              f"{np.round(q, 3).tolist()} inside the keep-in box (direct, via home, via "
+                              "the upright posture)")
+
+    def _acquire(self, group: Acquire) -> PoseRecord | None:
         """Run one pose visit; after a suspension, run it again from its first step."""
         self.current = group
         self.emit(PoseStarted(campaign=self.campaign, index=group.index, role=group.role,
                               target=list(group.target)))
         t0 = self.clock.monotonic()
-        results = self._with_suspenders(lambda: [self._device_step(s) for s in group.steps])
+        try:
+            results = self._with_suspenders(lambda: [self._device_step(s) for s in group.steps])
+        except (PoseSkippedError, UnsafePathError) as exc:
+            self.emit(PoseSkipped(campaign=self.campaign, index=group.index, role=group.role,
+                                  reason=str(exc)))
+            self.current = None
+            return None
         reading = next(r for s, r in zip(group.steps, results, strict=True) if isinstance(s, ReadJoints))
         point = next(r for s, r in zip(group.steps, results, strict=True) if isinstance(s, Measure))
         xyz = np.asarray(point.xyz if hasattr(point, "xyz") else point.position, dtype=float)
@@ -351,6 +408,9 @@ class Engine:
             except Exception as err:  # a failing check is just "not clear yet"
                 log.debug("suspender %s check failed: %s", suspender.kind, err)
             if time.monotonic() - start > limit:
+                self._set_state(RUNNING)
+                if suspender.on_timeout == "skip":
+                    raise PoseSkippedError(f"{suspender.kind} did not clear within {limit:.0f} s")
                 raise SuspendTimeout(f"{suspender.kind} did not clear within {limit:.0f} s: "
                                      f"{suspender.message}") from exc
             self._abort.wait(poll)

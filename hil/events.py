@@ -20,16 +20,16 @@ import numpy as np
 log = logging.getLogger(__name__)
 
 
-def _plain(value: Any) -> Any:
+def jsonable(value: Any) -> Any:
     """JSON-ready copy of a value: arrays and tuples become lists, non-finite floats become None."""
     if isinstance(value, np.ndarray):
-        return _plain(value.tolist())
+        return jsonable(value.tolist())
     if isinstance(value, list | tuple):
-        return [_plain(v) for v in value]
+        return [jsonable(v) for v in value]
     if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
+        return {str(k): jsonable(v) for k, v in value.items()}
     if isinstance(value, np.generic):
-        return _plain(value.item())
+        return jsonable(value.item())
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
@@ -52,7 +52,7 @@ class Event:
         return type(self).__name__
 
     def to_dict(self) -> dict[str, Any]:
-        return {"event": self.name, **{f.name: _plain(getattr(self, f.name)) for f in fields(self)}}
+        return {"event": self.name, **{f.name: jsonable(getattr(self, f.name)) for f in fields(self)}}
 
     @staticmethod
     def from_dict(data: dict[str, Any]) -> Event:

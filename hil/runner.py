@@ -21,7 +21,7 @@ from hil.campaign import CampaignResult, ChoosePoses, ResumeState, calibration_p
 from hil.config import StationConfig
 from hil.engine import Clock, Engine, RealClock, RunAborted
 from hil.errors import InputError
-from hil.events import EventBus, RunFinished, RunStarted
+from hil.events import EventBus, PlanReady, RunFinished, RunStarted
 from hil.geometry import Geometry
 from hil.kinematics import Kinematics
 from hil.plans import PoseRecord
@@ -101,8 +101,13 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
     outcome.tracker_info = ({"name": ident.name, "serial": ident.serial_number,
                              "firmware": ".".join(map(str, ident.firmware))} if ident is not None else {})
     estimate: dict[str, Any] = {"tracker": None}
+    try:
+        home = np.asarray(devices.robot.read_joints(1).q, dtype=float)  # where the operator left it
+    except Exception:  # no reading: the first move's path is then not checked from here
+        home = None
     engine = Engine(
-        devices.robot, devices.tracker, campaign, spec, bus=bus, suspenders=suspenders(devices),
+        devices.robot, devices.tracker, campaign, spec, bus=bus, home=home,
+        suspenders=suspenders(devices, relock_timeout=config.timeouts["relock"]),
         clock=clock or RealClock(), suspend_timeout=config.timeouts["suspend"],
         keep_in=(np.array(config.keep_in["min"]), np.array(config.keep_in["max"])),
         check_model=Geometry.nominal(spec, config.smr["offset"]),
@@ -142,3 +147,36 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
     bus.emit(RunFinished(campaign=campaign, status=outcome.status, detail=detail,
                          result={"software": __version__}))
     return outcome
+
+
+def plan_saver(store: Any, campaign: str) -> Callable[[Any], None]:
+    """Critical subscriber: the selected poses reach the store before the first of them is visited."""
+
+    def save(event: Any) -> None:
+        if isinstance(event, PlanReady) and event.campaign == campaign:
+            store.save_plan(campaign, [(p["index"], p["role"], p["q"]) for p in event.poses],
+                            plan={"tracker": event.tracker, "selection": event.selection})
+
+    return save
+
+
+def resume_state(store: Any, campaign: str) -> ResumeState:
+    """What an interrupted campaign already has: its plan, tracker estimate and measured poses."""
+    record = store.campaign(campaign)
+    plan = record.plan or {}
+    tracker = None
+    if plan.get("tracker"):
+        tracker = Geometry.from_dict({**Geometry.nominal(record.robot.type or "ur5e").to_dict(),
+                                      "tracker": plan["tracker"]}, source=f"campaign {campaign}").tracker
+    targets = {p.index: p for p in record.poses}
+    planned = [(p.index, p.role, np.array(p.target)) for p in record.poses if p.role != "bootstrap"]
+    records = {}
+    for index, m in store.measured_poses(campaign).items():
+        pose = targets.get(index)
+        target = np.array(pose.target) if pose is not None else np.array(m.q)
+        records[(m.role, index)] = PoseRecord(
+            index=index, role=m.role, target=target, q=np.array(m.q),
+            q_spread=np.array(m.q_spread if m.q_spread is not None else np.zeros(6)), p=np.array(m.p),
+            p_spread=np.array(m.p_spread if m.p_spread is not None else np.zeros(3)), samples=m.samples)
+    return ResumeState(poses=planned if tracker is not None and planned else None, tracker=tracker,
+                       records=records, selection=plan.get("selection") or {})

@@ -6,7 +6,7 @@ below map the drivers' typed errors to what the operator must do and to how the 
 ====================  ===========================================  =====================================
 kind                  raised by                                    cleared when
 ====================  ===========================================  =====================================
-beam_lost             tracker TargetLost (1285/1292/8710, lock 0)  a re-lock (lock-in, then search) works
+beam_lost             tracker TargetLost (1285/1292/8710, lock 0)  a re-lock works (else the pose is skipped)
 unstable_point        tracker UnstablePoint                        at once (the pose is measured again)
 tracker_link          tracker TrackerTimeout / GarbledReply        at once (the driver already resynced)
 tracker_unplugged     tracker ConnectionLost                       the link opens again
@@ -126,12 +126,17 @@ def _tracker_reopened(tracker: Tracker) -> Callable[[], bool]:
     return check
 
 
-def suspenders(devices: Devices, poll: float = 0.5) -> list[Suspender]:
-    """The suspenders of a real (or simulated) station; see the module docstring."""
+def suspenders(devices: Devices, poll: float = 0.5, relock_timeout: float = 30.0) -> list[Suspender]:
+    """The suspenders of a real (or simulated) station; see the module docstring.
+
+    A beam that does not come back within `relock_timeout` skips the pose: the SMR may simply not be
+    visible there (the tracker position was only estimated), and no operator action fixes that.
+    """
     robot, tracker = devices.robot, devices.tracker
     return [
         Suspender("beam_lost", _is(tracker_errors.TargetLost), tracker.relock,
-                  "the tracker lost the SMR: clear the line of sight (the run re-locks by itself)", poll),
+                  "the tracker lost the SMR: clear the line of sight (the run re-locks by itself)", poll,
+                  timeout=relock_timeout, on_timeout="skip"),
         Suspender("unstable_point", _is(tracker_errors.UnstablePoint), lambda: True,
                   "the SMR reading was not stable; measuring the pose again", poll),
         Suspender("tracker_link", _is(tracker_errors.LinkError), lambda: True,

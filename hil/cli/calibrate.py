@@ -1,86 +1,219 @@
-"""`hil calibrate --sim`: a whole calibration of a simulated arm, headless.
+"""`hil calibrate`: a whole calibration campaign, headless (end-of-line cells, CI).
 
-For now the simulated station is offline: the hidden truth is measured directly through the
-kinematic model with tracker noise (no controller or instrument protocol in between). The campaign
-engine against the protocol-level simulators replaces this path when it lands; the command line and
-the result file stay the same.
+``hil calibrate --config station.toml`` runs against the configured robot and tracker;
+``hil calibrate --sim [--truth truth.json] [--speed F]`` starts the simulated station (UR controller
+and GeoCOM tracker, driven through the real ur_rtde and serial clients) and calibrates it.
+
+Re-running the same command continues the last unfinished campaign of the same station, robot (by
+serial number) and configuration — after ``kill -9`` included — measuring only what is missing;
+``--new`` starts afresh, ``--resume`` insists on continuing.
+
+Progress goes to stderr (a bar with ETA on a terminal, plain lines otherwise); ``--json`` prints one
+event per line on stdout; ``--out`` writes the final result (``hil-result/1``, the calibrated model
+under ``model``) and ``--report`` a self-contained HTML report. Exit codes: 0 accepted, 1 finished
+above the acceptance threshold, 2 bad input, 3 hardware fault, 4 aborted.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import hashlib
+import json
 import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from hil.cli._common import mm, print_json
+from hil.config import StationConfig, default_config, load_config
 from hil.errors import InputError
-from hil.identification import identify, validate
-from hil.measurements import Measurements, atomic_write_text
-from hil.model_file import load_truth, model_document, truth_document
+from hil.events import Event, EventBus, jsonable
+from hil.measurements import atomic_write_text
+from hil.progress import JsonLines, Progress
 from hil.robots import ROBOT_NAMES, get_robot
-from hil.synthetic import Noise, measure, random_configurations, random_truth
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("calibrate", help="run a whole calibration (simulated station)",
-                       description="Calibrate a simulated arm end to end: measure, identify, validate "
-                                   "on held-out poses, report. Exit code 1 if the validation RMS "
-                                   "exceeds --accept.")
-    p.add_argument("--sim", action="store_true", required=True, help="use the simulated station")
-    p.add_argument("--truth", metavar="truth.json", help="hidden truth (default: random, by --seed)")
-    p.add_argument("--robot", default="ur5e", help=f"robot type ({', '.join(ROBOT_NAMES)})")
-    p.add_argument("--poses", type=int, default=30, help="calibration poses (default 30)")
-    p.add_argument("--validation", type=int, default=50, help="held-out poses (default 50)")
-    p.add_argument("--seed", type=int, default=1)
-    p.add_argument("--accept", type=float, default=1e-4, metavar="METRES",
-                   help="acceptance threshold on the validation RMS (default 0.1 mm)")
-    p.add_argument("--json", action="store_true", help="print the result JSON on stdout")
+    p = sub.add_parser("calibrate", help="run a whole calibration campaign",
+                       description=__doc__.split("\n\n")[0],
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--config", metavar="station.toml", help="station configuration")
+    src.add_argument("--sim", action="store_true", help="use the simulated station")
+    p.add_argument("--truth", metavar="truth.json", help="--sim: the hidden truth (default: random)")
+    p.add_argument("--speed", type=float, default=1.0, metavar="F", help="--sim: fast-time factor")
+    p.add_argument("--seed", type=int, default=1, help="--sim: seed of the random truth and noise")
+    p.add_argument("--robot", default="ur5e", help=f"--sim: robot type ({', '.join(ROBOT_NAMES)})")
+    p.add_argument("--poses", type=int, help="calibration poses (overrides the config)")
+    p.add_argument("--validation", type=int, help="validation poses (overrides the config)")
+    p.add_argument("--candidates", type=int, help="selector candidates (overrides the config)")
+    p.add_argument("--accept", type=float, metavar="METRES", help="validation RMS threshold")
+    p.add_argument("--cycles", type=int, default=1,
+                   help="visits of each validation pose (>1 adds ISO 9283 AP/RP)")
+    p.add_argument("--db", metavar="PATH", help="campaign database (default: config, $HIL_DB, data dir)")
+    again = p.add_mutually_exclusive_group()
+    again.add_argument("--resume", action="store_true", help="continue the last unfinished campaign")
+    again.add_argument("--new", action="store_true", help="start a new campaign even if one is unfinished")
+    p.add_argument("--json", action="store_true", help="one JSON event per line on stdout")
     p.add_argument("--out", metavar="result.json", help="write the result (embeds the model)")
+    p.add_argument("--report", metavar="report.html", help="write the HTML report")
     p.set_defaults(func=run)
 
 
-def run(args: argparse.Namespace) -> int:
-    if args.validation < 1:
-        raise InputError("--validation must be at least 1")
-    rng = np.random.default_rng(args.seed)
-    if args.truth:
-        truth, noise = load_truth(args.truth)
-    else:
-        truth, noise = random_truth(get_robot(args.robot).name, rng), Noise()
-    robot = truth.robot
-    q, p = measure(truth, random_configurations(robot, args.poses, rng), noise, rng)
-    qv, pv = measure(truth, random_configurations(robot, args.validation, rng), noise, rng)
-    fit = identify(Measurements.from_arrays(q, p, "simulated-station"), robot)
-    held_out = Measurements.from_arrays(qv, pv, "simulated-validation")
-    before = validate(fit.baseline, held_out)
-    after = validate(fit.geometry, held_out)
-    passed = after.rms <= args.accept
-    result = {
-        "format": "hil-result/1",
-        "station": "offline simulation",
-        "robot": robot,
-        "passed": passed,
-        "accept_rms": args.accept,
-        "validation": {"before": before.as_dict(), "after": after.as_dict()},
-        "truth": truth_document(truth, noise),
-        "model": model_document(fit, after.as_dict()),
-    }
-    if args.out:
-        import json
+def _overrides(args: argparse.Namespace) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for option, key in (("poses", "campaign__calibration_poses"),
+                        ("validation", "campaign__validation_poses"),
+                        ("candidates", "campaign__candidates"), ("accept", "campaign__acceptance")):
+        value = getattr(args, option)
+        if value is not None:
+            if not value > 0:
+                raise InputError(f"--{option} must be positive, got {value}")
+            out[key] = value
+    if args.cycles < 1:
+        raise InputError(f"--cycles must be at least 1, got {args.cycles}")
+    return out
 
-        atomic_write_text(args.out, json.dumps(result, indent=2) + "\n")
-    if args.json:
-        print_json(result)
+
+@contextlib.contextmanager
+def _station(args: argparse.Namespace) -> Iterator[tuple[StationConfig, dict[str, Any], dict | None]]:
+    """(config to run, config that identifies the run in the store, hidden truth or None)."""
+    if args.config:
+        if args.truth or args.speed != 1.0:
+            raise InputError("--truth and --speed go with --sim, not --config")
+        config = load_config(args.config)
+        config = config.with_overrides(**_overrides(args)) if _overrides(args) else config
+        yield config, config.as_dict(), None
+        return
+    if not args.speed > 0:
+        raise InputError(f"--speed must be positive, got {args.speed}")
+    robot = get_robot(args.robot).name
+    truth_sha = ""
+    if args.truth:
+        from hil.model_file import load_truth
+
+        geometry, _ = load_truth(args.truth)  # a bad truth fails here, naming the key
+        robot = geometry.robot
+        truth_sha = hashlib.sha256(Path(args.truth).read_bytes()).hexdigest()
+    from mocks.station import start_station
+
+    sim = start_station(robot=robot, truth=args.truth, speed=args.speed, seed=args.seed)
+    try:
+        station = sim.info["services"][0]
+        base = default_config().with_overrides(
+            station__name="simulated station", robot__type=robot, robot__speed=1.0,
+            robot__acceleration=2.0, campaign__seed=args.seed, **_overrides(args))
+        config = base.with_overrides(robot__address=sim.address, tracker__url=station["tracker_url"])
+        # the simulator's address is random; the run is identified by what it simulates
+        identity = base.with_overrides(robot__address="sim",
+                                       tracker__url=f"sim:seed={args.seed};truth={truth_sha}").as_dict()
+        yield config, identity, station["truth"]
+    finally:
+        sim.stop()
+
+
+def run(args: argparse.Namespace) -> int:
+    from hil.engine import RealClock
+    from hil.runner import plan_saver, resume_state, run_campaign
+    from hil.selection import campaign_chooser
+    from hil.station import HARDWARE_ERRORS, open_devices
+    from hil.store import Store
+
+    for path in (args.out, args.report):
+        if path and Path(path).is_dir():
+            raise InputError(f"{path}: is a directory")
+    with _station(args) as (config, identity, truth):
+        store = Store.open(args.db, config=config)
+        try:
+            try:
+                devices = open_devices(config)
+            except HARDWARE_ERRORS as exc:
+                print(f"hil: hardware fault: cannot connect: {type(exc).__name__}: {exc}",
+                      file=sys.stderr)
+                return 3
+            info = devices.robot.info
+            robot = {"type": config.robot["type"], "serial": info.serial if info else "",
+                     "model": info.model if info else "", "software": info.software_version if info else ""}
+            campaign = None if args.new else store.find_resumable(identity, robot_serial=robot["serial"])
+            if args.resume and campaign is None:
+                devices.close()
+                raise InputError("--resume: no unfinished campaign of this station, robot and configuration")
+            resume = resume_state(store, campaign) if campaign else None
+            if campaign is None:
+                campaign = store.create_campaign(identity, robot)
+            events: list[Event] = []
+            bus = EventBus()
+            bus.subscribe(store.as_subscriber(), critical=True)
+            bus.subscribe(plan_saver(store, campaign), critical=True)
+            bus.subscribe(events.append)
+            bus.subscribe(Progress())
+            if args.json:
+                bus.subscribe(JsonLines())
+            started = time.time()
+            outcome = run_campaign(config, campaign_chooser(config), bus=bus, campaign=campaign,
+                                   resume=resume, devices=devices, clock=RealClock(args.speed),
+                                   validation_cycles=args.cycles)
+            result = _result(outcome, config, events, started, truth)
+            store.set_status(campaign, outcome.status, result=result)
+        finally:
+            store.close()
+    if args.out:
+        atomic_write_text(args.out, json.dumps(result, indent=2, allow_nan=False) + "\n")
+    if args.report and outcome.result is not None:
+        from hil.report import write_report
+
+        write_report(_report_data(outcome, config, events, started), args.report)
+    return outcome.exit_code
+
+
+def _report_data(outcome: Any, config: StationConfig, events: list[Event], started: float) -> Any:
+    from hil.campaign import BOOTSTRAP, CALIBRATION, VALIDATION, measurements_of
+    from hil.report import RobotInfo, report_data_from
+    from hil.report.data import Observability
+
+    r = outcome.result
+    by_role: dict[str, list[Any]] = {BOOTSTRAP: [], CALIBRATION: [], VALIDATION: []}
+    for rec in sorted(r.records, key=lambda x: x.index):
+        by_role[rec.role].append(rec)
+    fitted = by_role[BOOTSTRAP] + by_role[CALIBRATION]
+    sel = r.selection.get("calibration") or {}
+    obs = (Observability(sel.get("index", "O1"), float(sel["value"]), sel.get("bound"), sel.get("method", ""))
+           if sel.get("value") is not None else None)
+    iso = ({"AP (worst pose)": r.iso9283["AP_max"], "RP (worst pose)": r.iso9283["RP_max"]}
+           if r.iso9283 else None)
+    cal = measurements_of(fitted, "calibration")
+    val = measurements_of(by_role[VALIDATION], "validation")
+    digest = hashlib.sha256(np.hstack([cal.q, cal.p]).tobytes() + np.hstack([val.q, val.p]).tobytes())
+    return report_data_from(
+        r.fit, r.before, r.after, config, campaign=outcome.campaign,
+        robot=RobotInfo(config.robot["type"], outcome.robot_info.get("serial", ""),
+                        outcome.robot_info.get("software", "")),
+        started=started, finished=time.time(), calibration=cal, validation=val, iso9283=iso,
+        observability=obs, times=outcome.timing, events=events,
+        hashes={"measurements": digest.hexdigest()}, model=r.model)
+
+
+def _result(outcome: Any, config: StationConfig, events: list[Event], started: float,
+            truth: dict | None) -> dict[str, Any]:
+    """The hil-result/1 document (the MES result when the campaign finished, else its status)."""
+    if outcome.result is not None:
+        from hil.report import mes_result
+
+        doc = mes_result(_report_data(outcome, config, events, started))
+        if outcome.result.iso9283:
+            doc["validation"]["iso9283_poses"] = outcome.result.iso9283["poses"]
+        doc["selection"] = outcome.result.selection
     else:
-        out = sys.stdout
-        print(f"simulated {robot}: {args.poses} calibration poses, {args.validation} validation poses, "
-              f"tracker noise {noise.tracker_sigma * 1e6:.0f} µm", file=out)
-        print(f"  fit: {fit.iterations} iterations, RMS {mm(fit.rms)}, "
-              f"{len(fit.rejected)} rejected", file=out)
-        print(f"  validation before: RMS {mm(before.rms)}  max {mm(before.max)}", file=out)
-        print(f"  validation after:  RMS {mm(after.rms)}  max {mm(after.max)}  "
-              f"-> {'PASS' if passed else 'FAIL'} (accept {mm(args.accept)})", file=out)
-        if args.out:
-            print(f"wrote {args.out}", file=out)
-    return 0 if passed else 1
+        doc = {"format": "hil-result/1", "campaign": outcome.campaign, "passed": False,
+               "station": config.station["name"], "robot": config.robot["type"]}
+    doc["status"] = outcome.status
+    doc["exit_code"] = outcome.exit_code
+    doc["error"] = None if outcome.error is None else f"{type(outcome.error).__name__}: {outcome.error}"
+    doc["tracker"] = outcome.tracker_info
+    doc["robot_info"] = outcome.robot_info
+    if truth is not None:
+        doc["truth"] = truth
+    return jsonable(doc)
