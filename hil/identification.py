@@ -222,6 +222,22 @@ def _worst_outlier(Jp: np.ndarray, res: np.ndarray, inv: np.ndarray) -> tuple[in
     return k, float(pvals[k])
 
 
+_REGISTRATION = np.r_[np.arange(N_PARAMETERS)[TRACKER_SLICE], np.arange(N_PARAMETERS)[SMR_SLICE]]
+
+
+def register(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None,
+             max_iter: int = 50) -> Geometry:
+    """The nominal arm with only the tracker pose and the SMR offset fitted to `meas`.
+
+    This is "before calibration": what the arm's own kinematics achieve once the tracker is
+    registered. Works from 3 non-collinear poses (the SMR offset is then poorly determined).
+    """
+    nominal = Geometry.nominal(robot, smr=(0.0, 0.0, 0.0) if smr_guess is None else smr_guess)
+    state = _State.at(align_tracker(nominal, meas), meas.q)
+    state, _, _ = _levenberg_marquardt(state, meas.q, meas.p, _REGISTRATION, max_iter)
+    return state.geometry
+
+
 def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None, *,
              reject_outliers: bool = True, alpha: float = 0.01, max_iter: int = 100,
              correlation_threshold: float = 0.95) -> FitResult:
@@ -237,9 +253,7 @@ def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
     initial_rms = float(np.sqrt(np.mean(np.sum((meas.p - state.p) ** 2, axis=1))))
 
     # Tracker pose and SMR offset first: a far-off SMR guess otherwise drags the joints around.
-    first = np.array([i for i in idx if i in range(N_PARAMETERS)[TRACKER_SLICE]
-                      or i in range(N_PARAMETERS)[SMR_SLICE]])
-    state, iterations, _ = _levenberg_marquardt(state, meas.q, meas.p, first, max_iter)
+    state, iterations, _ = _levenberg_marquardt(state, meas.q, meas.p, _REGISTRATION, max_iter)
     baseline = state.geometry
     rejected: list[RejectedPose] = []
     max_reject = min(m // 5, m - minimum_poses(n))

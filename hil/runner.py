@@ -23,7 +23,9 @@ from hil.engine import Clock, Engine, RealClock, RunAborted
 from hil.errors import InputError
 from hil.events import EventBus, PlanReady, RunFinished, RunStarted
 from hil.geometry import Geometry
+from hil.identification import register
 from hil.kinematics import Kinematics
+from hil.measurements import Measurements
 from hil.plans import PoseRecord
 from hil.robots import get_robot
 from hil.station import HARDWARE_ERRORS, Devices, open_devices, suspenders
@@ -58,18 +60,24 @@ class RunOutcome:
         return 3
 
 
-def _nominal_deviation(config: StationConfig, tracker_estimate: Callable[[], Any]
-                       ) -> Callable[[PoseRecord], float | None]:
-    """Distance of each measured point from the nominal model's prediction (shown live)."""
+def _nominal_deviation(config: StationConfig) -> Callable[[PoseRecord], float | None]:
+    """Distance of each new point from the nominal arm's prediction, shown live to the operator.
+
+    The nominal arm is registered (tracker pose and SMR offset fitted) on the points measured so far,
+    so the figure is the arm's kinematic error, not the error of a rough SMR guess. Needs 4 points.
+    """
     robot = config.robot["type"]
-    smr = config.smr["offset"]
+    smr = np.array(config.smr["offset"])
+    seen: list[PoseRecord] = []
 
     def deviation(record: PoseRecord) -> float | None:
-        tracker = tracker_estimate()
-        if tracker is None:
+        seen.append(record)
+        if len(seen) < 4:
             return None
-        p = Kinematics(Geometry.nominal(robot, smr, tracker)).points(record.q)[0]
-        return float(np.linalg.norm(p - record.p))
+        meas = Measurements(np.array([r.q for r in seen]), np.array([r.p for r in seen]),
+                            np.arange(len(seen)), "live", "")
+        model = register(meas, robot, smr)
+        return float(np.linalg.norm(Kinematics(model).points(record.q)[0] - record.p))
 
     return deviation
 
@@ -100,7 +108,6 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
     ident = getattr(devices.tracker, "identity", None)
     outcome.tracker_info = ({"name": ident.name, "serial": ident.serial_number,
                              "firmware": ".".join(map(str, ident.firmware))} if ident is not None else {})
-    estimate: dict[str, Any] = {"tracker": None}
     try:
         home = np.asarray(devices.robot.read_joints(1).q, dtype=float)  # where the operator left it
     except Exception:  # no reading: the first move's path is then not checked from here
@@ -111,7 +118,7 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
         clock=clock or RealClock(), suspend_timeout=config.timeouts["suspend"],
         keep_in=(np.array(config.keep_in["min"]), np.array(config.keep_in["max"])),
         check_model=Geometry.nominal(spec, config.smr["offset"]),
-        deviation=_nominal_deviation(config, lambda: estimate["tracker"]))
+        deviation=_nominal_deviation(config))
     if engine_ready is not None:
         engine_ready(engine)
     planned = (config.campaign["calibration_poses"]
@@ -120,12 +127,6 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
                         poses=planned, resumed=resume is not None,
                         measured=len(resume.records) if resume else 0))
 
-    def track_estimate(event: Any) -> None:
-        if type(event).__name__ == "PlanReady" and event.tracker:
-            estimate["tracker"] = Geometry.from_dict(
-                {**Geometry.nominal(spec).to_dict(), "tracker": event.tracker}).tracker
-
-    bus.subscribe(track_estimate)
     try:
         result: CampaignResult = engine.run(
             calibration_plan(config, choose, campaign, resume, validation_cycles))
@@ -141,7 +142,6 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
     except Exception as exc:  # hardware faults, suspensions that never cleared, failed fits
         outcome.status, outcome.error, detail = "failed", exc, f"{type(exc).__name__}: {exc}"
     finally:
-        bus.unsubscribe(track_estimate)
         outcome.timing = engine.stats.as_dict()
         devices.close()
     bus.emit(RunFinished(campaign=campaign, status=outcome.status, detail=detail,

@@ -53,7 +53,14 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
     controller.inject("set_joints", q=home.tolist())
     config = SimulatorConfig(instrument=InstrumentConfig(seed=seed), link=LinkConfig(baudrate=baudrate),
                              address=controller.config.address, port=tracker_port)
-    return StationService(GeoComSimulator(world, config), world, truth_document(geometry, noise), home)
+    simulator = GeoComSimulator(world, config)
+    # the tracker's faults, reachable through the robot simulator's control channel
+    controller.extra_faults.update({
+        "block_beam": world.block_beam,
+        "tracker_unplug": lambda: simulator.faults.unplug(),
+        "tracker_garble": lambda: simulator.faults.garble_next_reply(),
+    })
+    return StationService(simulator, world, truth_document(geometry, noise), home)
 
 
 def station_spec(truth: str | None = None, seed: int = 0, acceptance_angle: float = 30.0,

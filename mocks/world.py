@@ -27,6 +27,7 @@ class World:
     truth: Geometry
     joints: Callable[[], np.ndarray]
     acceptance_deg: float = 30.0
+    blocked: str = ""  # non-empty: something (a person, a cable) is in the beam, and what
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     def __post_init__(self) -> None:
@@ -45,10 +46,16 @@ class World:
 
     def target(self) -> TargetState:
         p, angle = self.state(np.asarray(self.joints(), dtype=float))
+        if self.blocked:
+            return TargetState(p, False, self.blocked)
         if angle > self.acceptance_deg:
             return TargetState(p, False, f"SMR faces away ({angle:.0f}° > {self.acceptance_deg:.0f}° "
                                          "acceptance)")
         return TargetState(p, True)
+
+    def block_beam(self, on: bool = True, reason: str = "something is in the beam") -> None:
+        """Fault injection: interrupt (or restore) the line of sight."""
+        self.blocked = reason if on else ""
 
     def home_pose(self, rng: np.random.Generator, samples: int = 20000) -> np.ndarray:
         """A start pose where the operator would lock the beam: SMR facing the tracker, arm bent.

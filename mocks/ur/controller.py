@@ -27,6 +27,7 @@ import importlib
 import logging
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -91,6 +92,8 @@ class SimController:
     def __init__(self, config: SimConfig, fk: FkFn | None = None, clock: SimClock | None = None) -> None:
         self.config = config
         self.clock = clock if clock is not None else SimClock(config.speed)
+        # faults of services in the same process (the tracker): name -> action(**args)
+        self.extra_faults: dict[str, Callable[..., Any]] = {}
         robot = config.robot.lower()
         rate = config.rate_hz or (125.0 if robot in _CB3 else 500.0)
         arm_cfg = ArmConfig(robot=robot, rate_hz=rate, encoder_noise=config.encoder_noise, seed=config.seed)
@@ -243,6 +246,8 @@ class SimController:
                 a.speed_slider = 1.0
                 self.rtde.stalled = False
                 self.dashboard.unresponsive = False
+        elif name in self.extra_faults:
+            self.extra_faults[name](**args)
         else:
             raise ValueError(f"unknown fault {name!r}")
         return self.state()

@@ -12,6 +12,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import json
 import logging
@@ -124,6 +125,16 @@ def child_main(argv: Sequence[str] | None = None) -> int:
     return 0
 
 
+def _die_with_parent() -> None:
+    """Linux: the simulator gets SIGTERM when the process that started it dies (even by kill -9)."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        pr_set_pdeathsig = 1
+        with contextlib.suppress(OSError, AttributeError):
+            ctypes.CDLL("libc.so.6", use_errno=True).prctl(pr_set_pdeathsig, signal.SIGTERM)
+
+
 class SimStartError(RuntimeError):
     """The simulator process could not start (e.g. its ports are taken)."""
 
@@ -158,7 +169,7 @@ class SimProcess:
         env["UR_SIM_LOG_LEVEL"] = str(self.log_level)
         cmd = [sys.executable, "-m", "mocks.ur", json.dumps(self.config.to_dict()), *self.services]
         self._proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
-                                      env=env, cwd=root)
+                                      env=env, cwd=root, preexec_fn=_die_with_parent)
         assert self._proc.stdout is not None
         line = ""
         with selectors.DefaultSelector() as sel:
