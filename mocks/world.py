@@ -60,10 +60,12 @@ class World:
     def home_pose(self, rng: np.random.Generator, samples: int = 20000) -> np.ndarray:
         """A start pose where the operator would lock the beam: SMR facing the tracker, arm bent.
 
-        Chosen among random configurations with the elbow and wrist away from singularities and the
-        SMR at least 20 cm above the base, as the one facing the tracker most directly.
+        Chosen among random configurations with the upper arm above horizontal, the elbow and wrist
+        away from singularities and the elbow and SMR at least 20 cm above the base, as the one facing
+        the tracker most directly.
         """
         q = rng.uniform(-np.pi, np.pi, (samples, 6))
+        q[:, 1] = rng.uniform(-2.6, -0.5, samples)  # upper arm well above horizontal
         q[:, 2] = rng.uniform(0.6, 2.2, samples) * rng.choice([-1.0, 1.0], samples)
         q[:, 4] = rng.uniform(0.5, 2.6, samples) * rng.choice([-1.0, 1.0], samples)
         kin = Kinematics(self.truth)
@@ -71,5 +73,6 @@ class World:
         p = np.einsum("nij,j->ni", F[:, :3, :3], self.truth.smr) + F[:, :3, 3]
         to_tracker = self.truth.tracker.translation - p
         cos = np.einsum("ni,ni->n", F[:, :3, 2], to_tracker) / np.linalg.norm(to_tracker, axis=1)
-        cos[p[:, 2] < 0.2] = -2.0
+        elbow = kin.joint_frames(q)[:, 2, :3, 3]
+        cos[(p[:, 2] < 0.2) | (elbow[:, 2] < 0.2)] = -2.0
         return q[int(np.argmax(cos))]

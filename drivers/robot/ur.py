@@ -66,6 +66,7 @@ class URRobot:
         self._r: Any = None  # rtde_receive.RTDEReceiveInterface
         self._cmd_lock = threading.Lock()
         self._abort = threading.Event()
+        self._abandoned: list[tuple[Any, Any]] = []  # interfaces left after a lost link (see reconnect)
 
     # ------------------------------------------------------------------ connection
     def open(self) -> RobotInfo:
@@ -134,9 +135,44 @@ class URRobot:
                 log.debug("closing the receive interface: %s", exc)
 
     def reconnect(self) -> RobotInfo:
-        """Close and open again (after a protective stop was unlocked, a link drop, ...)."""
-        self.close()
-        return self.open()
+        """Recover after a dropped link or a stopped program, without tearing the interfaces down.
+
+        ur_rtde's control interface reconnects by itself from a background thread when the link
+        drops; destroying the interfaces while that thread runs crashes the process. So: wait
+        (bounded) for the library's own recovery, ask for an explicit reconnect where it gave up,
+        re-upload the control script if it is not running, then check the controller's state.
+        Never connected yet: a plain `open`.
+        """
+        c, r = self._c, self._r
+        if c is None or r is None:
+            return self.open()
+        cfg = self.config
+        # the controller must accept connections again before anything is tried (timed, pure Python)
+        rtde_version(cfg.host, cfg.connect_timeout)
+        dropped = not c.isConnected()
+        deadline = time.monotonic() + cfg.connect_timeout
+        # the library's own reconnection re-uploads the script too: let it finish before touching c
+        while dropped and not (c.isConnected() and c.isProgramRunning()) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        if dropped and not (c.isConnected() and r.isConnected() and c.isProgramRunning()):
+            # ur_rtde gave up. Its reconnect() on half-torn-down interfaces corrupts the heap, and
+            # their destructors race its threads: keep the old objects (idle now) and start afresh.
+            self._abandoned.append((c, r))
+            self._c = self._r = None
+            return self.open()
+        try:
+            if not r.isConnected():
+                r.reconnect()
+            if not c.isProgramRunning():
+                with self._cmd_lock:
+                    c.reuploadScript()
+        except RuntimeError as exc:
+            raise RobotUnreachable(f"{cfg.host}: reconnecting failed: {exc}") from exc
+        if not (c.isConnected() and r.isConnected()):
+            raise ConnectionLost(f"{cfg.host}: the link did not come back")
+        self.check_status()
+        assert self.info is not None
+        return self.info
 
     def __enter__(self) -> URRobot:
         self.open()
@@ -186,13 +222,22 @@ class URRobot:
             tcp = list(cfg.tcp_offset) if any(cfg.tcp_offset) else list(_TINY_TCP)
             for s in np.linspace(0.0, 1.0, max(cfg.keep_in_checks, 2)):
                 qs = q0 + s * (qa - q0)
-                with self._cmd_lock:
+                with self._typed_errors(), self._cmd_lock:
                     pose = c.getForwardKinematics(qs.tolist(), tcp)
                 if len(pose) < 3 or not cfg.keep_in.contains(np.asarray(pose)):
                     where = "at the target" if s == 1.0 else f"at {s:.0%} of the way"
                     raise KeepInZoneViolation(f"TCP {np.round(pose[:3], 4).tolist()} leaves the keep-in "
                                               f"zone {where}")
         return qa
+
+    @contextmanager
+    def _typed_errors(self) -> Iterator[None]:
+        """ur_rtde raises bare RuntimeErrors; turn them into the controller's typed state error."""
+        try:
+            yield
+        except RuntimeError as exc:
+            self.check_status()  # raises ProtectiveStop, ProgramStopped, ConnectionLost, ...
+            raise ConnectionLost(f"ur_rtde: {exc}") from exc
 
     # ------------------------------------------------------------------ motion
     def move_to(self, q: Sequence[float], *, speed: float | None = None,
@@ -203,13 +248,14 @@ class URRobot:
         the arm does not settle within the configured timeouts (after stopping it).
         """
         cfg = self.config
+        self.check_status()  # a stopped controller answers the checks below with bare RuntimeErrors
         target = self.validate_target(q)
         v = cfg.speed if speed is None else min(speed, cfg.speed)
         a = cfg.acceleration if acceleration is None else min(acceleration, cfg.acceleration)
         c, _r = self._require()
         self.check_status()
         self._abort.clear()
-        with self._cmd_lock:
+        with self._typed_errors(), self._cmd_lock:
             accepted = c.moveJ(target.tolist(), v, a, True)
         if not accepted:
             self.check_status()
@@ -253,7 +299,9 @@ class URRobot:
         """Stop the arm now (any motion, any thread); a move_to in progress raises MotionAborted."""
         self._abort.set()
         c = self._c
-        if c is None:
+        if c is None or not c.isConnected():
+            # no link, nothing to command (a dropped link stops the program on the controller); and
+            # calling into ur_rtde while its own thread reconnects crashes the process
             return
         with self._cmd_lock:
             c.stopJ(deceleration, False)
