@@ -69,14 +69,17 @@ def test_identify_fk_export_validate(station, tmp_path, capsys):
                  str(station / "validation.csv"), "--max-rms", "1e-6"]) == 1
 
 
-def test_calibrate_sim_writes_result_with_model(tmp_path, capsys):
+def test_calibrate_bad_input_fails_before_anything_starts(tmp_path, capsys):
     out = tmp_path / "result.json"
-    assert main(["calibrate", "--sim", "--seed", "5", "--out", str(out)]) == 0
-    result = json.loads(out.read_text())
-    assert result["passed"] and result["model"]["format"] == "hil-model/1"
-    after, before = result["validation"]["after"]["rms"], result["validation"]["before"]["rms"]
-    assert after < 1e-4 < before
-    assert "PASS" in capsys.readouterr().out
+    assert "--speed must be positive" in run_bad(capsys, ["calibrate", "--sim", "--speed", "0",
+                                                          "--out", str(out)], out)
+    assert "no such file" in run_bad(capsys, ["calibrate", "--sim", "--truth", str(tmp_path / "t.json"),
+                                              "--out", str(out)], out)
+    bad = tmp_path / "station.toml"
+    bad.write_text("[robot]\nspeed = -2\n")
+    assert "robot.speed: must be > 0" in run_bad(capsys, ["calibrate", "--config", str(bad),
+                                                          "--out", str(out)], out)
+    assert "not allowed with argument" in run_bad(capsys, ["calibrate", "--config", str(bad), "--sim"])
 
 
 def test_bad_measurements(tmp_path, capsys, station):
@@ -122,11 +125,10 @@ def test_bad_options(tmp_path, capsys, station):
 
 def test_console_entry_point_runs_as_a_process(tmp_path):
     out = tmp_path / "r.json"
-    proc = subprocess.run([sys.executable, "-m", "hil", "calibrate", "--sim", "--poses", "20",
-                           "--validation", "10", "--out", str(out)],
-                          cwd=ROOT, capture_output=True, text=True, timeout=120)
+    proc = subprocess.run([sys.executable, "-m", "hil", "synth", "--poses", "12", "--validation", "3",
+                           "--out-dir", str(tmp_path)], cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
-    assert json.loads(out.read_text())["robot"] == "ur5e"
+    assert json.loads((tmp_path / "truth.json").read_text())["format"] == "hil-truth/1"
     proc = subprocess.run([sys.executable, "-m", "hil", "identify", "--robot", "ur5e",
                            "--measurements", str(tmp_path / "missing.csv"), "--out", str(out)],
                           cwd=ROOT, capture_output=True, text=True, timeout=120)
