@@ -27,8 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from drivers.robot import errors as robot_errors
+from drivers.robot.isolated import IsolatedURRobot
 from drivers.robot.model import KeepInZone, RobotConfig
-from drivers.robot.ur import URRobot
 from drivers.tracker import errors as tracker_errors
 from drivers.tracker.measurement import Atmosphere, Tracker, TrackerConfig
 from drivers.tracker.transport import SerialConfig
@@ -73,9 +73,13 @@ def tracker_config(config: StationConfig) -> TrackerConfig:
 
 @dataclass
 class Devices:
-    """The opened robot and tracker of a station."""
+    """The opened robot and tracker of a station.
 
-    robot: URRobot
+    The robot is driven through `IsolatedURRobot` (ur_rtde in a child process): a crash of the client
+    library on a dropped link becomes a `ConnectionLost` the engine recovers from.
+    """
+
+    robot: IsolatedURRobot
     tracker: Tracker
 
     def close(self) -> None:
@@ -86,7 +90,7 @@ class Devices:
 
 def open_devices(config: StationConfig) -> Devices:
     """Connect to the robot and the tracker (typed driver errors on failure; nothing left open)."""
-    robot = URRobot(robot_config(config))
+    robot = IsolatedURRobot(robot_config(config))
     tracker = Tracker(tracker_config(config))
     robot.open()
     try:
@@ -101,7 +105,7 @@ def _is(*kinds: type[BaseException]) -> Callable[[BaseException], bool]:
     return lambda exc: isinstance(exc, kinds)
 
 
-def _robot_ready(robot: URRobot) -> Callable[[], bool]:
+def _robot_ready(robot: IsolatedURRobot) -> Callable[[], bool]:
     """True once the controller is running normally again; reconnects after the program stopped."""
 
     def check() -> bool:

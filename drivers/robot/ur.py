@@ -56,6 +56,11 @@ STOP_DECEL = 4.0  # rad/s^2 used when the driver stops the arm itself
 _TINY_TCP = (0.0, 0.0, 0.0, 0.0, 0.0, 1e-12)  # non-zero on purpose (see module docstring)
 
 
+#: ur_rtde interfaces whose link was lost: never disconnected nor destroyed while the process runs,
+#: because ur_rtde's reconnection thread may still be using them (see `URRobot.close`).
+_ABANDONED: list[Any] = []
+
+
 class URRobot:
     """A UR arm driven through ur_rtde. ``with URRobot(RobotConfig(host)) as robot: robot.move_to(q)``."""
 
@@ -66,7 +71,6 @@ class URRobot:
         self._r: Any = None  # rtde_receive.RTDEReceiveInterface
         self._cmd_lock = threading.Lock()
         self._abort = threading.Event()
-        self._abandoned: list[tuple[Any, Any]] = []  # interfaces left after a lost link (see reconnect)
 
     # ------------------------------------------------------------------ connection
     def open(self) -> RobotInfo:
@@ -121,18 +125,25 @@ class URRobot:
         """Disconnect (the control script is stopped so the arm is left idle)."""
         c, r = self._c, self._r
         self._c = self._r = None
+        # An interface that lost its link may be inside ur_rtde's own reconnection thread right now;
+        # disconnecting (or destroying) it then crashes the process, so it is set aside instead.
         if c is not None:
-            try:
-                if c.isConnected():
+            if not c.isConnected():
+                _ABANDONED.append(c)
+            else:
+                try:
                     c.stopScript()
-                c.disconnect()
-            except RuntimeError as exc:
-                log.debug("closing the control interface: %s", exc)
+                    c.disconnect()
+                except RuntimeError as exc:
+                    log.debug("closing the control interface: %s", exc)
         if r is not None:
-            try:
-                r.disconnect()
-            except RuntimeError as exc:
-                log.debug("closing the receive interface: %s", exc)
+            if not r.isConnected():
+                _ABANDONED.append(r)
+            else:
+                try:
+                    r.disconnect()
+                except RuntimeError as exc:
+                    log.debug("closing the receive interface: %s", exc)
 
     def reconnect(self) -> RobotInfo:
         """Recover after a dropped link or a stopped program, without tearing the interfaces down.
@@ -142,6 +153,12 @@ class URRobot:
         (bounded) for the library's own recovery, ask for an explicit reconnect where it gave up,
         re-upload the control script if it is not running, then check the controller's state.
         Never connected yet: a plain `open`.
+
+        Known upstream limit (ur_rtde 1.6.5): when the library's automatic reconnection itself fails
+        (the controller refuses connections for longer than its attempt), its receive thread can
+        crash the process in ``RTDE::isDataAvailable()`` (reproduced against the simulator with a
+        3 s refusal, about one run in three). Nothing in this driver can prevent that from inside
+        the process; running the client in a child process would.
         """
         c, r = self._c, self._r
         if c is None or r is None:
@@ -157,7 +174,7 @@ class URRobot:
         if dropped and not (c.isConnected() and r.isConnected() and c.isProgramRunning()):
             # ur_rtde gave up. Its reconnect() on half-torn-down interfaces corrupts the heap, and
             # their destructors race its threads: keep the old objects (idle now) and start afresh.
-            self._abandoned.append((c, r))
+            _ABANDONED.extend((c, r))
             self._c = self._r = None
             return self.open()
         try:

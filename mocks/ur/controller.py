@@ -211,11 +211,12 @@ class SimController:
         elif name == "release_emergency_stop":
             a.release_emergency_stop()
         elif name == "drop_connection":
-            if args.get("stop_program", True):
-                a.stop_program(decel=8.0)
+            # the link goes first; the controller's watchdog then stops the program (as on a real arm)
             refuse = float(args.get("refuse_s", 0.0))
             for srv in (self.rtde, self.dashboard, self.script):
                 srv.drop(refuse)
+            if args.get("stop_program", True):
+                a.stop_program(decel=8.0)
         elif name == "stall":
             self.rtde.stalled = bool(args.get("on", True))
         elif name == "remote_control":

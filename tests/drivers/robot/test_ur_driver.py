@@ -26,6 +26,7 @@ from drivers.robot import (
     UnsupportedVersion,
     URRobot,
 )
+from drivers.robot.isolated import IsolatedURRobot
 from mocks.ur.controller import SimConfig
 from mocks.ur.process import SimProcess
 from mocks.ur.testing import random_loopback, start_sim
@@ -117,11 +118,48 @@ def test_emergency_stop_mid_move(robot: URRobot, sim: SimProcess) -> None:
     assert_arm_stopped(sim)
 
 
-def test_dropped_connection_mid_move(robot: URRobot, sim: SimProcess) -> None:
-    inject_later(sim, 0.05, "drop_connection", refuse_s=3.0)
-    with pytest.raises(ConnectionLost):
-        robot.move_to(Q_FAR)
-    assert_arm_stopped(sim)
+def test_dropped_connection_mid_move(sim: SimProcess) -> None:
+    """Through the isolated client (as the product drives the arm): ur_rtde's own reconnection after
+    a dropped link can crash its process (see URRobot.reconnect); here that is a ConnectionLost."""
+    robot = IsolatedURRobot(config(sim))
+    robot.open()
+    try:
+        inject_later(sim, 0.05, "drop_connection", refuse_s=1.0)
+        with pytest.raises(ConnectionLost):
+            robot.move_to(Q_FAR)
+        assert_arm_stopped(sim)
+        deadline = time.monotonic() + 20
+        while True:  # the controller accepts connections again after 1 s: reconnect until it works
+            try:
+                robot.reconnect()
+                break
+            except (ConnectionLost, RobotUnreachable, ProgramStopped):
+                assert time.monotonic() < deadline, "could not reconnect"
+                time.sleep(0.5)
+        reading = robot.move_to(Q_A)
+        assert np.allclose(reading.q, Q_A, atol=1e-3)
+    finally:
+        robot.close()
+
+
+def test_isolated_client_survives_the_death_of_its_process(sim: SimProcess) -> None:
+    robot = IsolatedURRobot(config(sim))
+    robot.open()
+    try:
+        assert robot.info is not None and robot.info.model == "UR5e"
+        first = robot._proc
+        first.kill()  # what a segfault of ur_rtde looks like from outside
+        first.join(5)
+        with pytest.raises(ConnectionLost, match="process died"):
+            robot.read_joints(3)
+        robot.reconnect()
+        assert robot._proc is not first and robot.read_joints(3).samples == 3
+        threading.Timer(0.1, robot.stop).start()  # stop from another thread mid-move
+        with pytest.raises(MotionAborted):
+            robot.move_to(Q_FAR)
+        assert_arm_stopped(sim)
+    finally:
+        robot.close()
 
 
 def test_program_stopped_mid_move(robot: URRobot, sim: SimProcess) -> None:

@@ -1,0 +1,178 @@
+"""The UR driver in a child process, so a crash of the ur_rtde client cannot take the caller down.
+
+ur_rtde 1.6.5 can crash its host process when its automatic reconnection runs after a dropped link
+(its receive thread segfaults in ``RTDE::isDataAvailable()``; reproduced against the simulator).
+An end-of-line cell must not lose its run to a network blip, so the campaign talks to the arm
+through this proxy: every call is forwarded to a `URRobot` living in a child process; if that process
+dies, the call raises `ConnectionLost`, and `reconnect()` starts a fresh one. `stop()` travels on a
+channel of its own, so it interrupts a `move_to` in progress as it does in-process.
+
+Servo streaming (MOVEB) stays in-process with `URRobot`: a 500 Hz loop must not cross a pipe.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import multiprocessing as mp
+import threading
+from multiprocessing.connection import Connection
+from typing import Any
+
+import numpy as np
+
+from drivers.robot.errors import ConnectionLost, RobotError
+from drivers.robot.model import JointReading, RobotConfig, RobotInfo
+
+_START_TIMEOUT = 30.0  # seconds for the child to import ur_rtde and answer
+_MARGIN = 10.0  # seconds added to the driver's own timeouts before the proxy gives up on a call
+
+
+def _serve(commands: Connection, stops: Connection, config: RobotConfig) -> None:
+    """Child process: run calls on a URRobot until the pipe closes."""
+    from drivers.robot.ur import URRobot
+
+    robot = URRobot(config)
+
+    def stopper() -> None:
+        while True:
+            try:
+                stops.recv()
+            except (EOFError, OSError):
+                return
+            with contextlib.suppress(Exception):
+                robot.stop()
+
+    threading.Thread(target=stopper, daemon=True).start()
+    while True:
+        try:
+            name, args, kwargs = commands.recv()
+        except (EOFError, OSError):
+            break
+        try:
+            reply: tuple[str, Any] = ("ok", getattr(robot, name)(*args, **kwargs))
+        except Exception as exc:  # every error crosses back to the caller, typed when picklable
+            reply = ("err", exc)
+        try:
+            commands.send(reply)
+        except Exception:  # an unpicklable error: send its text
+            commands.send(("err", RobotError(f"{type(reply[1]).__name__}: {reply[1]}")))
+    with contextlib.suppress(Exception):
+        robot.close()
+
+
+class IsolatedURRobot:
+    """A `URRobot` in a child process (same methods); no I/O until `open()`."""
+
+    def __init__(self, config: RobotConfig) -> None:
+        self.config = config
+        self.info: RobotInfo | None = None
+        self._proc: Any = None
+        self._cmd: Connection | None = None
+        self._stop: Connection | None = None
+        self._lock = threading.Lock()
+
+    # --- the child ---------------------------------------------------------------------------
+    def _start(self) -> None:
+        ctx = mp.get_context("spawn")
+        cmd_parent, cmd_child = ctx.Pipe()
+        stop_parent, stop_child = ctx.Pipe()
+        proc = ctx.Process(target=_serve, args=(cmd_child, stop_child, self.config), daemon=True,
+                           name=f"ur-client-{self.config.host}")
+        proc.start()
+        cmd_child.close()
+        stop_child.close()
+        self._proc, self._cmd, self._stop = proc, cmd_parent, stop_parent
+
+    def _kill(self) -> None:
+        proc, self._proc = self._proc, None
+        for conn in (self._cmd, self._stop):
+            if conn is not None:
+                with contextlib.suppress(OSError):
+                    conn.close()
+        self._cmd = self._stop = None
+        if proc is not None:
+            proc.join(2.0)
+            if proc.is_alive():
+                proc.kill()
+                proc.join(2.0)
+
+    def _call(self, name: str, *args: Any, timeout: float, **kwargs: Any) -> Any:
+        with self._lock:
+            if self._cmd is None or self._proc is None:
+                raise ConnectionLost("not connected; call open()")
+            try:
+                self._cmd.send((name, args, kwargs))
+                ready = self._cmd.poll(timeout)
+                if not ready:
+                    raise ConnectionLost(f"the robot client did not answer {name}() within {timeout:.0f} s")
+                status, value = self._cmd.recv()
+            except (EOFError, OSError):
+                code = self._proc.exitcode if self._proc is not None else None
+                self._kill()
+                raise ConnectionLost(f"the robot client process died during {name}() "
+                                     f"(exit code {code}); reconnect to continue") from None
+        if status == "err":
+            raise value
+        return value
+
+    # --- the Robot protocol --------------------------------------------------------------------
+    def open(self) -> RobotInfo:
+        """Start the client process and connect (the URRobot pre-flight checks apply)."""
+        if self._proc is None:
+            self._start()
+        try:
+            self.info = self._call("open", timeout=_START_TIMEOUT + self.config.connect_timeout)
+        except BaseException:
+            self._kill()
+            raise
+        return self.info
+
+    def close(self) -> None:
+        if self._proc is not None:
+            with contextlib.suppress(RobotError, OSError):
+                self._call("close", timeout=self.config.connect_timeout + _MARGIN)
+        self._kill()
+
+    def reconnect(self) -> RobotInfo:
+        """Recover the link; a dead (or unresponsive) client process is replaced by a new one."""
+        if self._proc is not None and self._proc.is_alive():
+            try:
+                self.info = self._call("reconnect", timeout=2 * self.config.connect_timeout + _MARGIN)
+                return self.info
+            except ConnectionLost:
+                self._kill()
+        else:
+            self._kill()
+        return self.open()
+
+    def check_status(self) -> None:
+        self._call("check_status", timeout=self.config.connect_timeout + _MARGIN)
+
+    def move_to(self, q: Any, *, speed: float | None = None, acceleration: float | None = None,
+                samples: int = 1) -> JointReading:
+        return self._call("move_to", np.asarray(q, dtype=float).tolist(), speed=speed,
+                          acceleration=acceleration, samples=samples,
+                          timeout=self.config.move_timeout + self.config.settle_timeout + _MARGIN)
+
+    def read_joints(self, samples: int = 1, timeout: float = 2.0) -> JointReading:
+        return self._call("read_joints", samples, timeout=timeout + samples / 100.0 + _MARGIN)
+
+    def tcp_pose(self) -> np.ndarray:
+        return self._call("tcp_pose", timeout=_MARGIN)
+
+    def validate_target(self, q: Any) -> np.ndarray:
+        return self._call("validate_target", np.asarray(q, dtype=float).tolist(), timeout=_MARGIN)
+
+    def stop(self) -> None:
+        """Stop the arm now, from any thread, even while a move_to is waiting."""
+        stop = self._stop
+        if stop is not None:
+            with contextlib.suppress(OSError):
+                stop.send(True)
+
+    def __enter__(self) -> IsolatedURRobot:
+        self.open()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
