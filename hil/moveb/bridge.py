@@ -293,5 +293,5 @@ class Curve:
 
     def arclength_grid(self, ds: float) -> np.ndarray:
         """Arc lengths every `ds` (the last one at the end) and at every piece boundary."""
-        n = max(int(math.ceil(self.length / ds)), 1)
+        n = max(math.ceil(self.length / ds), 1)
         return np.unique(np.r_[np.linspace(0.0, self.length, n + 1), self._s0])

@@ -27,9 +27,10 @@ curve, so |PiQi| bounds the distance from the original point to the curve. While
 
 A shift that would exceed Di is pulled back to 0.99·Di and lowers that di by the overshoot. Where
 Ei ≥ Di the unshifted bridge already meets Ei, so di = Di from the start; elsewhere the first solve
-already uses Di + Ei' (the seed's initial threshold is lost; this saves one LP). The loop stops when every point is
-within E (and every shift within D); if it has not after `max_iterations`, the plan falls back to the
-unshifted points with di = min(Di, Ei)·(1 − margin), which honours both thresholds by construction.
+already uses Di + Ei' (the seed's initial threshold is lost; this saves one LP). The loop stops
+when every point is within E (and every shift within D); if it has not after `max_iterations`,
+the plan falls back to the unshifted points with di = min(Di, Ei)·(1 − margin), which honours
+both thresholds by construction.
 Straight input (θ = 0 everywhere) has no bridges and no shifts, so it stays exactly straight.
 """
 
@@ -67,8 +68,10 @@ def _directions(W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def half_angles(W: np.ndarray) -> np.ndarray:
     """(n+1,) half of the turn at each point (0 at the ends)."""
     T, _ = _directions(W)
-    cos = np.clip(np.einsum("ij,ij->i", T[:-1], T[1:]), -1.0, 1.0)
-    return np.r_[0.0, 0.5 * np.arccos(cos), 0.0]
+    # atan2 of |cross| and dot: accurate near 0 (arccos of a rounded cosine would see a 1e-8 turn
+    # in collinear input)
+    turn = np.arctan2(np.linalg.norm(np.cross(T[:-1], T[1:]), axis=1), np.einsum("ij,ij->i", T[:-1], T[1:]))
+    return np.r_[0.0, 0.5 * turn, 0.0]
 
 
 def solve_lp(W: np.ndarray, d: np.ndarray, shape: BridgeShape, previous: np.ndarray | None = None,
@@ -172,7 +175,7 @@ def plan_positions(P: np.ndarray, D: np.ndarray, E: np.ndarray, shape: BridgeSha
             W[over] = P[over] + (W[over] - P[over]) * (limit[over] / shift[over])[:, None]
             cap = np.where(over, cap - (shift - limit), cap)
         d = np.where(E < D, np.maximum(cap, 1e-9), limit)
-        changed = np.any(W != W_before, axis=1) | (d != d_before)
+        changed = np.any(W_before != W, axis=1) | (d != d_before)
     d = (1.0 - MARGIN) * np.minimum(D, E)
     h = solve_lp(P, d, shape)
     Q = apexes(P, h, shape)

@@ -109,7 +109,7 @@ def summary(plan: Plan) -> dict[str, object]:
                        "max_point_error": float(sol.point_error[idx].max()),
                        "max_shift": float(sol.shift[idx].max())})
     return {"points": len(plan.program.points), "continuity": plan.continuity,
-            "length_mm": plan.length, "bridges": int(len(plan.curve.bridged)),
+            "length_mm": plan.length, "bridges": len(plan.curve.bridged),
             "iterations": sol.iterations, "fallback": sol.fallback,
             "planning_ms": plan.seconds * 1e3, "groups": groups,
             "finite": bool(math.isfinite(plan.length))}

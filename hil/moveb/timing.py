@@ -66,7 +66,7 @@ class TimeLaw:
 def speed_ceiling(s: np.ndarray, kappa: np.ndarray, limits: Limits, rate_hz: float) -> np.ndarray:
     """Step 1 of the module docstring on a uniform grid `s`."""
     ds = s[1] - s[0]
-    reach = max(int(round(limits.velocity / rate_hz / ds)), 1)  # one cycle's travel at full speed
+    reach = max(round(limits.velocity / rate_hz / ds), 1)  # one cycle's travel at full speed
     pad = np.r_[np.full(reach, kappa[0]), kappa, np.full(reach, kappa[-1])]
     dk = np.abs(pad[2 * reach:] - pad[:-2 * reach]) / (2 * reach * ds)
     with np.errstate(divide="ignore"):
@@ -84,13 +84,13 @@ def feed_profile(s: np.ndarray, kappa: np.ndarray, limits: Limits, rate_hz: floa
         raise InputError("the path has zero length")
     if ds is None:
         ds = min(0.05, length / 1000.0)
-    n = max(int(math.ceil(length / ds)), 2)
+    n = max(math.ceil(length / ds), 2)
     grid = np.linspace(0.0, length, n + 1)
     ds = grid[1]
     k = np.interp(grid, s - s[0], np.asarray(kappa, float))
     T = 2.0 * limits.acceleration / limits.jerk
     vlim = speed_ceiling(grid, k, limits, rate_hz)
-    window = int(math.ceil(limits.velocity * T / ds))
+    window = math.ceil(limits.velocity * T / ds)
     vlim = minimum_filter1d(vlim, size=2 * window + 1, mode="nearest")
     vlim[0] = vlim[-1] = 0.0
     a = limits.acceleration
@@ -105,7 +105,7 @@ def feed_profile(s: np.ndarray, kappa: np.ndarray, limits: Limits, rate_hz: floa
     dt = 1.0 / rate_hz
     tc = np.arange(0.0, t[-1] + dt, dt)
     vc = np.interp(tc, t, v)
-    taps = max(int(round(T / dt)), 1)
+    taps = max(round(T / dt), 1)
     vf = np.convolve(vc, np.full(taps, 1.0 / taps))
     sf = np.r_[0.0, np.cumsum(0.5 * (vf[1:] + vf[:-1]) * dt)]
     sf *= length / sf[-1]

@@ -23,9 +23,11 @@ def distance_to_polyline(points: np.ndarray, vertices: np.ndarray) -> tuple[np.n
 
 def point_errors(plan: Plan, step: float = 0.02) -> np.ndarray:
     """Distance from each original point to the densely sampled curve."""
-    dense = plan.dense(step, per_bridge=400)
-    P = plan.program.positions
-    out = np.empty(len(P))
-    for i, p in enumerate(P):
-        out[i] = distance_to_polyline(p[None, :], dense.position)[0][0]
+    dense = plan.dense(step, per_bridge=400).position
+    a, ab = dense[:-1], np.diff(dense, axis=0)
+    ab2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+    out = np.empty(len(plan.program.points))
+    for i, p in enumerate(plan.program.positions):  # exact distance to every dense segment
+        t = np.clip(np.einsum("ij,ij->i", p - a, ab) / ab2, 0.0, 1.0)
+        out[i] = np.linalg.norm(p - (a + t[:, None] * ab), axis=1).min()
     return out
