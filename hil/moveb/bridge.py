@@ -241,15 +241,13 @@ class Curve:
         """(n+1,) arc length of `apex` for each program point (keys of the orientation spline)."""
         out = np.empty(len(self.working))
         out[0], out[-1] = 0.0, self.length
-        line_end = self._s0 + self._piece_len
-        for k in range(1, len(self.working) - 1):
-            # the piece after line k-1 is the bridge at k, or line k starts at the point
-            p = int(np.flatnonzero((self._kinds == 0) & (self._refs == k - 1))[0])
-            if self.h[k] > 0:
-                j = p + 1
-                out[k] = self._s0[j] + self._table[self._refs[j], TABLE_SAMPLES]
-            else:
-                out[k] = line_end[p]
+        lines = np.flatnonzero(self._kinds == 0)  # line k-1 is the (k-1)-th line piece
+        k = np.arange(1, len(self.working) - 1)
+        p = lines[k - 1]
+        out[k] = self._s0[p] + self._piece_len[p]  # the point itself where there is no bridge
+        b = self.h[k] > 0
+        j = p[b] + 1  # the bridge right after line k-1; its apex is half-way through its table
+        out[k[b]] = self._s0[j] + self._table[self._refs[j], TABLE_SAMPLES]
         return out
 
     def evaluate(self, s: np.ndarray) -> dict[str, np.ndarray]:

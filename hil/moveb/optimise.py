@@ -7,7 +7,12 @@ its chord error is |WiQi| = h·sinθi. Maximise Σ hi subject to
 * non-overlap: arm·h(j) + arm·h(j+1) ≤ Lj on every segment (the first and last segments carry one
   bridge only);
 * chord error: hi·sinθi ≤ di;
-* hi ≥ 0.
+* hi ≥ ĥi = min(di/sinθi, L(i−1)/(2·arm), Li/(2·arm)), the bridge's share under the classic
+  half-segment split.
+
+The last bound is ours. Σh alone starves a corner between two others on short segments (h1 + h2 ≤ c,
+h2 + h3 ≤ c is maximised by h2 = 0: a sharp kink, infinite curvature); with the floor every bridge is
+at least as flat as the half-split gives, the floor is always feasible, and Σh spreads the rest.
 
 The peak curvature of a bridge is ∝ 1/h, so a larger Σh is a flatter path. Σh alone is degenerate
 when two bridges share a segment that limits both (any split has the same sum), and HiGHS would pick
@@ -95,6 +100,9 @@ def solve_lp(W: np.ndarray, d: np.ndarray, shape: BridgeShape, previous: np.ndar
     # presolve: a segment whose two bridges fit at their chord bounds can never bind; a corner whose
     # two segments cannot bind takes its bound. Only the coupled rest goes to HiGHS (this keeps the
     # repeated solves of the point-error iteration cheap; HiGHS' own presolve runs after the wrapper).
+    # the floor: no bridge smaller than its share under the classic half-segment split
+    floor = np.minimum(upper, np.minimum(np.r_[np.inf, L], np.r_[L, np.inf]) / (2.0 * shape.arm))
+    floor[[0, -1]] = 0.0
     coupled = shape.arm * (upper[:-1] + upper[1:]) > L
     free = np.zeros(len(W), bool)
     free[corners] = ~coupled[corners - 1] & ~coupled[corners]
@@ -106,7 +114,8 @@ def solve_lp(W: np.ndarray, d: np.ndarray, shape: BridgeShape, previous: np.ndar
         touched[:-1] |= changed[1:]
         chain = np.r_[0, np.cumsum(~coupled)]  # points k and k+1 share a chain iff segment k is coupled
         redo = np.isin(chain[var], np.unique(chain[touched]))
-        h[var[~redo]] = np.minimum(previous[var[~redo]], upper[var[~redo]])
+        keep = var[~redo]
+        h[keep] = np.clip(previous[keep], floor[keep], upper[keep])
         var = var[redo]
     if var.size:
         m = len(var)
@@ -119,7 +128,7 @@ def solve_lp(W: np.ndarray, d: np.ndarray, shape: BridgeShape, previous: np.ndar
         A = sp.csc_array((np.full(len(rows), shape.arm), (rows, cols)), shape=(len(segs), m))
         w = np.sin(theta[var])
         cost = -(1.0 + TIE_BREAK * w / w.max())
-        res = linprog(cost, A_ub=A, b_ub=L[segs], bounds=np.c_[np.zeros(m), upper[var]], method="highs")
+        res = linprog(cost, A_ub=A, b_ub=L[segs], bounds=np.c_[floor[var], upper[var]], method="highs")
         if res.status != 0:  # cannot happen for this LP (h = 0 is feasible, bounds are finite)
             raise RuntimeError(f"bridge LP failed: {res.message}")
         h[var] = np.clip(res.x, 0.0, upper[var])
