@@ -58,7 +58,8 @@ def arc_blend(P: np.ndarray, tolerance: float, step: float = 0.05) -> Profile:
     kappa_piece = np.zeros_like(lengths)
     kappa_piece[1::2] = np.where(phi > 1e-9, 1.0 / r, 0.0)
     edges = np.r_[0.0, np.cumsum(lengths)]
-    s = np.unique(np.r_[np.arange(0.0, edges[-1], step), edges])
+    arcs = (edges[1:-1:2, None] + lengths[1::2, None] * np.linspace(0.0, 1.0, 65)[None, :]).ravel()
+    s = np.unique(np.r_[np.arange(0.0, edges[-1], step), edges, arcs])  # 64 samples per arc too
     piece = np.clip(np.searchsorted(edges, s, side="right") - 1, 0, len(lengths) - 1)
     # positions (for deviation metrics): lines exactly, arcs by rotation about their centres
     pos = np.empty((len(s), 3))
