@@ -1,0 +1,1 @@
+"""MOVEB: error-controlled smooth trajectories (seed 001): programs, planning, timing, running."""

@@ -1,0 +1,112 @@
+"""The feed profile: arc length against time under Cartesian velocity, acceleration and jerk limits
+and the curvature's normal-acceleration (and normal-jerk) limits, sampled at the controller rate.
+
+The method works on any sampled curvature profile κ(s), so the MOVEB curve and the baselines are
+timed by the same code (the benchmark's "cycle time under the same limits").
+
+1. A speed ceiling along s: v ≤ v_max, κ·v² ≤ a_n (normal acceleration) and |dκ/ds|·v³ ≤ j_max
+   (the normal jerk of travelling a curvature change at speed v). dκ/ds is the difference of κ over
+   one controller cycle's travel at full speed: a curvature *jump* (G1 blends) then costs what a
+   controller really pays — the acceleration step must fit in a cycle — instead of depending on how
+   finely the curve was sampled.
+2. That ceiling is lowered to its minimum over ±v_max·T around each s (T the jerk filter below), so
+   the filter's time-averaging cannot carry a higher speed into a curvature peak.
+3. Forward and backward passes under the tangential acceleration a_max (exact and vectorised:
+   v²(s) = min over s' ≤ s of v_lim²(s') + 2a(s − s'), a cumulative minimum), at rest at both ends.
+4. The speed is resampled in time at the controller period and smoothed with a moving average of
+   length T = 2·a_max/j_max: a moving average of a profile bounded by v_max and a_max stays bounded
+   by them, and its jerk is (a(t) − a(t − T))/T ≤ 2·a_max/T = j_max. The arc length is the integral
+   (rescaled by < 1e-9 to end exactly at the curve's length).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.ndimage import minimum_filter1d
+
+from hil.errors import InputError
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Cartesian limits of the tool point (mm, s)."""
+
+    velocity: float = 250.0  # mm/s
+    acceleration: float = 2000.0  # mm/s², tangential
+    jerk: float = 20000.0  # mm/s³, tangential and normal
+    normal_acceleration: float = 2000.0  # mm/s², κ·v²
+
+    def __post_init__(self) -> None:
+        for name in ("velocity", "acceleration", "jerk", "normal_acceleration"):
+            value = getattr(self, name)
+            if not (value > 0 and math.isfinite(value)):
+                raise InputError(f"limit {name} must be positive and finite, got {value}")
+
+
+@dataclass(frozen=True)
+class TimeLaw:
+    """Arc length at the controller's samples: t[k] = k/rate, s[k] in mm."""
+
+    t: np.ndarray
+    s: np.ndarray
+    rate_hz: float
+
+    @property
+    def cycle_time(self) -> float:
+        return float(self.t[-1])
+
+    @property
+    def velocity(self) -> np.ndarray:
+        return np.gradient(self.s, self.t)
+
+
+def speed_ceiling(s: np.ndarray, kappa: np.ndarray, limits: Limits, rate_hz: float) -> np.ndarray:
+    """Step 1 of the module docstring on a uniform grid `s`."""
+    ds = s[1] - s[0]
+    reach = max(round(limits.velocity / rate_hz / ds), 1)  # one cycle's travel at full speed
+    pad = np.r_[np.full(reach, kappa[0]), kappa, np.full(reach, kappa[-1])]
+    dk = np.abs(pad[2 * reach:] - pad[:-2 * reach]) / (2 * reach * ds)
+    with np.errstate(divide="ignore"):
+        v = np.minimum(limits.velocity, np.sqrt(limits.normal_acceleration / np.maximum(kappa, 1e-300)))
+        v = np.minimum(v, np.cbrt(limits.jerk / np.maximum(dk, 1e-300)))
+    return v
+
+
+def feed_profile(s: np.ndarray, kappa: np.ndarray, limits: Limits, rate_hz: float,
+                 ds: float | None = None) -> TimeLaw:
+    """The time law of a curve given its curvature κ at arc lengths s (mm, 1/mm)."""
+    s = np.asarray(s, float)
+    length = float(s[-1] - s[0])
+    if not length > 0:
+        raise InputError("the path has zero length")
+    if ds is None:
+        ds = min(0.05, length / 1000.0)
+    n = max(math.ceil(length / ds), 2)
+    grid = np.linspace(0.0, length, n + 1)
+    ds = grid[1]
+    k = np.interp(grid, s - s[0], np.asarray(kappa, float))
+    T = 2.0 * limits.acceleration / limits.jerk
+    vlim = speed_ceiling(grid, k, limits, rate_hz)
+    window = math.ceil(limits.velocity * T / ds)
+    vlim = minimum_filter1d(vlim, size=2 * window + 1, mode="nearest")
+    vlim[0] = vlim[-1] = 0.0
+    a = limits.acceleration
+    v2 = vlim ** 2
+    fwd = 2 * a * grid + np.minimum.accumulate(v2 - 2 * a * grid)
+    bwd = -2 * a * grid + np.minimum.accumulate((v2 + 2 * a * grid)[::-1])[::-1]
+    v = np.sqrt(np.maximum(np.minimum(fwd, bwd), 0.0))
+    mean = 0.5 * (v[1:] + v[:-1])
+    if np.any(mean <= 0):
+        raise InputError("the feed profile stops inside the path (a limit is zero there)")
+    t = np.r_[0.0, np.cumsum(ds / mean)]
+    dt = 1.0 / rate_hz
+    tc = np.arange(0.0, t[-1] + dt, dt)
+    vc = np.interp(tc, t, v)
+    taps = max(round(T / dt), 1)
+    vf = np.convolve(vc, np.full(taps, 1.0 / taps))
+    sf = np.r_[0.0, np.cumsum(0.5 * (vf[1:] + vf[:-1]) * dt)]
+    sf *= length / sf[-1]
+    return TimeLaw(np.arange(len(sf)) * dt, sf, rate_hz)

@@ -1,0 +1,121 @@
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from hil.cli import main
+from hil.geometry import Geometry
+from hil.ik import UnreachableError, solve_ik, solve_path
+from hil.kinematics import Kinematics
+from hil.moveb.plan import SAMPLES_HEADER, plan_program
+from hil.moveb.program import load_program
+from hil.moveb.run import path_accuracy, register, tool_targets
+from hil.moveb.timing import Limits
+from hil.synthetic import random_truth
+
+EXAMPLES = Path(__file__).parents[3] / "hil" / "moveb" / "examples"
+Q0 = np.array([0.3, -1.2, 1.5, -1.8, -1.57, 0.2])
+
+
+@pytest.mark.parametrize("rate", [500.0, 125.0])
+def test_feed_profile_honours_the_limits(rate: float) -> None:
+    plan = plan_program(load_program(EXAMPLES / "square.moveb"), "G3")
+    lim = Limits(velocity=200.0, acceleration=1500.0, jerk=15000.0, normal_acceleration=800.0)
+    law, _samples = plan.timed(lim, rate)
+    dt = 1.0 / rate
+    assert np.allclose(np.diff(law.t), dt)
+    assert law.s[0] == 0.0 and law.s[-1] == pytest.approx(plan.length)
+    v = np.diff(law.s) / dt
+    a = np.diff(v) / dt
+    j = np.diff(a) / dt
+    assert v.min() >= -1e-9 and v.max() <= lim.velocity * 1.001
+    assert np.abs(a).max() <= lim.acceleration * 1.02
+    assert np.abs(j).max() <= lim.jerk * 1.05
+    vm = 0.5 * (v[1:] + v[:-1])
+    kappa = plan.curve.evaluate(law.s[1:-1])["curvature"]
+    assert (kappa * vm ** 2).max() <= lim.normal_acceleration * 1.05
+    assert v[0] < lim.acceleration * dt and v[-1] < lim.acceleration * dt  # at rest at both ends
+
+
+def test_ik_solves_the_calibrated_chain_and_refuses_the_unreachable() -> None:
+    truth = random_truth("ur5e", np.random.default_rng(3))
+    kin = Kinematics(truth)
+    target = pin.SE3(kin.flange_poses(Q0 + 0.1)[0])
+    q = solve_ik(kin, target, Q0)
+    assert np.allclose(kin.flange_poses(q)[0], target.homogeneous, atol=1e-9)
+    far = pin.SE3(np.eye(3), np.array([3.0, 0.0, 0.5]))
+    with pytest.raises(UnreachableError, match="out of reach"):
+        solve_ik(kin, far, Q0)
+
+
+def test_ik_follows_a_planned_path_with_the_smr_as_tcp() -> None:
+    geometry = Geometry.nominal("ur5e", smr=(0.0, 0.0, 0.045))
+    kin = Kinematics(geometry)
+    plan = plan_program(load_program(EXAMPLES / "square.moveb"), "G2")
+    _law, s = plan.timed(Limits(velocity=400.0), 125.0)
+    # anchor the program where the arm can reach: start at Q0's SMR position, tool down
+    F = kin.flange_poses(Q0)[0]
+    shift = (F[:3, :3] @ geometry.smr + F[:3, 3]) * 1e3 - s.position[0]
+    Q = solve_path(kin, tool_targets(s.position + shift, s.z_axis, s.x_axis, geometry.smr), Q0)
+    got = kin.points(Q, frame="base", point="smr") * 1e3
+    assert np.abs(got - (s.position + shift)).max() < 1e-6
+
+
+def test_path_accuracy_and_registration() -> None:
+    path = np.c_[np.linspace(0, 100, 1001), np.zeros(1001), np.zeros(1001)]
+    measured = path[::10] + np.array([0.0, 0.05, 0.0])
+    acc = path_accuracy(path, measured, np.array([[50.0, 0.0, 0.0]]))
+    assert acc["max_deviation_mm"] == pytest.approx(0.05)
+    assert acc["rms_deviation_mm"] == pytest.approx(0.05)
+    assert acc["corner_deviation_measured_mm"][0] == pytest.approx(0.05)
+    L = np.c_[np.r_[np.linspace(0, 100, 501), np.full(500, 100.0)],
+              np.r_[np.zeros(501), np.linspace(0.2, 100, 500)], np.zeros(1001)]
+    R = pin.rpy.rpyToMatrix(0.1, -0.2, 2.0)
+    in_tracker = (L[::5] - np.array([1000.0, 200.0, 0.0])) @ R  # R^T applied: base -> tracker
+    back = register(in_tracker, L[::5], L)
+    assert np.abs(back - L[::5]).max() < 1e-6
+
+
+def test_cli_plan_writes_samples(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "samples.csv"
+    assert main(["moveb", "plan", str(EXAMPLES / "square.moveb"), "--continuity", "G3",
+                 "--out", str(out)]) == 0
+    lines = out.read_text().splitlines()
+    assert lines[0] == ",".join(SAMPLES_HEADER)
+    rows = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
+    assert np.all(np.diff(rows[:, 0]) > 0)
+    assert np.allclose(np.linalg.norm(rows[:, 4:7], axis=1), 1.0, atol=1e-12)
+    assert '"continuity": "G3"' in capsys.readouterr().out
+
+
+def test_cli_plan_bad_program_is_one_line_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    bad = tmp_path / "bad.moveb"
+    bad.write_text("MOVEB 0 0 0 0 0 1 1 0 0 1 1\n# c\nMOVEB 1 0 0 0 0 1 1 0 0 -1 1\n")
+    assert main(["moveb", "plan", str(bad), "--out", str(tmp_path / "s.csv")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "bad.moveb: line 3: D (chord-height error) must be positive" in err
+    assert len(err.splitlines()) == 1
+
+
+@pytest.mark.skipif(os.environ.get("HIL_MOVEB_SIM") != "1",
+                    reason="end-to-end run on the simulated station (~30 s idle machine): HIL_MOVEB_SIM=1")
+def test_cli_run_on_the_simulated_station(tmp_path: Path) -> None:
+    prog = tmp_path / "small.moveb"
+    prog.write_text("MOVEB 0 0 0 0 0 1 1 0 0 0.5 0.2\nMOVEB 30 0 0 0 0 1 1 0 0 0.5 0.2\n"
+                    "MOVEB 30 30 0 0 0 1 1 0 0 0.5 0.2\n")
+    out = tmp_path / "run.json"
+    res = subprocess.run([sys.executable, "-m", "hil", "moveb", "run", str(prog), "--sim", "--frame",
+                          "current", "--velocity", "150", "--out", str(out)],
+                         capture_output=True, text=True, timeout=240, cwd=Path(__file__).parents[3])
+    assert res.returncode == 0, res.stderr
+    import json
+
+    doc = json.loads(out.read_text())
+    assert doc["registered"] is True
+    assert doc["path_accuracy"]["max_deviation_mm"] < 2.0
