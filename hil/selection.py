@@ -68,7 +68,7 @@ class SelectionModel:
         self.lower, self.upper = self.spec.lower.copy(), self.spec.upper.copy()
         self.max_joint_speed = self.spec.max_joint_speed.copy()
         self.smr = self.geometry.smr.copy()
-        self.arm = ArmShape.scaled((abs(self.spec.dh.a[1]) / 0.425) ** 0.6)
+        self.arm = arm_shape(self.spec.name)
         self._origins = np.array([M.homogeneous for M in self.geometry.joints])
         self._flange = self.geometry.flange.homogeneous
         self.parameters, self.unobservable = self._observable_parameters()
@@ -109,6 +109,11 @@ class SelectionModel:
     def jacobian(self, q: np.ndarray) -> np.ndarray:
         """(N, 3, n) identification Jacobian of the observable parameters (hil's pinocchio model)."""
         return self.kinematics.jacobian(q, self.parameters)
+
+
+def arm_shape(robot: str) -> ArmShape:
+    """The arm's link capsules: a UR5e's scaled by (|a2| / 0.425)^0.6 (see the module docstring)."""
+    return ArmShape.scaled((abs(get_robot(robot).dh.a[1]) / 0.425) ** 0.6)
 
 
 def parse_constraints(*, tracker: Sequence[float] | None, disabled: Sequence[str] = (),

@@ -17,7 +17,12 @@ import numpy as np
 
 from hil.geometry import Geometry
 from hil.kinematics import Kinematics
+from hil.selection import arm_shape
 from mocks.geocom.target import TargetState
+from selector.arm import segment_distance
+
+#: The beam is checked from this far beyond the SMR centre (the SMR's own nest is not an obstacle).
+BEAM_CLEARANCE = 0.03
 
 
 @dataclass
@@ -32,17 +37,37 @@ class World:
 
     def __post_init__(self) -> None:
         self._kin = Kinematics(self.truth)
+        self._arm = arm_shape(self.truth.robot)
 
     def state(self, q: np.ndarray) -> tuple[np.ndarray, float]:
         """(SMR in the tracker frame, angle in degrees between its axis and the line to the tracker)."""
         with self._lock:  # one pinocchio Data: the simulator's threads take turns
             F = self._kin.flange_poses(q)[0]
         p_base = F[:3, :3] @ self.truth.smr + F[:3, 3]
+        return self._in_tracker(p_base), self._angle(F, p_base)
+
+    def _in_tracker(self, p_base: np.ndarray) -> np.ndarray:
         T = self.truth.tracker
-        to_tracker = T.translation - p_base
+        return T.rotation.T @ (p_base - T.translation)
+
+    def _angle(self, F: np.ndarray, p_base: np.ndarray) -> float:
+        to_tracker = self.truth.tracker.translation - p_base
         cos = float(F[:3, 2] @ to_tracker / np.linalg.norm(to_tracker))
-        p_tracker = T.rotation.T @ (p_base - T.translation)
-        return p_tracker, float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+        return float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+
+    def blocked_by_arm(self, q: np.ndarray) -> bool:
+        """Whether a link of the (true) arm cuts the beam between the SMR and the tracker."""
+        with self._lock:
+            frames = self._kin.joint_frames(q)
+        F = frames[0, 6]
+        smr = F[:3, :3] @ self.truth.smr + F[:3, 3]
+        tracker = self.truth.tracker.translation
+        beam = tracker - smr
+        dist = float(np.linalg.norm(beam))
+        start = smr + beam / dist * min(BEAM_CLEARANCE, dist)
+        links = self._arm.segments(frames, smr[None])[:, :-1]  # every capsule but the SMR's own
+        d = segment_distance(start[None, None], tracker[None, None], links[:, :, 0], links[:, :, 1])
+        return bool(np.any(d <= np.asarray(self._arm.radii)[:-1]))
 
     def target(self) -> TargetState:
         p, angle = self.state(np.asarray(self.joints(), dtype=float))
@@ -51,6 +76,8 @@ class World:
         if angle > self.acceptance_deg:
             return TargetState(p, False, f"SMR faces away ({angle:.0f}° > {self.acceptance_deg:.0f}° "
                                          "acceptance)")
+        if self.blocked_by_arm(np.asarray(self.joints(), dtype=float)):
+            return TargetState(p, False, "the arm blocks the line of sight")
         return TargetState(p, True)
 
     def block_beam(self, on: bool = True, reason: str = "something is in the beam") -> None:
