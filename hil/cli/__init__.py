@@ -34,6 +34,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "sim",
     "history",
     "report",
+    "tui",
 )
 
 EXIT_OK = 0
