@@ -74,7 +74,7 @@ class TuiOptions:
     truth: str | None = None
     db: str | None = None
     out_dir: str = "."
-    overrides: dict[str, Any] = field(default_factory=dict)  # dotted config keys (calibrate's options)
+    overrides: dict[str, Any] = field(default_factory=dict)  # "campaign.seed" or "campaign__seed" keys
     connect: bool = True  # connect to the robot and tracker at start
     start_station: bool = True  # False: no station at all (snapshot tests feed the screens by hand)
 
@@ -88,7 +88,8 @@ def station_context(options: TuiOptions) -> Iterator[tuple[StationConfig, dict[s
     """
     if not options.sim:
         assert options.config is not None, "--config or --sim"
-        config = options.config.with_overrides(**options.overrides) if options.overrides else options.config
+        overrides = _dotted(options.overrides)
+        config = options.config.with_overrides(**overrides) if overrides else options.config
         yield config, config.as_dict(), None, None
         return
     truth_sha = ""
@@ -106,7 +107,7 @@ def station_context(options: TuiOptions) -> Iterator[tuple[StationConfig, dict[s
         station = sim.info["services"][0]
         base = default_config().with_overrides(
             station__name="simulated station", robot__type=robot, robot__speed=1.0,
-            robot__acceleration=2.0, campaign__seed=options.seed, **options.overrides)
+            robot__acceleration=2.0, campaign__seed=options.seed, **_dotted(options.overrides))
         config = base.with_overrides(robot__address=sim.address, tracker__url=station["tracker_url"])
         identity = base.with_overrides(robot__address="sim",
                                        tracker__url=f"sim:seed={options.seed};truth={truth_sha}").as_dict()
@@ -253,7 +254,13 @@ class Session:
         if devices is None:
             return
         try:
-            devices.robot.check_status()
+            try:
+                devices.robot.check_status()
+            except robot_errors.ProgramStopped:
+                # after a protective stop is unlocked the control script is gone: reload it, as the
+                # run's own suspender does (refused while the controller is still not ready)
+                devices.robot.reconnect()
+                devices.robot.check_status()
             st.safety = "normal"
         except robot_errors.ProtectiveStop:
             st.safety = "PROTECTIVE STOP"

@@ -20,6 +20,7 @@ class HilScreen(Screen[None]):
         return cast("HilApp", self.app)
 
     def on_screen_resume(self) -> None:
+        self.refresh_bindings()  # the footer otherwise keeps the previous screen's (empty) keys
         self.refresh_view()
 
     def refresh_view(self) -> None:

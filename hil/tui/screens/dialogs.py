@@ -11,19 +11,19 @@ from textual.screen import ModalScreen
 from textual.widgets import Button, Static
 
 HELP = """\
-[b]Screens[/b]   1 Station   2 Plan   3 Run   4 Results   5 History
-[b]Anywhere[/b]  ? this help   q quit   ctrl+p command palette   tab/shift+tab move focus
+[b]Screens[/b]   1 Station  2 Plan  3 Run  4 Results  5 History
+[b]Anywhere[/b]  ? help  q quit  ctrl+p commands  tab next field
+[b]Station[/b]   c connect/disconnect  m measure SMR now  r refresh
+[b]Plan[/b]      s select poses  u use for next run  esc leave field
+[b]Run[/b]       g start or resume  p pause/resume  a abort
+[b]Results[/b]   m model  u URDF  y ROS YAML  h HTML report  x all
+[b]History[/b]   enter open in Results  r reload
 
-[b]Station[/b]   c connect / disconnect   m measure the SMR now   r refresh status
-[b]Plan[/b]      s run the selector   u use these counts for the next run   esc leave a field
-[b]Run[/b]       g start (or resume) a campaign   p pause / resume   a abort
-[b]Results[/b]   m model JSON   u URDF   y ROS YAML   h HTML report   x all of them
-[b]History[/b]   enter open in Results   r reload
-
-A run pauses by itself when the beam is lost, on a protective stop or when a link drops, shows
-what to do, and goes on when the cause is cleared. Quitting mid-run stops the arm and keeps the
-campaign resumable: the next start (here or with hil calibrate) continues it.
 """
+
+HELP += ("A run pauses by itself when the beam is lost, on a protective stop or when a link drops, "
+         "says what to do, and goes on once the cause is cleared. Quitting mid-run stops the arm and "
+         "keeps the campaign resumable: the next start (here or hil calibrate) continues it.")
 
 
 class HelpScreen(ModalScreen[None]):

@@ -34,7 +34,8 @@ class HistoryScreen(HilScreen):
     def compose(self) -> ComposeResult:
         yield NavBar("history")
         table: DataTable[Text] = DataTable(id="campaigns", cursor_type="row", zebra_stripes=True)
-        table.add_columns("campaign", "updated", "robot", "status", "poses", "val [mm]")
+        table.add_columns(*(Text(c) for c in ("campaign", "updated", "robot", "status", "poses",
+                                             "val [mm]")))
         yield table
         yield Static(id="database")
         yield Footer()

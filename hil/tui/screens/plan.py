@@ -36,7 +36,7 @@ class PlanScreen(HilScreen):
     """Pose count, index and constraints; the selector's result and a plot of the chosen poses."""
 
     name_key = "plan"
-    AUTO_FOCUS = None  # the screen's keys work at once; tab reaches the fields
+    AUTO_FOCUS = ""  # nothing: an Input would swallow s and u; tab reaches the fields
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("s", "select", "Select poses"),
         Binding("u", "use", "Use for next run"),

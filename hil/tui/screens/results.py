@@ -69,7 +69,7 @@ class ResultsScreen(HilScreen):
         yield Footer()
 
     def on_mount(self) -> None:
-        self.query_one("#stats").border_title = "Validation (held-out poses) [mm]"
+        self.query_one("#stats").border_title = "Validation, held-out poses, mm"
         self.query_one("#fit").border_title = "Fit"
         self.refresh_view()
 

@@ -39,7 +39,7 @@ def row_cells(row: PoseRow) -> tuple[Text, ...]:
     if row.q is not None and row.target:
         dq = f"{1e3 * math.degrees(float(np.max(np.abs(np.subtract(row.q, row.target))))):.1f}"
     if row.status == "skipped":
-        p = f"skipped: {row.reason}"[:40]
+        p = "skipped"
     elif row.p is not None:
         p = " ".join(f"{1e3 * v:.1f}" for v in row.p)
     else:
@@ -72,7 +72,7 @@ class RunScreen(HilScreen):
         yield Static(id="run-step")
         table: DataTable[Text] = DataTable(id="poses", cursor_type="row", zebra_stripes=True)
         for label, key in COLUMNS:
-            table.add_column(label, key=key)
+            table.add_column(Text(label), key=key)  # Text: "[deg]" is not markup
         yield table
         yield PlotView("deviation from nominal [mm] per pose", y_floor=0.0, id="errors")
         yield Footer()
@@ -108,7 +108,7 @@ class RunScreen(HilScreen):
         waited = self.hil.now() - s.t
         banner.update(Text.assemble(
             (f" {s.kind.replace('_', ' ').upper()} ", "bold reverse"),
-            f"  waiting {clock(waited)}  (the run goes on by itself once cleared; a aborts)\n",
+            f"  waiting {clock(waited)}  (resumes by itself once cleared)\n",
             (s.message, "bold")))
 
     def _status(self, run: RunState) -> None:
