@@ -35,6 +35,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "history",
     "report",
     "moveb",
+    "tui",
 )
 
 EXIT_OK = 0

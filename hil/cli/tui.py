@@ -1,0 +1,63 @@
+"""`hil tui`: the shop-floor terminal app (Textual) for calibration campaigns.
+
+``hil tui --sim [--speed F]`` starts the simulated station inside the app; ``hil tui --config
+station.toml`` talks to a real one. The app runs the same campaigns as ``hil calibrate`` on the same
+engine and store: a campaign interrupted in one can be resumed from the other. Keys: ``?`` in the app.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from hil.errors import InputError
+from hil.robots import ROBOT_NAMES, get_robot
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("tui", help="the operator's terminal app (keyboard only, 80x24 and larger)",
+                       description=__doc__.split("\n\n")[0],
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--config", metavar="station.toml", help="station configuration")
+    src.add_argument("--sim", action="store_true", help="use the simulated station")
+    p.add_argument("--speed", type=float, default=1.0, metavar="F", help="--sim: fast-time factor")
+    p.add_argument("--seed", type=int, default=1, help="--sim: seed of the random truth and noise")
+    p.add_argument("--robot", default="ur5e", help=f"--sim: robot type ({', '.join(ROBOT_NAMES)})")
+    p.add_argument("--truth", metavar="truth.json", help="--sim: the hidden truth (default: random)")
+    p.add_argument("--poses", type=int, help="calibration poses (overrides the config)")
+    p.add_argument("--validation", type=int, help="validation poses (overrides the config)")
+    p.add_argument("--candidates", type=int, help="selector candidates (overrides the config)")
+    p.add_argument("--accept", type=float, metavar="METRES", help="validation RMS threshold")
+    p.add_argument("--db", metavar="PATH", help="campaign database (default: config, $HIL_DB, data dir)")
+    p.add_argument("--out-dir", default=".", metavar="DIR", help="where exports go (default: here)")
+    p.set_defaults(func=run, cycles=1)
+
+
+def options_from(args: argparse.Namespace) -> object:
+    """`TuiOptions` from the command line; bad input raises InputError before the app starts."""
+    from hil.cli.calibrate import _overrides
+    from hil.config import load_config
+    from hil.tui.session import TuiOptions
+
+    overrides = _overrides(args)
+    if args.config:
+        if args.truth or args.speed != 1.0:
+            raise InputError("--truth and --speed go with --sim, not --config")
+        return TuiOptions(config=load_config(args.config), db=args.db, out_dir=args.out_dir,
+                          overrides=overrides)
+    if not args.speed > 0:
+        raise InputError(f"--speed must be positive, got {args.speed}")
+    if args.truth:
+        from hil.model_file import load_truth
+
+        load_truth(args.truth)  # a bad truth fails here, naming the key
+    return TuiOptions(sim=True, speed=args.speed, seed=args.seed, robot=get_robot(args.robot).name,
+                      truth=args.truth, db=args.db, out_dir=args.out_dir, overrides=overrides)
+
+
+def run(args: argparse.Namespace) -> int:
+    from hil.tui.app import create_app
+
+    app = create_app(options_from(args))  # type: ignore[arg-type]
+    code = app.run()
+    return int(code or 0)

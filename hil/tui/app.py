@@ -1,0 +1,350 @@
+"""The terminal app: one factory (`create_app`) for ``hil tui`` and for the tests.
+
+The app owns the screens and the presentation state; the `Session` owns the station, the store and
+the engine and works only on worker threads. Messages go one way (session → app, see
+`hil.tui.messages`), requests the other (app → session, always through `run_worker(thread=True)`), so
+the UI thread never waits on a device, the store or the selector.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterable
+from typing import Any, ClassVar
+
+from rich.text import Text
+from textual import on
+from textual.app import App, SystemCommand
+from textual.binding import Binding, BindingType
+from textual.screen import ModalScreen, Screen
+from textual.widgets import Input
+from textual.worker import Worker, WorkerState
+
+from hil.events import PlanReady, RunStarted
+from hil.tui.messages import (
+    CampaignLoaded,
+    EngineEvent,
+    Exported,
+    HistoryLoaded,
+    Notice,
+    ResumeQuestion,
+    RunEnded,
+    SelectionDone,
+    SelectionFailed,
+    StationChanged,
+)
+from hil.tui.screens.base import HilScreen
+from hil.tui.screens.dialogs import Confirm, HelpScreen, ResumeDialog
+from hil.tui.screens.history import HistoryScreen
+from hil.tui.screens.plan import PlanScreen
+from hil.tui.screens.results import ResultsScreen
+from hil.tui.screens.run import RunScreen
+from hil.tui.screens.station import StationScreen
+from hil.tui.session import Session, TuiOptions
+from hil.tui.state import RunState
+from hil.tui.widgets.nav import SCREENS
+
+__all__ = ["HilApp", "TuiOptions", "create_app"]
+
+POLL_SECONDS = 2.0  # station status refresh while idle
+
+
+class HilApp(App[int]):
+    """Calibration campaigns from a terminal; see the module docstring and the Help screen (``?``)."""
+
+    CSS_PATH = "hil.tcss"
+    TITLE = "hil"
+    ENABLE_COMMAND_PALETTE = True
+    BINDINGS: ClassVar[list[BindingType]] = [
+        *(Binding(key, f"show('{name}')", title, show=False) for key, name, title in SCREENS),
+        Binding("question_mark", "help", "Help"),
+        Binding("q", "quit_app", "Quit"),
+    ]
+
+    def __init__(self, options: TuiOptions, *, now: Callable[[], float] = time.time) -> None:
+        super().__init__()
+        self.options = options
+        self.now = now  # the wall clock of elapsed waits (fixed in snapshot tests)
+        self.session = Session(options, self.post_message)
+        self.run_state = RunState()
+        self.exit_code = 0
+        self._quit_requested = False
+        self.views: dict[str, HilScreen] = {
+            "station": StationScreen(), "plan": PlanScreen(), "run": RunScreen(),
+            "results": ResultsScreen(), "history": HistoryScreen()}
+
+    # --- start and stop ------------------------------------------------------------------------------
+    def on_mount(self) -> None:
+        for name, screen in self.views.items():
+            self.install_screen(screen, name)
+        self.push_screen("station")
+        if self.options.start_station:
+            self.session.start()
+        self.set_interval(POLL_SECONDS, self._poll)
+        self.set_interval(1.0, self._tick)
+
+    def on_unmount(self) -> None:
+        # Closes the devices, the store and the simulator; quick when no run is going (see action_quit_app).
+        self.session.abort(quitting=True)
+        self.session.shutdown()
+
+    def _poll(self) -> None:
+        if self.session.devices is not None and not self.session.run_active:
+            self._work(self.session.poll, "poll", exclusive=True)
+
+    def _tick(self) -> None:
+        if self.run_state.active and isinstance(self.screen, RunScreen):
+            self.screen.tick()
+
+    def _work(self, fn: Callable[..., Any], group: str, *args: Any, exclusive: bool = False) -> Worker[Any]:
+        """Run `fn` on a worker thread; its errors are shown, never raised into the UI."""
+        return self.run_worker(lambda: fn(*args), thread=True, group=group, exclusive=exclusive,
+                               exit_on_error=False, name=group)
+
+    def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
+        if event.state == WorkerState.ERROR and event.worker.error is not None:
+            err = event.worker.error
+            self.notify(f"{event.worker.name}: {type(err).__name__}: {err}", severity="error", timeout=10)
+
+    # --- navigation ----------------------------------------------------------------------------------
+    def action_show(self, name: str) -> None:
+        if isinstance(self.screen, ModalScreen):
+            return
+        if self.screen is not self.views[name]:
+            self.switch_screen(name)
+
+    def action_help(self) -> None:
+        if not isinstance(self.screen, HelpScreen):
+            self.push_screen(HelpScreen())
+
+    def nav_status(self) -> Text:
+        """The right-hand side of the navigation bar."""
+        run, st = self.run_state, self.session.station
+        if run.active:
+            state = "SUSPENDED" if run.suspended else run.state
+            style = "bold red" if run.suspended else "bold yellow" if state == "paused" else "bold green"
+            return Text.assemble((state, style), f" {run.measured}/{run.planned}")
+        style = {"connected": "green", "failed": "red"}.get(st.phase, "yellow")
+        return Text(st.phase, style=style)
+
+    def _refresh(self, *names: str) -> None:
+        for name in names or tuple(self.views):
+            self.views[name].refresh_view()
+
+    # --- quitting ------------------------------------------------------------------------------------
+    def action_quit_app(self) -> None:
+        if not self.session.run_active:
+            self.exit(self.exit_code)
+            return
+
+        def answer(yes: bool | None) -> None:
+            if yes:
+                self._quit_requested = True
+                self.notify("stopping the arm; the campaign stays resumable", severity="warning")
+                self.session.abort(quitting=True)
+
+        self.push_screen(Confirm("A campaign is running. Quit?\nThe arm stops now; every measured point is "
+                                 "kept and the next start resumes the campaign.", yes="Quit",
+                                 no="Keep running"), answer)
+
+    # --- station -------------------------------------------------------------------------------------
+    def action_toggle_connection(self) -> None:
+        st = self.session.station
+        if st.phase in ("connecting", "starting"):
+            return
+        self._work(self.session.disconnect if st.connected else self.session.connect, "connect",
+                   exclusive=True)
+
+    def action_measure_now(self) -> None:
+        self._work(self.session.measure_now, "measure", exclusive=True)
+
+    def action_poll(self) -> None:
+        self._work(self.session.poll, "poll", exclusive=True)
+
+    def on_station_changed(self, _: StationChanged) -> None:
+        self._refresh("station")
+        for widget in self.screen.query("NavBar"):
+            widget.refresh()
+        plan = self.views["plan"]
+        if isinstance(plan, PlanScreen) and plan.is_mounted and not plan.query_one("#in-poses", Input).value:
+            plan.load_fields()
+
+    # --- plan ----------------------------------------------------------------------------------------
+    def start_selection(self, values: dict[str, Any]) -> None:
+        self._work(self.session.select, "select", values["campaign.calibration_poses"],
+                   values["campaign.validation_poses"], values["campaign.candidates"],
+                   values["campaign.index"], values["campaign.seed"], exclusive=True)
+
+    def on_selection_done(self, message: SelectionDone) -> None:
+        plan = self.views["plan"]
+        assert isinstance(plan, PlanScreen)
+        plan.show_selection(message.report, message.points, message.tracker, message.assumed_tracker,
+                            "preview (s)")
+
+    def on_selection_failed(self, message: SelectionFailed) -> None:
+        plan = self.views["plan"]
+        assert isinstance(plan, PlanScreen)
+        plan.show_error(message.text)
+
+    def _show_run_plan(self, event: PlanReady) -> None:
+        """The plan the campaign chose, on the Plan screen (computed off the UI thread: FK of the poses)."""
+        import numpy as np
+
+        from hil.geometry import Geometry
+        from hil.kinematics import Kinematics
+
+        config = self.session.run_config()
+        info = dict((event.selection or {}).get("calibration") or {})
+        poses = [p["q"] for p in event.poses if p["role"] == "calibration"]
+        if not poses:
+            return
+        tracker = event.tracker or {"xyz": [0.0, 0.0, 0.0], "rpy": [0.0, 0.0, 0.0]}
+        nominal = Geometry.nominal(config.robot["type"], config.smr["offset"]).to_dict()
+        geometry = Geometry.from_dict({**nominal, "tracker": tracker})
+        points = Kinematics(geometry).points(np.array(poses), frame="base")
+        info.update(count=len(poses), poses=poses)
+        self.call_from_thread(self._plan_from_run, info, points, tuple(tracker["xyz"]))
+
+    def _plan_from_run(self, info: dict[str, Any], points: Any, tracker: tuple[float, ...]) -> None:
+        plan = self.views["plan"]
+        assert isinstance(plan, PlanScreen)
+        plan.show_selection(info, points, tracker, False, f"campaign {self.run_state.campaign}")
+
+    # --- run -----------------------------------------------------------------------------------------
+    def action_start_run(self) -> None:
+        if self.session.run_active:
+            self.notify("a run is already going", severity="warning")
+            return
+        if self.session.store is None:
+            self.notify("the station is not ready yet", severity="warning")
+            return
+        self.notify("starting: connecting and checking for an unfinished campaign...")
+        self._work(self.session.prepare_run, "run")
+
+    def on_resume_question(self, message: ResumeQuestion) -> None:
+        def answer(choice: str | None) -> None:
+            if choice == "resume":
+                self._work(self.session.run, "run", message.campaign)
+            elif choice == "new":
+                self._work(self.session.run, "run", None)
+
+        self.push_screen(ResumeDialog(message.campaign, message.measured, message.planned), answer)
+
+    def action_pause(self) -> None:
+        if not self.session.run_active or self.session.engine is None:
+            self.notify("no run to pause", severity="warning")
+            return
+        paused = self.session.pause()
+        self.notify("pausing after the current step" if paused else "resuming")
+
+    def action_abort(self) -> None:
+        if not self.session.run_active:
+            self.notify("no run to abort", severity="warning")
+            return
+
+        def answer(yes: bool | None) -> None:
+            if yes:
+                self.session.abort()
+                self.notify("aborting: the arm stops after the current step", severity="warning")
+
+        self.push_screen(Confirm("Abort the campaign? It ends as 'aborted' and cannot be resumed.\n"
+                                 "(To stop now and continue later, quit with q instead.)",
+                                 yes="Abort", no="Keep running"), answer)
+
+    def on_engine_event(self, message: EngineEvent) -> None:
+        event = message.event
+        self.run_state.apply(event)
+        if isinstance(event, RunStarted) and not isinstance(self.screen, ModalScreen):
+            self.action_show("run")
+        if isinstance(event, PlanReady):
+            self._work(self._show_run_plan, "plan-fk", event)
+        run = self.views["run"]
+        if self.screen is run:
+            run.refresh_view()
+        else:
+            nav = self.screen.query("NavBar")
+            for widget in nav:
+                widget.refresh()
+
+    def on_run_ended(self, message: RunEnded) -> None:
+        self.exit_code = {"accepted": 0, "rejected": 1, "aborted": 4, "interrupted": 4}.get(message.status, 3)
+        if message.quitting or self._quit_requested:
+            self.exit(self.exit_code)
+            return
+        severity = "information" if message.status == "accepted" else "warning"
+        self.notify(f"campaign {message.campaign}: {message.status}"
+                    + (f" ({message.detail})" if message.detail else ""), severity=severity, timeout=8)
+        self._refresh("run")
+        if message.campaign:
+            self.open_campaign(message.campaign, switch=message.status in ("accepted", "rejected"))
+
+    # --- results and history -------------------------------------------------------------------------
+    def open_campaign(self, campaign: str, switch: bool = True) -> None:
+        self._switch_to_results = switch
+        self._work(self.session.load_campaign, "load", campaign, exclusive=True)
+
+    def on_campaign_loaded(self, message: CampaignLoaded) -> None:
+        results = self.views["results"]
+        assert isinstance(results, ResultsScreen)
+        results.show(message.record)
+        if getattr(self, "_switch_to_results", True):
+            self.action_show("results")
+
+    def start_history(self) -> None:
+        self._work(self.session.load_history, "history", exclusive=True)
+
+    def on_history_loaded(self, message: HistoryLoaded) -> None:
+        history = self.views["history"]
+        assert isinstance(history, HistoryScreen)
+        history.show(message.rows, message.database)
+
+    def start_export(self, record: Any, kinds: list[str]) -> None:
+        self._work(self.session.export, "export", record, kinds)
+
+    def on_exported(self, message: Exported) -> None:
+        results = self.views["results"]
+        assert isinstance(results, ResultsScreen)
+        results.exported(message.paths, message.error)
+        if message.error:
+            self.notify(f"export: {message.error}", severity="error", timeout=8)
+        elif message.paths:
+            self.notify(f"wrote {len(message.paths)} file(s) (paths on the Results screen)", timeout=4)
+
+    @on(Notice)
+    def _notice(self, message: Notice) -> None:
+        severity = message.severity if message.severity in ("warning", "error") else "information"
+        self.notify(message.text, severity=severity,  # type: ignore[arg-type]
+                    timeout=10 if severity == "error" else 4)
+
+    def _inject(self, fault: str, args: dict[str, Any]) -> None:
+        self._work(lambda: self.session.inject(fault, **args), "sim")
+
+    # --- command palette -----------------------------------------------------------------------------
+    def get_system_commands(self, screen: Screen[Any]) -> Iterable[SystemCommand]:
+        for key, name, title in SCREENS:
+            yield SystemCommand(f"Go to {title}", f"the {title} screen (key {key})",
+                                lambda name=name: self.action_show(name))
+        yield SystemCommand("Connect / disconnect", "the robot and the tracker (Station, c)",
+                            self.action_toggle_connection)
+        yield SystemCommand("Measure now", "one SMR point with the tracker (Station, m)",
+                            self.action_measure_now)
+        yield SystemCommand("Start campaign", "run (or resume) a calibration campaign (Run, g)",
+                            self.action_start_run)
+        yield SystemCommand("Pause / resume run", "between steps (Run, p)", self.action_pause)
+        yield SystemCommand("Abort run", "ends the campaign as aborted (Run, a)", self.action_abort)
+        yield SystemCommand("Help", "every key (?)", self.action_help)
+        if self.options.sim:
+            for fault, title, args in (
+                    ("protective_stop", "Simulator: protective stop", {}),
+                    ("clear", "Simulator: clear the protective stop", {}),
+                    ("block_beam", "Simulator: block the tracker beam", {"on": True}),
+                    ("block_beam", "Simulator: unblock the tracker beam", {"on": False})):
+                yield SystemCommand(title, f"inject {fault} into the simulated station",
+                                    lambda f=fault, a=args: self._inject(f, a))
+        yield from super().get_system_commands(screen)
+
+
+def create_app(options: TuiOptions | None = None, **kwargs: Any) -> HilApp:
+    """The app for ``hil tui`` and for the tests (`TuiOptions` fields as keywords, or `options`)."""
+    now = kwargs.pop("now", time.time)
+    return HilApp(options or TuiOptions(**kwargs), now=now)

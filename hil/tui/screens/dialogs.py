@@ -1,0 +1,90 @@
+"""Modal dialogs: help, a yes/no question (quit or abort mid-run), resume-or-new."""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Horizontal, Vertical
+from textual.screen import ModalScreen
+from textual.widgets import Button, Static
+
+HELP = """\
+[b]Screens[/b]   1 Station  2 Plan  3 Run  4 Results  5 History
+[b]Anywhere[/b]  ? help  q quit  ctrl+p commands  tab next field
+[b]Station[/b]   c connect/disconnect  m measure SMR now  r refresh
+[b]Plan[/b]      s select poses  u use for next run  esc leave field
+[b]Run[/b]       g start or resume  p pause/resume  a abort
+[b]Results[/b]   m model  u URDF  y ROS YAML  h HTML report  x all
+[b]History[/b]   enter open in Results  r reload
+
+"""
+
+HELP += ("A run pauses by itself when the beam is lost, on a protective stop or when a link drops, "
+         "says what to do, and goes on once the cause is cleared. Quitting mid-run stops the arm and "
+         "keeps the campaign resumable: the next start (here or hil calibrate) continues it.")
+
+
+class HelpScreen(ModalScreen[None]):
+    """Every key of the app on one page."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [Binding("escape,question_mark,q", "dismiss", "Close")]
+
+    def compose(self) -> ComposeResult:
+        with Vertical(id="dialog", classes="help"):
+            yield Static(HELP, id="help-text")
+            yield Static("[dim]esc or ? closes[/dim]")
+
+
+class Confirm(ModalScreen[bool]):
+    """A yes/no question; y / n / esc answer it."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [Binding("y", "answer(True)", "Yes"),
+                                             Binding("n,escape", "answer(False)", "No")]
+
+    def __init__(self, question: str, yes: str = "Yes", no: str = "No") -> None:
+        super().__init__()
+        self.question, self.yes, self.no = question, yes, no
+
+    def compose(self) -> ComposeResult:
+        with Vertical(id="dialog"):
+            yield Static(self.question, id="question")
+            with Horizontal(classes="buttons"):
+                yield Button(f"{self.yes} (y)", id="yes", variant="error", compact=True)
+                yield Button(f"{self.no} (n)", id="no", compact=True)
+
+    def action_answer(self, value: bool) -> None:
+        self.dismiss(value)
+
+    def on_button_pressed(self, event: Button.Pressed) -> None:
+        self.dismiss(event.button.id == "yes")
+
+
+class ResumeDialog(ModalScreen[str]):
+    """An unfinished campaign exists: resume it (r), start a new one (n) or cancel (esc)."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [Binding("r", "answer('resume')", "Resume"),
+                                             Binding("n", "answer('new')", "New"),
+                                             Binding("escape", "answer('cancel')", "Cancel")]
+
+    def __init__(self, campaign: str, measured: int, planned: int) -> None:
+        super().__init__()
+        self.campaign, self.measured, self.planned = campaign, measured, planned
+
+    def compose(self) -> ComposeResult:
+        with Vertical(id="dialog"):
+            yield Static(f"Campaign [b]{self.campaign}[/b] of this station, robot and configuration "
+                         f"is unfinished ({self.measured} of {self.planned or '?'} poses measured).\n"
+                         "Resume it, measuring only what is missing, or start a new campaign?",
+                         id="question")
+            with Horizontal(classes="buttons"):
+                yield Button("Resume (r)", id="resume", variant="primary", compact=True)
+                yield Button("New (n)", id="new", compact=True)
+                yield Button("Cancel (esc)", id="cancel", compact=True)
+
+    def action_answer(self, value: str) -> None:
+        self.dismiss(value)
+
+    def on_button_pressed(self, event: Button.Pressed) -> None:
+        self.dismiss(str(event.button.id))

@@ -1,0 +1,166 @@
+"""Results: did the calibration pass, by how much did it improve the arm, which parameters moved and
+how well they are known; export the model, URDF, ROS kinematics YAML and HTML report.
+
+Shows a campaign record from the store — the one just run, or one opened from History — so what the
+operator sees is what was recorded, never a figure only the screen knows.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any, ClassVar
+
+from rich.table import Table
+from rich.text import Text
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Horizontal
+from textual.widgets import DataTable, Footer, Static
+
+from hil.tui.screens.base import HilScreen
+from hil.tui.widgets.nav import NavBar
+
+
+def _mm(v: Any) -> str:
+    return "-" if v is None or not math.isfinite(float(v)) else f"{float(v) * 1e3:.4f}"
+
+
+def parameter_cells(p: dict[str, Any]) -> tuple[str, str, str, str]:
+    """name, value, std, unit: translations in mm, rotations in mrad (`.tx` / `.rx` style names)."""
+    name = str(p.get("name", "?"))
+    axis = name.rsplit(".", 1)[-1]
+    angular = axis.startswith("r")
+    scale, unit = (1e3, "mrad") if angular else (1e3, "mm")
+    value, std = p.get("value"), p.get("std")
+    fmt = "{:+.4f}"
+    return (name, fmt.format(value * scale) if value is not None else "-",
+            f"{std * scale:.4f}" if std is not None and math.isfinite(std) else "-", unit)
+
+
+class ResultsScreen(HilScreen):
+    """One finished (or unfinished) campaign from the store."""
+
+    name_key = "results"
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("m", "export('model')", "Model"),
+        Binding("u", "export('urdf')", "URDF"),
+        Binding("y", "export('ros')", "ROS YAML"),
+        Binding("h", "export('report')", "HTML report"),
+        Binding("x", "export('all')", "All"),
+    ]
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.record: Any = None
+        self.written: list[str] = []
+        self.export_error = ""
+
+    def compose(self) -> ComposeResult:
+        yield NavBar("results")
+        yield Static(id="verdict")
+        with Horizontal(id="result-top"):
+            yield Static(id="stats", classes="panel")
+            yield Static(id="fit", classes="panel")
+        table: DataTable[str] = DataTable(id="params", cursor_type="row", zebra_stripes=True)
+        table.add_columns("parameter", "value", "std", "unit")
+        yield table
+        yield Static(id="exports")
+        yield Footer()
+
+    def on_mount(self) -> None:
+        self.query_one("#stats").border_title = "Validation, held-out poses, mm"
+        self.query_one("#fit").border_title = "Fit"
+        self.refresh_view()
+
+    def show(self, record: Any) -> None:
+        if self.record is None or record.id != self.record.id:
+            self.written, self.export_error = [], ""
+        self.record = record
+        self.refresh_view()
+
+    def exported(self, paths: list[str], error: str) -> None:
+        self.written = list(dict.fromkeys([*self.written, *paths]))
+        self.export_error = error
+        self.refresh_view()
+
+    def action_export(self, kind: str) -> None:
+        if self.record is None:
+            self.hil.notify("no campaign shown: run one, or open one from History (5)", severity="warning")
+            return
+        kinds = ["model", "urdf", "ros", "report"] if kind == "all" else [kind]
+        self.hil.start_export(self.record, kinds)
+
+    def refresh_view(self) -> None:
+        if not self.is_mounted:
+            return
+        self.query_one(NavBar).refresh()
+        verdict = self.query_one("#verdict", Static)
+        stats, fit = self.query_one("#stats", Static), self.query_one("#fit", Static)
+        table: DataTable[str] = self.query_one("#params", DataTable)
+        rec = self.record
+        if rec is None:
+            verdict.update(Text("no campaign yet: run one (3, g) or open one from History (5)", style="dim"))
+            stats.update("")
+            fit.update("")
+            table.clear()
+            self._exports()
+            return
+        s = rec.summary
+        accept = ((rec.config or {}).get("campaign") or {}).get("acceptance")
+        v = rec.validation
+        if v is not None:
+            word, style = ("PASS", "bold white on green") if v.passed else ("FAIL", "bold white on red")
+        else:
+            word, style = s.status.upper(), "bold reverse"
+        line = Text.assemble((f" {word} ", style), "  ", (rec.id, "bold"), f"  {s.status}")
+        if v is not None and accept is not None:
+            line.append(f"  RMS {_mm(v.after.get('rms'))} mm {'≤' if v.passed else '>'} "
+                        f"{_mm(accept)} mm")
+        if rec.detail and v is None:
+            line.append(f"\n{rec.detail}", "dim")
+        verdict.update(line)
+        grid = Table("", "before", "after", box=None, padding=(0, 1), show_edge=False)
+        if v is not None:
+            for key in ("rms", "max", "mean"):
+                grid.add_row(key, _mm(v.before.get(key)), Text(_mm(v.after.get(key)), style="bold"))
+            grid.add_row("poses", str(v.before.get("count", "-")), str(v.after.get("count", "-")))
+        else:
+            grid.add_row("none yet", "", "")
+        stats.update(grid)
+        fit.update(self._fit(rec))
+        table.clear()
+        model = rec.model
+        for p in (model.doc.get("parameters") or []) if model is not None else []:
+            table.add_row(*parameter_cells(p))
+        self._exports()
+
+    @staticmethod
+    def _fit(rec: Any) -> Table:
+        grid = Table.grid(padding=(0, 1))
+        grid.add_column(style="dim")
+        grid.add_column()
+        model = rec.model
+        if model is None:
+            grid.add_row("model", "none yet")
+            return grid
+        f = model.doc.get("fit") or {}
+        grid.add_row("RMS", f"{_mm(f.get('rms'))} mm (max {_mm(f.get('max'))})")
+        grid.add_row("poses", f"{f.get('used', '-')} used of {f.get('poses', '-')}, "
+                              f"{len(f.get('rejected') or [])} rejected")
+        cond = f.get("condition")
+        grid.add_row("condition", f"{cond:.3g}" if isinstance(cond, int | float) else "-")
+        grid.add_row("parameters", str(len(model.doc.get("parameters") or [])))
+        return grid
+
+    def _exports(self) -> None:
+        text = Text()
+        if self.written:
+            folders = {str(Path(p).parent) for p in self.written}
+            text.append(f"wrote in {', '.join(sorted(folders))}: ", "dim")
+            text.append("  ".join(Path(p).name for p in self.written))
+        if self.export_error:
+            text.append(("\n" if self.written else "") + f"export failed: {self.export_error}", "bold red")
+        if not text:
+            text.append(f"exports go to {self.hil.session.options.out_dir}", "dim")
+        self.query_one("#exports", Static).update(text)

@@ -1,0 +1,530 @@
+"""The app's link to the station, the store and the engine. Every method that blocks runs on a worker
+thread; results reach the UI only as messages (`hil.tui.messages`), posted thread-safely.
+
+It mirrors ``hil calibrate`` (`hil.cli.calibrate.run`) step for step — same station start-up, store,
+resume rules, event subscribers, result document — so a campaign run from the terminal app is the
+same campaign as a headless one. Two differences, both for the operator at the terminal:
+
+* the robot and tracker stay connected between runs (the Station screen reads their status and can
+  measure the SMR); a run takes the open devices over and the session reconnects afterwards;
+* quitting mid-run aborts the engine but records the campaign as ``interrupted`` rather than
+  ``aborted``: ``aborted`` is final in the store, ``interrupted`` is resumable, so the next start (from
+  the app or ``hil calibrate``) continues it.
+
+The simulated station's process is started and stopped by one long-lived thread (`_host_main`): the
+simulator dies with the thread that started it (PR_SET_PDEATHSIG), so a short-lived worker must not
+start it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import logging
+import threading
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from textual.message import Message
+
+from hil.config import StationConfig, default_config
+from hil.engine import Engine, RealClock
+from hil.errors import InputError
+from hil.events import Event, EventBus
+from hil.tui.messages import (
+    CampaignLoaded,
+    EngineEvent,
+    Exported,
+    HistoryLoaded,
+    Notice,
+    ResumeQuestion,
+    RunEnded,
+    SelectionDone,
+    SelectionFailed,
+    StationChanged,
+)
+from hil.tui.state import StationState
+
+log = logging.getLogger(__name__)
+
+INTERRUPTED = "interrupted"  # not in hil.store.FINISHED: resumable
+
+#: Export actions of the Results screen: key -> (file suffix, hil.exports format or "html").
+EXPORTS: dict[str, tuple[str, str]] = {
+    "model": ("-model.json", "json"),
+    "urdf": (".urdf", "urdf"),
+    "ros": ("-kinematics.yaml", "ros-kinematics"),
+    "report": ("-report.html", "html"),
+}
+
+
+@dataclass
+class TuiOptions:
+    """How ``hil tui`` was started (also what the tests pass to `hil.tui.app.create_app`)."""
+
+    config: StationConfig | None = None  # --config, already loaded and checked
+    sim: bool = False
+    speed: float = 1.0
+    seed: int = 1
+    robot: str = "ur5e"
+    truth: str | None = None
+    db: str | None = None
+    out_dir: str = "."
+    overrides: dict[str, Any] = field(default_factory=dict)  # "campaign.seed" or "campaign__seed" keys
+    connect: bool = True  # connect to the robot and tracker at start
+    start_station: bool = True  # False: no station at all (snapshot tests feed the screens by hand)
+
+
+@contextlib.contextmanager
+def station_context(options: TuiOptions) -> Iterator[tuple[StationConfig, dict[str, Any], dict | None, Any]]:
+    """(config to run, config identifying the run in the store, hidden truth, simulator or None).
+
+    Same as `hil.cli.calibrate._station`, which does not hand out its simulator; the app needs it for
+    the fault-injection commands of the command palette.
+    """
+    if not options.sim:
+        assert options.config is not None, "--config or --sim"
+        overrides = _dotted(options.overrides)
+        config = options.config.with_overrides(**overrides) if overrides else options.config
+        yield config, config.as_dict(), None, None
+        return
+    truth_sha = ""
+    robot = options.robot
+    if options.truth:
+        from hil.model_file import load_truth
+
+        geometry, _ = load_truth(options.truth)
+        robot = geometry.robot
+        truth_sha = hashlib.sha256(Path(options.truth).read_bytes()).hexdigest()
+    from mocks.station import start_station
+
+    sim = start_station(robot=robot, truth=options.truth, speed=options.speed, seed=options.seed)
+    try:
+        station = sim.info["services"][0]
+        base = default_config().with_overrides(
+            station__name="simulated station", robot__type=robot, robot__speed=1.0,
+            robot__acceleration=2.0, campaign__seed=options.seed, **_dotted(options.overrides))
+        config = base.with_overrides(robot__address=sim.address, tracker__url=station["tracker_url"])
+        identity = base.with_overrides(robot__address="sim",
+                                       tracker__url=f"sim:seed={options.seed};truth={truth_sha}").as_dict()
+        yield config, identity, station["truth"], sim
+    finally:
+        sim.stop()
+
+
+def _error(exc: BaseException) -> str:
+    return f"{type(exc).__name__}: {exc}"
+
+
+def _dotted(overrides: dict[str, Any]) -> dict[str, Any]:
+    return {k.replace(".", "__"): v for k, v in overrides.items()}
+
+
+class Session:
+    """Station, store and runs of one app (see the module docstring)."""
+
+    def __init__(self, options: TuiOptions, post: Callable[[Message], Any]) -> None:
+        self.options = options
+        self._post = post
+        self.station = StationState(simulated=options.sim)
+        self.config: StationConfig | None = None
+        self.identity: dict[str, Any] | None = None
+        self.truth: dict[str, Any] | None = None
+        self.sim: Any = None
+        self.store: Any = None
+        self.devices: Any = None
+        self.engine: Engine | None = None
+        self.plan_overrides: dict[str, Any] = {}  # campaign.* keys set on the Plan screen
+        self.run_active = False
+        self.paused = False
+        self.quitting = False
+        self._device_lock = threading.Lock()
+        self._stop = threading.Event()
+        self.ready = threading.Event()
+        self._host: threading.Thread | None = None
+
+    # --- plumbing ----------------------------------------------------------------------------------
+    def post(self, message: Message) -> None:
+        try:
+            self._post(message)
+        except Exception:  # the app is gone (shutting down): nothing left to show it on
+            log.debug("dropped %r", message, exc_info=True)
+
+    def changed(self) -> None:
+        self.post(StationChanged())
+
+    def notice(self, text: str, severity: str = "information") -> None:
+        self.post(Notice(text, severity))
+
+    # --- the station's lifetime ----------------------------------------------------------------------
+    def start(self) -> None:
+        """Start the station (simulator and store) on its own long-lived thread."""
+        self._host = threading.Thread(target=self._host_main, name="hil-station", daemon=True)
+        self._host.start()
+
+    def _host_main(self) -> None:
+        st = self.station
+        st.detail = (f"speed {self.options.speed:g}x, seed {self.options.seed}" if self.options.sim
+                     else "")
+        self.changed()
+        try:
+            with station_context(self.options) as (config, identity, truth, sim):
+                from hil.store import Store
+
+                self.config, self.identity, self.truth, self.sim = config, identity, truth, sim
+                self.store = Store.open(self.options.db, config=config)
+                st.name = config.station["name"]
+                st.robot_address, st.tracker_url = config.robot["address"], config.tracker["url"]
+                st.phase = "disconnected"
+                self.ready.set()
+                self.changed()
+                if self.options.connect:
+                    self.connect()
+                self._stop.wait()
+                self._close_devices()
+                self.store.close()
+        except Exception as exc:  # a station that cannot start is shown, not raised
+            st.phase, st.error = "failed", f"the station did not start: {_error(exc)}"
+            self.notice(st.error, "error")
+            self.changed()
+        finally:
+            self.ready.set()
+
+    def shutdown(self, timeout: float = 15.0) -> None:
+        """Close the devices, the store and the simulator (waits for the station thread)."""
+        self._stop.set()
+        if self._host is not None:
+            self._host.join(timeout)
+
+    # --- devices -------------------------------------------------------------------------------------
+    def connect(self) -> None:
+        """Open the robot and the tracker and read their status."""
+        from hil.station import open_devices
+
+        st = self.station
+        if self.config is None:
+            self.notice("the station is not ready yet", "warning")
+            return
+        with self._device_lock:
+            if self.devices is not None or self.run_active:
+                return
+            st.phase, st.error = "connecting", ""
+            self.changed()
+            try:
+                devices = open_devices(self.config)
+            except Exception as exc:  # every driver error, and a bad tracker URL, is the operator's to see
+                st.phase, st.error = "disconnected", f"cannot connect: {_error(exc)}"
+                self.notice(st.error, "error")
+                self.changed()
+                return
+            self.devices = devices
+            info, ident = devices.robot.info, devices.tracker.identity
+            st.robot = ({"model": info.model, "serial": info.serial, "software": info.software_version}
+                        if info is not None else {})
+            st.tracker = ({"name": ident.name, "serial": str(ident.serial_number),
+                           "firmware": ".".join(map(str, ident.firmware))} if ident is not None else {})
+            st.phase = "connected"
+            self._read_status()
+        self.changed()
+
+    def disconnect(self) -> None:
+        with self._device_lock:
+            if self.run_active:
+                self.notice("a run is using the station; pause or abort it first", "warning")
+                return
+            self._close_devices()
+            self.station.phase, self.station.safety, self.station.lock = "disconnected", "-", "-"
+        self.changed()
+
+    def _close_devices(self) -> None:
+        devices, self.devices = self.devices, None
+        if devices is not None:
+            devices.close()
+
+    def _read_status(self) -> None:
+        """Safety status of the robot and lock status of the tracker (device lock held)."""
+        from drivers.robot import errors as robot_errors
+        from drivers.tracker.errors import TrackerError
+
+        st, devices = self.station, self.devices
+        if devices is None:
+            return
+        try:
+            try:
+                devices.robot.check_status()
+            except robot_errors.ProgramStopped:
+                # after a protective stop is unlocked the control script is gone: reload it, as the
+                # run's own suspender does (refused while the controller is still not ready)
+                devices.robot.reconnect()
+                devices.robot.check_status()
+            st.safety = "normal"
+        except robot_errors.ProtectiveStop:
+            st.safety = "PROTECTIVE STOP"
+        except robot_errors.EmergencyStop:
+            st.safety = "EMERGENCY STOP"
+        except robot_errors.ProgramStopped:
+            st.safety = "program stopped"
+        except robot_errors.SpeedSliderReduced as exc:
+            st.safety = f"normal ({exc})"
+        except robot_errors.RobotError as exc:
+            st.safety = f"unknown ({_error(exc)})"
+        try:
+            st.lock = devices.tracker.commands.read_lock_status().name.lower().replace("_", " ")
+        except TrackerError as exc:
+            st.lock = f"unknown ({_error(exc)})"
+
+    def poll(self) -> None:
+        """Refresh the status readings, unless a run or another device action is using the devices."""
+        if self.run_active or self.devices is None or not self._device_lock.acquire(blocking=False):
+            return
+        try:
+            before = (self.station.safety, self.station.lock)
+            self._read_status()
+            changed = before != (self.station.safety, self.station.lock)
+        finally:
+            self._device_lock.release()
+        if changed:
+            self.changed()
+
+    def measure_now(self) -> None:
+        """Measure the SMR once, as the run would (samples and stability from the config)."""
+        st = self.station
+        with self._device_lock:
+            if self.devices is None or self.config is None or self.run_active:
+                self.notice("connect to the station first (c)" if not self.run_active
+                            else "a run is using the tracker", "warning")
+                return
+            try:
+                point = self.devices.tracker.measure_point(self.config.campaign["samples"])
+            except Exception as exc:
+                st.last_point = f"failed: {_error(exc)}"
+                self.notice(f"measure now: {_error(exc)}", "error")
+            else:
+                x, y, z = (1e3 * v for v in point.xyz)
+                spread = 1e6 * max(point.spread)
+                st.last_point = (f"x {x:.3f}  y {y:.3f}  z {z:.3f} mm  (spread {spread:.1f} µm, "
+                                 f"{point.samples} samples)")
+                self.notice(f"SMR at {st.last_point}")
+            self._read_status()
+        self.changed()
+
+    # --- runs ----------------------------------------------------------------------------------------
+    def run_config(self) -> StationConfig:
+        assert self.config is not None
+        if not self.plan_overrides:
+            return self.config
+        return self.config.with_overrides(**_dotted(self.plan_overrides))
+
+    def run_identity(self) -> dict[str, Any]:
+        """The configuration that identifies this run in the store (the Plan screen's changes included)."""
+        assert self.identity is not None
+        if not self.plan_overrides:
+            return self.identity
+        data = {section: dict(values) for section, values in self.identity.items()}
+        for key, value in self.plan_overrides.items():
+            section, name = key.split(".")
+            data[section][name] = value
+        return data
+
+    def prepare_run(self) -> None:
+        """Before a run: connect if needed, then ask about an unfinished campaign, or start."""
+        if self.run_active:
+            self.notice("a run is already going", "warning")
+            return
+        if self.store is None:
+            self.notice("the station is not ready yet", "warning")
+            return
+        if self.devices is None:
+            self.connect()
+            if self.devices is None:
+                return
+        serial = self.devices.robot.info.serial if self.devices.robot.info else None
+        try:
+            campaign = self.store.find_resumable(self.run_identity(), robot_serial=serial)
+            if campaign is not None:
+                summary = self.store.campaign(campaign).summary
+                self.post(ResumeQuestion(campaign, summary.measured, summary.planned))
+                return
+        except Exception as exc:
+            self.notice(f"store: {_error(exc)}", "error")
+            return
+        self.run(None)
+
+    def run(self, resume_campaign: str | None) -> None:
+        """One campaign, as ``hil calibrate`` runs it (a new one, or `resume_campaign` continued)."""
+        from hil.runner import plan_saver, resume_state, run_campaign
+        from hil.selection import campaign_chooser
+        from hil.station import open_devices
+        from hil.tui.adapters import result_document
+
+        if self.run_active or self.config is None or self.store is None:
+            return
+        self.run_active = True
+        st, store = self.station, self.store
+        campaign = resume_campaign or ""
+        try:
+            config = self.run_config()
+            with self._device_lock:
+                devices, self.devices = self.devices, None
+            if devices is None:
+                devices = open_devices(config)
+            st.phase = "in run"
+            self.changed()
+            info = devices.robot.info
+            robot = {"type": config.robot["type"], "serial": info.serial if info else "",
+                     "model": info.model if info else "", "software": info.software_version if info else ""}
+            resume = resume_state(store, resume_campaign) if resume_campaign else None
+            campaign = resume_campaign or store.create_campaign(self.run_identity(), robot)
+            events: list[Event] = []
+            bus = EventBus()
+            bus.subscribe(store.as_subscriber(), critical=True)
+            bus.subscribe(plan_saver(store, campaign), critical=True)
+            bus.subscribe(events.append)
+            bus.subscribe(lambda event: self.post(EngineEvent(event)))
+            started = time.time()
+            outcome = run_campaign(config, campaign_chooser(config), bus=bus, campaign=campaign,
+                                   resume=resume, devices=devices,
+                                   clock=RealClock(self.options.speed if self.options.sim else 1.0),
+                                   engine_ready=self._engine_ready)
+            status, detail = outcome.status, ""
+            if outcome.error is not None:
+                detail = _error(outcome.error)
+            if self.quitting and status == "aborted":
+                status, detail = INTERRUPTED, "quit from the terminal app mid-run; resumable"
+            result = result_document(outcome, config, events, started, self.truth)
+            result["status"] = status
+            store.set_status(campaign, status, detail=detail or None, result=result)
+        except Exception as exc:  # bad input found before motion, a store failure, a connect failure
+            status, detail = "failed", _error(exc)
+            self.notice(f"the run stopped: {detail}", "error")
+            if campaign:
+                with contextlib.suppress(Exception):
+                    store.set_status(campaign, "failed", detail=detail)
+        finally:
+            self.engine = None
+            self.run_active = False
+            st.phase, st.safety, st.lock = "disconnected", "-", "-"
+            self.changed()
+        self.post(RunEnded(campaign, status, detail, self.quitting))
+        if not self.quitting and not self._stop.is_set():
+            self.connect()
+
+    def _engine_ready(self, engine: Engine) -> None:
+        self.engine, self.paused = engine, False
+        if self.quitting:
+            engine.request_abort()
+
+    def pause(self) -> bool:
+        """Pause (True) or resume (False) the run; takes effect between steps."""
+        engine = self.engine
+        if engine is None:
+            return False
+        if self.paused:
+            self.paused = False
+            engine.request_resume()
+            return False
+        self.paused = True
+        engine.request_pause()
+        return True
+
+    def abort(self, quitting: bool = False) -> None:
+        self.quitting = self.quitting or quitting
+        if self.engine is not None:
+            self.engine.request_abort()
+
+    # --- planning ------------------------------------------------------------------------------------
+    def select(self, count: int, validation: int, candidates: int, index: str, seed: int) -> None:
+        """Run the campaign's own pose chooser for a preview of the plan (Plan screen)."""
+        from hil.campaign import CALIBRATION, SelectionRequest
+        from hil.geometry import Geometry, look_at_tracker
+        from hil.kinematics import Kinematics
+        from hil.selection import DEFAULT_TRACKER_FOR_JACOBIAN, campaign_chooser
+
+        if self.config is None:
+            self.post(SelectionFailed("the station is not ready yet"))
+            return
+        try:
+            config = self.config.with_overrides(
+                campaign__calibration_poses=count, campaign__validation_poses=validation,
+                campaign__candidates=candidates, campaign__index=index, campaign__seed=seed)
+            position = config.tracker["position"]
+            assumed = position is None
+            where = tuple(float(v) for v in (DEFAULT_TRACKER_FOR_JACOBIAN if assumed else position))
+            model = Geometry.nominal(config.robot["type"], config.smr["offset"], look_at_tracker(where))
+            choice = campaign_chooser(config)(SelectionRequest(
+                CALIBRATION, count, model=model,
+                keep_in=(np.array(config.keep_in["min"]), np.array(config.keep_in["max"])),
+                acceptance_angle=config.smr["acceptance_angle"], index=index, candidates=candidates,
+                seed=seed, exclude=np.zeros((0, 6))))
+            points = Kinematics(model).points(choice.poses, frame="base")
+        except Exception as exc:  # an impossible request (InputError) or a selector failure
+            self.post(SelectionFailed(str(exc) if isinstance(exc, InputError) else _error(exc)))
+            return
+        report = dict(choice.info, poses=choice.poses.tolist(), count=len(choice.poses))
+        self.post(SelectionDone(report, points, where, assumed))
+
+    # --- the store -----------------------------------------------------------------------------------
+    def load_history(self, limit: int = 200) -> None:
+        if self.store is None:
+            return
+        try:
+            self.post(HistoryLoaded(self.store.campaigns(limit), str(self.store.path)))
+        except Exception as exc:
+            self.notice(f"history: {_error(exc)}", "error")
+
+    def load_campaign(self, campaign: str) -> None:
+        if self.store is None:
+            return
+        try:
+            self.post(CampaignLoaded(self.store.campaign(campaign)))
+        except Exception as exc:
+            self.notice(f"campaign {campaign}: {_error(exc)}", "error")
+
+    def export(self, record: Any, kinds: list[str]) -> None:
+        """Write the campaign's model, URDF, ROS kinematics YAML and/or HTML report to the output dir."""
+        from hil.exports import export
+        from hil.geometry import Geometry
+        from hil.measurements import atomic_write_text
+        from hil.report import report_data_from_result, write_report
+
+        out = Path(self.options.out_dir)
+        written: list[str] = []
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+            for kind in kinds:
+                suffix, fmt = EXPORTS[kind]
+                path = out / f"{record.id}{suffix}"
+                if fmt == "html":
+                    if not record.result or "model" not in record.result:
+                        raise InputError(f"campaign {record.id} has no finished result to report")
+                    write_report(report_data_from_result(record.result, source=f"campaign {record.id}"),
+                                 path)
+                else:
+                    if record.model is None:
+                        raise InputError(f"campaign {record.id} has no calibrated model "
+                                         f"(status {record.summary.status})")
+                    source = f"campaign {record.id}"
+                    doc = record.model.doc
+                    atomic_write_text(path, export(doc, Geometry.from_dict(doc, source=source), fmt,
+                                                   source=source))
+                written.append(str(path))
+        except Exception as exc:
+            self.post(Exported(written, str(exc) if isinstance(exc, InputError) else _error(exc)))
+            return
+        self.post(Exported(written))
+
+    # --- the simulator -------------------------------------------------------------------------------
+    def inject(self, fault: str, **args: Any) -> None:
+        """A fault in the simulated station (command palette; tests)."""
+        if self.sim is None:
+            self.notice("fault injection needs the simulated station (--sim)", "warning")
+            return
+        try:
+            self.sim.inject(fault, **args)
+            self.notice(f"simulator: {fault}")
+        except Exception as exc:
+            self.notice(f"simulator: {fault}: {_error(exc)}", "error")

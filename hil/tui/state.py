@@ -1,0 +1,144 @@
+"""What the screens show, as plain data: the station's status and the live run's progress.
+
+The run state is folded from the campaign's events (`RunState.apply`) on the UI thread, so the
+screens never read the engine or the devices directly, and a test (or a snapshot) can build the same
+state from canned events.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from hil.events import (
+    Event,
+    Message,
+    PhaseChanged,
+    PlanReady,
+    PointMeasured,
+    PoseReached,
+    PoseSkipped,
+    PoseStarted,
+    Resumed,
+    RunFinished,
+    RunStarted,
+    StateChanged,
+    Suspended,
+    ValidationDone,
+)
+
+
+@dataclass
+class StationState:
+    """Connection and status of the robot and the tracker, as last read."""
+
+    phase: str = "starting"  # starting, disconnected, connecting, connected, in run, failed
+    name: str = ""
+    simulated: bool = False
+    detail: str = ""  # e.g. "speed 20x, seed 1"
+    robot_address: str = ""
+    tracker_url: str = ""
+    robot: dict[str, str] = field(default_factory=dict)  # model, serial, software
+    tracker: dict[str, str] = field(default_factory=dict)  # name, serial, firmware
+    safety: str = "-"
+    lock: str = "-"
+    last_point: str = ""
+    error: str = ""
+
+    @property
+    def connected(self) -> bool:
+        return self.phase in ("connected", "in run")
+
+
+@dataclass
+class PoseRow:
+    """One pose of the live table."""
+
+    index: int
+    role: str
+    target: list[float]
+    status: str = "moving"  # moving, reached, measured, skipped
+    q: list[float] | None = None
+    p: list[float] | None = None
+    deviation: float | None = None
+    reason: str = ""
+
+
+@dataclass
+class RunState:
+    """The live run, folded from events (see `apply`)."""
+
+    campaign: str = ""
+    active: bool = False
+    planned: int = 0
+    resumed_with: int = 0
+    state: str = "idle"
+    phase: str = ""
+    detail: str = ""
+    rows: dict[tuple[str, int], PoseRow] = field(default_factory=dict)
+    deviations: list[float] = field(default_factory=list)  # in measuring order (m)
+    suspended: Suspended | None = None
+    last_resumed: Resumed | None = None
+    started_t: float | None = None
+    measured_times: list[float] = field(default_factory=list)  # event times of this run's points
+    finished: RunFinished | None = None
+    validation: ValidationDone | None = None
+    plan: PlanReady | None = None
+    messages: list[str] = field(default_factory=list)
+
+    @property
+    def measured(self) -> int:
+        return self.resumed_with + len(self.measured_times)
+
+    @property
+    def skipped(self) -> int:
+        return sum(1 for r in self.rows.values() if r.status == "skipped")
+
+    def eta(self) -> float | None:
+        """Seconds to the last pose, from this run's pace so far (None until two points)."""
+        t = self.measured_times
+        if len(t) < 2 or self.planned <= 0:
+            return None
+        pace = (t[-1] - t[0]) / (len(t) - 1)
+        left = max(0, self.planned - self.measured - self.skipped)
+        return pace * left
+
+    def apply(self, event: Event) -> None:
+        """Fold one event into the state."""
+        if isinstance(event, RunStarted):
+            self.__init__()  # type: ignore[misc]  # a fresh run
+            self.campaign, self.active, self.planned = event.campaign, True, event.poses
+            self.resumed_with, self.started_t = event.measured, event.t
+        elif isinstance(event, StateChanged):
+            self.state = event.state
+        elif isinstance(event, PhaseChanged):
+            self.phase, self.detail = event.phase, event.detail
+        elif isinstance(event, PlanReady):
+            self.plan = event
+        elif isinstance(event, PoseStarted):
+            self.rows[(event.role, event.index)] = PoseRow(event.index, event.role, list(event.target))
+        elif isinstance(event, PoseReached):
+            row = self.rows.get((event.role, event.index))
+            if row is not None:
+                row.status, row.q = "reached", list(event.q)
+        elif isinstance(event, PointMeasured):
+            row = self.rows.setdefault((event.role, event.index),
+                                       PoseRow(event.index, event.role, list(event.target or event.q)))
+            row.status, row.q, row.p = "measured", list(event.q), list(event.p)
+            row.deviation = event.deviation
+            if event.role != "bootstrap":
+                self.measured_times.append(event.t)
+            if event.deviation is not None:
+                self.deviations.append(event.deviation)
+        elif isinstance(event, PoseSkipped):
+            row = self.rows.setdefault((event.role, event.index), PoseRow(event.index, event.role, []))
+            row.status, row.reason = "skipped", event.reason
+        elif isinstance(event, Suspended):
+            self.suspended = event
+        elif isinstance(event, Resumed):
+            self.suspended, self.last_resumed = None, event
+        elif isinstance(event, ValidationDone):
+            self.validation = event
+        elif isinstance(event, Message):
+            self.messages.append(f"{event.level}: {event.text}")
+        elif isinstance(event, RunFinished):
+            self.finished, self.active, self.suspended = event, False, None

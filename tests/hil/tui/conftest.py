@@ -1,0 +1,46 @@
+"""Helpers of the terminal app's tests: the screen as plain text, waiting for a condition."""
+
+from __future__ import annotations
+
+import asyncio
+import io
+import os
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from rich.console import Console
+from textual.app import App
+
+SNAPSHOTS = Path(__file__).parent / "snapshots"
+
+
+def screen_text(app: App) -> str:
+    """What the terminal shows, as text (colours dropped), trailing blanks stripped."""
+    width, height = app.size
+    console = Console(width=width, height=height, file=io.StringIO(), force_terminal=True,
+                      color_system="truecolor", record=True, legacy_windows=False, safe_box=False)
+    console.print(app.screen._compositor.render_update(full=True, screen_stack=app._background_screens,
+                                                       simplify=True))
+    return "\n".join(line.rstrip() for line in console.export_text(styles=False).splitlines()) + "\n"
+
+
+def check_snapshot(app: App, name: str) -> None:
+    """Compare the screen with snapshots/<name>.txt (``HIL_SNAPSHOT_UPDATE=1`` rewrites it)."""
+    path = SNAPSHOTS / f"{name}.txt"
+    text = screen_text(app)
+    if os.environ.get("HIL_SNAPSHOT_UPDATE") == "1" or not path.exists():
+        path.write_text(text, encoding="utf-8")
+        return
+    assert text == path.read_text(encoding="utf-8"), f"screen differs from {path}:\n{text}"
+
+
+async def wait_for(pilot, condition: Callable[[], object], timeout: float, what: str) -> None:
+    """Let the app run until `condition()` holds (fast-time simulation: seconds, not minutes)."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout} s waiting for {what}\n{screen_text(pilot.app)}")
+        await pilot.pause(0.05)
+        await asyncio.sleep(0)
+
