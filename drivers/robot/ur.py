@@ -100,6 +100,14 @@ class URRobot:
             if "remote control" in text:
                 raise NotInRemoteControl(f"{cfg.host}: {text}") from exc
             raise RobotUnreachable(f"{cfg.host}: ur_rtde could not connect: {text}") from exc
+        # the control script starts asynchronously: a move sent before it plays would be refused
+        deadline = time.monotonic() + cfg.connect_timeout
+        while int(self._r.getRuntimeState()) != RUNTIME_PLAYING:
+            if time.monotonic() > deadline:
+                self.close()
+                raise ProgramStopped(f"{cfg.host}: the control script did not start within "
+                                     f"{cfg.connect_timeout} s")
+            time.sleep(0.01)
         rate = 500.0 if series == "e" else 125.0
         self.info = RobotInfo(model=model, serial=status.serial,
                               software_version=status.polyscope_version or ".".join(map(str, version)),
