@@ -184,7 +184,7 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
     with _station(args) as (config, _identity, _truth):
         geometry = model or Geometry.nominal(config.robot["type"], smr=config.smr["offset"])
         try:
-            devices = open_devices(config)
+            devices = open_devices(config, streaming=True)
         except HARDWARE_ERRORS as exc:
             return {"status": "hardware fault", "error": f"{type(exc).__name__}: {exc}", "exit_code": 3}
         try:

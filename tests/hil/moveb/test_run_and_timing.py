@@ -1,6 +1,5 @@
 from __future__ import annotations
 
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -103,8 +102,6 @@ def test_cli_plan_bad_program_is_one_line_exit_2(tmp_path: Path, capsys: pytest.
     assert len(err.splitlines()) == 1
 
 
-@pytest.mark.skipif(os.environ.get("HIL_MOVEB_SIM") != "1",
-                    reason="end-to-end run on the simulated station (~30 s idle machine): HIL_MOVEB_SIM=1")
 def test_cli_run_on_the_simulated_station(tmp_path: Path) -> None:
     prog = tmp_path / "small.moveb"
     prog.write_text("MOVEB 0 0 0 0 0 1 1 0 0 0.5 0.2\nMOVEB 30 0 0 0 0 1 1 0 0 0.5 0.2\n"
