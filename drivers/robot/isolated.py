@@ -60,6 +60,28 @@ def _serve(commands: Connection, stops: Connection, config: RobotConfig) -> None
         robot.close()
 
 
+@contextlib.contextmanager
+def _real_stderr() -> Any:
+    """The process's own stderr while a child starts.
+
+    multiprocessing hands ``sys.stderr.fileno()`` to its resource tracker; under a TUI (Textual
+    replaces sys.stderr with an object without a real descriptor) that is not a valid descriptor.
+    """
+    import sys
+
+    replaced = sys.stderr
+    try:
+        ok = replaced is not None and replaced.fileno() >= 0
+    except (AttributeError, OSError, ValueError):
+        ok = False
+    if not ok:
+        sys.stderr = sys.__stderr__
+    try:
+        yield
+    finally:
+        sys.stderr = replaced
+
+
 class IsolatedURRobot:
     """A `URRobot` in a child process (same methods); no I/O until `open()`."""
 
@@ -78,7 +100,8 @@ class IsolatedURRobot:
         stop_parent, stop_child = ctx.Pipe()
         proc = ctx.Process(target=_serve, args=(cmd_child, stop_child, self.config), daemon=True,
                            name=f"ur-client-{self.config.host}")
-        proc.start()
+        with _real_stderr():
+            proc.start()
         cmd_child.close()
         stop_child.close()
         self._proc, self._cmd, self._stop = proc, cmd_parent, stop_parent

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import hashlib
 import json
 import sys
 import time
@@ -26,14 +25,12 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from hil.config import StationConfig, default_config, load_config
+from hil.config import StationConfig, load_config
 from hil.errors import InputError
-from hil.events import Event, EventBus, jsonable
+from hil.events import Event, EventBus
 from hil.measurements import atomic_write_text
 from hil.progress import JsonLines, Progress
-from hil.robots import ROBOT_NAMES, get_robot
+from hil.robots import ROBOT_NAMES
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -90,33 +87,16 @@ def _station(args: argparse.Namespace) -> Iterator[tuple[StationConfig, dict[str
         return
     if not args.speed > 0:
         raise InputError(f"--speed must be positive, got {args.speed}")
-    robot = get_robot(args.robot).name
-    truth_sha = ""
-    if args.truth:
-        from hil.model_file import load_truth
+    from hil.simstation import simulated_station
 
-        geometry, _ = load_truth(args.truth)  # a bad truth fails here, naming the key
-        robot = geometry.robot
-        truth_sha = hashlib.sha256(Path(args.truth).read_bytes()).hexdigest()
-    from mocks.station import start_station
-
-    sim = start_station(robot=robot, truth=args.truth, speed=args.speed, seed=args.seed)
-    try:
-        station = sim.info["services"][0]
-        base = default_config().with_overrides(
-            station__name="simulated station", robot__type=robot, robot__speed=1.0,
-            robot__acceleration=2.0, campaign__seed=args.seed, **_overrides(args))
-        config = base.with_overrides(robot__address=sim.address, tracker__url=station["tracker_url"])
-        # the simulator's address is random; the run is identified by what it simulates
-        identity = base.with_overrides(robot__address="sim",
-                                       tracker__url=f"sim:seed={args.seed};truth={truth_sha}").as_dict()
-        yield config, identity, station["truth"]
-    finally:
-        sim.stop()
+    with simulated_station(args.robot, args.truth, args.speed, args.seed, **_overrides(args)) as (
+            config, identity, truth, _sim):
+        yield config, identity, truth
 
 
 def run(args: argparse.Namespace) -> int:
     from hil.engine import RealClock
+    from hil.results import report_data, result_document
     from hil.runner import plan_saver, resume_state, run_campaign
     from hil.selection import campaign_chooser
     from hil.station import HARDWARE_ERRORS, open_devices
@@ -156,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
             outcome = run_campaign(config, campaign_chooser(config), bus=bus, campaign=campaign,
                                    resume=resume, devices=devices, clock=RealClock(args.speed),
                                    validation_cycles=args.cycles)
-            result = _result(outcome, config, events, started, truth)
+            result = result_document(outcome, config, events, started, truth)
             store.set_status(campaign, outcome.status, result=result)
         finally:
             store.close()
@@ -165,55 +145,5 @@ def run(args: argparse.Namespace) -> int:
     if args.report and outcome.result is not None:
         from hil.report import write_report
 
-        write_report(_report_data(outcome, config, events, started), args.report)
+        write_report(report_data(outcome, config, events, started), args.report)
     return outcome.exit_code
-
-
-def _report_data(outcome: Any, config: StationConfig, events: list[Event], started: float) -> Any:
-    from hil.campaign import BOOTSTRAP, CALIBRATION, VALIDATION, measurements_of
-    from hil.report import RobotInfo, report_data_from
-    from hil.report.data import Observability
-
-    r = outcome.result
-    by_role: dict[str, list[Any]] = {BOOTSTRAP: [], CALIBRATION: [], VALIDATION: []}
-    for rec in sorted(r.records, key=lambda x: x.index):
-        by_role[rec.role].append(rec)
-    fitted = by_role[BOOTSTRAP] + by_role[CALIBRATION]
-    sel = r.selection.get("calibration") or {}
-    obs = (Observability(sel.get("index", "O1"), float(sel["value"]), sel.get("bound"), sel.get("method", ""))
-           if sel.get("value") is not None else None)
-    iso = ({"AP (worst pose)": r.iso9283["AP_max"], "RP (worst pose)": r.iso9283["RP_max"]}
-           if r.iso9283 else None)
-    cal = measurements_of(fitted, "calibration")
-    val = measurements_of(by_role[VALIDATION], "validation")
-    digest = hashlib.sha256(np.hstack([cal.q, cal.p]).tobytes() + np.hstack([val.q, val.p]).tobytes())
-    return report_data_from(
-        r.fit, r.before, r.after, config, campaign=outcome.campaign,
-        robot=RobotInfo(config.robot["type"], outcome.robot_info.get("serial", ""),
-                        outcome.robot_info.get("software", "")),
-        started=started, finished=time.time(), calibration=cal, validation=val, iso9283=iso,
-        observability=obs, times=outcome.timing, events=events,
-        hashes={"measurements": digest.hexdigest()}, model=r.model)
-
-
-def _result(outcome: Any, config: StationConfig, events: list[Event], started: float,
-            truth: dict | None) -> dict[str, Any]:
-    """The hil-result/1 document (the MES result when the campaign finished, else its status)."""
-    if outcome.result is not None:
-        from hil.report import mes_result
-
-        doc = mes_result(_report_data(outcome, config, events, started))
-        if outcome.result.iso9283:
-            doc["validation"]["iso9283_poses"] = outcome.result.iso9283["poses"]
-        doc["selection"] = outcome.result.selection
-    else:
-        doc = {"format": "hil-result/1", "campaign": outcome.campaign, "passed": False,
-               "station": config.station["name"], "robot": config.robot["type"]}
-    doc["status"] = outcome.status
-    doc["exit_code"] = outcome.exit_code
-    doc["error"] = None if outcome.error is None else f"{type(outcome.error).__name__}: {outcome.error}"
-    doc["tracker"] = outcome.tracker_info
-    doc["robot_info"] = outcome.robot_info
-    if truth is not None:
-        doc["truth"] = truth
-    return jsonable(doc)

@@ -19,7 +19,6 @@ start it.
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import logging
 import threading
 import time
@@ -31,7 +30,7 @@ from typing import Any
 import numpy as np
 from textual.message import Message
 
-from hil.config import StationConfig, default_config
+from hil.config import StationConfig
 from hil.engine import Engine, RealClock
 from hil.errors import InputError
 from hil.events import Event, EventBus
@@ -83,8 +82,8 @@ class TuiOptions:
 def station_context(options: TuiOptions) -> Iterator[tuple[StationConfig, dict[str, Any], dict | None, Any]]:
     """(config to run, config identifying the run in the store, hidden truth, simulator or None).
 
-    Same as `hil.cli.calibrate._station`, which does not hand out its simulator; the app needs it for
-    the fault-injection commands of the command palette.
+    The simulator is handed out too: the app needs it for the fault-injection commands of the
+    command palette.
     """
     if not options.sim:
         assert options.config is not None, "--config or --sim"
@@ -92,28 +91,11 @@ def station_context(options: TuiOptions) -> Iterator[tuple[StationConfig, dict[s
         config = options.config.with_overrides(**overrides) if overrides else options.config
         yield config, config.as_dict(), None, None
         return
-    truth_sha = ""
-    robot = options.robot
-    if options.truth:
-        from hil.model_file import load_truth
+    from hil.simstation import simulated_station
 
-        geometry, _ = load_truth(options.truth)
-        robot = geometry.robot
-        truth_sha = hashlib.sha256(Path(options.truth).read_bytes()).hexdigest()
-    from mocks.station import start_station
-
-    sim = start_station(robot=robot, truth=options.truth, speed=options.speed, seed=options.seed)
-    try:
-        station = sim.info["services"][0]
-        base = default_config().with_overrides(
-            station__name="simulated station", robot__type=robot, robot__speed=1.0,
-            robot__acceleration=2.0, campaign__seed=options.seed, **_dotted(options.overrides))
-        config = base.with_overrides(robot__address=sim.address, tracker__url=station["tracker_url"])
-        identity = base.with_overrides(robot__address="sim",
-                                       tracker__url=f"sim:seed={options.seed};truth={truth_sha}").as_dict()
-        yield config, identity, station["truth"], sim
-    finally:
-        sim.stop()
+    with simulated_station(options.robot, options.truth, options.speed, options.seed,
+                           **_dotted(options.overrides)) as station:
+        yield station
 
 
 def _error(exc: BaseException) -> str:
@@ -356,10 +338,10 @@ class Session:
 
     def run(self, resume_campaign: str | None) -> None:
         """One campaign, as ``hil calibrate`` runs it (a new one, or `resume_campaign` continued)."""
+        from hil.results import result_document
         from hil.runner import plan_saver, resume_state, run_campaign
         from hil.selection import campaign_chooser
         from hil.station import open_devices
-        from hil.tui.adapters import result_document
 
         if self.run_active or self.config is None or self.store is None:
             return
