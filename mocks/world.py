@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -23,6 +23,8 @@ from selector.arm import segment_distance
 
 #: The beam is checked from this far beyond the SMR centre (the SMR's own nest is not an obstacle).
 BEAM_CLEARANCE = 0.03
+#: The simulated links' thickness as a fraction of the selector's (enveloping) capsules.
+TRUE_LINK_FRACTION = 0.8
 
 
 @dataclass
@@ -37,7 +39,9 @@ class World:
 
     def __post_init__(self) -> None:
         self._kin = Kinematics(self.truth)
-        self._arm = arm_shape(self.truth.robot)
+        # The selector plans with capsules that envelop the links; the real links are slimmer.
+        planned = arm_shape(self.truth.robot)
+        self._arm = replace(planned, radii=tuple(TRUE_LINK_FRACTION * r for r in planned.radii))
 
     def state(self, q: np.ndarray) -> tuple[np.ndarray, float]:
         """(SMR in the tracker frame, angle in degrees between its axis and the line to the tracker)."""

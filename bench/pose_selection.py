@@ -1,6 +1,6 @@
 """Benchmark of the pose selector (issue 3). Not a test: it prints a table and asserts nothing.
 
-    python bench/selector.py [--quick]
+    python bench/pose_selection.py [--quick]
 
 Station: UR5e, SMR 30/−20/45 mm off the flange centre, tracker at (2.5, 0.5, 0.5) m, every candidate
 constraint on. Rows:
