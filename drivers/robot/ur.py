@@ -100,14 +100,11 @@ class URRobot:
             if "remote control" in text:
                 raise NotInRemoteControl(f"{cfg.host}: {text}") from exc
             raise RobotUnreachable(f"{cfg.host}: ur_rtde could not connect: {text}") from exc
-        # the control script starts asynchronously: a move sent before it plays would be refused
-        deadline = time.monotonic() + cfg.connect_timeout
-        while int(self._r.getRuntimeState()) != RUNTIME_PLAYING:
-            if time.monotonic() > deadline:
-                self.close()
-                raise ProgramStopped(f"{cfg.host}: the control script did not start within "
-                                     f"{cfg.connect_timeout} s")
-            time.sleep(0.01)
+        try:
+            self._wait_playing()
+        except ProgramStopped:
+            self.close()
+            raise
         rate = 500.0 if series == "e" else 125.0
         self.info = RobotInfo(model=model, serial=status.serial,
                               software_version=status.polyscope_version or ".".join(map(str, version)),
@@ -115,6 +112,16 @@ class URRobot:
         log.info("connected to %s %s (serial %s, software %s)", cfg.host, model, status.serial,
                  self.info.software_version)
         return self.info
+
+    def _wait_playing(self) -> None:
+        """Wait (bounded) until the control script plays: it starts asynchronously after an upload."""
+        cfg = self.config
+        deadline = time.monotonic() + cfg.connect_timeout
+        while int(self._r.getRuntimeState()) != RUNTIME_PLAYING:
+            if time.monotonic() > deadline:
+                raise ProgramStopped(f"{cfg.host}: the control script did not start within "
+                                     f"{cfg.connect_timeout} s")
+            time.sleep(0.01)
 
     @staticmethod
     def _check_dashboard(remote: bool | None, safety: str, robot_mode: str) -> None:
@@ -195,6 +202,7 @@ class URRobot:
             raise RobotUnreachable(f"{cfg.host}: reconnecting failed: {exc}") from exc
         if not (c.isConnected() and r.isConnected()):
             raise ConnectionLost(f"{cfg.host}: the link did not come back")
+        self._wait_playing()  # else the next check re-uploads, killing the script that is starting
         self.check_status()
         assert self.info is not None
         return self.info

@@ -138,7 +138,8 @@ class Station:
         self.config = default_config().with_overrides(
             robot__address=self.sim.address, tracker__url=svc["tracker_url"], robot__speed=1.0,
             robot__acceleration=2.0, campaign__calibration_poses=14, campaign__validation_poses=4,
-            campaign__candidates=3000, timeouts__relock=20.0)
+            campaign__candidates=3000, timeouts__relock=20.0,
+            timeouts__suspend=90.0)
         self.store = Store.open(tmp_path / "hil.db")
         self.campaign = self.store.create_campaign(self.config, "ur5e")
         self.events: list = []
