@@ -50,6 +50,13 @@ def solve_ik(kin: Kinematics, target: pin.SE3, seed: np.ndarray, *, tolerance: f
         raise UnreachableError(f"IK did not converge (pose error {err:.3g}): the target is out of reach "
                                "or at a singularity")
     lo, hi = model.lowerPositionLimit, model.upperPositionLimit
+    # a revolute joint reaches the same pose a turn away: take the turn nearest the seed that lies
+    # within the limits (the same pose, not a clamp; far seeds otherwise wander off by 2π)
+    turns = np.round((np.asarray(seed, dtype=float) - q) / (2 * np.pi))
+    solved = q
+    for k in (turns, turns - 1, turns + 1):  # nearest the seed first, then the turns either side
+        alt = solved + 2 * np.pi * k
+        q = np.where(((q < lo) | (q > hi) | (k == turns)) & (alt >= lo) & (alt <= hi), alt, q)
     if np.any(q < lo) or np.any(q > hi):
         j = int(np.flatnonzero((q < lo) | (q > hi))[0])
         raise UnreachableError(f"IK answer leaves the limits of joint {j + 1} ({q[j]:.3f} rad)")

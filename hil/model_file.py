@@ -26,6 +26,7 @@ from hil.measurements import atomic_write_text
 from hil.synthetic import Noise
 
 MODEL_FORMAT = "hil-model/1"
+RESULT_FORMAT = "hil-result/1"  # a campaign result; it embeds the model
 TRUTH_FORMAT = "hil-truth/1"
 
 
@@ -97,9 +98,18 @@ def read_json(path: str | os.PathLike[str]) -> dict[str, Any]:
 
 def load_geometry(path: str | os.PathLike[str],
                   formats: tuple[str, ...] = (MODEL_FORMAT, TRUTH_FORMAT)) -> tuple[Geometry, dict]:
-    """The geometry in a model or truth file, and the whole document."""
+    """The geometry in a model or truth file, and the whole document.
+
+    Where a model is accepted, a campaign result (``hil-result/1``, what ``hil calibrate --out``
+    writes) is accepted too: it embeds the model, and an engineer should not have to dig it out.
+    """
     doc = read_json(path)
     fmt = doc.get("format")
+    if fmt == RESULT_FORMAT and MODEL_FORMAT in formats:
+        model = doc.get("model")
+        if not isinstance(model, dict):
+            raise InputError(f"{path}: the campaign result holds no model (status {doc.get('status')!r})")
+        doc, fmt = model, model.get("format")
     if fmt not in formats:
         raise InputError(f"{path}: field 'format' is {fmt!r}, expected {' or '.join(formats)}")
     return Geometry.from_dict(doc, source=str(path)), doc

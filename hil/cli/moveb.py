@@ -36,7 +36,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     src.add_argument("--config", metavar="station.toml", help="station configuration")
     src.add_argument("--sim", action="store_true", help="use the simulated station")
     run.add_argument("--model", metavar="model.json",
-                     help="calibrated model (hil-model/1 or a truth): IK and the tracker pose")
+                     help="calibrated model (hil-model/1, a campaign result that embeds one, or a truth): "
+                          "IK and the tracker pose")
     run.add_argument("--continuity", choices=("G2", "G3"), default="G2")
     run.add_argument("--frame", choices=("base", "current"), default="base",
                      help="program frame: the robot base, or anchored at the arm's current TCP pose")
@@ -44,6 +45,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--acceleration", type=float, default=1000.0, metavar="MM/S2")
     run.add_argument("--jerk", type=float, default=10000.0, metavar="MM/S3")
     run.add_argument("--normal-acceleration", type=float, default=1000.0, metavar="MM/S2")
+    run.add_argument("--joint-speed", type=float, default=1.0, metavar="F",
+                     help="allowed fraction of the datasheet joint speeds (0 < F <= 1); the feed slows "
+                          "down where the path would need more")
     run.add_argument("--tracker-rate", type=float, default=100.0, metavar="HZ")
     run.add_argument("--truth", metavar="truth.json", help="--sim: the hidden truth (default: random)")
     run.add_argument("--speed", type=float, default=1.0, metavar="F", help="--sim: fast-time factor")

@@ -74,11 +74,13 @@ class Plan:
     def dense(self, step: float = 0.5, per_bridge: int = 64) -> Samples:
         return self.at(self.sample_grid(step, per_bridge))
 
-    def timed(self, limits: Limits, rate_hz: float) -> tuple[TimeLaw, Samples]:
-        """The time law under `limits` and the trajectory at the controller's samples."""
+    def timed(self, limits: Limits, rate_hz: float,
+              ceiling: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[TimeLaw, Samples]:
+        """The time law under `limits` (and a speed `ceiling` along s, if given) and the trajectory
+        at the controller's samples."""
         grid = self.curve.arclength_grid(min(0.05, max(self.length / 1000.0, 1e-3)))
         grid = np.unique(np.r_[grid, self.curve.bridge_arclengths(64)])
-        law = feed_profile(grid, self.curve.evaluate(grid)["curvature"], limits, rate_hz)
+        law = feed_profile(grid, self.curve.evaluate(grid)["curvature"], limits, rate_hz, ceiling=ceiling)
         return law, self.at(law.s)
 
 

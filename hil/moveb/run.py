@@ -30,12 +30,17 @@ import numpy as np
 import pinocchio as pin
 from scipy.spatial import cKDTree
 
+from hil.errors import InputError
 from hil.geometry import Geometry
 from hil.ik import solve_path
 from hil.kinematics import Kinematics
-from hil.moveb.plan import Plan, plan_program
+from hil.moveb.joints import JointSpeeds, joint_speed_ceiling, retime
+from hil.moveb.plan import Plan, Samples, plan_program
 from hil.moveb.program import Program, load_program
 from hil.moveb.timing import Limits
+from hil.plans import check_target
+
+Box = tuple[np.ndarray, np.ndarray]  # keep-in box corners (base frame, m)
 
 
 def program_in_frame(program: Program, anchor: np.ndarray) -> Program:
@@ -111,18 +116,78 @@ class RunResult:
     cycle_time: float
     registered: bool
     lost: int
+    joint_speeds: dict[str, Any]
+    accuracy_registered: dict[str, Any] | None = None  # with a model: the same run, rigidly fitted
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """The joint trajectory to stream: one row of `Q` per controller sample."""
+
+    samples: Samples  # the tool path at the controller samples (mm, base frame)
+    Q: np.ndarray  # (N, 6) rad
+    rate_hz: float
+    speeds: JointSpeeds
+
+    @property
+    def cycle_time(self) -> float:
+        return (len(self.Q) - 1) / self.rate_hz
+
+
+def solve_trajectory(plan: Plan, geometry: Geometry, limits: Limits, rate_hz: float, q_start: np.ndarray,
+                     *, joint_speed_fraction: float = 1.0, keep_in: Box | None = None,
+                     grid_step: float = 1.0) -> Trajectory:
+    """Time the plan under the Cartesian limits *and* the joint speed maxima, and solve its IK.
+
+    1. Every controller sample must lie in the keep-in box (checked on the dense path first, so a
+       program that leaves it is refused before any IK).
+    2. IK on a geometric grid (`grid_step` mm, and through every bridge) gives the joint-speed
+       ceiling (`hil.moveb.joints`); the feed profile runs under it.
+    3. IK at every controller sample (seeded from the grid's start, so both follow one branch), and
+       the joint speeds checked against ``joint_speed_fraction`` × the datasheet maxima, retimed
+       locally where the finite grid let a sample exceed them.
+    """
+    if not 0.0 < joint_speed_fraction <= 1.0:
+        raise InputError(f"joint speed fraction must be in (0, 1], got {joint_speed_fraction}")
+    kin = Kinematics(geometry)
+    source = plan.program.source
+    if keep_in is not None:
+        lo, hi = (np.asarray(v, float) * 1e3 for v in keep_in)
+        dense = plan.dense(min(grid_step, 0.5))
+        out = np.flatnonzero(np.any((dense.position < lo) | (dense.position > hi), axis=1))
+        if out.size:
+            p = dense.position[out[0]]
+            raise InputError(f"{source}: s = {dense.s[out[0]]:.1f} mm: the path leaves the keep-in box at "
+                             f"({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f}) mm")
+    geo = plan.at(plan.sample_grid(grid_step, per_bridge=16))
+    Q_geo = solve_path(kin, tool_targets(geo.position, geo.z_axis, geo.x_axis, geometry.smr), q_start,
+                       max_step=0.1, where=[f"{source}: s = {v:.1f} mm" for v in geo.s])
+    allowed = joint_speed_fraction * geometry.spec.max_joint_speed
+    ceiling = joint_speed_ceiling(geo.s, Q_geo, allowed)
+    timed: dict[str, Samples] = {}
+
+    def time_path(c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        _law, samples = plan.timed(limits, rate_hz, ceiling=(geo.s, c))
+        timed["samples"] = samples
+        Q = solve_path(kin, tool_targets(samples.position, samples.z_axis, samples.x_axis, geometry.smr),
+                       Q_geo[0], where=[f"{source}: s = {v:.1f} mm" for v in samples.s])
+        return samples.s, Q
+
+    _s, Q, _ceiling, speeds = retime(time_path, geo.s, ceiling, rate_hz, allowed)
+    return Trajectory(timed["samples"], Q, rate_hz, speeds)
 
 
 def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, registered: bool,
-            tracker_rate: float = 100.0, settle: float = 0.3) -> RunResult:
+            tracker_rate: float = 100.0, settle: float = 0.3, joint_speed_fraction: float = 1.0,
+            keep_in: Box | None = None) -> RunResult:
     """Solve, move to the start, stream the samples and measure (see module docstring)."""
     rate = devices.robot.info.rate_hz if devices.robot.info else geometry.spec.rate_hz
-    law, samples = plan.timed(limits, rate)
-    kin = Kinematics(geometry)
     q_now = np.asarray(devices.robot.read_joints(1).q, dtype=float)
-    where = [f"{plan.program.source}: s = {s:.1f} mm" for s in samples.s]
-    Q = solve_path(kin, tool_targets(samples.position, samples.z_axis, samples.x_axis, geometry.smr),
-                   q_now, where=where)
+    traj = solve_trajectory(plan, geometry, limits, rate, q_now, joint_speed_fraction=joint_speed_fraction,
+                            keep_in=keep_in)
+    samples, Q = traj.samples, traj.Q
+    # the approach is a joint move: its path must stay in the keep-in box too (never clamped)
+    check_target(Q[0], geometry.spec, keep_in, geometry, start=q_now)
     devices.robot.move_to(Q[0])
     records: list[Any] = []
     stop = threading.Event()
@@ -163,13 +228,17 @@ def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, reg
         T = geometry.tracker
         base = (m @ T.rotation.T + T.translation) * 1e3
     corners = plan.program.positions[1:-1]
-    return RunResult(path_accuracy(path, base, corners), law.cycle_time, registered, lost)
+    fitted = None
+    if not registered:  # the same points rigidly fitted: comparable with a run without a model
+        idx = np.clip(np.searchsorted(step_times, [r.t for r in got]), 0, len(Q) - 1)
+        fitted = path_accuracy(path, register(m * 1e3, samples.position[idx], path), corners)
+    return RunResult(path_accuracy(path, base, corners), traj.cycle_time, registered, lost,
+                     traj.speeds.as_dict(), fitted)
 
 
 def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
     """`hil moveb run`: station from --config/--sim (as `hil calibrate`), plan, execute, report."""
     from hil.cli.calibrate import _station
-    from hil.errors import InputError
     from hil.model_file import load_geometry
     from hil.station import HARDWARE_ERRORS, open_devices
 
@@ -195,8 +264,10 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
                 anchor[:3, 3] = (F[:3, :3] @ geometry.smr + F[:3, 3]) * 1e3
                 program = program_in_frame(program, anchor)
             plan = plan_program(program, args.continuity)
+            keep_in = (np.array(config.keep_in["min"]), np.array(config.keep_in["max"]))
             result = execute(devices, plan, geometry, limits, registered=model is None,
-                             tracker_rate=args.tracker_rate)
+                             tracker_rate=args.tracker_rate, joint_speed_fraction=args.joint_speed,
+                             keep_in=keep_in)
         except HARDWARE_ERRORS as exc:
             return {"status": "hardware fault", "error": f"{type(exc).__name__}: {exc}", "exit_code": 3}
         finally:
@@ -204,4 +275,5 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
     return {"format": "hil-moveb-run/1", "status": "done", "exit_code": 0, "program": args.program,
             "continuity": args.continuity, "model": args.model, "registered": result.registered,
             "cycle_time_s": result.cycle_time, "lost_samples": result.lost,
-            "path_accuracy": result.accuracy}
+            "path_accuracy": result.accuracy, "path_accuracy_registered": result.accuracy_registered,
+            "joint_speeds": result.joint_speeds}

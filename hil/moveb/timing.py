@@ -76,8 +76,12 @@ def speed_ceiling(s: np.ndarray, kappa: np.ndarray, limits: Limits, rate_hz: flo
 
 
 def feed_profile(s: np.ndarray, kappa: np.ndarray, limits: Limits, rate_hz: float,
-                 ds: float | None = None) -> TimeLaw:
-    """The time law of a curve given its curvature κ at arc lengths s (mm, 1/mm)."""
+                 ds: float | None = None, ceiling: tuple[np.ndarray, np.ndarray] | None = None) -> TimeLaw:
+    """The time law of a curve given its curvature κ at arc lengths s (mm, 1/mm).
+
+    `ceiling` (arc lengths, speeds in mm/s) is a further speed limit along the path, joined to step 1
+    before the rest: the joint-speed ceiling of `hil.moveb.joints`.
+    """
     s = np.asarray(s, float)
     length = float(s[-1] - s[0])
     if not length > 0:
@@ -90,6 +94,9 @@ def feed_profile(s: np.ndarray, kappa: np.ndarray, limits: Limits, rate_hz: floa
     k = np.interp(grid, s - s[0], np.asarray(kappa, float))
     T = 2.0 * limits.acceleration / limits.jerk
     vlim = speed_ceiling(grid, k, limits, rate_hz)
+    if ceiling is not None:
+        cs, cv = (np.asarray(c, float) for c in ceiling)
+        vlim = np.minimum(vlim, np.interp(grid, cs - s[0], cv))
     window = math.ceil(limits.velocity * T / ds)
     vlim = minimum_filter1d(vlim, size=2 * window + 1, mode="nearest")
     vlim[0] = vlim[-1] = 0.0

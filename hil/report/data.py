@@ -25,8 +25,7 @@ from hil.events import Event, Message, PoseSkipped, Resumed, Suspended
 from hil.identification import Correlation, ErrorStats, FitResult, RejectedPose
 from hil.kinematics import Kinematics
 from hil.measurements import Measurements
-
-RESULT_FORMAT = "hil-result/1"
+from hil.model_file import RESULT_FORMAT
 
 
 @dataclass(frozen=True)

@@ -81,6 +81,21 @@ def test_json_model_round_trip(calibrated, rng):
     assert all(p["std"] > 0 for p in saved["parameters"])
 
 
+def test_a_campaign_result_is_accepted_where_a_model_is(calibrated, rng, tmp_path):
+    geometry, doc, _path = calibrated
+    result = tmp_path / "result.json"
+    write_json(result, {"format": "hil-result/1", "status": "done", "model": doc})
+    loaded, saved = load_geometry(result)
+    Q = random_configurations("ur5e", 5, rng)
+    assert np.abs(Kinematics(loaded).points(Q) - Kinematics(geometry).points(Q)).max() < 1e-12
+    assert saved["format"] == "hil-model/1"
+    write_json(result, {"format": "hil-result/1", "status": "failed", "model": None})
+    with pytest.raises(InputError, match="result.json: the campaign result holds no model .status 'failed'"):
+        load_geometry(result)
+    with pytest.raises(InputError, match="expected hil-truth/1"):  # where only a truth will do
+        load_geometry(result, ("hil-truth/1",))
+
+
 def test_yaml_refuses_a_non_nominal_flange():
     g = Geometry.nominal("ur5e")
     g.flange = g.flange * pin.exp6(np.r_[1e-4, 0, 0, 0, 0, 0])

@@ -53,6 +53,20 @@ def test_ik_solves_the_calibrated_chain_and_refuses_the_unreachable() -> None:
         solve_ik(kin, far, Q0)
 
 
+def test_ik_answer_a_turn_away_is_brought_back_within_the_limits() -> None:
+    kin = Kinematics(Geometry.nominal("ur5e"))
+    q_true = np.array([0.3, -1.2, 1.5, -1.8, -1.57, 5.9])  # joint 6 near its +2π limit
+    target = pin.SE3(kin.flange_poses(q_true)[0])
+    seed = q_true.copy()
+    seed[5] = -0.2  # the seed is a whole turn away (the same wrist pose): the turn nearest it
+    q = solve_ik(kin, target, seed)
+    assert np.allclose(kin.flange_poses(q)[0], target.homogeneous, atol=1e-9)
+    assert q[5] == pytest.approx(5.9 - 2 * np.pi, abs=1e-6)
+    seed[5] = 12.0  # past the limit: the iteration lands at 5.9 + 2π, one turn back is within
+    q = solve_ik(kin, target, seed)
+    assert q[5] == pytest.approx(5.9, abs=1e-6)
+
+
 def test_ik_follows_a_planned_path_with_the_smr_as_tcp() -> None:
     geometry = Geometry.nominal("ur5e", smr=(0.0, 0.0, 0.045))
     kin = Kinematics(geometry)
