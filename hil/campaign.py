@@ -174,6 +174,11 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
             if record is not None:  # None: the visit was skipped (the engine said why)
                 records[(BOOTSTRAP, k)] = record
         boot = [r for (role, _), r in sorted(records.items()) if role == BOOTSTRAP]
+        if len(boot) < 3:  # three points fix a frame; fewer is a station problem, not a fit failure
+            raise IdentificationError(
+                f"cannot locate the tracker: {len(boot)} of {camp['bootstrap_poses']} bootstrap points "
+                "measured (is the SMR facing the tracker with a clear line of sight at the start pose? "
+                "or set tracker.position in the configuration)")
         tracker = align_tracker(Geometry.nominal(robot, smr_guess),
                                 measurements_of(boot, "bootstrap")).tracker
     model = Geometry.nominal(robot, smr_guess, tracker)

@@ -27,6 +27,7 @@ def simulated_station(robot: str = "ur5e", truth: str | None = None, speed: floa
         from hil.model_file import load_truth
 
         geometry, _ = load_truth(truth)  # a bad truth fails here, naming the key
+        truth = str(Path(truth).resolve())  # the simulator runs in a process of its own, elsewhere
         robot = geometry.robot
         truth_sha = hashlib.sha256(Path(truth).read_bytes()).hexdigest()
     from mocks.station import start_station

@@ -93,7 +93,7 @@ class World:
 
         Chosen among random configurations with the upper arm above horizontal, the elbow and wrist
         away from singularities and the elbow and SMR at least 20 cm above the base, as the one facing
-        the tracker most directly.
+        the tracker most directly with the line of sight clear of the arm's own links.
         """
         q = rng.uniform(-np.pi, np.pi, (samples, 6))
         q[:, 1] = rng.uniform(-2.6, -0.5, samples)  # upper arm well above horizontal
@@ -106,4 +106,7 @@ class World:
         cos = np.einsum("ni,ni->n", F[:, :3, 2], to_tracker) / np.linalg.norm(to_tracker, axis=1)
         elbow = kin.joint_frames(q)[:, 2, :3, 3]
         cos[(p[:, 2] < 0.2) | (elbow[:, 2] < 0.2)] = -2.0
-        return q[int(np.argmax(cos))]
+        for i in np.argsort(-cos)[:1000]:
+            if cos[i] > -2.0 and not self.blocked_by_arm(q[i]):
+                return q[i]
+        raise ValueError("no start pose sees the tracker: is the tracker placed where the arm can face it?")

@@ -218,7 +218,10 @@ def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, reg
     got = [r for r in records if r.position is not None and t0 <= r.t <= t1]
     lost = sum(1 for r in records if r.position is None and t0 <= r.t <= t1)
     if len(got) < 3:
-        raise RuntimeError(f"the tracker returned {len(got)} points during the motion ({lost} lost)")
+        from drivers.tracker.errors import TrackerError
+
+        raise TrackerError(f"the tracker measured {len(got)} points during the motion ({lost} lost): keep "
+                           "the SMR facing the tracker with a clear line of sight along the whole path")
     m = np.array([r.position for r in got])
     path = plan.dense(0.2).position  # mm, base frame
     if registered:

@@ -89,6 +89,17 @@ def test_bootstrap_locates_an_unknown_tracker():
     assert roles.count("bootstrap") >= 4 and result.passed
 
 
+def test_bootstrap_with_the_beam_never_seen_fails_saying_why():
+    st = Station(tracker_known=False)
+    st.tracker.lose_beam = 10**6
+    st.engine.suspenders = [Suspender("beam_lost", lambda e: isinstance(e, FakeBeamLost), lambda: False,
+                                      "bring the SMR back into the beam", poll=0.01, timeout=0.05,
+                                      on_timeout="skip")]
+    with pytest.raises(Exception, match=r"cannot locate the tracker: 0 of \d+ bootstrap points measured"):
+        st.engine.run(st.plan())
+    assert st.engine.state == FAILED
+
+
 def test_protective_stop_mid_move_suspends_and_resumes():
     st = Station(protective_stop_on_moves={3})
     result = st.engine.run(st.plan())
