@@ -23,14 +23,12 @@ from __future__ import annotations
 import contextlib
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from drivers.robot import errors as robot_errors
 from drivers.robot.isolated import IsolatedURRobot
 from drivers.robot.model import KeepInZone, RobotConfig
-from drivers.robot.ur import URRobot
 from drivers.tracker import errors as tracker_errors
 from drivers.tracker.measurement import Atmosphere, Tracker, TrackerConfig
 from drivers.tracker.transport import SerialConfig
@@ -78,10 +76,11 @@ class Devices:
     """The opened robot and tracker of a station.
 
     The robot is driven through `IsolatedURRobot` (ur_rtde in a child process): a crash of the client
-    library on a dropped link becomes a `ConnectionLost` the engine recovers from.
+    library on a dropped link becomes a `ConnectionLost` the engine recovers from. That includes MOVEB's
+    500 Hz servo streaming, whose loop runs in the child (`follow`).
     """
 
-    robot: Any  # IsolatedURRobot, or URRobot for streaming
+    robot: IsolatedURRobot
     tracker: Tracker
 
     def close(self) -> None:
@@ -90,13 +89,10 @@ class Devices:
                 close()
 
 
-def open_devices(config: StationConfig, *, streaming: bool = False) -> Devices:
-    """Connect to the robot and the tracker (typed driver errors on failure; nothing left open).
-
-    `streaming` (MOVEB's 500 Hz servo loop) drives the arm in-process with `URRobot`, because such a
-    loop must not cross a pipe; otherwise the arm is driven through `IsolatedURRobot`.
-    """
-    robot: Any = URRobot(robot_config(config)) if streaming else IsolatedURRobot(robot_config(config))
+def open_devices(config: StationConfig) -> Devices:
+    """Connect to the robot (through `IsolatedURRobot`) and the tracker (typed driver errors on failure;
+    nothing left open)."""
+    robot = IsolatedURRobot(robot_config(config))
     tracker = Tracker(tracker_config(config))
     robot.open()
     try:

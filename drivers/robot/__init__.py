@@ -16,15 +16,17 @@ from drivers.robot.errors import (
     RobotUnreachable,
     SafetyStop,
     SpeedSliderReduced,
+    StartPositionMismatch,
     TargetRejected,
     UnsupportedVersion,
 )
-from drivers.robot.model import JointReading, KeepInZone, Robot, RobotConfig, RobotInfo
+from drivers.robot.model import FollowResult, JointReading, KeepInZone, Robot, RobotConfig, RobotInfo
 from drivers.robot.ur import ServoStream, URRobot
 
 __all__ = [
     "ConnectionLost",
     "EmergencyStop",
+    "FollowResult",
     "JointLimitViolation",
     "JointReading",
     "KeepInZone",
@@ -44,6 +46,7 @@ __all__ = [
     "SafetyStop",
     "ServoStream",
     "SpeedSliderReduced",
+    "StartPositionMismatch",
     "TargetRejected",
     "URRobot",
     "UnsupportedVersion",

@@ -68,9 +68,13 @@ class KeepInZoneViolation(TargetRejected):
     """The TCP would leave the configured keep-in zone at the target or on the way."""
 
 
+class StartPositionMismatch(TargetRejected):
+    """A streamed trajectory does not start where the arm is: its first servo target would be a jump."""
+
+
 class MotionTimeout(RobotError, TimeoutError):
     """The arm did not reach the target / become steady in time; it has been stopped."""
 
 
 class MotionAborted(RobotError):
-    """`stop()` was called while a motion was in progress."""
+    """`stop()` was called while a motion (a move_to or a streamed trajectory) was in progress."""

@@ -5,9 +5,12 @@ ur_rtde 1.6.5 can crash its host process when its automatic reconnection runs af
 An end-of-line cell must not lose its run to a network blip, so the campaign talks to the arm
 through this proxy: every call is forwarded to a `URRobot` living in a child process; if that process
 dies, the call raises `ConnectionLost`, and `reconnect()` starts a fresh one. `stop()` travels on a
-channel of its own, so it interrupts a `move_to` in progress as it does in-process.
+channel of its own, so it interrupts a `move_to` or a `follow` in progress as it does in-process.
 
-Servo streaming (MOVEB) stays in-process with `URRobot`: a 500 Hz loop must not cross a pipe.
+Servo streaming (MOVEB) runs in the child too: `follow(Q)` sends the whole trajectory across the pipe
+once, the 500 Hz loop runs next to ur_rtde (`URRobot.follow`), and the samples' send times come back
+on the system-wide monotonic clock. A call that outlives its timeout stops the arm and ends the child
+(its late reply must never be read as the answer to a later call); `reconnect()` starts a new one.
 """
 
 from __future__ import annotations
@@ -21,10 +24,13 @@ from typing import Any
 import numpy as np
 
 from drivers.robot.errors import ConnectionLost, RobotError
-from drivers.robot.model import JointReading, RobotConfig, RobotInfo
+from drivers.robot.model import FollowResult, JointReading, RobotConfig, RobotInfo
+from drivers.robot.trajectory import check_trajectory, keep_in_checkpoints
 
 _START_TIMEOUT = 30.0  # seconds for the child to import ur_rtde and answer
 _MARGIN = 10.0  # seconds added to the driver's own timeouts before the proxy gives up on a call
+_FK_BUDGET = 0.05  # seconds allowed per keep-in FK check of a trajectory (about 4 ms measured)
+_SLOWER = 1.5  # a servo loop may run this much slower than the controller rate before time-out
 
 
 def _serve(commands: Connection, stops: Connection, config: RobotConfig) -> None:
@@ -54,6 +60,8 @@ def _serve(commands: Connection, stops: Connection, config: RobotConfig) -> None
             reply = ("err", exc)
         try:
             commands.send(reply)
+        except OSError:  # the parent gave up on this call (its timeout) or is gone
+            break
         except Exception:  # an unpicklable error: send its text
             commands.send(("err", RobotError(f"{type(reply[1]).__name__}: {reply[1]}")))
     with contextlib.suppress(Exception):
@@ -127,7 +135,10 @@ class IsolatedURRobot:
                 self._cmd.send((name, args, kwargs))
                 ready = self._cmd.poll(timeout)
                 if not ready:
-                    raise ConnectionLost(f"the robot client did not answer {name}() within {timeout:.0f} s")
+                    self.stop()  # the arm may still be moving under the unanswered call
+                    self._kill()  # its late reply must not answer the next call
+                    raise ConnectionLost(f"the robot client did not answer {name}() within "
+                                         f"{timeout:.0f} s; reconnect to continue")
                 status, value = self._cmd.recv()
             except (EOFError, OSError):
                 code = self._proc.exitcode if self._proc is not None else None
@@ -177,6 +188,21 @@ class IsolatedURRobot:
                           acceleration=acceleration, samples=samples,
                           timeout=self.config.move_timeout + self.config.settle_timeout + _MARGIN)
 
+    def follow(self, Q: Any, *, lookahead: float = 0.1, gain: float = 300.0,
+               settle: float = 0.0) -> FollowResult:
+        """`URRobot.follow` in the child: the servo loop runs next to ur_rtde, not across the pipe.
+
+        `Q` crosses once; the timeout covers the stream (`_SLOWER` x its duration at the controller
+        rate), the hold, the keep-in checks and a margin. A child that dies mid-stream (ur_rtde's
+        crash on a dropped link) raises ConnectionLost here; this process carries on.
+        """
+        cfg = self.config
+        Qa = check_trajectory(Q, cfg.joint_lower, cfg.joint_upper)  # the child checks it again
+        rate = self.info.rate_hz if self.info else 125.0  # unknown: the slower (CB3) rate
+        checks = len(keep_in_checkpoints(Qa, cfg.keep_in_spacing)) if cfg.keep_in is not None else 0
+        timeout = _SLOWER * (len(Qa) / rate + settle) + checks * _FK_BUDGET + cfg.connect_timeout + _MARGIN
+        return self._call("follow", Qa, lookahead=lookahead, gain=gain, settle=settle, timeout=timeout)
+
     def read_joints(self, samples: int = 1, timeout: float = 2.0) -> JointReading:
         return self._call("read_joints", samples, timeout=timeout + samples / 100.0 + _MARGIN)
 
@@ -187,7 +213,7 @@ class IsolatedURRobot:
         return self._call("validate_target", np.asarray(q, dtype=float).tolist(), timeout=_MARGIN)
 
     def stop(self) -> None:
-        """Stop the arm now, from any thread, even while a move_to is waiting."""
+        """Stop the arm now, from any thread, even while a move_to or a follow is running."""
         stop = self._stop
         if stop is not None:
             with contextlib.suppress(OSError):

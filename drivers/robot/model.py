@@ -39,6 +39,23 @@ class JointReading:
 
 
 @dataclass(frozen=True)
+class FollowResult:
+    """What a streamed trajectory (`URRobot.follow`) reports.
+
+    `times[i]` is when sample i was sent, on ``time.monotonic()``: CLOCK_MONOTONIC on Linux, one
+    clock for the whole system, so a parent process can compare the times sent back by the isolated
+    client's child with its own (e.g. the tracker's) timestamps without any offset.
+    The period figures cover every loop cycle, the hold at the last target included.
+    """
+
+    times: np.ndarray  # (N,) send time of each sample, time.monotonic() seconds
+    hold_end: float  # time.monotonic() when the hold at the last target ended
+    period_count: int  # loop periods measured (samples + hold cycles - 1)
+    period_mean: float  # seconds
+    period_max: float  # seconds
+
+
+@dataclass(frozen=True)
 class KeepInZone:
     """Axis-aligned box (controller base frame, metres) the TCP must stay inside."""
 
@@ -61,6 +78,11 @@ class RobotConfig:
     keep_in: KeepInZone | None = None
     tcp_offset: tuple[float, ...] = (0.0,) * 6  # pose of the TCP in the flange frame (for the keep-in check)
     keep_in_checks: int = 8  # points along the joint-space path checked against the keep-in zone
+    keep_in_spacing: float = 0.02  # rad: largest joint change between keep-in checks of a trajectory
+    # rad: the first sample of a streamed trajectory may be this far (largest joint) from the arm.
+    # After a move_to the arm is within settle_tolerance; 0.01 rad reached in one lookahead time
+    # (>= 30 ms) needs < 0.35 rad/s, a gentle start rather than a jump the servo loop must absorb.
+    follow_start_tolerance: float = 0.01
     connect_timeout: float = 5.0
     move_timeout: float = 120.0  # real seconds for one move_to, settling included
     settle_timeout: float = 5.0  # real seconds to become steady after the profile ends

@@ -15,6 +15,10 @@ Design choices, and why:
   On any error of its own (timeout, slider, abort) the driver stops the arm before raising.
 * `getForwardKinematics(q)` with a zero TCP offset reads stale registers in ur_rtde 1.6.5, so the
   driver always passes a non-zero offset.
+* Servo streaming: `follow(Q)` runs a whole trajectory's 500 Hz loop inside the driver, so under
+  `IsolatedURRobot` it runs in the child process next to ur_rtde (a per-sample loop must not cross a
+  pipe, and a crash of the library on a dropped link must not take the caller down). `servo()` is the
+  lower-level in-process loop it is built on.
 """
 
 from __future__ import annotations
@@ -42,10 +46,12 @@ from drivers.robot.errors import (
     RobotNotReady,
     RobotUnreachable,
     SpeedSliderReduced,
+    StartPositionMismatch,
     UnsupportedVersion,
 )
-from drivers.robot.model import JointReading, RobotConfig, RobotInfo
+from drivers.robot.model import FollowResult, JointReading, RobotConfig, RobotInfo
 from drivers.robot.probe import DashboardLine, rtde_version
+from drivers.robot.trajectory import check_trajectory, keep_in_checkpoints
 
 log = logging.getLogger(__name__)
 
@@ -250,18 +256,25 @@ class URRobot:
             raise JointLimitViolation(f"joint {j + 1} target {qa[j]:.4f} rad is outside "
                                       f"[{lo[j]:.4f}, {hi[j]:.4f}]")
         if cfg.keep_in is not None:
-            c, r = self._require()
+            _c, r = self._require()
             q0 = np.asarray(r.getActualQ(), dtype=float)
-            tcp = list(cfg.tcp_offset) if any(cfg.tcp_offset) else list(_TINY_TCP)
             for s in np.linspace(0.0, 1.0, max(cfg.keep_in_checks, 2)):
-                qs = q0 + s * (qa - q0)
-                with self._typed_errors(), self._cmd_lock:
-                    pose = c.getForwardKinematics(qs.tolist(), tcp)
-                if len(pose) < 3 or not cfg.keep_in.contains(np.asarray(pose)):
+                pose = self._outside_keep_in(q0 + s * (qa - q0))
+                if pose is not None:
                     where = "at the target" if s == 1.0 else f"at {s:.0%} of the way"
                     raise KeepInZoneViolation(f"TCP {np.round(pose[:3], 4).tolist()} leaves the keep-in "
                                               f"zone {where}")
         return qa
+
+    def _outside_keep_in(self, q: np.ndarray) -> list[float] | None:
+        """The TCP pose at `q` (controller FK) if it is outside the keep-in zone, else None."""
+        cfg = self.config
+        assert cfg.keep_in is not None
+        c, _r = self._require()
+        tcp = list(cfg.tcp_offset) if any(cfg.tcp_offset) else list(_TINY_TCP)
+        with self._typed_errors(), self._cmd_lock:
+            pose = list(c.getForwardKinematics(q.tolist(), tcp))
+        return pose if len(pose) < 3 or not cfg.keep_in.contains(np.asarray(pose)) else None
 
     @contextmanager
     def _typed_errors(self) -> Iterator[None]:
@@ -378,9 +391,68 @@ class URRobot:
         return np.asarray(r.getActualTCPPose(), dtype=float)
 
     # ------------------------------------------------------------------ streaming
+    def follow(self, Q: object, *, lookahead: float = 0.1, gain: float = 300.0,
+               settle: float = 0.0) -> FollowResult:
+        """Stream a whole joint trajectory (one sample per controller period), then hold its end.
+
+        The loop runs here, in the driver's process, so under `IsolatedURRobot` it runs in the child
+        next to ur_rtde and only `Q` and the result cross the pipe. Before anything moves: every
+        sample is checked against the joint limits (refused naming the sample and joint, never
+        clamped), then the controller status, then the first sample against the arm's position
+        (`follow_start_tolerance`: a servo stream must not start with a jump; `move_to(Q[0])` first),
+        then the keep-in zone at samples `keep_in_spacing` rad apart. Each sample is sent with servoJ
+        at the controller period (`lookahead` s in [0.03, 0.2], `gain` in [100, 2000]), the last one
+        is held for `settle` s, and servoStop ends the stream — on any error too.
+
+        `stop()` from another thread ends it with MotionAborted (no servo target is sent after the
+        stop). Returns each sample's send time on ``time.monotonic()`` — the system-wide
+        CLOCK_MONOTONIC on Linux, so a parent process can compare them with its own timestamps —
+        and the loop-period statistics (`FollowResult`).
+        """
+        cfg = self.config
+        self._abort.clear()  # a stop() from here on aborts this stream
+        Qa = check_trajectory(Q, cfg.joint_lower, cfg.joint_upper)
+        if not (0.03 <= lookahead <= 0.2 and 100.0 <= gain <= 2000.0 and 0.0 <= settle < 3600.0):
+            raise ValueError(f"lookahead {lookahead} s must be in [0.03, 0.2], gain {gain} in "
+                             f"[100, 2000], settle {settle} s in [0, 3600)")
+        self.check_status()
+        _c, r = self._require()
+        jump = np.abs(Qa[0] - np.asarray(r.getActualQ(), dtype=float))
+        j = int(np.argmax(jump))
+        if jump[j] > cfg.follow_start_tolerance:
+            raise StartPositionMismatch(
+                f"the trajectory starts {jump[j]:.4f} rad away from the arm at joint {j + 1} (more than "
+                f"{cfg.follow_start_tolerance} rad): move to its first sample first")
+        if cfg.keep_in is not None:
+            for i in keep_in_checkpoints(Qa, cfg.keep_in_spacing):
+                pose = self._outside_keep_in(Qa[i])
+                if pose is not None:
+                    raise KeepInZoneViolation(f"sample {i}: TCP {np.round(pose[:3], 4).tolist()} leaves "
+                                              "the keep-in zone (trajectory refused, nothing moved)")
+        times = np.empty(len(Qa))
+        with self._servo_session(lookahead, gain) as stream:
+            for i, q in enumerate(Qa):
+                times[i] = stream.send(q)
+            for _ in range(round(settle / stream.dt)):
+                stream.send(Qa[-1])
+            hold_end = time.monotonic()
+        periods = np.asarray(stream.periods)
+        return FollowResult(times=times, hold_end=hold_end, period_count=int(periods.size),
+                            period_mean=float(periods.mean()) if periods.size else 0.0,
+                            period_max=float(periods.max()) if periods.size else 0.0)
+
     @contextmanager
     def servo(self, *, lookahead: float = 0.1, gain: float = 300.0) -> Iterator[ServoStream]:
-        """A servo loop at the controller rate; the arm is stopped (servoStop) when the block exits."""
+        """A servo loop at the controller rate; the arm is stopped (servoStop) when the block exits.
+
+        `stop()` from another thread makes the next `step` raise MotionAborted.
+        """
+        self._abort.clear()
+        with self._servo_session(lookahead, gain) as stream:
+            yield stream
+
+    @contextmanager
+    def _servo_session(self, lookahead: float, gain: float) -> Iterator[ServoStream]:
         c, r = self._require()
         self.check_status()
         stream = ServoStream(self, c, r, lookahead, gain)
@@ -388,7 +460,7 @@ class URRobot:
             yield stream
         finally:
             try:
-                if c.isConnected():
+                if c.isConnected():  # never call into ur_rtde while its own thread reconnects
                     with self._cmd_lock:
                         c.servoStop(STOP_DECEL)
             except RuntimeError as exc:
@@ -402,29 +474,45 @@ class ServoStream:
         self.robot, self._c, self._r = robot, c, r
         self.lookahead, self.gain = lookahead, gain
         self.dt = 1.0 / (robot.info.rate_hz if robot.info else 500.0)
-        self.periods: list[float] = []
+        self.periods: list[float] = []  # seconds between successive sends (time.monotonic)
         self._t_last: float | None = None
         self._n = 0
 
-    def step(self, q: Sequence[float], *, pose: bool = False) -> None:
-        """Send one target (joints, or a TCP pose with ``pose=True``) and keep the loop period."""
+    def step(self, q: Sequence[float], *, pose: bool = False) -> float:
+        """Validate and send one target (joints, or a TCP pose with ``pose=True``); see `send`."""
         qa = self.robot.validate_target(q) if not pose else np.asarray(q, dtype=float)
-        t_start = self._c.initPeriod()
-        now = time.perf_counter()
+        return self.send(qa, pose=pose)
+
+    def send(self, qa: np.ndarray, *, pose: bool = False) -> float:
+        """Send one already validated target, keep the loop period; returns the send time (monotonic).
+
+        Raises MotionAborted after `stop()`, ConnectionLost when the link is gone (checked before
+        every command: calling into ur_rtde while its own thread reconnects can crash the process).
+        """
+        robot, c = self.robot, self._c
+        t_start = c.initPeriod()
+        now = time.monotonic()
         if self._t_last is not None:
             self.periods.append(now - self._t_last)
         self._t_last = now
-        with self.robot._cmd_lock:
+        target = qa.tolist()
+        with robot._typed_errors(), robot._cmd_lock:
+            # checked under the lock stop() holds while sending stopJ: no servo target after a stop
+            if robot._abort.is_set():
+                raise MotionAborted("stopped by request")
+            if not c.isConnected():
+                raise ConnectionLost(f"lost the RTDE link to {robot.config.host}")
             if pose:
-                ok = self._c.servoL(qa.tolist(), 0.0, 0.0, self.dt, self.lookahead, self.gain)
+                ok = c.servoL(target, 0.0, 0.0, self.dt, self.lookahead, self.gain)
             else:
-                ok = self._c.servoJ(qa.tolist(), 0.0, 0.0, self.dt, self.lookahead, self.gain)
+                ok = c.servoJ(target, 0.0, 0.0, self.dt, self.lookahead, self.gain)
         self._n += 1
         if not ok or self._n % 10 == 0:
-            self.robot.check_status()
+            robot.check_status()
             if not ok:
                 raise RobotError("the controller refused a servo command")
-        self._c.waitPeriod(t_start)
+        c.waitPeriod(t_start)
+        return now
 
     def actual_q(self) -> np.ndarray:
         return np.asarray(self._r.getActualQ(), dtype=float)

@@ -6,8 +6,10 @@
 * Joint targets come from `hil.ik` on the *calibrated* model when one is given (``--model``), so the
   calibration's effect shows in the measured path; without one, the nominal model.
 * The trajectory is solved for every controller sample before anything moves (an unreachable sample
-  is an error naming its arc length), then the arm moves to the start and the samples are streamed
-  through the driver's servo loop while a thread samples the tracker in continuous mode.
+  is an error naming its arc length), then the arm moves to the start and the whole trajectory is
+  handed to the driver's `follow`, whose servo loop runs in the isolated robot client's process (a
+  crash of ur_rtde on a dropped link is a ConnectionLost here), while a thread samples the tracker in
+  continuous mode. Both sides time-stamp on the system-wide monotonic clock.
 * Tracker points are brought into the base frame with the model's tracker pose. Without a model that
   pose is unknown, so it is registered: a rigid fit of the measured points to the commanded positions
   at the same times, refined by nearest-point iterations (ICP). The result says ``registered: true``;
@@ -203,13 +205,8 @@ def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, reg
     thread = threading.Thread(target=sample, name="tracker-stream", daemon=True)
     thread.start()
     time.sleep(0.05)
-    step_times = np.empty(len(Q))
-    with devices.robot.servo(lookahead=0.05, gain=1000) as stream:
-        for i, q in enumerate(Q):
-            step_times[i] = time.monotonic()
-            stream.step(q)
-        for _ in range(int(settle * rate)):
-            stream.step(Q[-1])
+    res = devices.robot.follow(Q, lookahead=0.05, gain=1000, settle=settle)
+    step_times = res.times  # send time of each sample (time.monotonic, as the tracker's records)
     stop.set()
     thread.join(timeout=5.0)
     if failure:
@@ -256,7 +253,7 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
     with _station(args) as (config, _identity, _truth):
         geometry = model or Geometry.nominal(config.robot["type"], smr=config.smr["offset"])
         try:
-            devices = open_devices(config, streaming=True)
+            devices = open_devices(config)
         except HARDWARE_ERRORS as exc:
             return {"status": "hardware fault", "error": f"{type(exc).__name__}: {exc}", "exit_code": 3}
         try:

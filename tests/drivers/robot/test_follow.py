@@ -1,0 +1,174 @@
+"""Streaming a whole trajectory (`follow`) against the simulated controller, in-process and isolated.
+
+The isolated client is how the product drives the arm: its servo loop runs in the child process, so a
+dropped link (or a crash of ur_rtde) mid-stream must surface here as a typed error, this process alive.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+import time
+from collections.abc import Iterator
+from typing import Any
+
+import numpy as np
+import pytest
+
+import drivers.robot.isolated as isolated
+from drivers.robot import (
+    ConnectionLost,
+    JointLimitViolation,
+    MotionAborted,
+    ProgramStopped,
+    RobotUnreachable,
+    StartPositionMismatch,
+    URRobot,
+)
+from drivers.robot.isolated import IsolatedURRobot
+from mocks.ur.process import SimProcess
+from tests.drivers.robot.test_ur_driver import Q_A, assert_arm_stopped, config, inject_later
+
+DQ = np.array([0.3, -0.1, 0.15, 0.0, 0.2, -0.25])
+
+
+def ramp(q0: Any, dq: np.ndarray, n: int) -> np.ndarray:
+    """n samples from q0 to q0 + dq, smooth (cosine) in time."""
+    s = 0.5 - 0.5 * np.cos(np.pi * np.arange(n) / (n - 1))
+    return np.asarray(q0, dtype=float) + s[:, None] * dq
+
+
+@pytest.fixture(params=["in-process", "isolated"])
+def arm(request: pytest.FixtureRequest, sim: SimProcess) -> Iterator[Any]:
+    """An opened driver at Q_A: a URRobot, or the IsolatedURRobot the product uses."""
+    rob: Any = (URRobot if request.param == "in-process" else IsolatedURRobot)(config(sim))
+    rob.open()
+    try:
+        rob.move_to(Q_A)
+        yield rob
+    finally:
+        rob.close()
+
+
+@pytest.fixture
+def iso(sim: SimProcess) -> Iterator[IsolatedURRobot]:
+    rob = IsolatedURRobot(config(sim))
+    rob.open()
+    try:
+        rob.move_to(Q_A)
+        yield rob
+    finally:
+        rob.close()
+
+
+def test_follow_streams_the_trajectory_and_ends_at_its_last_sample(arm: Any) -> None:
+    traj = ramp(Q_A, DQ, 400)  # 0.8 s at 500 Hz
+    before = time.monotonic()
+    res = arm.follow(traj, lookahead=0.05, gain=1000, settle=0.1)
+    after = time.monotonic()
+    assert res.times.shape == (400,) and np.all(np.diff(res.times) > 0)
+    # one clock for the whole system: the child's send times fall inside this process's call
+    assert before < res.times[0] and res.times[-1] < res.hold_end <= after
+    assert res.period_count == 400 + 50 - 1
+    assert 0.0018 < res.period_mean < 0.0025 and res.period_max < 0.05
+    assert np.allclose(arm.read_joints(5).q, traj[-1], atol=1e-3)
+    print(f"\n{type(arm).__name__}: {res.period_count} periods, mean {res.period_mean * 1e3:.3f} ms, "
+          f"max {res.period_max * 1e3:.3f} ms")
+
+
+def test_a_sample_outside_the_joint_limits_is_refused_before_moving(sim: SimProcess) -> None:
+    traj = ramp(Q_A, DQ, 300)
+    traj[120, 1] = -3.2
+    for cls in (URRobot, IsolatedURRobot):
+        with cls(config(sim, joint_lower=(-3.0,) * 6, joint_upper=(3.0,) * 6)) as rob:
+            q_before = sim.state()["q"]
+            with pytest.raises(JointLimitViolation, match="sample 120: joint 2"):
+                rob.follow(traj)
+            bad = traj.copy()
+            bad[7, 4] = np.nan
+            with pytest.raises(JointLimitViolation, match="sample 7: joint 5"):
+                rob.follow(bad)
+            assert sim.state()["q"] == q_before and not sim.state()["moving"]
+
+
+def test_a_first_sample_away_from_the_arm_is_refused(arm: Any, sim: SimProcess) -> None:
+    q_before = sim.state()["q"]
+    start = np.array(Q_A) + np.array([0.0, 0.0, 0.05, 0.0, 0.0, 0.0])
+    with pytest.raises(StartPositionMismatch, match="joint 3"):
+        arm.follow(ramp(start, DQ, 100))
+    assert sim.state()["q"] == q_before and not sim.state()["moving"]
+
+
+def test_stop_from_another_thread_aborts_the_stream(arm: Any, sim: SimProcess) -> None:
+    traj = ramp(Q_A, DQ, 2000)  # 4 s
+    threading.Timer(0.3, arm.stop).start()
+    t0 = time.monotonic()
+    with pytest.raises(MotionAborted):
+        arm.follow(traj, lookahead=0.05, gain=1000)
+    assert time.monotonic() - t0 < 2.0
+    assert_arm_stopped(sim)
+    assert not np.allclose(sim.state()["q"], traj[-1], atol=1e-2)
+    q = arm.read_joints(1).q  # the driver still works: stream again from where the arm stopped
+    arm.follow(ramp(q, -0.5 * DQ, 100), settle=0.05)
+
+
+def _reconnect(robot: IsolatedURRobot, within: float = 20.0) -> None:
+    deadline = time.monotonic() + within
+    while True:
+        try:
+            robot.reconnect()
+            return
+        except (ConnectionLost, RobotUnreachable, ProgramStopped):
+            assert time.monotonic() < deadline, "could not reconnect"
+            time.sleep(0.5)
+
+
+def test_dropped_link_mid_stream_is_a_typed_error_and_this_process_survives(
+        iso: IsolatedURRobot, sim: SimProcess) -> None:
+    traj = ramp(Q_A, DQ, 2000)
+    inject_later(sim, 0.3, "drop_connection", refuse_s=1.0)
+    with pytest.raises(ConnectionLost):
+        iso.follow(traj, lookahead=0.05, gain=1000)
+    assert_arm_stopped(sim)
+    _reconnect(iso)
+    q = iso.read_joints(1).q
+    iso.follow(ramp(q, -0.5 * DQ, 100), settle=0.05)
+    assert np.allclose(iso.read_joints(3).q, q - 0.5 * DQ, atol=1e-3)
+
+
+def test_client_crash_mid_stream_is_connection_lost(iso: IsolatedURRobot, sim: SimProcess) -> None:
+    """What ur_rtde's segfault on a dropped link looks like from the parent: the child dies."""
+    pid = iso._proc.pid
+    threading.Timer(0.3, lambda: os.kill(pid, signal.SIGSEGV)).start()
+    with pytest.raises(ConnectionLost, match="process died"):
+        iso.follow(ramp(Q_A, DQ, 2000))
+    # nothing commands the controller now: its servo holds the last target it received
+    end = time.monotonic() + 3.0
+    while True:
+        q0 = np.array(sim.state()["q"])
+        time.sleep(0.05)
+        if np.max(np.abs(np.array(sim.state()["q"]) - q0)) < 1e-6:
+            break
+        assert time.monotonic() < end, "the arm is still moving"
+    _reconnect(iso)  # a new client uploads its control script: the old servo is gone
+    assert_arm_stopped(sim)
+    assert iso._proc.pid != pid and iso.read_joints(1).samples == 1
+
+
+def test_a_stream_outliving_its_timeout_is_stopped_and_its_client_replaced(
+        iso: IsolatedURRobot, sim: SimProcess, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(isolated, "_SLOWER", 0.05)
+    monkeypatch.setattr(isolated, "_MARGIN", 0.5 - iso.config.connect_timeout)  # about 0.7 s for 4 s
+    first = iso._proc
+    t0 = time.monotonic()
+    with pytest.raises(ConnectionLost, match="did not answer follow"):
+        iso.follow(ramp(Q_A, DQ, 2000))
+    assert time.monotonic() - t0 < 4.0
+    assert_arm_stopped(sim)
+    assert not first.is_alive()
+    monkeypatch.undo()
+    with pytest.raises(ConnectionLost, match="not connected"):
+        iso.read_joints(1)
+    _reconnect(iso)
+    assert iso.read_joints(1).samples == 1
