@@ -204,11 +204,13 @@ def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, reg
 
     thread = threading.Thread(target=sample, name="tracker-stream", daemon=True)
     thread.start()
-    time.sleep(0.05)
-    res = devices.robot.follow(Q, lookahead=0.05, gain=1000, settle=settle)
+    try:
+        time.sleep(0.05)
+        res = devices.robot.follow(Q, lookahead=0.05, gain=1000, settle=settle)
+    finally:  # the sampling thread ends with the motion, failed or not
+        stop.set()
+        thread.join(timeout=5.0)
     step_times = res.times  # send time of each sample (time.monotonic, as the tracker's records)
-    stop.set()
-    thread.join(timeout=5.0)
     if failure:
         raise failure[0]
     t0, t1 = step_times[0], step_times[-1] + settle
@@ -219,20 +221,17 @@ def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, reg
 
         raise TrackerError(f"the tracker measured {len(got)} points during the motion ({lost} lost): keep "
                            "the SMR facing the tracker with a clear line of sight along the whole path")
-    m = np.array([r.position for r in got])
+    m = np.array([r.position for r in got]) * 1e3  # mm, tracker frame
     path = plan.dense(0.2).position  # mm, base frame
-    if registered:
-        idx = np.clip(np.searchsorted(step_times, [r.t for r in got]), 0, len(Q) - 1)
-        base = register(m * 1e3, samples.position[idx], path)
-    else:
-        T = geometry.tracker
-        base = (m @ T.rotation.T + T.translation) * 1e3
     corners = plan.program.positions[1:-1]
-    fitted = None
-    if not registered:  # the same points rigidly fitted: comparable with a run without a model
-        idx = np.clip(np.searchsorted(step_times, [r.t for r in got]), 0, len(Q) - 1)
-        fitted = path_accuracy(path, register(m * 1e3, samples.position[idx], path), corners)
-    return RunResult(path_accuracy(path, base, corners), traj.cycle_time, registered, lost,
+    idx = np.clip(np.searchsorted(step_times, [r.t for r in got]), 0, len(Q) - 1)
+    fitted = path_accuracy(path, register(m, samples.position[idx], path), corners)
+    if registered:
+        return RunResult(fitted, traj.cycle_time, True, lost, traj.speeds.as_dict(), None)
+    T = geometry.tracker
+    base = m @ T.rotation.T + T.translation * 1e3
+    # with a model: in its base frame, and (comparable with a run without one) rigidly fitted
+    return RunResult(path_accuracy(path, base, corners), traj.cycle_time, False, lost,
                      traj.speeds.as_dict(), fitted)
 
 
