@@ -52,6 +52,7 @@ def robot_config(config: StationConfig) -> RobotConfig:
         host=config.robot["address"], speed=config.robot["speed"],
         acceleration=config.robot["acceleration"],
         joint_lower=tuple(spec.lower), joint_upper=tuple(spec.upper),
+        max_joint_speed=tuple(float(v) for v in spec.max_joint_speed),
         keep_in=KeepInZone(tuple(config.keep_in["min"]), tuple(config.keep_in["max"])),
         tcp_offset=(smr[0], smr[1], smr[2], 0.0, 0.0, 0.0),
         connect_timeout=config.timeouts["connect"], move_timeout=config.timeouts["move"])

@@ -83,6 +83,8 @@ class RobotConfig:
     # After a move_to the arm is within settle_tolerance; 0.01 rad reached in one lookahead time
     # (>= 30 ms) needs < 0.35 rad/s, a gentle start rather than a jump the servo loop must absorb.
     follow_start_tolerance: float = 0.01
+    # rad/s per joint: no streamed sample may ask more of a joint than this (None: not checked)
+    max_joint_speed: tuple[float, ...] | None = None
     connect_timeout: float = 5.0
     move_timeout: float = 120.0  # real seconds for one move_to, settling included
     settle_timeout: float = 5.0  # real seconds to become steady after the profile ends

@@ -13,10 +13,14 @@ import numpy as np
 from drivers.robot.errors import JointLimitViolation, TargetRejected
 
 
-def check_trajectory(Q: object, lower: Sequence[float], upper: Sequence[float]) -> np.ndarray:
+def check_trajectory(Q: object, lower: Sequence[float], upper: Sequence[float],
+                     max_step: Sequence[float] | None = None) -> np.ndarray:
     """`Q` as an (N, 6) float array, or the refusal naming the first bad sample and joint.
 
-    Every sample is checked (vectorised) before anything moves; nothing is ever clamped.
+    Every sample is checked (vectorised) before anything moves; nothing is ever clamped. With
+    `max_step` (rad per controller period, per joint: the joint speed maxima over the rate), a step
+    between consecutive samples above it is refused too: the planner slows down for its joint
+    speeds, so such a step is a planning error (or a branch jump) the arm must not be asked to follow.
     """
     try:
         Qa = np.array(Q, dtype=float)
@@ -34,6 +38,15 @@ def check_trajectory(Q: object, lower: Sequence[float], upper: Sequence[float]) 
         i, j = (int(v) for v in bad[0])
         raise JointLimitViolation(f"sample {i}: joint {j + 1} target {Qa[i, j]:.4f} rad is outside "
                                   f"[{lo[j]:.4f}, {hi[j]:.4f}] (trajectory refused, nothing moved)")
+    if max_step is not None and len(Qa) > 1:
+        step = np.abs(np.diff(Qa, axis=0))
+        limit = np.asarray(max_step, dtype=float)
+        bad = np.argwhere(step > limit * (1.0 + 1e-9))
+        if bad.size:
+            i, j = (int(v) for v in bad[0])
+            raise TargetRejected(f"sample {i + 1}: joint {j + 1} would move {step[i, j]:.4f} rad in one "
+                                 f"period (at most {limit[j]:.4f}: its speed limit) (trajectory refused, "
+                                 "nothing moved)")
     return Qa
 
 

@@ -397,12 +397,13 @@ class URRobot:
 
         The loop runs here, in the driver's process, so under `IsolatedURRobot` it runs in the child
         next to ur_rtde and only `Q` and the result cross the pipe. Before anything moves: every
-        sample is checked against the joint limits (refused naming the sample and joint, never
-        clamped), then the controller status, then the first sample against the arm's position
-        (`follow_start_tolerance`: a servo stream must not start with a jump; `move_to(Q[0])` first),
-        then the keep-in zone at samples `keep_in_spacing` rad apart. Each sample is sent with servoJ
-        at the controller period (`lookahead` s in [0.03, 0.2], `gain` in [100, 2000]), the last one
-        is held for `settle` s, and servoStop ends the stream — on any error too.
+        sample is checked against the joint limits and each step against `max_joint_speed`
+        (refused naming the sample and joint, never clamped), then the controller status, then the
+        first sample against the arm's position (`follow_start_tolerance`: a servo stream must not
+        start with a jump; `move_to(Q[0])` first), then the keep-in zone at samples
+        `keep_in_spacing` rad apart. Each sample is sent with servoJ at the controller period
+        (`lookahead` s in [0.03, 0.2], `gain` in [100, 2000]), the last one is held for `settle` s,
+        and servoStop ends the stream — on any error too.
 
         `stop()` from another thread ends it with MotionAborted (no servo target is sent after the
         stop). Returns each sample's send time on ``time.monotonic()`` — the system-wide
@@ -411,7 +412,9 @@ class URRobot:
         """
         cfg = self.config
         self._abort.clear()  # a stop() from here on aborts this stream
-        Qa = check_trajectory(Q, cfg.joint_lower, cfg.joint_upper)
+        rate = self.info.rate_hz if self.info else 500.0
+        max_step = None if cfg.max_joint_speed is None else np.asarray(cfg.max_joint_speed) / rate
+        Qa = check_trajectory(Q, cfg.joint_lower, cfg.joint_upper, max_step)
         if not (0.03 <= lookahead <= 0.2 and 100.0 <= gain <= 2000.0 and 0.0 <= settle < 3600.0):
             raise ValueError(f"lookahead {lookahead} s must be in [0.03, 0.2], gain {gain} in "
                              f"[100, 2000], settle {settle} s in [0, 3600)")

@@ -24,6 +24,7 @@ from drivers.robot import (
     ProgramStopped,
     RobotUnreachable,
     StartPositionMismatch,
+    TargetRejected,
     URRobot,
 )
 from drivers.robot.isolated import IsolatedURRobot
@@ -90,6 +91,18 @@ def test_a_sample_outside_the_joint_limits_is_refused_before_moving(sim: SimProc
             with pytest.raises(JointLimitViolation, match="sample 7: joint 5"):
                 rob.follow(bad)
             assert sim.state()["q"] == q_before and not sim.state()["moving"]
+
+
+def test_a_step_faster_than_a_joint_may_go_is_refused_before_moving(sim: SimProcess) -> None:
+    traj = ramp(Q_A, DQ, 40)  # 0.3 rad in 80 ms: up to ~6 rad/s on joint 1
+    for cls in (URRobot, IsolatedURRobot):
+        with cls(config(sim, max_joint_speed=(3.0,) * 6)) as rob:
+            rob.move_to(traj[0])
+            q_before = sim.state()["q"]
+            with pytest.raises(TargetRejected, match=r"sample \d+: joint 1 would move .* rad in one period"):
+                rob.follow(traj)
+            assert sim.state()["q"] == q_before and not sim.state()["moving"]
+            rob.follow(ramp(traj[0], DQ, 400))  # the same move at under 1.2 rad/s goes
 
 
 def test_a_first_sample_away_from_the_arm_is_refused(arm: Any, sim: SimProcess) -> None:
