@@ -27,7 +27,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--speed", type=float, default=1.0, help="simulated seconds per real second")
     p.add_argument("--truth", help="truth JSON of the simulated world (used by the station's world model)")
     p.add_argument("--control-port", type=int, default=30999, help="JSON-lines fault channel port (0: any)")
-    p.add_argument("--polyscope", default="5.15.0.12345", help="controller software version to report")
+    p.add_argument("--polyscope", default=None,
+                   help="controller software version to report (default 5.15.0.12345; 3.15.8.106339 for CB3)")
     p.add_argument("--serial", default="20235500001")
     p.add_argument("--local-control", action="store_true", help="start in local control (not remote)")
     p.add_argument("--speed-slider", type=float, default=1.0, help="speed slider fraction 0..1")
@@ -39,8 +40,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def config_from_args(args: argparse.Namespace) -> SimConfig:
     """A SimConfig from parsed options (raises ValueError with a one-line message on bad values)."""
-    parts = args.polyscope.split(".")
-    if len(parts) != 4 or not all(x.isdigit() for x in parts):
+    parts = args.polyscope.split(".") if args.polyscope else None
+    if parts is not None and (len(parts) != 4 or not all(x.isdigit() for x in parts)):
         raise ValueError(f"--polyscope: expected four numbers like 5.15.0.12345, got {args.polyscope!r}")
     if not args.address.startswith("127."):
         raise ValueError(f"--address: only loopback addresses (127.x.y.z) are allowed, got {args.address!r}")
@@ -50,7 +51,7 @@ def config_from_args(args: argparse.Namespace) -> SimConfig:
         raise ValueError("--speed: must be > 0")
     faults: list[dict[str, Any]] = [{"name": f} for f in args.fault]
     return SimConfig(address=args.address, robot=args.robot, speed=args.speed,
-                     version=tuple(int(x) for x in parts),  # type: ignore[arg-type]
+                     version=tuple(int(x) for x in parts) if parts else None,  # type: ignore[arg-type]
                      serial=args.serial, control_port=args.control_port,
                      remote_control=not args.local_control, speed_slider=args.speed_slider,
                      encoder_noise=args.encoder_noise, seed=args.seed, faults=faults)

@@ -53,7 +53,7 @@ class SimConfig:
     address: str = "127.0.0.1"
     robot: str = "ur5e"
     speed: float = 1.0
-    version: tuple[int, int, int, int] = (5, 15, 0, 12345)
+    version: tuple[int, int, int, int] | None = None  # None: 5.15 (e-series) or 3.15 (CB3), by robot
     serial: str = "20235500001"
     model: str | None = None  # dashboard "get robot model"; default from `robot`
     rtde_port: int = 30004
@@ -115,10 +115,12 @@ class SimController:
         self.arm.remote_control = config.remote_control
         self.arm.speed_slider = config.speed_slider
         model = config.model or robot.upper().rstrip("E")
+        version = tuple(config.version) if config.version else (
+            (3, 15, 8, 106339) if robot in _CB3 else (5, 15, 0, 12345))
         host = config.address
-        self.rtde = RtdeServer(self.arm, host, config.rtde_port, tuple(config.version))  # type: ignore[arg-type]
+        self.rtde = RtdeServer(self.arm, host, config.rtde_port, version)  # type: ignore[arg-type]
         self.dashboard = DashboardServer(self.arm, host, config.dashboard_port, model=model,
-                                         serial=config.serial, version=tuple(config.version))  # type: ignore[arg-type]
+                                         serial=config.serial, version=version)  # type: ignore[arg-type]
         self.script = ScriptServer(self.arm, host, config.script_port)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None

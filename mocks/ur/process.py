@@ -110,7 +110,7 @@ def child_main(argv: Sequence[str] | None = None) -> int:
     level = int(os.environ.get("UR_SIM_LOG_LEVEL", logging.WARNING))
     logging.basicConfig(level=level, format="ur-sim %(levelname)s %(name)s: %(message)s", stream=sys.stderr)
     raw = json.loads(args[0])
-    raw["version"] = tuple(raw.get("version", (5, 15, 0, 0)))
+    raw["version"] = tuple(raw["version"]) if raw.get("version") else None
     config = SimConfig(**raw)
 
     def ready(info: dict[str, Any]) -> None:

@@ -75,6 +75,23 @@ def test_open_reads_identity(robot: URRobot) -> None:
     assert robot.info.software_version.startswith("5.15.0") and robot.info.rate_hz == 500.0
 
 
+def test_a_cb3_controller_runs_at_125_hz_and_follows_a_trajectory() -> None:
+    from mocks.ur.testing import start_sim
+
+    cb3 = start_sim(robot="ur5", speed=1.0)
+    try:
+        with URRobot(config(cb3)) as rob:
+            assert rob.info is not None and rob.info.model == "UR5"
+            assert rob.info.software_version.startswith("3.15") and rob.info.rate_hz == 125.0
+            q0 = np.asarray(rob.read_joints(1).q)
+            traj = q0 + np.linspace(0.0, 0.05, 125)[:, None] * np.array([1.0, 0, 0, 0, 0, 1.0])
+            res = rob.follow(traj, settle=0.1)
+            assert abs(res.period_mean - 1 / 125) < 1e-3
+            assert np.allclose(rob.read_joints(5).q, traj[-1], atol=1e-3)
+    finally:
+        cb3.stop()
+
+
 def test_move_to_settles_and_reads_averaged_joints(robot: URRobot, sim: SimProcess) -> None:
     reading = robot.move_to(Q_A, samples=20)
     assert reading.samples == 20
