@@ -54,6 +54,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--seed", type=int, default=1, help="--sim: seed of the random truth and noise")
     run.add_argument("--robot", default="ur5e", help=f"--sim: robot type ({', '.join(ROBOT_NAMES)})")
     run.add_argument("--out", metavar="result.json", help="write the path-accuracy result")
+    run.add_argument("--plot", metavar="run.png",
+                     help="write a figure: commanded and measured path, deviation along the path")
     run.set_defaults(func=run_run)
     p.set_defaults(func=lambda args: (p.print_help(sys.stderr), 2)[1])
 
@@ -74,6 +76,10 @@ def run_plan(args: argparse.Namespace) -> int:
 
 def run_run(args: argparse.Namespace) -> int:
     from hil.moveb.run import run_from_cli
+
+    for path in (args.out, args.plot):
+        if path and Path(path).is_dir():
+            raise InputError(f"{path}: is a directory")
 
     doc = run_from_cli(args)
     if args.out:

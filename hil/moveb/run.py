@@ -120,6 +120,10 @@ class RunResult:
     lost: int
     joint_speeds: dict[str, Any]
     accuracy_registered: dict[str, Any] | None = None  # with a model: the same run, rigidly fitted
+    measured: np.ndarray | None = None  # (N, 3) mm, in the frame `accuracy` was computed in
+    path: np.ndarray | None = None  # (M, 3) mm, the commanded path
+    path_s: np.ndarray | None = None  # (M,) mm, its arc lengths
+    corners: np.ndarray | None = None  # (K, 3) mm, programmed interior points
 
 
 @dataclass(frozen=True)
@@ -222,17 +226,20 @@ def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, reg
         raise TrackerError(f"the tracker measured {len(got)} points during the motion ({lost} lost): keep "
                            "the SMR facing the tracker with a clear line of sight along the whole path")
     m = np.array([r.position for r in got]) * 1e3  # mm, tracker frame
-    path = plan.dense(0.2).position  # mm, base frame
+    dense = plan.dense(0.2)
+    path = dense.position  # mm, base frame
     corners = plan.program.positions[1:-1]
     idx = np.clip(np.searchsorted(step_times, [r.t for r in got]), 0, len(Q) - 1)
-    fitted = path_accuracy(path, register(m, samples.position[idx], path), corners)
+    moved = register(m, samples.position[idx], path)
+    fitted = path_accuracy(path, moved, corners)
+    shown = dict(path=path, path_s=dense.s, corners=corners)
     if registered:
-        return RunResult(fitted, traj.cycle_time, True, lost, traj.speeds.as_dict(), None)
+        return RunResult(fitted, traj.cycle_time, True, lost, traj.speeds.as_dict(), None, moved, **shown)
     T = geometry.tracker
     base = m @ T.rotation.T + T.translation * 1e3
     # with a model: in its base frame, and (comparable with a run without one) rigidly fitted
     return RunResult(path_accuracy(path, base, corners), traj.cycle_time, False, lost,
-                     traj.speeds.as_dict(), fitted)
+                     traj.speeds.as_dict(), fitted, base, **shown)
 
 
 def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
@@ -271,6 +278,14 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
             return {"status": "hardware fault", "error": f"{type(exc).__name__}: {exc}", "exit_code": 3}
         finally:
             devices.close()
+    if args.plot:
+        from hil.moveb.plot import write_run_figure
+
+        frame = "rigidly fitted (no model)" if result.registered else "model base frame"
+        write_run_figure(args.plot, result.path, result.path_s, result.measured,
+                         distance_to_path(result.measured, result.path), result.corners,
+                         f"{args.program}: max {result.accuracy['max_deviation_mm']:.3f} mm, "
+                         f"RMS {result.accuracy['rms_deviation_mm']:.3f} mm ({frame})")
     return {"format": "hil-moveb-run/1", "status": "done", "exit_code": 0, "program": args.program,
             "continuity": args.continuity, "model": args.model, "registered": result.registered,
             "cycle_time_s": result.cycle_time, "lost_samples": result.lost,

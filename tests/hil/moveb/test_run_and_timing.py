@@ -116,6 +116,18 @@ def test_cli_plan_bad_program_is_one_line_exit_2(tmp_path: Path, capsys: pytest.
     assert len(err.splitlines()) == 1
 
 
+def test_run_figure_draws_path_and_deviation() -> None:
+    from hil.moveb.plot import run_figure
+
+    plan = plan_program(load_program(EXAMPLES / "square.moveb"), "G2")
+    dense = plan.dense(0.5)
+    rng = np.random.default_rng(0)
+    measured = dense.position[::3] + rng.normal(0, 0.01, (len(dense.position[::3]), 3))
+    dev = np.linalg.norm(measured - dense.position[::3], axis=1)
+    png = run_figure(dense.position, dense.s, measured, dev, plan.program.positions[1:-1], "square")
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20000
+
+
 def _moveb_run(tmp_path: Path, prog: Path, name: str, *extra: str) -> dict:
     import json
     import os
@@ -146,7 +158,9 @@ def test_cli_run_on_the_simulated_station_and_what_the_model_changes(tmp_path: P
     assert nominal["registered"] is True and nominal["path_accuracy_registered"] is None
     assert 0.05 < nominal["path_accuracy"]["max_deviation_mm"] < 2.0
     assert max(nominal["joint_speeds"]["peak_fraction"]) <= 1.0
-    model = _moveb_run(tmp_path, prog, "model", "--truth", "truth.json", "--model", "truth.json")
+    model = _moveb_run(tmp_path, prog, "model", "--truth", "truth.json", "--model", "truth.json",
+                       "--plot", "run.png")
+    assert (tmp_path / "run.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert model["registered"] is False
     acc, fitted = model["path_accuracy"], model["path_accuracy_registered"]
     assert acc["max_deviation_mm"] < 0.1 and fitted["max_deviation_mm"] < 0.1
