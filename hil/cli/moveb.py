@@ -28,6 +28,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     plan.add_argument("--out", required=True, metavar="samples.csv")
     plan.add_argument("--step", type=float, default=0.5, metavar="MM",
                       help="sample spacing on straight parts (every bridge gets 64 samples too)")
+    plan.add_argument("--rate", type=float, default=500.0, metavar="HZ",
+                      help="controller rate for the cycle time in the summary (500 e-series, 125 CB3)")
+    _limit_options(plan)
     plan.set_defaults(func=run_plan)
 
     run = moveb.add_parser("run", help="run a MOVEB program on the robot and measure it")
@@ -41,10 +44,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--continuity", choices=("G2", "G3"), default="G2")
     run.add_argument("--frame", choices=("base", "current"), default="base",
                      help="program frame: the robot base, or anchored at the arm's current TCP pose")
-    run.add_argument("--velocity", type=float, default=100.0, metavar="MM/S")
-    run.add_argument("--acceleration", type=float, default=1000.0, metavar="MM/S2")
-    run.add_argument("--jerk", type=float, default=10000.0, metavar="MM/S3")
-    run.add_argument("--normal-acceleration", type=float, default=1000.0, metavar="MM/S2")
+    _limit_options(run)
     run.add_argument("--joint-speed", type=float, default=1.0, metavar="F",
                      help="allowed fraction of the datasheet joint speeds (0 < F <= 1); the feed slows "
                           "down where the path would need more")
@@ -60,6 +60,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=lambda args: (p.print_help(sys.stderr), 2)[1])
 
 
+def _limit_options(p: argparse.ArgumentParser) -> None:
+    """The Cartesian limits of the feed profile (tool point)."""
+    p.add_argument("--velocity", type=float, default=100.0, metavar="MM/S")
+    p.add_argument("--acceleration", type=float, default=1000.0, metavar="MM/S2")
+    p.add_argument("--jerk", type=float, default=10000.0, metavar="MM/S3")
+    p.add_argument("--normal-acceleration", type=float, default=1000.0, metavar="MM/S2")
+
+
 def run_plan(args: argparse.Namespace) -> int:
     from hil.moveb.plan import plan_program, summary, write_samples
     from hil.moveb.program import load_program
@@ -68,9 +76,18 @@ def run_plan(args: argparse.Namespace) -> int:
         raise InputError(f"--step must be positive, got {args.step}")
     if Path(args.out).is_dir():
         raise InputError(f"{args.out}: is a directory")
+    from hil.moveb.timing import Limits
+
+    if not args.rate > 0:
+        raise InputError(f"--rate must be positive, got {args.rate}")
+    limits = Limits(args.velocity, args.acceleration, args.jerk, args.normal_acceleration)
     plan = plan_program(load_program(args.program), args.continuity)
     write_samples(args.out, plan.dense(args.step))
-    print_json(summary(plan))
+    law, _samples = plan.timed(limits, args.rate)
+    # the Cartesian limits only: joint speeds depend on where the arm runs it (`hil moveb run`)
+    print_json(dict(summary(plan), cycle_time_s=law.cycle_time, rate_hz=args.rate,
+                    limits={"velocity": limits.velocity, "acceleration": limits.acceleration,
+                            "jerk": limits.jerk, "normal_acceleration": limits.normal_acceleration}))
     return 0
 
 

@@ -104,7 +104,16 @@ def test_cli_plan_writes_samples(tmp_path: Path, capsys: pytest.CaptureFixture[s
     rows = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
     assert np.all(np.diff(rows[:, 0]) > 0)
     assert np.allclose(np.linalg.norm(rows[:, 4:7], axis=1), 1.0, atol=1e-12)
-    assert '"continuity": "G3"' in capsys.readouterr().out
+    import json
+
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["continuity"] == "G3" and doc["rate_hz"] == 500.0
+    slow = main(["moveb", "plan", str(EXAMPLES / "square.moveb"), "--out", str(out), "--velocity", "20",
+                 "--rate", "125"])
+    assert slow == 0
+    doc_slow = json.loads(capsys.readouterr().out)
+    # at 20 mm/s the 400 mm path alone takes 20 s (at 100 mm/s the corners' curvature dominates)
+    assert doc_slow["cycle_time_s"] > 20.0 > 1.5 * doc["cycle_time_s"] and doc_slow["rate_hz"] == 125.0
 
 
 def test_cli_plan_bad_program_is_one_line_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
