@@ -31,15 +31,14 @@ from dataclasses import dataclass
 from math import comb
 
 import numpy as np
-from scipy.integrate import cumulative_simpson
 from scipy.interpolate import BSpline
+
+from hil.moveb.arclength import TABLE_SAMPLES, arclength_table, table_parameters
 
 ALPHA_G3 = (5.0 + math.sqrt(97.0)) / 18.0
 DEFAULT_BETA = 0.5
 #: Turns below this (radians) are straight: no bridge, the curve runs through the point.
 STRAIGHT = 1e-9
-#: Samples per bridge half in the arc-length table.
-TABLE_SAMPLES = 32
 
 
 @dataclass(frozen=True)
@@ -141,20 +140,6 @@ def bridge_derivatives(ctrl: np.ndarray, u: np.ndarray, degree: int,
     return [d * 2.0 ** k for k, d in enumerate(ders)]
 
 
-def arclength_table(ctrl: np.ndarray, u: np.ndarray, degree: int) -> np.ndarray:
-    """(nb, len(u)) arc length from A1 at parameters u (the first half of u in [0, 0.5], the rest
-    after), by cumulative Simpson on the speeds of all bridges at once (one shared basis)."""
-    nb = len(ctrl)
-    if not nb:
-        return np.zeros((0, len(u)))
-    speeds = []
-    for half, mask in ((ctrl[:, : degree + 1], u < 0.5), (ctrl[:, degree:], u >= 0.5)):
-        t = np.where(u[mask] < 0.5, 2.0 * u[mask], 2.0 * u[mask] - 1.0)
-        dR = 2.0 * degree * np.diff(half, axis=1)  # d/du of each half's hodograph control points
-        speeds.append(np.linalg.norm(np.einsum("mj,njc->nmc", _bernstein(degree - 1, t), dR), axis=2))
-    return cumulative_simpson(np.concatenate(speeds, axis=1), x=u, axis=1, initial=0.0)
-
-
 def curvature_terms(d1: np.ndarray, d2: np.ndarray, d3: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Curvature κ and its arc-length derivative dκ/ds from the first three parameter derivatives."""
     c = np.cross(d1, d2)
@@ -187,31 +172,24 @@ class Curve:
         i = self.bridged
         self.control = control_points(W[i], T[i - 1], T[i], self.h[i], self.shape)
         # arc-length table of each bridge on a shared parameter grid
-        half = np.linspace(0.0, 0.5, TABLE_SAMPLES + 1)
-        self._u = np.r_[half, half[1:] + 0.5]
-        self._table = arclength_table(self.control, self._u, self.shape.degree)
-        # pieces in order: line 0, bridge at 1 (if any), line 1, ...
-        starts, ends, kinds, refs = [], [], [], []
-        start = W[0]
-        b_of = {int(k): j for j, k in enumerate(i)}
-        for k in range(1, len(W)):
-            end = self.control[b_of[k], 0] if k in b_of else W[k]
-            starts.append(start)
-            ends.append(end)
-            kinds.append(0)
-            refs.append(k - 1)
-            if k in b_of:
-                kinds.append(1)
-                refs.append(b_of[k])
-                starts.append(end)
-                start = self.control[b_of[k], -1]
-                ends.append(start)
-            else:
-                start = W[k]
-        self._kinds = np.array(kinds)
-        self._refs = np.array(refs)
-        self._a = np.array(starts)
-        self._b = np.array(ends)
+        self._u = table_parameters()
+        self._table = arclength_table(self.control, self.shape.degree)
+        # pieces in order: line 0, bridge at 1 (if any), line 1, ...; line k−1 runs from point k−1
+        # (or the B1 of its bridge) to point k (or the A1 of its bridge)
+        n = len(W) - 1
+        line_at = np.arange(n) + np.cumsum(self.h > 0)[:-1]  # piece index of line k−1, k = 1…n
+        self._kinds = np.zeros(n + len(i), int)
+        self._refs = np.empty(n + len(i), int)
+        self._refs[line_at] = np.arange(n)
+        self._kinds[line_at[i - 1] + 1] = 1
+        self._refs[line_at[i - 1] + 1] = np.arange(len(i))
+        self._a = np.empty((n + len(i), 3))
+        self._b = np.empty((n + len(i), 3))
+        self._a[line_at] = W[:-1]
+        self._b[line_at] = W[1:]
+        if len(i):
+            self._a[line_at[i - 1] + 1] = self._b[line_at[i - 1]] = self.control[:, 0]
+            self._b[line_at[i - 1] + 1] = self._a[line_at[i]] = self.control[:, -1]
         lengths = np.where(self._kinds == 0, np.linalg.norm(self._b - self._a, axis=1), 0.0)
         lengths[self._kinds == 1] = self._table[self._refs[self._kinds == 1], -1]
         self._s0 = np.r_[0.0, np.cumsum(lengths)[:-1]]

@@ -18,7 +18,13 @@ The peak curvature of a bridge is ∝ 1/h, so a larger Σh is a flatter path. Σ
 when two bridges share a segment that limits both (any split has the same sum), and HiGHS would pick
 an arbitrary vertex, possibly handing the shared length to a nearly straight corner that does not
 need it. The objective therefore adds a tie-break of 1e-3·sinθi/max sinθ: among the seed's optima,
-sharper corners get the room. Solved with `scipy.optimize.linprog` (HiGHS) on a sparse matrix.
+sharper corners get the room (max sinθ is taken once per plan, over the program's points, so an
+unchanged part of the path keeps an unchanged objective across the iteration).
+
+The LP is solved by `hil.moveb.chains`: its constraint graph is a path, an exact bound-tightening
+presolve splits it into independent chains, chains of up to three bridges have a closed-form
+optimum, and longer ones (rare) go to HiGHS. The iteration below solves it 6–7 times per plan, so
+the per-call overhead of scipy's HiGHS wrappers (0.6–1.5 ms) used to be most of the planning time.
 
 **The point-error iteration** (the update formulas are lost; this is our reading). Q lies on the
 curve, so |PiQi| bounds the distance from the original point to the curve. While some |PiQi| > Ei:
@@ -44,10 +50,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.optimize import linprog
 
-from hil.moveb.bridge import STRAIGHT, BridgeShape, Curve, control_points
+from hil.moveb.bridge import STRAIGHT, BridgeShape, Curve
+from hil.moveb.chains import ChainCache, solve_chain_lp
 
 MARGIN = 1e-2
 TIE_BREAK = 1e-3
@@ -72,80 +77,65 @@ def _directions(W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def half_angles(W: np.ndarray) -> np.ndarray:
     """(n+1,) half of the turn at each point (0 at the ends)."""
-    T, _ = _directions(W)
+    return _half_angles(_directions(W)[0])
+
+
+def _half_angles(T: np.ndarray) -> np.ndarray:
     # atan2 of |cross| and dot: accurate near 0 (arccos of a rounded cosine would see a 1e-8 turn
     # in collinear input)
     turn = np.arctan2(np.linalg.norm(np.cross(T[:-1], T[1:]), axis=1), np.einsum("ij,ij->i", T[:-1], T[1:]))
-    return np.r_[0.0, 0.5 * turn, 0.0]
+    out = np.zeros(len(T) + 1)
+    out[1:-1] = 0.5 * turn
+    return out
 
 
-def solve_lp(W: np.ndarray, d: np.ndarray, shape: BridgeShape, previous: np.ndarray | None = None,
-             changed: np.ndarray | None = None) -> np.ndarray:
+def solve_lp(W: np.ndarray, d: np.ndarray, shape: BridgeShape, cache: ChainCache | None = None,
+             sin_scale: float | None = None) -> np.ndarray:
     """(n+1,) bridge parameters h maximising Σh under non-overlap and |WQ| ≤ d (0 where straight).
 
-    With `previous` (the last solution) and `changed` (a mask of points whose position or threshold
-    changed since), only the chains of coupled bridges that contain a changed point (or a neighbour
-    of one: its turn changed) are solved again; the others keep their previous optimum, which is
-    still optimal because their constraints did not change.
+    The LP is solved chain by chain (`hil.moveb.chains`: exact presolve, closed forms for up to
+    three coupled bridges, HiGHS for longer chains). `cache` carries the HiGHS answers across the
+    point-error iteration; `sin_scale` is the tie-break's normaliser (default: the largest sinθ of
+    W), fixed by the caller so that an unchanged chain keeps an unchanged objective.
     """
-    _, L = _directions(W)
-    theta = half_angles(W)
-    corners = np.flatnonzero(theta > STRAIGHT)
-    h = np.zeros(len(W))
-    if not corners.size:
-        return h
-    sin = np.sin(theta[corners])
-    upper = np.zeros(len(W))
-    upper[corners] = d[corners] / sin
-    # presolve: a segment whose two bridges fit at their chord bounds can never bind; a corner whose
-    # two segments cannot bind takes its bound. Only the coupled rest goes to HiGHS (this keeps the
-    # repeated solves of the point-error iteration cheap; HiGHS' own presolve runs after the wrapper).
+    return _solve_lp(*_directions(W), d, shape, cache, sin_scale)
+
+
+def _solve_lp(T: np.ndarray, L: np.ndarray, d: np.ndarray, shape: BridgeShape, cache: ChainCache | None,
+              sin_scale: float | None) -> np.ndarray:
+    theta = _half_angles(T)
+    corner = theta > STRAIGHT
+    if not corner.any():
+        return np.zeros(len(d))
+    sin = np.sin(theta)
+    upper = np.zeros(len(d))
+    upper[corner] = d[corner] / sin[corner]
     # the floor: no bridge smaller than its share under the classic half-segment split
-    floor = np.minimum(upper, np.minimum(np.r_[np.inf, L], np.r_[L, np.inf]) / (2.0 * shape.arm))
-    floor[[0, -1]] = 0.0
-    coupled = shape.arm * (upper[:-1] + upper[1:]) > L
-    free = np.zeros(len(W), bool)
-    free[corners] = ~coupled[corners - 1] & ~coupled[corners]
-    h[free] = upper[free]
-    var = corners[~free[corners]]
-    if previous is not None and changed is not None and var.size:
-        touched = changed.copy()
-        touched[1:] |= changed[:-1]
-        touched[:-1] |= changed[1:]
-        chain = np.r_[0, np.cumsum(~coupled)]  # points k and k+1 share a chain iff segment k is coupled
-        redo = np.isin(chain[var], np.unique(chain[touched]))
-        keep = var[~redo]
-        h[keep] = np.clip(previous[keep], floor[keep], upper[keep])
-        var = var[redo]
-    if var.size:
-        m = len(var)
-        col = np.full(len(W), -1)
-        col[var] = np.arange(m)
-        segs = np.flatnonzero(coupled)
-        left, right = col[segs], col[segs + 1]  # segment j joins points j and j+1
-        rows = np.r_[np.flatnonzero(left >= 0), np.flatnonzero(right >= 0)]
-        cols = np.r_[left[left >= 0], right[right >= 0]]
-        A = sp.csc_array((np.full(len(rows), shape.arm), (rows, cols)), shape=(len(segs), m))
-        w = np.sin(theta[var])
-        cost = -(1.0 + TIE_BREAK * w / w.max())
-        res = linprog(cost, A_ub=A, b_ub=L[segs], bounds=np.c_[floor[var], upper[var]], method="highs")
-        if res.status != 0:  # cannot happen for this LP (h = 0 is feasible, bounds are finite)
-            raise RuntimeError(f"bridge LP failed: {res.message}")
-        h[var] = np.clip(res.x, 0.0, upper[var])
-    # keep the non-overlap exact despite the solver's feasibility tolerance
+    shorter = np.full(len(d), np.inf)  # the shorter neighbouring segment
+    shorter[:-1] = L
+    np.minimum(shorter[1:], L, out=shorter[1:])
+    floor = np.minimum(upper, shorter / (2.0 * shape.arm))
+    scale = sin_scale if sin_scale is not None else float(sin[corner].max())
+    cost = 1.0 + TIE_BREAK * sin / scale
+    h = solve_chain_lp(cost, floor, upper, L / shape.arm, cache)
+    h[~corner] = 0.0
+    # keep the non-overlap exact despite rounding (and the solver's feasibility tolerance)
     need = shape.arm * (h[:-1] + h[1:])
-    scale = np.minimum(1.0, L / np.maximum(need, 1e-300))
-    h[1:-1] *= np.minimum(scale[:-1], scale[1:])
+    scale_back = np.minimum(1.0, L / np.maximum(need, 1e-300))
+    h[1:-1] *= np.minimum(scale_back[:-1], scale_back[1:])
     return h
 
 
-def apexes(W: np.ndarray, h: np.ndarray, shape: BridgeShape) -> np.ndarray:
-    """(n+1, 3) the bridge apex Q at every bridged point, the working point elsewhere."""
-    T, _ = _directions(W)
+def apexes(W: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """(n+1, 3) the bridge apex Q = W + h·(T2 − T0)/2 at every bridged point, W elsewhere."""
+    return _apexes(W, _directions(W)[0], h)
+
+
+def _apexes(W: np.ndarray, T: np.ndarray, h: np.ndarray) -> np.ndarray:
     Q = W.copy()
     i = np.flatnonzero(h > 0)
     if i.size:
-        Q[i] = control_points(W[i], T[i - 1], T[i], h[i], shape)[:, shape.degree]
+        Q[i] = W[i] + 0.5 * h[i, None] * (T[i] - T[i - 1])  # the middle control point (bridge.py)
     return Q
 
 
@@ -161,18 +151,19 @@ def plan_positions(P: np.ndarray, D: np.ndarray, E: np.ndarray, shape: BridgeSha
     # where E >= D the unshifted bridge already meets E (|PQ| <= D), so its threshold is just D
     d = np.where(E < D, cap, limit)
     W = P.copy()
-    h: np.ndarray | None = None
-    changed: np.ndarray | None = None
+    cache = ChainCache()
+    theta = half_angles(P)
+    sin_scale = float(np.sin(theta).max()) or 1.0
     for it in range(1, max_iterations + 1):
-        h = solve_lp(W, d, shape, h, changed)
-        Q = apexes(W, h, shape)
+        T, L = _directions(W)
+        h = _solve_lp(T, L, d, shape, cache, sin_scale)
+        Q = _apexes(W, T, h)
         err = np.linalg.norm(P - Q, axis=1)
         shift = np.linalg.norm(W - P, axis=1)
         if np.all(err <= E) and np.all(shift <= D):
             return Solution(Curve(W, h, shape), it, err, shift, False)
-        W_before, d_before = W.copy(), d.copy()
         # move Q onto the sphere of radius E' about P (both ways once a point has moved)
-        # (a dead band below E leaves settled points alone, so later solves stay small)
+        # (a dead band below E leaves settled points alone, so their chains keep their optimum)
         active = (err > E) | ((shift > 0) & (err < (1.0 - 3.0 * MARGIN) * E))
         move = np.where(active, 1.0 - target / np.maximum(err, 1e-300), 0.0)
         W = W + (P - Q) * move[:, None]
@@ -184,9 +175,8 @@ def plan_positions(P: np.ndarray, D: np.ndarray, E: np.ndarray, shape: BridgeSha
             W[over] = P[over] + (W[over] - P[over]) * (limit[over] / shift[over])[:, None]
             cap = np.where(over, cap - (shift - limit), cap)
         d = np.where(E < D, np.maximum(cap, 1e-9), limit)
-        changed = np.any(W_before != W, axis=1) | (d != d_before)
     d = (1.0 - MARGIN) * np.minimum(D, E)
-    h = solve_lp(P, d, shape)
-    Q = apexes(P, h, shape)
+    h = solve_lp(P, d, shape, sin_scale=sin_scale)
+    Q = apexes(P, h)
     return Solution(Curve(P.copy(), h, shape), max_iterations, np.linalg.norm(P - Q, axis=1),
                     np.zeros(len(P)), True)

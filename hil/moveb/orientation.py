@@ -29,7 +29,11 @@ def axis_splines(s_keys: np.ndarray, z: np.ndarray, x: np.ndarray, continuity: s
                  ) -> tuple[BSpline, BSpline]:
     """Interpolating splines of the tool Z and X axes over the key arc lengths."""
     k = min(DEGREE[continuity], len(s_keys) - 1)
-    return make_interp_spline(s_keys, z, k=k), make_interp_spline(s_keys, x, k=k)
+    # one interpolation with six right-hand sides (same knots, same collocation matrix, one
+    # factorisation), split into the two axes
+    both = make_interp_spline(s_keys, np.column_stack([z, x]), k=k)
+    return (BSpline.construct_fast(both.t, np.ascontiguousarray(both.c[:, :3]), k, both.extrapolate),
+            BSpline.construct_fast(both.t, np.ascontiguousarray(both.c[:, 3:]), k, both.extrapolate))
 
 
 def orthonormal_frames(z: np.ndarray, x: np.ndarray, where: str = "path") -> tuple[np.ndarray, np.ndarray]:
