@@ -41,6 +41,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--model", metavar="model.json",
                      help="calibrated model (hil-model/1, a campaign result that embeds one, or a truth): "
                           "IK and the tracker pose")
+    run.add_argument("--ik", choices=("model", "nominal"), default="model",
+                     help="with --model: solve the joints on the model (default), or on the nominal arm "
+                          "and measure in the model's frame (how far off the uncalibrated arm is)")
     run.add_argument("--continuity", choices=("G2", "G3"), default="G2")
     run.add_argument("--frame", choices=("base", "current"), default="base",
                      help="program frame: the robot base, or anchored at the arm's current TCP pose")

@@ -258,6 +258,10 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
     args.cycles = 1
     with _station(args) as (config, _identity, _truth):
         geometry = model or Geometry.nominal(config.robot["type"], smr=config.smr["offset"])
+        if model is not None and args.ik == "nominal":
+            # the uncalibrated arm, measured in the model's base frame (its tracker pose and SMR):
+            # the absolute path error calibration removes, not only its non-rigid part
+            geometry = Geometry.nominal(model.robot, smr=model.smr, tracker=model.tracker)
         try:
             devices = open_devices(config)
         except HARDWARE_ERRORS as exc:
@@ -287,7 +291,8 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
                          f"{args.program}: max {result.accuracy['max_deviation_mm']:.3f} mm, "
                          f"RMS {result.accuracy['rms_deviation_mm']:.3f} mm ({frame})")
     return {"format": "hil-moveb-run/1", "status": "done", "exit_code": 0, "program": args.program,
-            "continuity": args.continuity, "model": args.model, "registered": result.registered,
+            "continuity": args.continuity, "model": args.model, "ik": "nominal" if model is None else args.ik,
+            "registered": result.registered,
             "cycle_time_s": result.cycle_time, "lost_samples": result.lost,
             "path_accuracy": result.accuracy, "path_accuracy_registered": result.accuracy_registered,
             "joint_speeds": result.joint_speeds}

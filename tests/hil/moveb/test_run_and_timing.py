@@ -175,3 +175,9 @@ def test_cli_run_on_the_simulated_station_and_what_the_model_changes(tmp_path: P
     assert acc["max_deviation_mm"] < 0.1 and fitted["max_deviation_mm"] < 0.1
     assert acc["rms_deviation_mm"] < 0.5 * nominal["path_accuracy"]["rms_deviation_mm"]
     assert len(acc["corner_deviation_measured_mm"]) == 1  # one interior point
+    # the nominal arm measured in the true frame: its absolute error, which the fit above hid
+    absolute = _moveb_run(tmp_path, prog, "absolute", "--truth", "truth.json", "--model", "truth.json",
+                          "--ik", "nominal")
+    assert absolute["ik"] == "nominal" and absolute["registered"] is False
+    assert absolute["path_accuracy"]["max_deviation_mm"] > 0.2
+    assert absolute["path_accuracy"]["max_deviation_mm"] > 5 * acc["max_deviation_mm"]
