@@ -75,19 +75,19 @@ def joint_speeds(Q: np.ndarray, rate_hz: float, allowed: np.ndarray) -> JointSpe
 
 def retime(time_path: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], s_grid: np.ndarray,
            ceiling: np.ndarray, rate_hz: float, allowed: np.ndarray, attempts: int = 4,
-           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, JointSpeeds]:
+           ) -> tuple[np.ndarray, JointSpeeds]:
     """Time the path under `ceiling` until the joint speeds at the controller samples are allowed.
 
     `time_path(ceiling)` returns (s, Q): arc lengths and joint angles at the controller's samples.
     Where a sample exceeds the maxima, the ceiling around its arc length is scaled by the excess
-    (with a 2 % margin) and the path is timed again. Returns (s, Q, ceiling used, joint speeds).
+    (with a 2 % margin) and the path is timed again. Returns (Q, its joint speeds).
     """
     ceiling = np.asarray(ceiling, float).copy()
     for _ in range(attempts):
         s, Q = time_path(ceiling)
         speeds = joint_speeds(Q, rate_hz, allowed)
         if speeds.ok:
-            return s, Q, ceiling, speeds
+            return Q, speeds
         qd = np.abs(np.diff(Q, axis=0)) * rate_hz
         excess = np.max(qd / allowed[None, :], axis=1)  # per interval between samples
         bad = np.flatnonzero(excess > 1.0)

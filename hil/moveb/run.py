@@ -37,6 +37,7 @@ from hil.geometry import Geometry
 from hil.ik import solve_path
 from hil.kinematics import Kinematics
 from hil.moveb.joints import JointSpeeds, joint_speed_ceiling, retime
+from hil.moveb.orientation import rotation_matrices
 from hil.moveb.plan import Plan, Samples, plan_program
 from hil.moveb.program import Program, load_program
 from hil.moveb.timing import Limits
@@ -59,11 +60,9 @@ def program_in_frame(program: Program, anchor: np.ndarray) -> Program:
 
 def tool_targets(samples_pos_mm: np.ndarray, z: np.ndarray, x: np.ndarray, smr: np.ndarray) -> list[pin.SE3]:
     """Flange poses (metres) putting the SMR at the samples with the tool axes (rotation of the flange)."""
-    out = []
-    for p, zz, xx in zip(samples_pos_mm, z, x, strict=True):
-        R = np.column_stack([xx, np.cross(zz, xx), zz])
-        out.append(pin.SE3(R, p * 1e-3 - R @ smr))
-    return out
+    R = rotation_matrices(np.asarray(z, float), np.asarray(x, float))
+    t = np.asarray(samples_pos_mm, float) * 1e-3 - R @ np.asarray(smr, float)
+    return [pin.SE3(Ri, ti) for Ri, ti in zip(R, t, strict=True)]
 
 
 def _kabsch(A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -179,7 +178,7 @@ def solve_trajectory(plan: Plan, geometry: Geometry, limits: Limits, rate_hz: fl
                        Q_geo[0], where=[f"{source}: s = {v:.1f} mm" for v in samples.s])
         return samples.s, Q
 
-    _s, Q, _ceiling, speeds = retime(time_path, geo.s, ceiling, rate_hz, allowed)
+    Q, speeds = retime(time_path, geo.s, ceiling, rate_hz, allowed)
     return Trajectory(timed["samples"], Q, rate_hz, speeds)
 
 
