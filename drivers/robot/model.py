@@ -92,6 +92,8 @@ class RobotConfig:
     steady_velocity: float = 1e-3  # rad/s: below this the arm is steady
     min_speed_fraction: float = 1.0  # speed slider below this raises SpeedSliderReduced
     poll_interval: float = 0.005
+    # s: how long a failed ur_rtde call waits for the controller state to say why (see _typed_errors)
+    explain_timeout: float = 0.5
     rtde_frequency: float = -1.0  # -1: the controller's rate (500 Hz e-series, 125 Hz CB3)
     allowed_versions: tuple[tuple[int, int], ...] = field(default=((3, 15), (5, 6)))
 

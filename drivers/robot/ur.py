@@ -28,7 +28,7 @@ import threading
 import time
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -278,12 +278,26 @@ class URRobot:
 
     @contextmanager
     def _typed_errors(self) -> Iterator[None]:
-        """ur_rtde raises bare RuntimeErrors; turn them into the controller's typed state error."""
+        """ur_rtde raises bare RuntimeErrors; turn them into the controller's typed state error.
+
+        The control call can fail (the script stopped) a few frames before the receive thread has
+        the frame whose safety bits say why; on a loaded machine that lag reaches tens of
+        milliseconds. So the state gets `explain_timeout` to explain the failure before it is
+        called a lost link, which would send the operator to the network instead of the pendant.
+        """
         try:
             yield
         except RuntimeError as exc:
+            self._explain(ConnectionLost(f"ur_rtde: {exc}"), exc)
+
+    def _explain(self, fallback: RobotError, cause: BaseException | None = None) -> NoReturn:
+        """Raise the typed error of the controller state within `explain_timeout`, else `fallback`."""
+        deadline = time.monotonic() + self.config.explain_timeout
+        while True:
             self.check_status()  # raises ProtectiveStop, ProgramStopped, ConnectionLost, ...
-            raise ConnectionLost(f"ur_rtde: {exc}") from exc
+            if time.monotonic() >= deadline:
+                raise fallback from cause
+            time.sleep(self.config.poll_interval)
 
     # ------------------------------------------------------------------ motion
     def move_to(self, q: Sequence[float], *, speed: float | None = None,
@@ -304,8 +318,7 @@ class URRobot:
         with self._typed_errors(), self._cmd_lock:
             accepted = c.moveJ(target.tolist(), v, a, True)
         if not accepted:
-            self.check_status()
-            raise ProgramStopped("the controller did not accept the move")
+            self._explain(ProgramStopped("the controller did not accept the move"))
         self._watch_motion(target)
         return self.read_joints(samples)
 
@@ -510,10 +523,10 @@ class ServoStream:
             else:
                 ok = c.servoJ(target, 0.0, 0.0, self.dt, self.lookahead, self.gain)
         self._n += 1
-        if not ok or self._n % 10 == 0:
+        if not ok:
+            robot._explain(RobotError("the controller refused a servo command"))
+        if self._n % 10 == 0:
             robot.check_status()
-            if not ok:
-                raise RobotError("the controller refused a servo command")
         c.waitPeriod(t_start)
         return now
 

@@ -196,7 +196,8 @@ def test_protective_stop_mid_move_waits_for_the_operator(tmp_path):
     st.on(PoseStarted, lambda e: e.index == 9, lambda e: st.later(0.02, "protective_stop"))
     st.on(Suspended, lambda e: e.kind == "protective_stop", lambda e: st.later(0.5, "clear"))
     outcome = st.run()
-    assert [e.kind for e in st.of(Suspended)][:1] == ["protective_stop"]
+    assert [e.kind for e in st.of(Suspended)][:1] == ["protective_stop"], [
+        (e.kind, e.message) for e in st.of(Suspended)]
     assert "teach pendant" in st.of(Suspended)[0].message
     assert any(e.kind == "protective_stop" for e in st.of(Resumed))
     st.check_nothing_lost(outcome)
