@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from hil.errors import InputError
+from hil.inputs import read_input_text
 from hil.robots import get_robot
 
 EXAMPLE = Path(__file__).with_name("station.example.toml")
@@ -210,12 +211,7 @@ def load_config(path: str | os.PathLike[str]) -> StationConfig:
     """Read and validate a station TOML file."""
     name = str(path)
     try:
-        with open(path, "rb") as fh:
-            data = tomllib.load(fh)
-    except FileNotFoundError:
-        raise InputError(f"{name}: no such file") from None
-    except OSError as exc:
-        raise InputError(f"{name}: cannot read: {exc.strerror or exc}") from None
+        data = tomllib.loads(read_input_text(path, "a TOML file"))
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{name}: not valid TOML: {exc}") from None
     return parse_config(data, name)

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from hil.errors import InputError
+from hil.inputs import decode_input_text, read_input_bytes
 
 JOINT_COLUMNS: tuple[str, ...] = ("q1", "q2", "q3", "q4", "q5", "q6")
 POINT_COLUMNS: tuple[str, ...] = ("x", "y", "z")
@@ -67,18 +68,8 @@ class Measurements:
 def read_table(path: str | os.PathLike[str], required: Sequence[str]) -> Table:
     """Read a CSV file whose header includes `required` numeric columns (others are ignored)."""
     name = str(path)
-    try:
-        raw = Path(path).read_bytes()
-    except FileNotFoundError:
-        raise InputError(f"{name}: no such file") from None
-    except IsADirectoryError:
-        raise InputError(f"{name}: is a directory, expected a CSV file") from None
-    except OSError as exc:
-        raise InputError(f"{name}: cannot read: {exc.strerror or exc}") from None
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise InputError(f"{name}: not a UTF-8 text file (byte {exc.start})") from None
+    raw = read_input_bytes(path, "a CSV file")
+    text = decode_input_text(raw, name)
     rows = [(n, row) for n, row in enumerate(csv.reader(io.StringIO(text)), start=1)
             if row and any(c.strip() for c in row) and not row[0].lstrip().startswith("#")]
     if not rows:

@@ -12,7 +12,6 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import os
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -22,6 +21,7 @@ from hil import __version__
 from hil.errors import InputError
 from hil.geometry import Geometry
 from hil.identification import FitResult
+from hil.inputs import read_input_text
 from hil.measurements import atomic_write_text
 from hil.synthetic import Noise
 
@@ -81,12 +81,7 @@ def write_json(path: str | os.PathLike[str], doc: dict[str, Any]) -> None:
 def read_json(path: str | os.PathLike[str]) -> dict[str, Any]:
     """Parse a JSON file; InputError naming the file and line when it is not valid JSON."""
     name = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(f"{name}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{name}: cannot read: {exc}") from None
+    text = read_input_text(path, "a JSON file")
     try:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:

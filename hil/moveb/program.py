@@ -21,11 +21,11 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from hil.errors import InputError
+from hil.inputs import read_input_text
 
 AXIS_TOLERANCE = 1e-3
 MIN_SEGMENT = 1e-3  # mm
@@ -149,14 +149,7 @@ def parse_program(text: str, source: str = "<program>") -> Program:
 
 def load_program(path: str | os.PathLike[str]) -> Program:
     """Read and validate a program file (InputError naming the file when it cannot be read)."""
-    name = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(f"{name}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{name}: cannot read: {exc}") from None
-    return parse_program(text, name)
+    return parse_program(read_input_text(path, "a MOVEB program"), str(path))
 
 
 def format_program(positions: np.ndarray, z_axes: np.ndarray, x_axes: np.ndarray,

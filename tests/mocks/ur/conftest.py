@@ -1,4 +1,4 @@
-"""Fixtures: a simulated controller in its own process on a unique loopback address."""
+"""Fixtures: one simulated controller shared by a module (`sim`, a fresh one, is in tests/conftest.py)."""
 
 from __future__ import annotations
 
@@ -8,16 +8,6 @@ import pytest
 
 from mocks.ur.process import SimProcess
 from mocks.ur.testing import start_sim
-
-
-@pytest.fixture
-def sim() -> Iterator[SimProcess]:
-    """A fresh simulator at 10x speed (protective-stop unlock delay: 0.5 s real)."""
-    s = start_sim(speed=10.0)
-    try:
-        yield s
-    finally:
-        s.stop()
 
 
 @pytest.fixture(scope="module")
