@@ -9,8 +9,15 @@ timed by the same code (the benchmark's "cycle time under the same limits").
    one controller cycle's travel at full speed: a curvature *jump* (G1 blends) then costs what a
    controller really pays — the acceleration step must fit in a cycle — instead of depending on how
    finely the curve was sampled.
-2. That ceiling is lowered to its minimum over ±v_max·T around each s (T the jerk filter below), so
-   the filter's time-averaging cannot carry a higher speed into a curvature peak.
+2. The ceiling is eroded so that the filter's time-averaging (step 4) cannot carry a higher speed
+   into a curvature peak: every point s' with ceiling c' lowers the ceiling to c' over ±c'·T around
+   it (T the jerk filter's length). Why that radius is enough: the filtered position at time t is
+   the mean of the unfiltered one over [t − T, t], so when it is at s' the unfiltered motion spent
+   that window on a stretch through s'; inside ±c'·T the unfiltered speed is ≤ c', so reaching the
+   edge from s' takes ≥ T, the stretch lies inside, and the filtered speed (the mean of the
+   unfiltered over the same window) is ≤ c'. A slow point thus only widens by its own (short)
+   travel in T, not by v_max·T. Radii are grouped in levels 10 % apart, each applied at its level's
+   largest radius (conservative), so the erosion costs a few min-filters.
 3. Forward and backward passes under the tangential acceleration a_max (exact and vectorised:
    v²(s) = min over s' ≤ s of v_lim²(s') + 2a(s − s'), a cumulative minimum), at rest at both ends.
 4. The speed is resampled in time at the controller period and smoothed with a moving average of
@@ -21,6 +28,7 @@ timed by the same code (the benchmark's "cycle time under the same limits").
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -75,6 +83,32 @@ def speed_ceiling(s: np.ndarray, kappa: np.ndarray, limits: Limits, rate_hz: flo
     return v
 
 
+def erode_by_travel(vlim: np.ndarray, ds: float, horizon: float, step: float = 1.1) -> np.ndarray:
+    """Step 2 of the module docstring: each point's ceiling c lowers its neighbours within c·horizon.
+
+    Written by hand: scipy's min-filters take one window for all points, and this one varies with
+    the ceiling. Points are grouped by radius in geometric levels (ratio `step`); each level is one
+    `minimum_filter1d` at its largest radius, so a point may act a little (< `step`) wider than
+    needed, never narrower. Points at the highest ceiling cannot lower anything and are skipped.
+    """
+    out = np.array(vlim, dtype=float)
+    top = out.max()
+    radius = np.ceil(out * horizon / ds).astype(np.int64)
+    active = out < top
+    if not active.any():
+        return out
+    r_lo, r_hi = int(radius[active].min()), int(radius[active].max())
+    edges = [r_lo - 1]
+    while edges[-1] < r_hi:
+        edges.append(max(edges[-1] + 1, math.ceil(edges[-1] * step)))
+    for lo, hi in itertools.pairwise(edges):
+        level = active & (radius > lo) & (radius <= hi)
+        if level.any():
+            masked = np.where(level, vlim, np.inf)
+            out = np.minimum(out, minimum_filter1d(masked, size=2 * hi + 1, mode="nearest"))
+    return out
+
+
 def feed_profile(s: np.ndarray, kappa: np.ndarray, limits: Limits, rate_hz: float,
                  ds: float | None = None, ceiling: tuple[np.ndarray, np.ndarray] | None = None) -> TimeLaw:
     """The time law of a curve given its curvature κ at arc lengths s (mm, 1/mm).
@@ -97,8 +131,9 @@ def feed_profile(s: np.ndarray, kappa: np.ndarray, limits: Limits, rate_hz: floa
     if ceiling is not None:
         cs, cv = (np.asarray(c, float) for c in ceiling)
         vlim = np.minimum(vlim, np.interp(grid, cs - s[0], cv))
-    window = math.ceil(limits.velocity * T / ds)
-    vlim = minimum_filter1d(vlim, size=2 * window + 1, mode="nearest")
+    dt = 1.0 / rate_hz
+    taps = max(round(T / dt), 1)
+    vlim = erode_by_travel(vlim, ds, (taps + 1) * dt)  # the filter's true length, one sample spare
     vlim[0] = vlim[-1] = 0.0
     a = limits.acceleration
     v2 = vlim ** 2
@@ -109,10 +144,8 @@ def feed_profile(s: np.ndarray, kappa: np.ndarray, limits: Limits, rate_hz: floa
     if np.any(mean <= 0):
         raise InputError("the feed profile stops inside the path (a limit is zero there)")
     t = np.r_[0.0, np.cumsum(ds / mean)]
-    dt = 1.0 / rate_hz
     tc = np.arange(0.0, t[-1] + dt, dt)
     vc = np.interp(tc, t, v)
-    taps = max(round(T / dt), 1)
     vf = np.convolve(vc, np.full(taps, 1.0 / taps))
     sf = np.r_[0.0, np.cumsum(0.5 * (vf[1:] + vf[:-1]) * dt)]
     sf *= length / sf[-1]
