@@ -69,10 +69,11 @@ def main() -> None:
             rows.append((name, run, time.perf_counter() - t0))
     print(f"\nprogram {Path(args.program).name}, seed {args.seed}, {args.velocity} mm/s\n")
     print("| model | frame | max dev. (mm) | RMS dev. (mm) | max corner dev. (mm) | planned (mm) | "
-          "cycle (s) | peak joint speed (% of max) | wall (s) |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "cycle (s) | peak joint speed (% of max) | peak joint acc. (rad/s²) | wall (s) |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for name, run, wall in rows:
         speed = max(run["joint_speeds"]["peak_fraction"]) * 100
+        accel = max(run["joint_speeds"]["peak_acceleration_rad_s2"])
         views = [("fitted" if run["registered"] else "model", run["path_accuracy"])]
         if run.get("path_accuracy_registered"):
             views.append(("fitted", run["path_accuracy_registered"]))
@@ -80,7 +81,8 @@ def main() -> None:
             corner = max(acc["corner_deviation_measured_mm"], default=float("nan"))
             planned = max(acc["corner_deviation_commanded_mm"], default=float("nan"))
             print(f"| {name} | {frame} | {acc['max_deviation_mm']:.4f} | {acc['rms_deviation_mm']:.4f} | "
-                  f"{corner:.4f} | {planned:.4f} | {run['cycle_time_s']:.2f} | {speed:.1f} | {wall:.0f} |")
+                  f"{corner:.4f} | {planned:.4f} | {run['cycle_time_s']:.2f} | {speed:.1f} | {accel:.2f} | "
+                  f"{wall:.0f} |")
 
 
 if __name__ == "__main__":

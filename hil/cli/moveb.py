@@ -51,6 +51,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--joint-speed", type=float, default=1.0, metavar="F",
                      help="allowed fraction of the datasheet joint speeds (0 < F <= 1); the feed slows "
                           "down where the path would need more")
+    run.add_argument("--joint-acceleration", type=float, default=None, metavar="RAD/S2",
+                     help="largest joint acceleration at the controller samples (every joint; UR "
+                          "publishes none, so none by default: the peak is reported either way)")
     run.add_argument("--tracker-rate", type=float, default=100.0, metavar="HZ")
     run.add_argument("--truth", metavar="truth.json", help="--sim: the hidden truth (default: random)")
     run.add_argument("--speed", type=float, default=1.0, metavar="F", help="--sim: fast-time factor")

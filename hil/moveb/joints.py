@@ -13,6 +13,13 @@ curvature limits, so the profile slows down smoothly around the hard spot instea
 refused. After timing, the joint trajectory at the controller's samples is checked against the same
 maxima: the grid is finite, so a residual excess is possible; `retime` lowers the ceiling locally by
 the measured excess and times again, and gives up (naming the arc length) only if that does not settle.
+
+Joint accelerations are measured the same way (second differences at the controller rate) and
+always reported. UR publishes no joint acceleration maxima, so a limit is the user's choice
+(`hil moveb run --joint-acceleration`) and it is a check, not a retiming: the peak is usually the
+tangential part dq/ds·s̈ where the tool speeds up from rest, which a lower speed ceiling does not
+reduce, so a path over the limit is refused before any motion, naming the arc length and the
+Cartesian limits that would lower it.
 """
 
 from __future__ import annotations
@@ -45,11 +52,13 @@ def joint_speed_ceiling(s: np.ndarray, Q: np.ndarray, max_speed: np.ndarray) -> 
 
 @dataclass(frozen=True)
 class JointSpeeds:
-    """Peak joint speeds of a timed joint trajectory, against the allowed maxima."""
+    """Peak joint speeds and accelerations of a timed joint trajectory, against the allowed maxima."""
 
     peak: np.ndarray  # (6,) rad/s
     allowed: np.ndarray  # (6,) rad/s
     worst_sample: int  # index of the sample with the largest speed ratio
+    peak_acceleration: np.ndarray  # (6,) rad/s²
+    allowed_acceleration: np.ndarray | None = None  # (6,) rad/s², None: not limited
 
     @property
     def ratio(self) -> np.ndarray:
@@ -57,49 +66,71 @@ class JointSpeeds:
 
     @property
     def ok(self) -> bool:
-        return bool(np.all(self.peak <= self.allowed))
+        acc_ok = (self.allowed_acceleration is None
+                  or bool(np.all(self.peak_acceleration <= self.allowed_acceleration)))
+        return bool(np.all(self.peak <= self.allowed)) and acc_ok
 
     def as_dict(self) -> dict[str, object]:
+        acc = None if self.allowed_acceleration is None else self.allowed_acceleration.tolist()
         return {"peak_rad_s": self.peak.tolist(), "allowed_rad_s": self.allowed.tolist(),
-                "peak_fraction": self.ratio.tolist()}
+                "peak_fraction": self.ratio.tolist(),
+                "peak_acceleration_rad_s2": self.peak_acceleration.tolist(),
+                "allowed_acceleration_rad_s2": acc}
 
 
-def joint_speeds(Q: np.ndarray, rate_hz: float, allowed: np.ndarray) -> JointSpeeds:
-    """Peak |Δq|·rate per joint over consecutive controller samples."""
-    qd = np.abs(np.diff(np.asarray(Q, float), axis=0)) * rate_hz
+def joint_speeds(Q: np.ndarray, rate_hz: float, allowed: np.ndarray,
+                 allowed_acceleration: np.ndarray | None = None) -> JointSpeeds:
+    """Peak |Δq|·rate and |Δ²q|·rate² per joint over consecutive controller samples."""
+    Q = np.asarray(Q, float)
+    allowed = np.asarray(allowed, float)
+    acc_allowed = None if allowed_acceleration is None else np.asarray(allowed_acceleration, float)
+    qd = np.abs(np.diff(Q, axis=0)) * rate_hz
+    qdd = np.abs(np.diff(Q, n=2, axis=0)) * rate_hz ** 2
+    peak_acc = qdd.max(axis=0) if len(qdd) else np.zeros(6)
     if not len(qd):
-        return JointSpeeds(np.zeros(6), np.asarray(allowed, float), 0)
-    ratio = qd / np.asarray(allowed, float)[None, :]
-    return JointSpeeds(qd.max(axis=0), np.asarray(allowed, float), int(np.argmax(ratio.max(axis=1))))
+        return JointSpeeds(np.zeros(6), allowed, 0, peak_acc, acc_allowed)
+    ratio = qd / allowed[None, :]
+    return JointSpeeds(qd.max(axis=0), allowed, int(np.argmax(ratio.max(axis=1))), peak_acc, acc_allowed)
 
 
 def retime(time_path: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], s_grid: np.ndarray,
            ceiling: np.ndarray, rate_hz: float, allowed: np.ndarray, attempts: int = 4,
-           ) -> tuple[np.ndarray, JointSpeeds]:
+           allowed_acceleration: np.ndarray | None = None) -> tuple[np.ndarray, JointSpeeds]:
     """Time the path under `ceiling` until the joint speeds at the controller samples are allowed.
 
     `time_path(ceiling)` returns (s, Q): arc lengths and joint angles at the controller's samples.
     Where a sample exceeds the maxima, the ceiling around its arc length is scaled by the excess
-    (with a 2 % margin) and the path is timed again. Returns (Q, its joint speeds).
+    (with a 2 % margin) and the path is timed again. Then the accelerations are checked against
+    `allowed_acceleration` when given (module docstring). Returns (Q, its joint speeds).
     """
+    allowed = np.asarray(allowed, float)
+    acc = None if allowed_acceleration is None else np.asarray(allowed_acceleration, float)
     ceiling = np.asarray(ceiling, float).copy()
     for _ in range(attempts):
         s, Q = time_path(ceiling)
-        speeds = joint_speeds(Q, rate_hz, allowed)
-        if speeds.ok:
-            return Q, speeds
+        speeds = joint_speeds(Q, rate_hz, allowed, acc)
+        if np.all(speeds.peak <= speeds.allowed):
+            break
         qd = np.abs(np.diff(Q, axis=0)) * rate_hz
         excess = np.max(qd / allowed[None, :], axis=1)  # per interval between samples
-        bad = np.flatnonzero(excess > 1.0)
         s_mid = 0.5 * (s[1:] + s[:-1])
         factor = np.ones(len(s_grid))
         span = max(float(np.max(np.diff(s))) * 4.0, 1e-6)  # the neighbourhood a slow-down must cover
-        for k in bad:
+        for k in np.flatnonzero(excess > 1.0):
             near = np.abs(s_grid - s_mid[k]) <= span
             factor[near] = np.minimum(factor[near], 0.98 / excess[k])
         ceiling *= factor
-    worst = speeds.worst_sample
-    j = int(np.argmax(speeds.ratio))
-    raise JointSpeedError(f"s = {s[worst]:.1f} mm: joint {j + 1} would need {speeds.peak[j]:.2f} rad/s "
-                          f"(allowed {speeds.allowed[j]:.2f}) even after slowing down; the path passes "
-                          "too close to a singularity")
+    else:
+        worst = speeds.worst_sample
+        j = int(np.argmax(speeds.ratio))
+        raise JointSpeedError(f"s = {s[worst]:.1f} mm: joint {j + 1} would need {speeds.peak[j]:.2f} rad/s "
+                              f"(allowed {speeds.allowed[j]:.2f}) even after slowing down; the path passes "
+                              "too close to a singularity")
+    if not speeds.ok:
+        assert acc is not None
+        qdd = np.abs(np.diff(Q, n=2, axis=0)) * rate_hz ** 2
+        k, j = np.unravel_index(int(np.argmax(qdd / acc[None, :])), qdd.shape)
+        raise JointSpeedError(f"s = {s[k + 1]:.1f} mm: joint {j + 1} would accelerate at {qdd[k, j]:.2f} "
+                              f"rad/s² (allowed {acc[j]:.2f}); lower --acceleration and --jerk (from rest "
+                              "and at speed changes) or --velocity (in bends)")
+    return Q, speeds

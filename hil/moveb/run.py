@@ -23,6 +23,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import threading
 import time
 from dataclasses import dataclass
@@ -140,8 +141,8 @@ class Trajectory:
 
 
 def solve_trajectory(plan: Plan, geometry: Geometry, limits: Limits, rate_hz: float, q_start: np.ndarray,
-                     *, joint_speed_fraction: float = 1.0, keep_in: Box | None = None,
-                     grid_step: float = 1.0) -> Trajectory:
+                     *, joint_speed_fraction: float = 1.0, joint_acceleration: float | None = None,
+                     keep_in: Box | None = None, grid_step: float = 1.0) -> Trajectory:
     """Time the plan under the Cartesian limits *and* the joint speed maxima, and solve its IK.
 
     1. Every controller sample must lie in the keep-in box (checked on the dense path first, so a
@@ -150,10 +151,13 @@ def solve_trajectory(plan: Plan, geometry: Geometry, limits: Limits, rate_hz: fl
        ceiling (`hil.moveb.joints`); the feed profile runs under it.
     3. IK at every controller sample (seeded from the grid's start, so both follow one branch), and
        the joint speeds checked against ``joint_speed_fraction`` × the datasheet maxima, retimed
-       locally where the finite grid let a sample exceed them.
+       locally where the finite grid let a sample exceed them; likewise ``joint_acceleration``
+       (rad/s², every joint) when given.
     """
     if not 0.0 < joint_speed_fraction <= 1.0:
         raise InputError(f"joint speed fraction must be in (0, 1], got {joint_speed_fraction}")
+    if joint_acceleration is not None and not (joint_acceleration > 0 and np.isfinite(joint_acceleration)):
+        raise InputError(f"joint acceleration must be positive, got {joint_acceleration} rad/s²")
     kin = Kinematics(geometry)
     source = plan.program.source
     if keep_in is not None:
@@ -178,18 +182,19 @@ def solve_trajectory(plan: Plan, geometry: Geometry, limits: Limits, rate_hz: fl
                        Q_geo[0], where=[f"{source}: s = {v:.1f} mm" for v in samples.s])
         return samples.s, Q
 
-    Q, speeds = retime(time_path, geo.s, ceiling, rate_hz, allowed)
+    acc = None if joint_acceleration is None else np.full(6, float(joint_acceleration))
+    Q, speeds = retime(time_path, geo.s, ceiling, rate_hz, allowed, allowed_acceleration=acc)
     return Trajectory(timed["samples"], Q, rate_hz, speeds)
 
 
 def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, registered: bool,
             tracker_rate: float = 100.0, settle: float = 0.3, joint_speed_fraction: float = 1.0,
-            keep_in: Box | None = None) -> RunResult:
+            joint_acceleration: float | None = None, keep_in: Box | None = None) -> RunResult:
     """Solve, move to the start, stream the samples and measure (see module docstring)."""
     rate = devices.robot.info.rate_hz if devices.robot.info else geometry.spec.rate_hz
     q_now = np.asarray(devices.robot.read_joints(1).q, dtype=float)
     traj = solve_trajectory(plan, geometry, limits, rate, q_now, joint_speed_fraction=joint_speed_fraction,
-                            keep_in=keep_in)
+                            joint_acceleration=joint_acceleration, keep_in=keep_in)
     samples, Q = traj.samples, traj.Q
     # the approach is a joint move: its path must stay in the keep-in box too (never clamped)
     check_target(Q[0], geometry.spec, keep_in, geometry, start=q_now)
@@ -251,6 +256,10 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
     limits = Limits(args.velocity, args.acceleration, args.jerk, args.normal_acceleration)
     if not args.tracker_rate > 0:
         raise InputError(f"--tracker-rate must be positive, got {args.tracker_rate}")
+    if not 0.0 < args.joint_speed <= 1.0:
+        raise InputError(f"--joint-speed must be in (0, 1], got {args.joint_speed}")
+    if args.joint_acceleration is not None and not 0.0 < args.joint_acceleration < math.inf:
+        raise InputError(f"--joint-acceleration must be positive, got {args.joint_acceleration}")
     model = load_geometry(args.model)[0] if args.model else None
     for name in ("poses", "validation", "candidates", "accept"):  # what `_station` reads for calibrate
         setattr(args, name, None)
@@ -276,7 +285,7 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
             keep_in = (np.array(config.keep_in["min"]), np.array(config.keep_in["max"]))
             result = execute(devices, plan, geometry, limits, registered=model is None,
                              tracker_rate=args.tracker_rate, joint_speed_fraction=args.joint_speed,
-                             keep_in=keep_in)
+                             joint_acceleration=args.joint_acceleration, keep_in=keep_in)
         except HARDWARE_ERRORS as exc:
             return {"status": "hardware fault", "error": f"{type(exc).__name__}: {exc}", "exit_code": 3}
         finally:

@@ -67,6 +67,31 @@ def test_joint_speeds_report() -> None:
     assert speeds.peak[0] == pytest.approx(1.0) and speeds.ok and speeds.worst_sample == 1
 
 
+def test_joint_accelerations_are_reported() -> None:
+    t = np.arange(11) / 100.0
+    Q = np.zeros((11, 6))
+    Q[:, 2] = 0.5 * 4.0 * t ** 2  # joint 3 accelerates at 4 rad/s²
+    speeds = joint_speeds(Q, 100.0, np.full(6, 2.0))
+    assert speeds.peak_acceleration[2] == pytest.approx(4.0) and speeds.peak_acceleration[0] == 0.0
+    assert speeds.as_dict()["allowed_acceleration_rad_s2"] is None and speeds.ok
+    assert not joint_speeds(Q, 100.0, np.full(6, 2.0), np.full(6, 3.9)).ok
+
+
+def test_a_joint_acceleration_limit_refuses_the_path_or_lets_it_run_unchanged() -> None:
+    plan = plan_program(load_program(EXAMPLES / "square.moveb"), "G2")
+    free = solve_trajectory(plan, GEOMETRY, LIMITS, 500.0, Q0)
+    peak = free.speeds.peak_acceleration.max()
+    assert peak > 0.5
+    within = solve_trajectory(plan, GEOMETRY, LIMITS, 500.0, Q0, joint_acceleration=1.01 * peak)
+    assert np.array_equal(within.Q, free.Q)
+    assert within.speeds.as_dict()["allowed_acceleration_rad_s2"] == [1.01 * peak] * 6
+    with pytest.raises(JointSpeedError, match=r"s = [\d.]+ mm: joint \d would accelerate at [\d.]+ rad/s² "
+                                              r"\(allowed [\d.]+\); lower --acceleration"):
+        solve_trajectory(plan, GEOMETRY, LIMITS, 500.0, Q0, joint_acceleration=0.9 * peak)
+    gentle = Limits(LIMITS.velocity, LIMITS.acceleration / 2, LIMITS.jerk / 2, LIMITS.normal_acceleration)
+    assert solve_trajectory(plan, GEOMETRY, gentle, 500.0, Q0, joint_acceleration=0.9 * peak).speeds.ok
+
+
 def test_path_outside_the_keep_in_box_is_refused_before_any_motion() -> None:
     plan = plan_program(load_program(EXAMPLES / "square.moveb"), "G2")
     box = (np.array([-1.0, -1.0, 0.0]), np.array([0.45, 1.0, 1.0]))  # cuts the square at x = 450 mm
