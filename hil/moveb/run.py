@@ -37,7 +37,7 @@ from hil.errors import InputError
 from hil.geometry import Geometry
 from hil.ik import solve_path
 from hil.kinematics import Kinematics
-from hil.moveb.joints import JointSpeeds, joint_speed_ceiling, retime
+from hil.moveb.joints import JointSpeedError, JointSpeeds, joint_speed_ceiling, retime
 from hil.moveb.orientation import rotation_matrices
 from hil.moveb.plan import Plan, Samples, plan_program
 from hil.moveb.program import Program, load_program
@@ -183,7 +183,10 @@ def solve_trajectory(plan: Plan, geometry: Geometry, limits: Limits, rate_hz: fl
         return samples.s, Q
 
     acc = None if joint_acceleration is None else np.full(6, float(joint_acceleration))
-    Q, speeds = retime(time_path, geo.s, ceiling, rate_hz, allowed, allowed_acceleration=acc)
+    try:
+        Q, speeds = retime(time_path, geo.s, ceiling, rate_hz, allowed, allowed_acceleration=acc)
+    except JointSpeedError as exc:
+        raise JointSpeedError(f"{source}: {exc}") from None
     return Trajectory(timed["samples"], Q, rate_hz, speeds)
 
 

@@ -85,8 +85,8 @@ def test_a_joint_acceleration_limit_refuses_the_path_or_lets_it_run_unchanged() 
     within = solve_trajectory(plan, GEOMETRY, LIMITS, 500.0, Q0, joint_acceleration=1.01 * peak)
     assert np.array_equal(within.Q, free.Q)
     assert within.speeds.as_dict()["allowed_acceleration_rad_s2"] == [1.01 * peak] * 6
-    with pytest.raises(JointSpeedError, match=r"s = [\d.]+ mm: joint \d would accelerate at [\d.]+ rad/s² "
-                                              r"\(allowed [\d.]+\); lower --acceleration"):
+    with pytest.raises(JointSpeedError, match=r"square\.moveb: s = [\d.]+ mm: joint \d would accelerate "
+                                              r"at [\d.]+ rad/s² \(allowed [\d.]+\); lower --acceleration"):
         solve_trajectory(plan, GEOMETRY, LIMITS, 500.0, Q0, joint_acceleration=0.9 * peak)
     gentle = Limits(LIMITS.velocity, LIMITS.acceleration / 2, LIMITS.jerk / 2, LIMITS.normal_acceleration)
     assert solve_trajectory(plan, GEOMETRY, gentle, 500.0, Q0, joint_acceleration=0.9 * peak).speeds.ok
