@@ -78,7 +78,8 @@ def main() -> None:
         if run.get("path_accuracy_registered"):
             views.append(("fitted", run["path_accuracy_registered"]))
         for frame, acc in views:
-            corner = max(acc["corner_deviation_measured_mm"], default=float("nan"))
+            corner = max((c for c in acc["corner_deviation_measured_mm"] if c is not None),
+                         default=float("nan"))  # null: a corner the tracker did not see
             planned = max(acc["corner_deviation_commanded_mm"], default=float("nan"))
             print(f"| {name} | {frame} | {acc['max_deviation_mm']:.4f} | {acc['rms_deviation_mm']:.4f} | "
                   f"{corner:.4f} | {planned:.4f} | {run['cycle_time_s']:.2f} | {speed:.1f} | {accel:.2f} | "

@@ -55,6 +55,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                      help="largest joint acceleration at the controller samples (every joint; UR "
                           "publishes none, so none by default: the peak is reported either way)")
     run.add_argument("--tracker-rate", type=float, default=100.0, metavar="HZ")
+    run.add_argument("--min-coverage", type=float, default=0.9, metavar="F",
+                     help="share of the path the tracker must measure; below it the run is reported "
+                          "'incomplete' (exit code 1)")
     run.add_argument("--truth", metavar="truth.json", help="--sim: the hidden truth (default: random)")
     run.add_argument("--speed", type=float, default=1.0, metavar="F", help="--sim: fast-time factor")
     run.add_argument("--seed", type=int, default=1, help="--sim: seed of the random truth and noise")

@@ -14,10 +14,10 @@
   pose is unknown, so it is registered: a rigid fit of the measured points to the commanded positions
   at the same times, refined by nearest-point iterations (ICP). The result says ``registered: true``;
   a rigid misplacement of the arm is then not seen.
-* Path accuracy in the style of ISO 9283 (path accuracy AT): for every measured point during the
-  motion, its distance to the commanded path (the dense commanded polyline); max and RMS of those;
-  and the corner deviation: for every interior program point, its distance to the measured path and
-  to the commanded path.
+* Path accuracy in the style of ISO 9283 and the share of the path it covers: `hil.moveb.accuracy`.
+  A run whose measured points cover less than ``min_coverage`` of the path is reported as
+  ``incomplete`` (exit code 1) with the largest unmeasured stretch named: its figures describe only
+  the part the tracker saw.
 """
 
 from __future__ import annotations
@@ -37,6 +37,7 @@ from hil.errors import InputError
 from hil.geometry import Geometry
 from hil.ik import solve_path
 from hil.kinematics import Kinematics
+from hil.moveb.accuracy import Coverage, coverage, distance_to_path, path_accuracy
 from hil.moveb.joints import JointSpeedError, JointSpeeds, joint_speed_ceiling, retime
 from hil.moveb.orientation import rotation_matrices
 from hil.moveb.plan import Plan, Samples, plan_program
@@ -87,31 +88,6 @@ def register(measured: np.ndarray, commanded_at_time: np.ndarray, path: np.ndarr
     return measured @ R.T + t
 
 
-def distance_to_path(points: np.ndarray, path: np.ndarray) -> np.ndarray:
-    """Distance of each point to the polyline `path` (nearest vertex, then its two segments)."""
-    _, idx = cKDTree(path).query(points)
-    best = np.full(len(points), np.inf)
-    for off in (-1, 0):
-        j = np.clip(idx + off, 0, len(path) - 2)
-        a, b = path[j], path[j + 1]
-        ab = b - a
-        t = np.clip(np.einsum("ij,ij->i", points - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab),
-                                                                        1e-300), 0.0, 1.0)
-        best = np.minimum(best, np.linalg.norm(points - (a + t[:, None] * ab), axis=1))
-    return best
-
-
-def path_accuracy(commanded: np.ndarray, measured: np.ndarray, corners: np.ndarray) -> dict[str, Any]:
-    """ISO 9283-style figures in mm: AT max/RMS and the corner deviations (see module docstring)."""
-    dev = distance_to_path(measured, commanded)
-    return {"samples": len(measured), "max_deviation_mm": float(dev.max()),
-            "rms_deviation_mm": float(np.sqrt(np.mean(dev ** 2))),
-            "corner_deviation_measured_mm": distance_to_path(corners, measured).tolist()
-            if len(corners) and len(measured) > 1 else [],
-            "corner_deviation_commanded_mm": distance_to_path(corners, commanded).tolist()
-            if len(corners) else []}
-
-
 @dataclass
 class RunResult:
     accuracy: dict[str, Any]
@@ -124,6 +100,7 @@ class RunResult:
     path: np.ndarray | None = None  # (M, 3) mm, the commanded path
     path_s: np.ndarray | None = None  # (M,) mm, its arc lengths
     corners: np.ndarray | None = None  # (K, 3) mm, programmed interior points
+    coverage: Coverage | None = None  # the stretches of the path the tracker measured
 
 
 @dataclass(frozen=True)
@@ -225,8 +202,9 @@ def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, reg
     if failure:
         raise failure[0]
     t0, t1 = step_times[0], step_times[-1] + settle
-    got = [r for r in records if r.position is not None and t0 <= r.t <= t1]
-    lost = sum(1 for r in records if r.position is None and t0 <= r.t <= t1)
+    during = [r for r in records if t0 <= r.t <= t1]
+    got = [r for r in during if r.position is not None]
+    lost = len(during) - len(got)
     if len(got) < 3:
         from drivers.tracker.errors import TrackerError
 
@@ -236,16 +214,20 @@ def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, reg
     dense = plan.dense(0.2)
     path = dense.position  # mm, base frame
     corners = plan.program.positions[1:-1]
-    idx = np.clip(np.searchsorted(step_times, [r.t for r in got]), 0, len(Q) - 1)
+    at = np.clip(np.searchsorted(step_times, [r.t for r in during]), 0, len(Q) - 1)  # sample per record
+    cov = coverage(samples.s[at], [r.position is not None for r in during], plan.length)
+    corner_s = dense.s[cKDTree(path).query(corners)[1]] if len(corners) else np.zeros(0)
+    seen = dict(corner_covered=cov.covers(corner_s), covered=cov.fraction)
+    idx = at[[r.position is not None for r in during]]
     moved = register(m, samples.position[idx], path)
-    fitted = path_accuracy(path, moved, corners)
-    shown = dict(path=path, path_s=dense.s, corners=corners)
+    fitted = path_accuracy(path, moved, corners, **seen)
+    shown = dict(path=path, path_s=dense.s, corners=corners, coverage=cov)
     if registered:
         return RunResult(fitted, traj.cycle_time, True, lost, traj.speeds.as_dict(), None, moved, **shown)
     T = geometry.tracker
     base = m @ T.rotation.T + T.translation * 1e3
     # with a model: in its base frame, and (comparable with a run without one) rigidly fitted
-    return RunResult(path_accuracy(path, base, corners), traj.cycle_time, False, lost,
+    return RunResult(path_accuracy(path, base, corners, **seen), traj.cycle_time, False, lost,
                      traj.speeds.as_dict(), fitted, base, **shown)
 
 
@@ -261,6 +243,8 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
         raise InputError(f"--tracker-rate must be positive, got {args.tracker_rate}")
     if not 0.0 < args.joint_speed <= 1.0:
         raise InputError(f"--joint-speed must be in (0, 1], got {args.joint_speed}")
+    if not 0.0 < args.min_coverage <= 1.0:
+        raise InputError(f"--min-coverage must be in (0, 1], got {args.min_coverage}")
     if args.joint_acceleration is not None and not 0.0 < args.joint_acceleration < math.inf:
         raise InputError(f"--joint-acceleration must be positive, got {args.joint_acceleration}")
     model = load_geometry(args.model)[0] if args.model else None
@@ -300,10 +284,20 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
         write_run_figure(args.plot, result.path, result.path_s, result.measured,
                          distance_to_path(result.measured, result.path), result.corners,
                          f"{args.program}: max {result.accuracy['max_deviation_mm']:.3f} mm, "
-                         f"RMS {result.accuracy['rms_deviation_mm']:.3f} mm ({frame})")
-    return {"format": "hil-moveb-run/1", "status": "done", "exit_code": 0, "program": args.program,
-            "continuity": args.continuity, "model": args.model, "ik": "nominal" if model is None else args.ik,
-            "registered": result.registered,
-            "cycle_time_s": result.cycle_time, "lost_samples": result.lost,
-            "path_accuracy": result.accuracy, "path_accuracy_registered": result.accuracy_registered,
-            "joint_speeds": result.joint_speeds}
+                         f"RMS {result.accuracy['rms_deviation_mm']:.3f} mm ({frame}; "
+                         f"{result.accuracy['coverage']:.0%} of the path measured)")
+    doc: dict[str, Any] = {"format": "hil-moveb-run/1", "status": "done", "exit_code": 0}
+    cov = result.coverage
+    if cov is not None and cov.fraction < args.min_coverage:
+        a, b = cov.largest_gap
+        doc.update(status="incomplete", exit_code=1,
+                   error=f"the tracker measured {cov.fraction:.0%} of the path ({result.lost} records lost; "
+                         f"longest unmeasured stretch s = {a:.1f}-{b:.1f} mm): the figures describe only "
+                         "the measured part; keep the SMR facing the tracker with a clear line of sight")
+    doc.update({"program": args.program, "continuity": args.continuity, "model": args.model,
+                "ik": "nominal" if model is None else args.ik, "registered": result.registered,
+                "cycle_time_s": result.cycle_time, "lost_samples": result.lost,
+                "coverage": None if cov is None else cov.fraction,
+                "path_accuracy": result.accuracy, "path_accuracy_registered": result.accuracy_registered,
+                "joint_speeds": result.joint_speeds})
+    return doc

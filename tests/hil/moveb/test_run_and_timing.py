@@ -137,7 +137,7 @@ def test_run_figure_draws_path_and_deviation() -> None:
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20000
 
 
-def _moveb_run(tmp_path: Path, prog: Path, name: str, *extra: str) -> dict:
+def _moveb_run(tmp_path: Path, prog: Path, name: str, *extra: str, exit_code: int = 0) -> dict:
     import json
     import os
 
@@ -148,7 +148,7 @@ def _moveb_run(tmp_path: Path, prog: Path, name: str, *extra: str) -> dict:
     res = subprocess.run([sys.executable, "-m", "hil", "moveb", "run", str(prog), "--sim", "--frame",
                           "current", "--velocity", "150", "--out", str(out), *extra],
                          capture_output=True, text=True, timeout=240, cwd=tmp_path, env=env)
-    assert res.returncode == 0, res.stderr
+    assert res.returncode == exit_code, res.stderr
     return json.loads(out.read_text())
 
 
@@ -165,6 +165,7 @@ def test_cli_run_on_the_simulated_station_and_what_the_model_changes(tmp_path: P
     write_json(truth, truth_document(random_truth("ur5e", np.random.default_rng(5)), Noise()))
     nominal = _moveb_run(tmp_path, prog, "nominal", "--truth", "truth.json")
     assert nominal["registered"] is True and nominal["path_accuracy_registered"] is None
+    assert nominal["status"] == "done" and nominal["coverage"] > 0.9
     assert 0.05 < nominal["path_accuracy"]["max_deviation_mm"] < 2.0
     assert max(nominal["joint_speeds"]["peak_fraction"]) <= 1.0
     model = _moveb_run(tmp_path, prog, "model", "--truth", "truth.json", "--model", "truth.json",
@@ -175,9 +176,20 @@ def test_cli_run_on_the_simulated_station_and_what_the_model_changes(tmp_path: P
     assert acc["max_deviation_mm"] < 0.1 and fitted["max_deviation_mm"] < 0.1
     assert acc["rms_deviation_mm"] < 0.5 * nominal["path_accuracy"]["rms_deviation_mm"]
     assert len(acc["corner_deviation_measured_mm"]) == 1  # one interior point
+    assert acc["corner_deviation_measured_mm"][0] < 0.5 and model["coverage"] > 0.9
     # the nominal arm measured in the true frame: its absolute error, which the fit above hid
     absolute = _moveb_run(tmp_path, prog, "absolute", "--truth", "truth.json", "--model", "truth.json",
                           "--ik", "nominal")
     assert absolute["ik"] == "nominal" and absolute["registered"] is False
     assert absolute["path_accuracy"]["max_deviation_mm"] > 0.2
     assert absolute["path_accuracy"]["max_deviation_mm"] > 5 * acc["max_deviation_mm"]
+
+
+def test_cli_run_the_tracker_saw_only_in_part_is_incomplete(tmp_path: Path) -> None:
+    """On the default simulated arm, the square anchored at the start pose turns the SMR out of the
+    tracker's sight after its first side: the figures then cover only that side, and say so."""
+    doc = _moveb_run(tmp_path, EXAMPLES / "square.moveb", "square", exit_code=1)
+    assert doc["status"] == "incomplete" and doc["exit_code"] == 1
+    assert doc["coverage"] < 0.5 and doc["lost_samples"] > 100
+    assert "longest unmeasured stretch s = " in doc["error"]
+    assert None in doc["path_accuracy"]["corner_deviation_measured_mm"]  # a corner nobody saw

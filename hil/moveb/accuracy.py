@@ -1,0 +1,85 @@
+"""How well the arm followed the path: ISO 9283-style figures, and how much of the path they cover.
+
+* Path accuracy AT: for every measured point during the motion, its distance to the commanded path
+  (the dense commanded polyline); max and RMS of those.
+* Corner deviation: for every interior program point, its distance to the measured path (and, for
+  reference, to the commanded one: the bridge keeps that within E by design).
+* Coverage: the tracker loses the SMR when the beam is blocked or the SMR turns away, and a figure
+  over the first fifth of a path says nothing of the rest. Each tracker record (measured or lost)
+  is placed on the path by its time stamp; the stretch between two consecutive *measured* records
+  is covered, the rest is not. A corner outside every covered stretch gets no measured deviation
+  (``null``) rather than its distance to wherever the measured points happen to be.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+
+def distance_to_path(points: np.ndarray, path: np.ndarray) -> np.ndarray:
+    """Distance of each point to the polyline `path` (nearest vertex, then its two segments)."""
+    _, idx = cKDTree(path).query(points)
+    best = np.full(len(points), np.inf)
+    for off in (-1, 0):
+        j = np.clip(idx + off, 0, len(path) - 2)
+        a, b = path[j], path[j + 1]
+        ab = b - a
+        t = np.clip(np.einsum("ij,ij->i", points - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab),
+                                                                        1e-300), 0.0, 1.0)
+        best = np.minimum(best, np.linalg.norm(points - (a + t[:, None] * ab), axis=1))
+    return best
+
+
+@dataclass(frozen=True)
+class Coverage:
+    """The stretches of the path (arc length, mm) between consecutive measured tracker records."""
+
+    spans: np.ndarray  # (K, 2) [from, to] mm
+    length: float  # mm, the whole path
+
+    @property
+    def fraction(self) -> float:
+        if not self.length:
+            return 0.0
+        return float(min(np.sum(self.spans[:, 1] - self.spans[:, 0]) / self.length, 1.0))
+
+    def covers(self, s: np.ndarray) -> np.ndarray:
+        """Whether each arc length lies in a covered stretch."""
+        s = np.asarray(s, float)
+        return np.any((self.spans[None, :, 0] <= s[:, None]) & (s[:, None] <= self.spans[None, :, 1]), axis=1)
+
+    @property
+    def largest_gap(self) -> tuple[float, float]:
+        """The longest uncovered stretch (from, to) in mm."""
+        edges = np.r_[0.0, self.spans.ravel(), self.length].reshape(-1, 2)  # [gap start, gap end] rows
+        k = int(np.argmax(edges[:, 1] - edges[:, 0]))
+        return float(edges[k, 0]), float(edges[k, 1])
+
+
+def coverage(s: np.ndarray, measured: np.ndarray, length: float) -> Coverage:
+    """Coverage from the records' arc lengths `s` (time order) and whether each was measured."""
+    s = np.asarray(s, float)
+    ok = np.asarray(measured, bool)
+    both = ok[1:] & ok[:-1] & (np.diff(s) >= 0)
+    spans = np.column_stack([s[:-1][both], s[1:][both]]) if len(s) > 1 else np.zeros((0, 2))
+    return Coverage(spans.reshape(-1, 2), float(length))
+
+
+def path_accuracy(commanded: np.ndarray, measured: np.ndarray, corners: np.ndarray,
+                  corner_covered: np.ndarray | None = None, covered: float | None = None) -> dict[str, Any]:
+    """ISO 9283-style figures in mm (module docstring); a corner not covered has no measured value."""
+    dev = distance_to_path(measured, commanded)
+    at_corner: list[float | None] = []
+    if len(corners) and len(measured) > 1:
+        at_corner = distance_to_path(corners, measured).tolist()
+        if corner_covered is not None:
+            at_corner = [d if c else None for d, c in zip(at_corner, corner_covered, strict=True)]
+    return {"samples": len(measured), "coverage": covered,
+            "max_deviation_mm": float(dev.max()), "rms_deviation_mm": float(np.sqrt(np.mean(dev ** 2))),
+            "corner_deviation_measured_mm": at_corner,
+            "corner_deviation_commanded_mm": distance_to_path(corners, commanded).tolist()
+            if len(corners) else []}
