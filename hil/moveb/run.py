@@ -27,6 +27,7 @@ import math
 import threading
 import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -283,7 +284,7 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
         frame = "rigidly fitted (no model)" if result.registered else "model base frame"
         write_run_figure(args.plot, result.path, result.path_s, result.measured,
                          distance_to_path(result.measured, result.path), result.corners,
-                         f"{args.program}: max {result.accuracy['max_deviation_mm']:.3f} mm, "
+                         f"{Path(args.program).name}: max {result.accuracy['max_deviation_mm']:.3f} mm, "
                          f"RMS {result.accuracy['rms_deviation_mm']:.3f} mm ({frame}; "
                          f"{result.accuracy['coverage']:.0%} of the path measured)")
     doc: dict[str, Any] = {"format": "hil-moveb-run/1", "status": "done", "exit_code": 0}
