@@ -204,7 +204,8 @@ def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, reg
         raise failure[0]
     t0, t1 = step_times[0], step_times[-1] + settle
     during = [r for r in records if t0 <= r.t <= t1]
-    got = [r for r in during if r.position is not None]
+    measured = np.array([r.position is not None for r in during], dtype=bool)
+    got = [r for r, ok in zip(during, measured, strict=True) if ok]
     lost = len(during) - len(got)
     if len(got) < 3:
         from drivers.tracker.errors import TrackerError
@@ -216,11 +217,10 @@ def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, reg
     path = dense.position  # mm, base frame
     corners = plan.program.positions[1:-1]
     at = np.clip(np.searchsorted(step_times, [r.t for r in during]), 0, len(Q) - 1)  # sample per record
-    cov = coverage(samples.s[at], [r.position is not None for r in during], plan.length)
+    cov = coverage(samples.s[at], measured, plan.length)
     corner_s = dense.s[cKDTree(path).query(corners)[1]] if len(corners) else np.zeros(0)
     seen = dict(corner_covered=cov.covers(corner_s), covered=cov.fraction)
-    idx = at[[r.position is not None for r in during]]
-    moved = register(m, samples.position[idx], path)
+    moved = register(m, samples.position[at[measured]], path)
     fitted = path_accuracy(path, moved, corners, **seen)
     shown = dict(path=path, path_s=dense.s, corners=corners, coverage=cov)
     if registered:

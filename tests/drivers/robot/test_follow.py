@@ -40,27 +40,25 @@ def ramp(q0: Any, dq: np.ndarray, n: int) -> np.ndarray:
     return np.asarray(q0, dtype=float) + s[:, None] * dq
 
 
-@pytest.fixture(params=["in-process", "isolated"])
-def arm(request: pytest.FixtureRequest, sim: SimProcess) -> Iterator[Any]:
-    """An opened driver at Q_A: a URRobot, or the IsolatedURRobot the product uses."""
-    rob: Any = (URRobot if request.param == "in-process" else IsolatedURRobot)(config(sim))
+def _opened_at_q_a(rob: Any) -> Iterator[Any]:
+    """Open `rob`, move it to Q_A, yield it, close it."""
     rob.open()
     try:
         rob.move_to(Q_A)
         yield rob
     finally:
         rob.close()
+
+
+@pytest.fixture(params=["in-process", "isolated"])
+def arm(request: pytest.FixtureRequest, sim: SimProcess) -> Iterator[Any]:
+    """An opened driver at Q_A: a URRobot, or the IsolatedURRobot the product uses."""
+    yield from _opened_at_q_a((URRobot if request.param == "in-process" else IsolatedURRobot)(config(sim)))
 
 
 @pytest.fixture
 def iso(sim: SimProcess) -> Iterator[IsolatedURRobot]:
-    rob = IsolatedURRobot(config(sim))
-    rob.open()
-    try:
-        rob.move_to(Q_A)
-        yield rob
-    finally:
-        rob.close()
+    yield from _opened_at_q_a(IsolatedURRobot(config(sim)))
 
 
 def test_follow_streams_the_trajectory_and_ends_at_its_last_sample(arm: Any) -> None:
