@@ -15,11 +15,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from hil.config import default_config
-from hil.engine import RealClock
-from hil.events import EventBus
-from hil.runner import run_campaign
-from hil.selection import campaign_chooser
+from hil.campaign.chooser import campaign_chooser
+from hil.campaign.engine import RealClock
+from hil.campaign.events import EventBus
+from hil.campaign.runner import run_campaign
+from hil.station.config import default_config
 from hil.store import Store
 from mocks.station import start_station
 

@@ -17,10 +17,10 @@ import time
 
 import numpy as np
 
-from hil.identification import identify
-from hil.kinematics import Kinematics, identifiable_parameters
-from hil.measurements import Measurements
-from hil.synthetic import Noise, measure, random_configurations, random_truth
+from hil.arm.kinematics import Kinematics, identifiable_parameters
+from hil.calibration.identification import identify
+from hil.calibration.measurements import Measurements
+from hil.calibration.synthetic import Noise, measure, random_configurations, random_truth
 
 ROBOT = "ur5e"
 SIGMA = 20e-6

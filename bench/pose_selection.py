@@ -26,12 +26,12 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from hil.selection import SelectionModel
+from hil.calibration.selection import SelectionModel
 from selector.bound import d_optimal_bound
 from selector.candidates import Constraints, generate_candidates
 from selector.exchange import exchange_select
 from selector.indices import scale_columns
-from selector.search import random_select
+from selector.random_selection import random_select
 from selector.tabu import tabu_select
 
 TRACKER = (2.5, 0.5, 0.5)

@@ -1,4 +1,19 @@
-"""hil: hardware-in-the-loop kinematic calibration of Universal Robots arms."""
+"""hil: hardware-in-the-loop kinematic calibration of Universal Robots arms.
+
+One package per concern, each importing only those below it (checked by tests/test_layout.py):
+
+    cli, tui          the command line and the operator's terminal app (on top)
+    moveb             error-bounded smooth tool paths (seed 001): plan, time, run, measure
+    report            the HTML report and the hil-result/1 document of a campaign
+    store             the durable history (SQLite): campaigns, points, models, events
+    campaign          plans, the engine, suspenders, events, the runner
+    station           station.toml, the devices it names, the simulated station
+    calibration       measurements, identification, model files, exports, synthetic truths, selection glue
+    arm               robot catalog, geometry, kinematics, IK, safe targets
+    files, errors     reading users' files, writing outputs atomically; the error types
+
+`selector` (pose selection) and `drivers` (hardware) are separate packages that know nothing of hil.
+"""
 
 from importlib.metadata import PackageNotFoundError, version
 

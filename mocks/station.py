@@ -13,8 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from hil.model_file import load_truth, truth_document
-from hil.synthetic import Noise, random_truth
+from hil.calibration.model_file import load_truth, truth_document
+from hil.calibration.synthetic import Noise, random_truth
 from mocks.geocom.instrument import InstrumentConfig
 from mocks.geocom.server import GeoComSimulator, LinkConfig, SimulatorConfig
 from mocks.world import World

@@ -15,9 +15,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from hil.geometry import Geometry
-from hil.kinematics import Kinematics
-from hil.selection import arm_shape
+from hil.arm.geometry import Geometry
+from hil.arm.kinematics import Kinematics
+from hil.calibration.selection import arm_shape
 from mocks.geocom.target import TargetState
 from selector.arm import segment_distance
 

@@ -6,23 +6,28 @@ by an outer loop of random restarts around a tabu search, with redundant-pose re
 
 * `indices` — O1…O5 and column scaling;
 * `information` — the information matrix of a pose set with low-rank (determinant lemma) swap scores;
+* `design` — what every method shares (the `Selection` result, count checks, scoring, redundancy);
 * `tabu` — the patent method; `exchange` — the DETMAX baseline; `random_selection` — the naive one;
+  `search` — the one entry point that picks a method by name;
 * `bound` — the D-optimal approximate-design bound (multiplicative algorithm with a duality certificate);
 * `candidates` / `arm` — feasible configurations under joint, workspace, visibility, singularity and
   self-collision constraints;
 * `order` — the visiting order that minimises travel time.
 
 Nothing here does I/O or imports `hil`: the kinematic model arrives as an argument satisfying
-`selector.model.PoseModel`.
+`selector.model.PoseModel`. Modules import each other one way (errors, indices, information, design,
+then the methods, then search); none imports this package's face.
 """
 
 from selector.bound import Bound, d_optimal_bound
 from selector.candidates import CandidateSet, Constraints, generate_candidates
+from selector.design import Selection, minimum_poses
 from selector.errors import CountError, NoCandidatesError, SelectorError, UnknownIndexError
 from selector.exchange import exchange_select
 from selector.indices import INDEX_NAMES, observability, parse_index
 from selector.order import order_poses, travel_time
-from selector.search import Selection, minimum_poses, random_select, select
+from selector.random_selection import random_select
+from selector.search import select
 from selector.tabu import TabuSettings, tabu_select
 
 __all__ = [

@@ -29,9 +29,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
+from selector.design import check_blocks
 from selector.errors import SelectorError
 from selector.information import gram
-from selector.search import check_blocks
 
 
 @dataclass(frozen=True)

@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from selector import arm as arm_mod
+from selector.arm import elbow_measure, segment_distance, shoulder_measure, wrist_measure
 from selector.errors import NoCandidatesError, SelectorError
 from selector.model import PoseModel
 
@@ -188,19 +188,19 @@ def evaluate(model: PoseModel, q: np.ndarray, constraints: Constraints, *, casca
         elif name == "line-of-sight":
             start = si + u * np.minimum(c.beam_clearance, dist)[:, None]
             links = segs_i[:, :-1]  # every capsule but the tool's own
-            d = arm_mod.segment_distance(start[:, None], np.broadcast_to(tracker, start.shape)[:, None],
+            d = segment_distance(start[:, None], np.broadcast_to(tracker, start.shape)[:, None],
                                          links[:, :, 0], links[:, :, 1])
             ok = np.all(d > radii[:-1], axis=1)
         elif name == "wrist":
-            ok = arm_mod.wrist_measure(Fi) >= math.sin(math.radians(c.wrist_margin_deg))
+            ok = wrist_measure(Fi) >= math.sin(math.radians(c.wrist_margin_deg))
         elif name == "elbow":
-            ok = arm_mod.elbow_measure(Fi) >= math.sin(math.radians(c.elbow_margin_deg))
+            ok = elbow_measure(Fi) >= math.sin(math.radians(c.elbow_margin_deg))
         elif name == "shoulder":
-            ok = arm_mod.shoulder_measure(Fi) >= c.shoulder_margin
+            ok = shoulder_measure(Fi) >= c.shoulder_margin
         else:  # self-collision
             pairs = model.arm.collision_pairs
             a, b = segs_i[:, pairs[:, 0]], segs_i[:, pairs[:, 1]]
-            d = arm_mod.segment_distance(a[:, :, 0], a[:, :, 1], b[:, :, 0], b[:, :, 1])
+            d = segment_distance(a[:, :, 0], a[:, :, 1], b[:, :, 0], b[:, :, 1])
             clearance = radii[pairs[:, 0]] + radii[pairs[:, 1]] + c.collision_margin
             ok = np.all(d >= clearance, axis=1)
         mask = np.zeros(n, dtype=bool)

@@ -1,7 +1,7 @@
 """Errors the selector raises on purpose.
 
 The selector must not import `hil`, so it has its own `ValueError` subclasses; the glue in
-``hil.selection`` turns them into ``hil.errors.InputError`` (exit code 2 on the command line).
+``hil.calibration.selection`` turns them into ``hil.errors.InputError`` (exit code 2 on the command line).
 """
 
 from __future__ import annotations

@@ -16,9 +16,9 @@ import time
 
 import numpy as np
 
+from selector.design import Selection, check_blocks, check_count, score
 from selector.indices import parse_index
 from selector.information import DesignState
-from selector.search import Selection, check_blocks, check_count, score
 
 
 def _excursion(state: DesignState, depth: int) -> tuple[DesignState, int]:

@@ -1,7 +1,7 @@
 """What the selector needs from a kinematic model (it never imports hil's; it receives one).
 
-``hil.selection.SelectionModel`` is the implementation the product uses; tests may pass any object with
-these attributes.
+``hil.calibration.selection.SelectionModel`` is the implementation the product uses; tests may pass
+any object with these attributes.
 """
 
 from __future__ import annotations

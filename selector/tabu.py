@@ -23,7 +23,7 @@ deterministic for a given seed:
    (aspiration). A move (a out, c in) is recorded in the tabu list, and is tabu while the list holds a
    move that removed c or added a, i.e. the reverse of a recent move; the list is cleared when it grows
    past l, as the patent says (not a sliding window).
-3. **Redundant-pose removal** (`selector.search.redundant_positions`): a pose whose removal does not
+3. **Redundant-pose removal** (`selector.design.redundant_positions`): a pose whose removal does not
    lower the index is dropped. With O1's 1/√m factor this drops poses that contribute less than an
    average pose — a principled "kick" for the next restart. The output keeps exactly `count` poses
    unless ``prune`` is set, in which case redundant poses of the final set are removed one at a time
@@ -41,10 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from selector.errors import SelectorError
-from selector.indices import index_from_information, parse_index
-from selector.information import DesignState
-from selector.search import (
+from selector.design import (
     Selection,
     check_blocks,
     check_count,
@@ -53,6 +50,9 @@ from selector.search import (
     redundant_positions,
     score,
 )
+from selector.errors import SelectorError
+from selector.indices import index_from_information, parse_index
+from selector.information import DesignState
 
 
 @dataclass(frozen=True)

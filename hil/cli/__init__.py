@@ -10,6 +10,8 @@ traceback at the user:
 * 3 — a hardware fault (robot or tracker) ended the run;
 * 4 — the run was aborted;
 * 70 — an unexpected internal error (one line; ``--debug`` shows the traceback).
+
+The top of hil: it may import every package below it; nothing imports it.
 """
 
 from __future__ import annotations

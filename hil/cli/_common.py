@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from hil.geometry import parse_triplet
+from hil.arm.geometry import parse_triplet
 
 
 def triplet_or_none(text: str | None, option: str) -> np.ndarray | None:

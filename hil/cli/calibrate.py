@@ -17,20 +17,17 @@ above the acceptance threshold, 2 bad input, 3 hardware fault, 4 aborted.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
 import sys
 import time
-from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
 
-from hil.config import StationConfig, load_config
+from hil.arm.catalog import ROBOT_NAMES
+from hil.campaign.events import Event, EventBus
+from hil.cli.progress import JsonLines, Progress
+from hil.cli.station_args import station_from_args
 from hil.errors import InputError
-from hil.events import Event, EventBus
-from hil.measurements import atomic_write_text
-from hil.progress import JsonLines, Progress
-from hil.robots import ROBOT_NAMES
+from hil.files.outputs import atomic_write_text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -60,52 +57,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _overrides(args: argparse.Namespace) -> dict[str, Any]:
-    out: dict[str, Any] = {}
-    for option, key in (("poses", "campaign__calibration_poses"),
-                        ("validation", "campaign__validation_poses"),
-                        ("candidates", "campaign__candidates"), ("accept", "campaign__acceptance")):
-        value = getattr(args, option)
-        if value is not None:
-            if not value > 0:
-                raise InputError(f"--{option} must be positive, got {value}")
-            out[key] = value
-    if args.cycles < 1:
-        raise InputError(f"--cycles must be at least 1, got {args.cycles}")
-    return out
-
-
-@contextlib.contextmanager
-def _station(args: argparse.Namespace) -> Iterator[tuple[StationConfig, dict[str, Any], dict | None]]:
-    """(config to run, config that identifies the run in the store, hidden truth or None)."""
-    if args.config:
-        if args.truth or args.speed != 1.0:
-            raise InputError("--truth and --speed go with --sim, not --config")
-        config = load_config(args.config)
-        config = config.with_overrides(**_overrides(args)) if _overrides(args) else config
-        yield config, config.as_dict(), None
-        return
-    if not args.speed > 0:
-        raise InputError(f"--speed must be positive, got {args.speed}")
-    from hil.simstation import simulated_station
-
-    with simulated_station(args.robot, args.truth, args.speed, args.seed, **_overrides(args)) as (
-            config, identity, truth, _sim):
-        yield config, identity, truth
-
-
 def run(args: argparse.Namespace) -> int:
-    from hil.engine import RealClock
-    from hil.results import report_data, result_document
-    from hil.runner import plan_saver, resume_state, run_campaign
-    from hil.selection import campaign_chooser
-    from hil.station import HARDWARE_ERRORS, open_devices
+    from hil.campaign.chooser import campaign_chooser
+    from hil.campaign.engine import RealClock
+    from hil.campaign.runner import plan_saver, resume_state, run_campaign
+    from hil.report.result import report_data, result_document
+    from hil.station.devices import HARDWARE_ERRORS, open_devices
     from hil.store import Store
 
     for path in (args.out, args.report):
         if path and Path(path).is_dir():
             raise InputError(f"{path}: is a directory")
-    with _station(args) as (config, identity, truth):
+    with station_from_args(args) as (config, identity, truth):
         store = Store.open(args.db, config=config)
         try:
             try:

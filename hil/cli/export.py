@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from hil.exports import FORMATS, export
-from hil.measurements import atomic_write_text
-from hil.model_file import MODEL_FORMAT, load_geometry
+from hil.calibration.exports import FORMATS, export
+from hil.calibration.model_file import MODEL_FORMAT, load_geometry
+from hil.files.outputs import atomic_write_text
 
 
 def register(sub: argparse._SubParsersAction) -> None:

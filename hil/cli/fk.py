@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import argparse
 
-from hil.kinematics import Kinematics
-from hil.measurements import atomic_write_text, format_csv, read_joints
-from hil.model_file import load_geometry
+from hil.arm.kinematics import Kinematics
+from hil.calibration.measurements import read_joints
+from hil.calibration.model_file import load_geometry
+from hil.files.outputs import atomic_write_text, format_csv
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -15,12 +15,13 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
+from hil.arm.geometry import Geometry
+from hil.calibration.exports import FORMATS, export
+from hil.calibration.measurements import write_measurements
 from hil.cli._common import mm, print_json
-from hil.config import load_config
 from hil.errors import InputError
-from hil.exports import FORMATS, export
-from hil.geometry import Geometry
-from hil.measurements import atomic_write_text, write_measurements
+from hil.files.outputs import atomic_write_text
+from hil.station.config import load_config
 from hil.store import ROLES, CampaignRecord, CampaignSummary, Store, resolve_path
 
 # File suffixes that say which export format is meant when --format is not given.

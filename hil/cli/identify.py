@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import argparse
 
+from hil.arm.catalog import ROBOT_NAMES, get_robot
+from hil.calibration.identification import FitResult, identify, validate
+from hil.calibration.measurements import read_measurements
+from hil.calibration.model_file import model_document, write_json
 from hil.cli._common import mm, print_json, triplet_or_none
-from hil.identification import FitResult, identify, validate
-from hil.measurements import read_measurements
-from hil.model_file import model_document, write_json
-from hil.robots import ROBOT_NAMES, get_robot
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -12,10 +12,12 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import Any
 
+from hil.arm.catalog import ROBOT_NAMES
 from hil.cli._common import print_json
+from hil.cli.station_args import station_from_args
 from hil.errors import InputError
-from hil.robots import ROBOT_NAMES
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -101,16 +103,96 @@ def run_plan(args: argparse.Namespace) -> int:
 
 
 def run_run(args: argparse.Namespace) -> int:
-    from hil.moveb.run import run_from_cli
-
     for path in (args.out, args.plot):
         if path and Path(path).is_dir():
             raise InputError(f"{path}: is a directory")
 
     doc = run_from_cli(args)
     if args.out:
-        from hil.measurements import atomic_write_text
+        from hil.files.outputs import atomic_write_text
 
         atomic_write_text(args.out, json.dumps(doc, indent=2, allow_nan=False) + "\n")
     print_json(doc)
     return int(doc.get("exit_code", 0))
+
+
+def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
+    """`hil moveb run`: station from --config/--sim (as `hil calibrate`), plan, execute, report."""
+    import math
+
+    import numpy as np
+
+    from hil.arm.geometry import Geometry
+    from hil.arm.kinematics import Kinematics
+    from hil.calibration.model_file import load_geometry
+    from hil.moveb.accuracy import distance_to_path
+    from hil.moveb.plan import plan_program
+    from hil.moveb.program import load_program
+    from hil.moveb.run import execute, program_in_frame
+    from hil.moveb.timing import Limits
+    from hil.station.devices import HARDWARE_ERRORS, open_devices
+
+    program = load_program(args.program)
+    limits = Limits(args.velocity, args.acceleration, args.jerk, args.normal_acceleration)
+    if not args.tracker_rate > 0:
+        raise InputError(f"--tracker-rate must be positive, got {args.tracker_rate}")
+    if not 0.0 < args.joint_speed <= 1.0:
+        raise InputError(f"--joint-speed must be in (0, 1], got {args.joint_speed}")
+    if not 0.0 < args.min_coverage <= 1.0:
+        raise InputError(f"--min-coverage must be in (0, 1], got {args.min_coverage}")
+    if args.joint_acceleration is not None and not 0.0 < args.joint_acceleration < math.inf:
+        raise InputError(f"--joint-acceleration must be positive, got {args.joint_acceleration}")
+    model = load_geometry(args.model)[0] if args.model else None
+    for name in ("poses", "validation", "candidates", "accept"):  # read by `station_from_args`
+        setattr(args, name, None)
+    args.cycles = 1
+    with station_from_args(args) as (config, _identity, _truth):
+        geometry = model or Geometry.nominal(config.robot["type"], smr=config.smr["offset"])
+        if model is not None and args.ik == "nominal":
+            # the uncalibrated arm, measured in the model's base frame (its tracker pose and SMR):
+            # the absolute path error calibration removes, not only its non-rigid part
+            geometry = Geometry.nominal(model.robot, smr=model.smr, tracker=model.tracker)
+        try:
+            devices = open_devices(config)
+        except HARDWARE_ERRORS as exc:
+            return {"status": "hardware fault", "error": f"{type(exc).__name__}: {exc}", "exit_code": 3}
+        try:
+            if args.frame == "current":
+                q = np.asarray(devices.robot.read_joints(1).q, dtype=float)
+                F = Kinematics(geometry).flange_poses(q)[0]
+                anchor = F.copy()
+                anchor[:3, 3] = (F[:3, :3] @ geometry.smr + F[:3, 3]) * 1e3
+                program = program_in_frame(program, anchor)
+            plan = plan_program(program, args.continuity)
+            keep_in = (np.array(config.keep_in["min"]), np.array(config.keep_in["max"]))
+            result = execute(devices, plan, geometry, limits, registered=model is None,
+                             tracker_rate=args.tracker_rate, joint_speed_fraction=args.joint_speed,
+                             joint_acceleration=args.joint_acceleration, keep_in=keep_in)
+        except HARDWARE_ERRORS as exc:
+            return {"status": "hardware fault", "error": f"{type(exc).__name__}: {exc}", "exit_code": 3}
+        finally:
+            devices.close()
+    if args.plot:
+        from hil.moveb.plot import write_run_figure
+
+        frame = "rigidly fitted (no model)" if result.registered else "model base frame"
+        write_run_figure(args.plot, result.path, result.path_s, result.measured,
+                         distance_to_path(result.measured, result.path), result.corners,
+                         f"{Path(args.program).name}: max {result.accuracy['max_deviation_mm']:.3f} mm, "
+                         f"RMS {result.accuracy['rms_deviation_mm']:.3f} mm ({frame}; "
+                         f"{result.accuracy['coverage']:.0%} of the path measured)")
+    doc: dict[str, Any] = {"format": "hil-moveb-run/1", "status": "done", "exit_code": 0}
+    cov = result.coverage
+    if cov is not None and cov.fraction < args.min_coverage:
+        a, b = cov.largest_gap
+        doc.update(status="incomplete", exit_code=1,
+                   error=f"the tracker measured {cov.fraction:.0%} of the path ({result.lost} records lost; "
+                         f"longest unmeasured stretch s = {a:.1f}-{b:.1f} mm): the figures describe only "
+                         "the measured part; keep the SMR facing the tracker with a clear line of sight")
+    doc.update({"program": args.program, "continuity": args.continuity, "model": args.model,
+                "ik": "nominal" if model is None else args.ik, "registered": result.registered,
+                "cycle_time_s": result.cycle_time, "lost_samples": result.lost,
+                "coverage": None if cov is None else cov.fraction,
+                "path_accuracy": result.accuracy, "path_accuracy_registered": result.accuracy_registered,
+                "joint_speeds": result.joint_speeds})
+    return doc

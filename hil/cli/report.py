@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import argparse
 
-from hil.model_file import read_json
+from hil.calibration.model_file import read_json
 from hil.report import report_data_from_result, write_report
 
 

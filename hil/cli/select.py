@@ -19,10 +19,10 @@ from typing import Any
 
 import numpy as np
 
+from hil.arm.geometry import parse_triplet
+from hil.calibration.selection import parse_constraints, select_poses
 from hil.errors import InputError
-from hil.geometry import parse_triplet
-from hil.measurements import atomic_write_text
-from hil.selection import parse_constraints, select_poses
+from hil.files.outputs import atomic_write_text
 from selector.candidates import CONSTRAINT_NAMES
 from selector.indices import INDEX_NAMES, SCALINGS
 from selector.search import METHODS

@@ -31,7 +31,7 @@ def run(args: argparse.Namespace) -> int:
     from mocks.ur.process import serve
 
     if args.truth:
-        from hil.model_file import load_truth
+        from hil.calibration.model_file import load_truth
 
         load_truth(args.truth)  # bad truth files fail here, with the key named, before serving
     try:

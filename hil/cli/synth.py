@@ -7,10 +7,10 @@ from pathlib import Path
 
 import numpy as np
 
-from hil.measurements import write_measurements
-from hil.model_file import load_truth, truth_document, write_json
-from hil.robots import ROBOT_NAMES, get_robot
-from hil.synthetic import Noise, measure, random_configurations, random_truth
+from hil.arm.catalog import ROBOT_NAMES, get_robot
+from hil.calibration.measurements import write_measurements
+from hil.calibration.model_file import load_truth, truth_document, write_json
+from hil.calibration.synthetic import Noise, measure, random_configurations, random_truth
 
 
 def register(sub: argparse._SubParsersAction) -> None:

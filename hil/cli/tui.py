@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import argparse
 
+from hil.arm.catalog import ROBOT_NAMES, get_robot
 from hil.errors import InputError
-from hil.robots import ROBOT_NAMES, get_robot
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -35,11 +35,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def options_from(args: argparse.Namespace) -> object:
     """`TuiOptions` from the command line; bad input raises InputError before the app starts."""
-    from hil.cli.calibrate import _overrides
-    from hil.config import load_config
+    from hil.cli.station_args import config_overrides
+    from hil.station.config import load_config
     from hil.tui.session import TuiOptions
 
-    overrides = _overrides(args)
+    overrides = config_overrides(args)
     if args.config:
         if args.truth or args.speed != 1.0:
             raise InputError("--truth and --speed go with --sim, not --config")
@@ -48,7 +48,7 @@ def options_from(args: argparse.Namespace) -> object:
     if not args.speed > 0:
         raise InputError(f"--speed must be positive, got {args.speed}")
     if args.truth:
-        from hil.model_file import load_truth
+        from hil.calibration.model_file import load_truth
 
         load_truth(args.truth)  # a bad truth fails here, naming the key
     return TuiOptions(sim=True, speed=args.speed, seed=args.seed, robot=get_robot(args.robot).name,

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import argparse
 
+from hil.calibration.identification import validate
+from hil.calibration.measurements import read_measurements
+from hil.calibration.model_file import load_geometry
 from hil.cli._common import mm, print_json
-from hil.identification import validate
-from hil.measurements import read_measurements
-from hil.model_file import load_geometry
 
 
 def register(sub: argparse._SubParsersAction) -> None:

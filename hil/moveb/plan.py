@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import BSpline
 
-from hil.measurements import atomic_write_text, format_csv
+from hil.files.outputs import atomic_write_text, format_csv
 from hil.moveb.bridge import BridgeShape, Curve
 from hil.moveb.optimise import Solution, plan_positions
 from hil.moveb.orientation import axis_splines, orthonormal_frames

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.colors import Normalize
 
-from hil.measurements import atomic_write_bytes
+from hil.files.outputs import atomic_write_bytes
 from hil.report.plots import _figure, _style, png
 
 

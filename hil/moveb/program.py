@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hil.errors import InputError
-from hil.inputs import read_input_text
+from hil.files.inputs import read_input_text
 
 AXIS_TOLERANCE = 1e-3
 MIN_SEGMENT = 1e-3  # mm

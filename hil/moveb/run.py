@@ -3,7 +3,7 @@
 * The TCP is the SMR centre (the model's ``smr`` in the flange frame, rotation of the flange): what
   the tracker measures is then exactly the programmed point, and the program's tool Z axis is the
   flange Z axis, the SMR's opening (keep it facing the tracker).
-* Joint targets come from `hil.ik` on the *calibrated* model when one is given (``--model``), so the
+* Joint targets come from `hil.arm.ik` on the *calibrated* model when one is given (``--model``), so the
   calibration's effect shows in the measured path; without one, the nominal model.
 * The trajectory is solved for every controller sample before anything moves (an unreachable sample
   is an error naming its arc length), then the arm moves to the start and the whole trajectory is
@@ -22,29 +22,26 @@
 
 from __future__ import annotations
 
-import argparse
-import math
 import threading
 import time
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 from scipy.spatial import cKDTree
 
+from hil.arm.geometry import Geometry
+from hil.arm.ik import solve_path
+from hil.arm.kinematics import Kinematics
+from hil.arm.safety import check_target
 from hil.errors import InputError
-from hil.geometry import Geometry
-from hil.ik import solve_path
-from hil.kinematics import Kinematics
-from hil.moveb.accuracy import Coverage, coverage, distance_to_path, path_accuracy
+from hil.moveb.accuracy import Coverage, coverage, path_accuracy
 from hil.moveb.joints import JointSpeedError, JointSpeeds, joint_speed_ceiling, retime
 from hil.moveb.orientation import rotation_matrices
-from hil.moveb.plan import Plan, Samples, plan_program
-from hil.moveb.program import Program, load_program
+from hil.moveb.plan import Plan, Samples
+from hil.moveb.program import Program
 from hil.moveb.timing import Limits
-from hil.plans import check_target
 
 Box = tuple[np.ndarray, np.ndarray]  # keep-in box corners (base frame, m)
 
@@ -230,75 +227,3 @@ def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, reg
     # with a model: in its base frame, and (comparable with a run without one) rigidly fitted
     return RunResult(path_accuracy(path, base, corners, **seen), traj.cycle_time, False, lost,
                      traj.speeds.as_dict(), fitted, base, **shown)
-
-
-def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
-    """`hil moveb run`: station from --config/--sim (as `hil calibrate`), plan, execute, report."""
-    from hil.cli.calibrate import _station
-    from hil.model_file import load_geometry
-    from hil.station import HARDWARE_ERRORS, open_devices
-
-    program = load_program(args.program)
-    limits = Limits(args.velocity, args.acceleration, args.jerk, args.normal_acceleration)
-    if not args.tracker_rate > 0:
-        raise InputError(f"--tracker-rate must be positive, got {args.tracker_rate}")
-    if not 0.0 < args.joint_speed <= 1.0:
-        raise InputError(f"--joint-speed must be in (0, 1], got {args.joint_speed}")
-    if not 0.0 < args.min_coverage <= 1.0:
-        raise InputError(f"--min-coverage must be in (0, 1], got {args.min_coverage}")
-    if args.joint_acceleration is not None and not 0.0 < args.joint_acceleration < math.inf:
-        raise InputError(f"--joint-acceleration must be positive, got {args.joint_acceleration}")
-    model = load_geometry(args.model)[0] if args.model else None
-    for name in ("poses", "validation", "candidates", "accept"):  # what `_station` reads for calibrate
-        setattr(args, name, None)
-    args.cycles = 1
-    with _station(args) as (config, _identity, _truth):
-        geometry = model or Geometry.nominal(config.robot["type"], smr=config.smr["offset"])
-        if model is not None and args.ik == "nominal":
-            # the uncalibrated arm, measured in the model's base frame (its tracker pose and SMR):
-            # the absolute path error calibration removes, not only its non-rigid part
-            geometry = Geometry.nominal(model.robot, smr=model.smr, tracker=model.tracker)
-        try:
-            devices = open_devices(config)
-        except HARDWARE_ERRORS as exc:
-            return {"status": "hardware fault", "error": f"{type(exc).__name__}: {exc}", "exit_code": 3}
-        try:
-            if args.frame == "current":
-                q = np.asarray(devices.robot.read_joints(1).q, dtype=float)
-                F = Kinematics(geometry).flange_poses(q)[0]
-                anchor = F.copy()
-                anchor[:3, 3] = (F[:3, :3] @ geometry.smr + F[:3, 3]) * 1e3
-                program = program_in_frame(program, anchor)
-            plan = plan_program(program, args.continuity)
-            keep_in = (np.array(config.keep_in["min"]), np.array(config.keep_in["max"]))
-            result = execute(devices, plan, geometry, limits, registered=model is None,
-                             tracker_rate=args.tracker_rate, joint_speed_fraction=args.joint_speed,
-                             joint_acceleration=args.joint_acceleration, keep_in=keep_in)
-        except HARDWARE_ERRORS as exc:
-            return {"status": "hardware fault", "error": f"{type(exc).__name__}: {exc}", "exit_code": 3}
-        finally:
-            devices.close()
-    if args.plot:
-        from hil.moveb.plot import write_run_figure
-
-        frame = "rigidly fitted (no model)" if result.registered else "model base frame"
-        write_run_figure(args.plot, result.path, result.path_s, result.measured,
-                         distance_to_path(result.measured, result.path), result.corners,
-                         f"{Path(args.program).name}: max {result.accuracy['max_deviation_mm']:.3f} mm, "
-                         f"RMS {result.accuracy['rms_deviation_mm']:.3f} mm ({frame}; "
-                         f"{result.accuracy['coverage']:.0%} of the path measured)")
-    doc: dict[str, Any] = {"format": "hil-moveb-run/1", "status": "done", "exit_code": 0}
-    cov = result.coverage
-    if cov is not None and cov.fraction < args.min_coverage:
-        a, b = cov.largest_gap
-        doc.update(status="incomplete", exit_code=1,
-                   error=f"the tracker measured {cov.fraction:.0%} of the path ({result.lost} records lost; "
-                         f"longest unmeasured stretch s = {a:.1f}-{b:.1f} mm): the figures describe only "
-                         "the measured part; keep the SMR facing the tracker with a clear line of sight")
-    doc.update({"program": args.program, "continuity": args.continuity, "model": args.model,
-                "ik": "nominal" if model is None else args.ik, "registered": result.registered,
-                "cycle_time_s": result.cycle_time, "lost_samples": result.lost,
-                "coverage": None if cov is None else cov.fraction,
-                "path_accuracy": result.accuracy, "path_accuracy_registered": result.accuracy_registered,
-                "joint_speeds": result.joint_speeds})
-    return doc

@@ -8,6 +8,10 @@ Typical use at the end of a campaign::
     write_json("result.json", mes_result(data))
 
 `report_data_from_result` rebuilds the same `ReportData` from a saved result (``hil report``).
+
+`hil.report.result` builds the ``hil-result/1`` document of a finished campaign (CLI and TUI alike).
+
+May import: `hil.campaign`, `hil.station`, `hil.calibration`, `hil.arm`, `hil.files`, `hil.errors`.
 """
 
 from hil.report.data import (

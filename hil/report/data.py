@@ -19,13 +19,13 @@ from typing import Any
 
 import numpy as np
 
-from hil.config import StationConfig
+from hil.arm.kinematics import Kinematics
+from hil.calibration.identification import Correlation, ErrorStats, FitResult, RejectedPose
+from hil.calibration.measurements import Measurements
+from hil.calibration.model_file import RESULT_FORMAT
+from hil.campaign.events import Event, Message, PoseSkipped, Resumed, Suspended
 from hil.errors import InputError
-from hil.events import Event, Message, PoseSkipped, Resumed, Suspended
-from hil.identification import Correlation, ErrorStats, FitResult, RejectedPose
-from hil.kinematics import Kinematics
-from hil.measurements import Measurements
-from hil.model_file import RESULT_FORMAT
+from hil.station.config import StationConfig
 
 
 @dataclass(frozen=True)
@@ -240,7 +240,7 @@ def report_data_from(
     * ``hashes`` is merged over the fit's own input digest (and the validation data's);
     * ``model`` defaults to ``model_document(fit, validation_after.as_dict())``.
     """
-    from hil.model_file import model_document, software_versions
+    from hil.calibration.model_file import model_document, software_versions
 
     if isinstance(config, StationConfig):
         cfg: dict[str, Any] = config.as_dict()

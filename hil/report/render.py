@@ -22,9 +22,9 @@ from pathlib import Path
 from typing import Any
 
 from hil import __version__
-from hil.measurements import atomic_write_text
-from hil.report import plots
+from hil.files.outputs import atomic_write_text
 from hil.report.data import ErrorSet, ReportData
+from hil.report.plots import data_uri, errors_per_pose, histograms, per_axis
 
 _ANGLE_SUFFIXES = (".rx", ".ry", ".rz")
 
@@ -67,7 +67,7 @@ def _kv(rows: Iterable[tuple[str, str]]) -> str:
 
 
 def _figure(png_bytes: bytes, alt: str, caption: str) -> str:
-    return (f'<figure><img src="{plots.data_uri(png_bytes)}" alt="{esc(alt)}" />'
+    return (f'<figure><img src="{data_uri(png_bytes)}" alt="{esc(alt)}" />'
             f"<figcaption>{esc(caption)}</figcaption></figure>")
 
 
@@ -140,23 +140,23 @@ def _validation(d: ReportData) -> str:
         parts.append("<h3>ISO 9283</h3>" + _kv((esc(k), esc(fmt_mm(v))) for k, v in d.iso9283.items()))
     if a.per_pose:
         before = b if b.per_pose and len(b.norms) == len(a.norms) else None
-        parts.append(_figure(plots.errors_per_pose(before, a, accept_rms=d.accept_rms),
+        parts.append(_figure(errors_per_pose(before, a, accept_rms=d.accept_rms),
                              "validation error per pose, before and after calibration",
                              "3-D error of each held-out pose, before (grey) and after (blue) "
                              "calibration. Dashed: RMS; dotted red: acceptance threshold on the RMS."))
-        parts.append(_figure(plots.histograms(before, a, accept_rms=d.accept_rms),
+        parts.append(_figure(histograms(before, a, accept_rms=d.accept_rms),
                              "histograms of validation errors",
                              "Distribution of the validation errors before and after calibration."))
     else:
         parts.append('<p class="muted">Per-pose validation errors were not recorded in this result; '
                      "only the summary figures are shown.</p>")
     if a.vectors is not None and a.per_pose:
-        parts.append(_figure(plots.per_axis(a.vectors), "per-axis validation errors after calibration",
+        parts.append(_figure(per_axis(a.vectors), "per-axis validation errors after calibration",
                              "Signed x, y, z errors (tracker frame) of each held-out pose after "
                              "calibration, and their spread per axis."))
     elif (d.calibration_after is not None and d.calibration_after.vectors is not None
           and d.calibration_after.per_pose):
-        parts.append(_figure(plots.per_axis(d.calibration_after.vectors, xlabel="calibration pose",
+        parts.append(_figure(per_axis(d.calibration_after.vectors, xlabel="calibration pose",
                                             lines=d.calibration_lines),
                              "per-axis calibration residuals",
                              "Signed x, y, z residuals (tracker frame) of each calibration pose after "
@@ -179,7 +179,7 @@ def _calibration(d: ReportData) -> str:
         if before is not None and len(before.norms) != len(after.norms):
             before = None
         rejected = None if d.calibration_used is None else ~d.calibration_used
-        parts.append(_figure(plots.errors_per_pose(before, after, rejected=rejected,
+        parts.append(_figure(errors_per_pose(before, after, rejected=rejected,
                                                    lines=d.calibration_lines, xlabel="calibration pose"),
                              "calibration residual per pose",
                              "Residual of each calibration pose with the nominal arm (grey, only the "

@@ -4,6 +4,8 @@
 run resumes from what is here, and ``hil history`` / ``hil show`` read it. See `hil.store.core` for
 the durability and threading rules, `hil.store.schema` for the tables and their upgrade steps, and
 `hil.store.paths` for where the file lives.
+
+May import: `hil.campaign.events` (what it records), `hil.errors`. Never the CLI or the TUI.
 """
 
 from hil.store.core import Store, StoreError, UnknownCampaignError, new_campaign_id

@@ -41,8 +41,7 @@ from typing import Any
 import numpy as np
 
 from hil import __version__
-from hil.errors import HilError, InputError
-from hil.events import (
+from hil.campaign.events import (
     Event,
     ModelIdentified,
     PointMeasured,
@@ -53,6 +52,7 @@ from hil.events import (
     StateChanged,
     ValidationDone,
 )
+from hil.errors import HilError, InputError
 from hil.store.paths import resolve_path
 from hil.store.records import (
     FINISHED,

@@ -20,7 +20,7 @@ from textual.screen import ModalScreen, Screen
 from textual.widgets import Input
 from textual.worker import Worker, WorkerState
 
-from hil.events import PlanReady, RunStarted
+from hil.campaign.events import PlanReady, RunStarted
 from hil.tui.messages import (
     CampaignLoaded,
     EngineEvent,
@@ -190,8 +190,8 @@ class HilApp(App[int]):
         """The plan the campaign chose, on the Plan screen (computed off the UI thread: FK of the poses)."""
         import numpy as np
 
-        from hil.geometry import Geometry
-        from hil.kinematics import Kinematics
+        from hil.arm.geometry import Geometry
+        from hil.arm.kinematics import Kinematics
 
         config = self.session.run_config()
         info = dict((event.selection or {}).get("calibration") or {})

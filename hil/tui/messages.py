@@ -12,7 +12,7 @@ from typing import Any
 
 from textual.message import Message
 
-from hil.events import Event
+from hil.campaign.events import Event
 
 
 @dataclass
@@ -48,7 +48,8 @@ class ResumeQuestion(Message):
 
 @dataclass
 class SelectionDone(Message):
-    """The Plan screen's selector run finished (`report` as `hil.selection.select_poses` returns)."""
+    """The Plan screen's selector run finished (`report`: what `select_poses` of
+    `hil.calibration.selection` returns)."""
 
     report: dict[str, Any]
     points: Any  # (N, 3) SMR positions in the base frame

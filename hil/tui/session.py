@@ -30,10 +30,10 @@ from typing import Any
 import numpy as np
 from textual.message import Message
 
-from hil.config import StationConfig
-from hil.engine import Engine, RealClock
+from hil.campaign.engine import Engine, RealClock
+from hil.campaign.events import Event, EventBus
 from hil.errors import InputError
-from hil.events import Event, EventBus
+from hil.station.config import StationConfig
 from hil.tui.messages import (
     CampaignLoaded,
     EngineEvent,
@@ -52,7 +52,7 @@ log = logging.getLogger(__name__)
 
 INTERRUPTED = "interrupted"  # not in hil.store.FINISHED: resumable
 
-#: Export actions of the Results screen: key -> (file suffix, hil.exports format or "html").
+#: Export actions of the Results screen: key -> (file suffix, hil.calibration.exports format or "html").
 EXPORTS: dict[str, tuple[str, str]] = {
     "model": ("-model.json", "json"),
     "urdf": (".urdf", "urdf"),
@@ -91,7 +91,7 @@ def station_context(options: TuiOptions) -> Iterator[tuple[StationConfig, dict[s
         config = options.config.with_overrides(**overrides) if overrides else options.config
         yield config, config.as_dict(), None, None
         return
-    from hil.simstation import simulated_station
+    from hil.station.simulated import simulated_station
 
     with simulated_station(options.robot, options.truth, options.speed, options.seed,
                            **_dotted(options.overrides)) as station:
@@ -185,7 +185,7 @@ class Session:
     # --- devices -------------------------------------------------------------------------------------
     def connect(self) -> None:
         """Open the robot and the tracker and read their status."""
-        from hil.station import open_devices
+        from hil.station.devices import open_devices
 
         st = self.station
         if self.config is None:
@@ -338,10 +338,10 @@ class Session:
 
     def run(self, resume_campaign: str | None) -> None:
         """One campaign, as ``hil calibrate`` runs it (a new one, or `resume_campaign` continued)."""
-        from hil.results import result_document
-        from hil.runner import plan_saver, resume_state, run_campaign
-        from hil.selection import campaign_chooser
-        from hil.station import open_devices
+        from hil.campaign.chooser import campaign_chooser
+        from hil.campaign.runner import plan_saver, resume_state, run_campaign
+        from hil.report.result import result_document
+        from hil.station.devices import open_devices
 
         if self.run_active or self.config is None or self.store is None:
             return
@@ -421,10 +421,11 @@ class Session:
     # --- planning ------------------------------------------------------------------------------------
     def select(self, count: int, validation: int, candidates: int, index: str, seed: int) -> None:
         """Run the campaign's own pose chooser for a preview of the plan (Plan screen)."""
-        from hil.campaign import CALIBRATION, SelectionRequest
-        from hil.geometry import Geometry, look_at_tracker
-        from hil.kinematics import Kinematics
-        from hil.selection import DEFAULT_TRACKER_FOR_JACOBIAN, campaign_chooser
+        from hil.arm.geometry import Geometry, look_at_tracker
+        from hil.arm.kinematics import Kinematics
+        from hil.calibration.selection import DEFAULT_TRACKER_FOR_JACOBIAN
+        from hil.campaign.chooser import campaign_chooser
+        from hil.campaign.plan import CALIBRATION, SelectionRequest
 
         if self.config is None:
             self.post(SelectionFailed("the station is not ready yet"))
@@ -468,9 +469,9 @@ class Session:
 
     def export(self, record: Any, kinds: list[str]) -> None:
         """Write the campaign's model, URDF, ROS kinematics YAML and/or HTML report to the output dir."""
-        from hil.exports import export
-        from hil.geometry import Geometry
-        from hil.measurements import atomic_write_text
+        from hil.arm.geometry import Geometry
+        from hil.calibration.exports import export
+        from hil.files.outputs import atomic_write_text
         from hil.report import report_data_from_result, write_report
 
         out = Path(self.options.out_dir)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from hil.events import (
+from hil.campaign.events import (
     Event,
     Message,
     PhaseChanged,

@@ -1,4 +1,4 @@
-"""The simulator's nominal kinematics and limits from hil's one kinematic model (hil.robots/kinematics).
+"""The simulator's nominal kinematics and limits from hil's one kinematic model (hil.arm.catalog/kinematics).
 
 `SimConfig.fk_factory` defaults to `nominal_fk`, so the simulated controller reports ``actual_TCP_pose``
 with exactly the model the rest of the product uses; `mocks.ur.kin.dh_fk_factory` stays as a fallback.
@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from hil.kinematics import Geometry, Kinematics
-from hil.robots import get_robot
+from hil.arm.catalog import get_robot
+from hil.arm.kinematics import Geometry, Kinematics
 from mocks.ur.kin import FkFn
 
 

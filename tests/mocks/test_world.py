@@ -1,6 +1,6 @@
 import numpy as np
 
-from hil.geometry import Geometry, look_at_tracker
+from hil.arm.geometry import Geometry, look_at_tracker
 from mocks.world import World
 
 
@@ -48,7 +48,7 @@ def test_injected_blockage(rng):
 
 
 def test_start_pose_sees_the_tracker_for_any_random_truth():
-    from hil.synthetic import random_truth
+    from hil.calibration.synthetic import random_truth
 
     for seed in range(8):  # seed 5 puts the tracker low and to the side: the best-facing pose is blocked
         truth = random_truth("ur5e", np.random.default_rng(seed))

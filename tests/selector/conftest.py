@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hil.selection import SelectionModel
+from hil.calibration.selection import SelectionModel
 from selector.candidates import Constraints, generate_candidates
 from selector.indices import scale_columns
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import scipy.optimize
 
-from hil.selection import SelectionModel
+from hil.calibration.selection import SelectionModel
 from selector import arm
 from selector.candidates import CONSTRAINT_NAMES, Constraints, evaluate, generate_candidates
 from selector.errors import NoCandidatesError, SelectorError

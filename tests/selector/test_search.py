@@ -4,11 +4,13 @@ import numpy as np
 import pytest
 
 from selector.bound import d_optimal_bound
+from selector.design import minimum_poses, redundant_positions
 from selector.errors import CountError, SelectorError
 from selector.exchange import exchange_select
 from selector.indices import observability
 from selector.information import DesignState
-from selector.search import minimum_poses, random_select, redundant_positions, select
+from selector.random_selection import random_select
+from selector.search import select
 from selector.tabu import TabuSettings, tabu_select
 
 FAST = TabuSettings(outer_iterations=3, tabu_iterations=30)

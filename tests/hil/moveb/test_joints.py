@@ -5,10 +5,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from hil.arm.geometry import Geometry
+from hil.arm.ik import solve_path
+from hil.arm.kinematics import Kinematics
 from hil.errors import InputError
-from hil.geometry import Geometry
-from hil.ik import solve_path
-from hil.kinematics import Kinematics
 from hil.moveb.joints import JointSpeedError, joint_speed_ceiling, joint_speeds, retime
 from hil.moveb.plan import plan_program
 from hil.moveb.program import load_program

@@ -8,15 +8,15 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from hil.arm.geometry import Geometry
+from hil.arm.ik import UnreachableError, solve_ik, solve_path
+from hil.arm.kinematics import Kinematics
+from hil.calibration.synthetic import random_truth
 from hil.cli import main
-from hil.geometry import Geometry
-from hil.ik import UnreachableError, solve_ik, solve_path
-from hil.kinematics import Kinematics
 from hil.moveb.plan import SAMPLES_HEADER, plan_program
 from hil.moveb.program import load_program
 from hil.moveb.run import path_accuracy, register, tool_targets
 from hil.moveb.timing import Limits
-from hil.synthetic import random_truth
 
 EXAMPLES = Path(__file__).parents[3] / "hil" / "moveb" / "examples"
 Q0 = np.array([0.3, -1.2, 1.5, -1.8, -1.57, 0.2])
@@ -155,8 +155,8 @@ def _moveb_run(tmp_path: Path, prog: Path, name: str, *extra: str, exit_code: in
 def test_cli_run_on_the_simulated_station_and_what_the_model_changes(tmp_path: Path) -> None:
     """The same program on the same (non-nominal) simulated arm: with the nominal model the path is
     off by the arm's kinematic errors; with the arm's true model it follows to tens of µm."""
-    from hil.model_file import truth_document, write_json
-    from hil.synthetic import Noise
+    from hil.calibration.model_file import truth_document, write_json
+    from hil.calibration.synthetic import Noise
 
     prog = tmp_path / "small.moveb"
     prog.write_text("MOVEB 0 0 0 0 0 1 1 0 0 0.5 0.2\nMOVEB 100 0 0 0 0 1 1 0 0 0.5 0.2\n"

@@ -13,8 +13,7 @@ import time
 import numpy as np
 import pytest
 
-from hil.config import default_config
-from hil.events import (
+from hil.campaign.events import (
     PhaseChanged,
     PointMeasured,
     PoseReached,
@@ -24,6 +23,7 @@ from hil.events import (
     StateChanged,
     Suspended,
 )
+from hil.station.config import default_config
 from hil.store import CampaignRecord, CampaignSummary, ModelRecord, RobotInfo, ValidationRecord
 from hil.tui.app import create_app
 from hil.tui.messages import CampaignLoaded, EngineEvent, HistoryLoaded, SelectionDone, StationChanged

@@ -1,0 +1,161 @@
+"""The calibration geometry of one arm + SMR + tracker, and its JSON "geometry block".
+
+A `Geometry` is what identification estimates and every other part evaluates: six joint origins in the
+URDF convention (joint i rotates about the z axis of its origin frame, joint 1's origin in the robot base
+frame, joint i's in joint i-1's rotated frame), the flange frame in joint 6's frame, the SMR centre in
+the flange frame and the tracker frame in the robot base frame. The JSON block is the contract shared by
+model files (``hil-model/1``) and simulator truths (``hil-truth/1``); see DESIGN.md.
+
+Orientations in files are URDF ``rpy``: R = Rz(yaw)·Ry(pitch)·Rx(roll), which is pinocchio's
+``rpyToMatrix`` convention.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from hil.arm.catalog import RobotSpec, get_robot
+from hil.errors import InputError
+
+
+def pose(xyz: Sequence[float], rpy: Sequence[float] = (0.0, 0.0, 0.0)) -> pin.SE3:
+    """SE(3) from URDF-style translation (m) and roll-pitch-yaw (rad)."""
+    return pin.SE3(pin.rpy.rpyToMatrix(*map(float, rpy)), np.asarray(xyz, dtype=float))
+
+
+def pose_to_dict(M: pin.SE3) -> dict[str, list[float]]:
+    """URDF-style ``{"xyz": [...], "rpy": [...]}`` of a pose, at full float precision."""
+    return {"xyz": [float(v) for v in M.translation],
+            "rpy": [float(v) for v in pin.rpy.matrixToRpy(M.rotation)]}
+
+
+def _dh_origin(a: float, alpha: float, d_next: float) -> pin.SE3:
+    """Tx(a)·Rx(α)·Tz(d_next): the fixed part of the DH chain between two joint rotations."""
+    return pose((a, 0.0, 0.0), (alpha, 0.0, 0.0)) * pose((0.0, 0.0, d_next))
+
+
+@dataclass
+class Geometry:
+    """Joint origins, flange, SMR offset and tracker pose of one arm (metres, radians)."""
+
+    robot: str
+    joints: list[pin.SE3]
+    flange: pin.SE3
+    smr: np.ndarray
+    tracker: pin.SE3 = field(default_factory=pin.SE3.Identity)
+
+    def __post_init__(self) -> None:
+        if len(self.joints) != 6:
+            raise InputError(f"a UR geometry has 6 joint origins, got {len(self.joints)}")
+        self.joints = [pin.SE3(M) for M in self.joints]
+        self.flange = pin.SE3(self.flange)
+        self.tracker = pin.SE3(self.tracker)
+        self.smr = np.array(self.smr, dtype=float).reshape(3)
+
+    @property
+    def spec(self) -> RobotSpec:
+        return get_robot(self.robot)
+
+    @classmethod
+    def nominal(cls, robot: str | RobotSpec, smr: Sequence[float] = (0.0, 0.0, 0.0),
+                tracker: pin.SE3 | None = None) -> Geometry:
+        """The nominal geometry from the catalog DH table.
+
+        Standard DH T = Π Rz(qi)·Tz(di)·Tx(ai)·Rx(αi) regrouped so each joint rotates about the z axis
+        of its origin: origin1 = Tz(d1), origin(i+1) = Tx(ai)·Rx(αi)·Tz(d(i+1)), flange = Tx(a6)·Rx(α6).
+        This is exactly ``ur_description``'s layout, and the flange is the controller's tool0 frame.
+        """
+        spec = robot if isinstance(robot, RobotSpec) else get_robot(robot)
+        d, a, alpha = spec.dh.d, spec.dh.a, spec.dh.alpha
+        joints = [pose((0.0, 0.0, d[0]))]
+        joints += [_dh_origin(a[i], alpha[i], d[i + 1]) for i in range(5)]
+        flange = _dh_origin(a[5], alpha[5], 0.0)
+        return cls(spec.name, joints, flange, np.asarray(smr, float),
+                   pin.SE3.Identity() if tracker is None else tracker)
+
+    def copy(self) -> Geometry:
+        return Geometry(self.robot, list(self.joints), self.flange, self.smr.copy(), self.tracker)
+
+    # --- the JSON geometry block -------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """The geometry block shared by model and truth files."""
+        return {
+            "robot": self.robot,
+            "joints": [pose_to_dict(M) for M in self.joints],
+            "flange": pose_to_dict(self.flange),
+            "smr": [float(v) for v in self.smr],
+            "tracker": pose_to_dict(self.tracker),
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], source: str = "geometry") -> Geometry:
+        """Parse a geometry block; a missing or malformed key raises InputError naming it."""
+        if not isinstance(data, Mapping):
+            raise InputError(f"{source}: expected a JSON object")
+        robot = _require(data, "robot", source)
+        spec = get_robot(str(robot)) if isinstance(robot, str) else None
+        if spec is None:
+            raise InputError(f"{source}: field 'robot' must be a robot name")
+        joints = _require(data, "joints", source)
+        if not isinstance(joints, list) or len(joints) != 6:
+            raise InputError(f"{source}: field 'joints' must be a list of 6 origins")
+        parsed = [_pose_field(j, f"joints[{i}]", source) for i, j in enumerate(joints)]
+        flange = _pose_field(_require(data, "flange", source), "flange", source)
+        smr = _vector(_require(data, "smr", source), "smr", source)
+        tracker = _pose_field(_require(data, "tracker", source), "tracker", source)
+        return cls(spec.name, parsed, flange, smr, tracker)
+
+
+def _require(data: Mapping[str, Any], key: str, source: str) -> Any:
+    if key not in data:
+        raise InputError(f"{source}: missing field '{key}'")
+    return data[key]
+
+
+def _vector(value: Any, name: str, source: str, n: int = 3) -> np.ndarray:
+    if not isinstance(value, list | tuple) or len(value) != n:
+        raise InputError(f"{source}: field '{name}' must be a list of {n} numbers")
+    try:
+        out = np.array([float(v) for v in value])
+    except (TypeError, ValueError):
+        raise InputError(f"{source}: field '{name}' must be a list of {n} numbers") from None
+    if not np.all(np.isfinite(out)):
+        raise InputError(f"{source}: field '{name}' has a non-finite value")
+    return out
+
+
+def _pose_field(value: Any, name: str, source: str) -> pin.SE3:
+    if not isinstance(value, Mapping):
+        raise InputError(f"{source}: field '{name}' must be an object with 'xyz' and 'rpy'")
+    xyz = _vector(_require(value, "xyz", f"{source}: {name}"), f"{name}.xyz", source)
+    rpy = _vector(_require(value, "rpy", f"{source}: {name}"), f"{name}.rpy", source)
+    return pose(xyz, rpy)
+
+
+def parse_triplet(text: str, name: str) -> np.ndarray:
+    """Parse "X,Y,Z" (a CLI option) into a finite 3-vector; InputError naming the option otherwise."""
+    parts = [p.strip() for p in str(text).split(",")]
+    try:
+        values = np.array([float(p) for p in parts])
+    except ValueError:
+        raise InputError(f"{name}: expected three numbers X,Y,Z, got {text!r}") from None
+    if values.shape != (3,) or not np.all(np.isfinite(values)):
+        raise InputError(f"{name}: expected three finite numbers X,Y,Z, got {text!r}")
+    return values
+
+
+def look_at_tracker(position: Sequence[float]) -> pin.SE3:
+    """A tracker frame at `position` (base frame) with z up and x pointing at the robot base.
+
+    Used when the user gives only the tracker's approximate position: the orientation about the
+    vertical is irrelevant to line of sight, and identification re-estimates the whole pose anyway.
+    """
+    p = np.asarray(position, dtype=float)
+    yaw = math.atan2(-p[1], -p[0]) if np.hypot(p[0], p[1]) > 1e-9 else 0.0
+    return pose(p, (0.0, 0.0, yaw))

@@ -1,0 +1,43 @@
+"""Is a motion target safe for this arm? Joint limits and the keep-in box, checked before any motion.
+
+Shared by the campaign (its plans are checked step by step before the arm moves) and MOVEB (every
+streamed target): an unsafe target is refused with a one-line error, never clamped.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hil.arm.catalog import RobotSpec
+from hil.arm.geometry import Geometry
+from hil.arm.kinematics import Kinematics
+from hil.errors import InputError
+
+
+def check_target(q: np.ndarray, spec: RobotSpec, keep_in: tuple[np.ndarray, np.ndarray] | None = None,
+                 model: Geometry | None = None, start: np.ndarray | None = None,
+                 path_checks: int = 16) -> None:
+    """Raise InputError if `q` is outside the joint limits, or the SMR leaves the keep-in box.
+
+    With `start`, the straight joint-space path from `start` to `q` (how moveJ travels) is checked at
+    `path_checks` points too. Nothing is clamped: an unsafe target is refused.
+    """
+    q = np.asarray(q, dtype=float)
+    if q.shape != (6,) or not np.all(np.isfinite(q)):
+        raise InputError(f"motion target {q.tolist()} is not six finite joint angles")
+    low = np.flatnonzero(q < spec.lower)
+    high = np.flatnonzero(q > spec.upper)
+    for j in (*low, *high):
+        raise InputError(f"motion target q{j + 1} = {q[j]:.4f} rad is outside the joint limits "
+                         f"[{spec.lower[j]:.4f}, {spec.upper[j]:.4f}]")
+    if keep_in is None or model is None:
+        return
+    lo, hi = keep_in
+    path = [q] if start is None else [start + (q - start) * s for s in np.linspace(0, 1, path_checks)]
+    pts = Kinematics(model).points(np.array(path), frame="base")
+    outside = np.flatnonzero(np.any((pts < lo) | (pts > hi), axis=1))
+    if outside.size:
+        p = pts[outside[0]]
+        where = "target" if start is None or outside[0] == len(path) - 1 else "path to the target"
+        raise InputError(f"motion {where} {np.round(q, 4).tolist()} puts the SMR at "
+                         f"{np.round(p, 4).tolist()} m, outside the keep-in box {lo.tolist()}..{hi.tolist()}")

@@ -1,0 +1,145 @@
+"""Exports of a calibrated geometry: URDF, the ROS ``ur_description`` kinematics YAML, JSON.
+
+The URDF's root link ``base`` is the controller's base frame (the frame ``actual_TCP_pose`` uses,
+``ur_description``'s ``base``/``base_link_inertia``), joints carry ``ur_description``'s names, and
+``tool0`` is the flange. It also carries the SMR (``smr`` under ``tool0``) and the tracker frame
+(``tracker`` under ``base``) so the whole measurement chain can be inspected in any URDF viewer.
+
+The YAML is what ``ur_description`` loads as ``kinematics_params``: six joint origins (``shoulder`` …
+``wrist_3``, each ``x y z roll pitch yaw``, R = Rz(yaw)·Ry(pitch)·Rx(roll)) and a ``hash``. It has no
+place for a flange change, which is why identification leaves the flange nominal (the SMR offset
+absorbs it); a geometry whose flange is not nominal is refused rather than silently exported wrong.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from typing import Any
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+import pinocchio as pin
+import yaml
+
+from hil import __version__
+from hil.arm.catalog import JOINT_NAMES, get_robot
+from hil.arm.geometry import Geometry, pose
+from hil.errors import InputError
+
+ROS_SEGMENTS: tuple[str, ...] = ("shoulder", "upper_arm", "forearm", "wrist_1", "wrist_2", "wrist_3")
+LINK_NAMES: tuple[str, ...] = ("shoulder_link", "upper_arm_link", "forearm_link", "wrist_1_link",
+                               "wrist_2_link", "wrist_3_link")
+FORMATS: tuple[str, ...] = ("urdf", "ros-kinematics", "json")
+
+
+def _num(v: float) -> str:
+    return repr(float(v))
+
+
+def _origin(M: pin.SE3) -> str:
+    rpy = pin.rpy.matrixToRpy(M.rotation)
+    xyz = " ".join(_num(v) for v in M.translation)
+    return f'<origin xyz="{xyz}" rpy="{" ".join(_num(v) for v in rpy)}"/>'
+
+
+def to_urdf(geometry: Geometry, comment: str = "") -> str:
+    """URDF of the calibrated arm (kinematics only: no meshes or inertias)."""
+    spec = get_robot(geometry.robot)
+    lines = ['<?xml version="1.0"?>']
+    if comment:
+        lines.append(f"<!-- {comment.replace('--', '- -')} -->")
+    lines.append(f"<robot name={quoteattr(spec.name + '_calibrated')}>")
+    lines.append('  <link name="base"/>')
+    parent = "base"
+    for i, (joint, link) in enumerate(zip(JOINT_NAMES, LINK_NAMES, strict=True)):
+        lines += [
+            f'  <link name="{link}"/>',
+            f'  <joint name="{joint}_joint" type="revolute">',
+            f'    <parent link="{parent}"/>',
+            f'    <child link="{link}"/>',
+            f"    {_origin(geometry.joints[i])}",
+            '    <axis xyz="0 0 1"/>',
+            f'    <limit lower="{_num(spec.lower[i])}" upper="{_num(spec.upper[i])}" '
+            f'effort="{_num(spec.effort[i])}" velocity="{_num(spec.max_joint_speed[i])}"/>',
+            "  </joint>",
+        ]
+        parent = link
+    for name, parent_link, M in (("tool0", "wrist_3_link", geometry.flange),
+                                 ("smr", "tool0", pose(geometry.smr)),
+                                 ("tracker", "base", geometry.tracker)):
+        lines += [
+            f'  <link name="{name}"/>',
+            f'  <joint name="{parent_link}-{name}" type="fixed">',
+            f'    <parent link="{parent_link}"/>',
+            f'    <child link="{name}"/>',
+            f"    {_origin(M)}",
+            "  </joint>",
+        ]
+    lines.append("</robot>")
+    return "\n".join(lines) + "\n"
+
+
+def _check_flange_nominal(geometry: Geometry, source: str) -> None:
+    nominal = Geometry.nominal(geometry.robot).flange
+    diff = pin.log6(nominal.inverse() * geometry.flange).vector
+    if np.max(np.abs(diff)) > 1e-12:
+        raise InputError(f"{source}: field 'flange' differs from the nominal flange; the ROS kinematics "
+                         "YAML cannot carry a flange change (export URDF or JSON instead)")
+
+
+def to_ros_kinematics(geometry: Geometry, comment: str = "", source: str = "model") -> str:
+    """``ur_description`` kinematics YAML of the calibrated joint origins, with a hash."""
+    _check_flange_nominal(geometry, source)
+    segments: dict[str, Any] = {}
+    for name, M in zip(ROS_SEGMENTS, geometry.joints, strict=True):
+        x, y, z = (float(v) for v in M.translation)
+        roll, pitch, yaw = (float(v) for v in pin.rpy.matrixToRpy(M.rotation))
+        segments[name] = {"x": x, "y": y, "z": z, "roll": roll, "pitch": pitch, "yaw": yaw}
+    digest = hashlib.sha256(json.dumps(segments, sort_keys=True).encode()).hexdigest()[:16]
+    doc = {"kinematics": {**segments, "hash": f"calib_{digest}"}}
+    header = f"# {comment}\n" if comment else ""
+    return header + yaml.safe_dump(doc, sort_keys=False, default_flow_style=False)
+
+
+def from_ros_kinematics(text: str, robot: str, source: str = "kinematics.yaml") -> Geometry:
+    """The geometry (nominal flange, no SMR, tracker at the base) of a ``ur_description`` YAML."""
+    try:
+        doc = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise InputError(f"{source}: not valid YAML ({exc})") from None
+    block = doc.get("kinematics") if isinstance(doc, dict) else None
+    if not isinstance(block, dict):
+        raise InputError(f"{source}: missing field 'kinematics'")
+    joints = []
+    for name in ROS_SEGMENTS:
+        seg = block.get(name)
+        if not isinstance(seg, dict):
+            raise InputError(f"{source}: missing field 'kinematics.{name}'")
+        try:
+            vals = [float(seg[k]) for k in ("x", "y", "z", "roll", "pitch", "yaw")]
+        except (KeyError, TypeError, ValueError):
+            raise InputError(f"{source}: field 'kinematics.{name}' needs numbers x y z roll pitch yaw"
+                             ) from None
+        joints.append(pose(vals[:3], vals[3:]))
+    nominal = Geometry.nominal(robot)
+    return Geometry(nominal.robot, joints, nominal.flange, np.zeros(3))
+
+
+def to_json(document: dict[str, Any]) -> str:
+    """The model document as JSON text."""
+    return json.dumps(document, indent=2) + "\n"
+
+
+def export(document: dict[str, Any], geometry: Geometry, fmt: str, source: str = "model") -> str:
+    """Text of `geometry` in format `fmt` (one of FORMATS)."""
+    provenance = document.get("input", {}) if isinstance(document.get("input"), dict) else {}
+    comment = (f"calibrated by hil {__version__} from {provenance.get('file', source)} "
+               f"sha256 {provenance.get('sha256', 'unknown')}")
+    if fmt == "urdf":
+        return to_urdf(geometry, comment)
+    if fmt == "ros-kinematics":
+        return to_ros_kinematics(geometry, comment, source)
+    if fmt == "json":
+        return to_json(document)
+    raise InputError(f"--format: unknown format {fmt!r}, choose one of {', '.join(FORMATS)}")

@@ -1,0 +1,320 @@
+"""Kinematic parameter identification from SMR positions measured by a tracker.
+
+The fit is a Levenberg–Marquardt loop written here rather than ``scipy.optimize.least_squares``
+because the step must be applied *multiplicatively* on SE(3) (`kinematics.apply_update`): scipy only
+adds steps to a vector, and an additive update of the twist with the Jacobian taken at zero error
+converges to a biased answer. Everything else comes from libraries (pinocchio for the kinematics,
+scipy for the rigid alignment, QR and the F distribution).
+
+Steps:
+1. check the data can identify the parameters at all (pose count, joints that never move, rank);
+2. align the tracker frame in closed form (Kabsch fit of nominal SMR positions to measured ones),
+   so the user supplies only the robot type and optionally a rough SMR offset;
+3. fit the tracker pose and SMR offset alone, then all identifiable parameters (27 for a UR);
+4. reject outliers one at a time by a leave-one-out F test on each pose's leverage-corrected
+   residual (Bonferroni at α = 1 %), refitting after each rejection; the rejected poses are named;
+5. report the fit RMS/max, iterations, condition number, covariance, standard deviations and
+   strongly correlated parameter pairs.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg
+import scipy.stats
+from scipy.spatial.transform import Rotation
+
+from hil.arm.geometry import Geometry
+from hil.arm.kinematics import (
+    N_PARAMETERS,
+    PARAMETER_NAMES,
+    SMR_SLICE,
+    TRACKER_SLICE,
+    Kinematics,
+    apply_update,
+    deviation_from,
+    generic_geometry,
+    identifiable_parameters,
+    numerical_rank,
+)
+from hil.calibration.measurements import Measurements
+from hil.errors import HilError, InputError
+
+#: Smallest spread (rad) of a joint's values for it to count as having moved.
+MIN_JOINT_SPREAD = 1e-3
+
+
+class IdentificationError(HilError):
+    """The fit failed to converge or produced a meaningless answer."""
+
+
+@dataclass(frozen=True)
+class RejectedPose:
+    """A pose the outlier test removed from the fit."""
+
+    index: int  # 0-based row of the input
+    line: int  # line number in the input file
+    residual: float  # residual norm (m) when it was rejected
+    p_value: float  # leave-one-out F test p-value (before the Bonferroni correction)
+
+
+@dataclass(frozen=True)
+class Correlation:
+    """A pair of identified parameters whose estimates are strongly correlated."""
+
+    a: str
+    b: str
+    rho: float
+
+
+@dataclass
+class FitResult:
+    """The calibrated geometry and everything a report needs about how well it is determined."""
+
+    geometry: Geometry
+    robot: str
+    indices: np.ndarray  # identified parameters (into PARAMETER_NAMES)
+    values: np.ndarray  # their deviation from the nominal geometry (m, rad; SMR absolute)
+    std: np.ndarray  # their standard deviations (local error coordinates at the solution)
+    covariance: np.ndarray  # (n, n)
+    rms: float  # fit RMS of the 3-D residual norms over the poses used (m)
+    max_error: float  # largest residual norm among the poses used (m)
+    sigma: float  # estimated per-axis measurement noise (m)
+    initial_rms: float  # RMS after the tracker alignment, before the fit (m)
+    iterations: int
+    condition: float  # of the column-normalised Jacobian
+    residuals: np.ndarray  # (m, 3) measured − model for every input pose (used or not)
+    used: np.ndarray  # (m,) bool
+    rejected: list[RejectedPose] = field(default_factory=list)
+    correlated: list[Correlation] = field(default_factory=list)
+    baseline: Geometry | None = None  # nominal arm with only the tracker pose and SMR fitted
+    seconds: float = 0.0
+    source: str = ""
+    sha256: str = ""
+
+    @property
+    def names(self) -> list[str]:
+        return [PARAMETER_NAMES[i] for i in self.indices]
+
+    def prediction_covariance(self, q: np.ndarray) -> np.ndarray:
+        """(N, 3, 3) covariance of the model's predicted SMR positions at configurations `q`."""
+        J = Kinematics(self.geometry).jacobian(q, self.indices)
+        return np.einsum("nij,jk,nlk->nil", J, self.covariance, J)
+
+
+def minimum_poses(n_parameters: int) -> int:
+    """Fewest poses that identify `n_parameters` and leave 3 residual degrees of freedom."""
+    return -(-(n_parameters + 3) // 3)
+
+
+def check_design(meas: Measurements, robot: str) -> None:
+    """Raise InputError if these poses cannot identify the model, naming what is wrong."""
+    idx = identifiable_parameters(robot)
+    n, m, src = len(idx), len(meas), meas.source
+    need = minimum_poses(n)
+    if m < need:
+        raise InputError(f"{src}: {m} poses, but identifying {n} parameters from 3 coordinates per "
+                         f"pose needs at least {need}")
+    spread = np.ptp(meas.q, axis=0)
+    if np.max(np.linalg.norm(meas.q - meas.q[0], axis=1)) < MIN_JOINT_SPREAD:
+        raise InputError(f"{src}: all {m} poses are the same joint configuration")
+    still = [f"q{j + 1}" for j in range(6) if spread[j] < MIN_JOINT_SPREAD]
+    if still:
+        raise InputError(f"{src}: column(s) {', '.join(still)} never change (spread below "
+                         f"{MIN_JOINT_SPREAD} rad): every joint must move for its parameters to be "
+                         "identifiable")
+    J = Kinematics(generic_geometry(robot)).jacobian(meas.q, idx).reshape(-1, n)
+    if numerical_rank(J) < n:
+        norms = np.linalg.norm(J, axis=0)
+        _, r, piv = scipy.linalg.qr(J / norms, mode="economic", pivoting=True)
+        d = np.abs(np.diag(r))
+        lost = [PARAMETER_NAMES[idx[piv[k]]] for k in range(n) if d[k] <= 1e-7 * d[0]]
+        raise InputError(f"{src}: degenerate pose set: the poses cannot identify {', '.join(lost)} "
+                         "(use more distinct poses that move every joint)")
+
+
+def align_tracker(geometry: Geometry, meas: Measurements) -> Geometry:
+    """`geometry` with its tracker pose from a closed-form rigid fit of modelled to measured points."""
+    base = Kinematics(geometry).points(meas.q, frame="base")
+    ca, cb = meas.p.mean(axis=0), base.mean(axis=0)
+    rot, _ = Rotation.align_vectors(meas.p - ca, base - cb)  # measured ≈ R·base + t
+    R = rot.as_matrix()
+    t = ca - R @ cb
+    out = geometry.copy()
+    out.tracker.rotation = R.T
+    out.tracker.translation = -R.T @ t
+    return out
+
+
+@dataclass
+class _State:
+    geometry: Geometry
+    p: np.ndarray
+    J: np.ndarray  # (m, 3, 51)
+
+    @classmethod
+    def at(cls, geometry: Geometry, q: np.ndarray) -> _State:
+        p, J = Kinematics(geometry).point_and_jacobian(q)
+        return cls(geometry, p, J)
+
+
+def _levenberg_marquardt(state: _State, q: np.ndarray, p_meas: np.ndarray, idx: np.ndarray,
+                         max_iter: int) -> tuple[_State, int, bool]:
+    """Minimise Σ‖p_meas − p(q)‖² over the parameters `idx`; returns (state, iterations, converged)."""
+    r = (p_meas - state.p).ravel()
+    cost = float(r @ r)
+    lam = 1e-3
+    for it in range(1, max_iter + 1):
+        J = state.J[:, :, idx].reshape(-1, len(idx))
+        A = J.T @ J
+        g = J.T @ r
+        D = np.maximum(np.diag(A), 1e-30)
+        improved = False
+        while lam < 1e12:
+            step = scipy.linalg.solve(A + lam * np.diag(D), g, assume_a="pos")
+            full = np.zeros(N_PARAMETERS)
+            full[idx] = step
+            cand = _State.at(apply_update(state.geometry, full), q)
+            r_c = (p_meas - cand.p).ravel()
+            cost_c = float(r_c @ r_c)
+            if cost_c < cost:
+                improved = True
+                break
+            lam *= 4.0
+        if not improved:
+            return state, it, True  # no step lowers the cost: at the minimum to working precision
+        drop = cost - cost_c
+        state, r, cost = cand, r_c, cost_c
+        lam = max(lam / 3.0, 1e-12)
+        if drop <= 1e-12 * cost + 1e-30 or np.max(np.abs(step) * np.sqrt(D)) < 1e-12:
+            return state, it, True
+    return state, max_iter, False
+
+
+def _statistics(J: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """(JᵀJ)⁻¹, σ̂² and the condition number, via column normalisation for numerical stability."""
+    norms = np.linalg.norm(J, axis=0)
+    Js = J / norms
+    s = np.linalg.svd(Js, compute_uv=False)
+    inv = np.linalg.pinv(Js.T @ Js) / np.outer(norms, norms)
+    dof = J.shape[0] - J.shape[1]
+    sigma2 = float(r @ r) / dof if dof > 0 else float("nan")
+    return inv, sigma2, float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
+
+
+def _worst_outlier(Jp: np.ndarray, res: np.ndarray, inv: np.ndarray) -> tuple[int, float]:
+    """Index (among the used poses) of the most significant outlier and its F-test p-value."""
+    m, n = Jp.shape[0], Jp.shape[2]
+    dof = 3 * m - n
+    if dof - 3 < 1:
+        return -1, 1.0
+    H = np.einsum("nij,jk,nlk->nil", Jp, inv, Jp)  # leverage blocks
+    Q = np.linalg.pinv(np.eye(3) - H)
+    qi = np.einsum("ni,nij,nj->n", res, Q, res)
+    ssr = float(np.sum(res * res))
+    s2_loo = np.maximum(ssr - qi, 1e-300) / (dof - 3)
+    F = qi / (3.0 * s2_loo)
+    pvals = scipy.stats.f.sf(F, 3, dof - 3)
+    k = int(np.argmin(pvals))
+    return k, float(pvals[k])
+
+
+_REGISTRATION = np.r_[np.arange(N_PARAMETERS)[TRACKER_SLICE], np.arange(N_PARAMETERS)[SMR_SLICE]]
+
+
+def register(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None,
+             max_iter: int = 50) -> Geometry:
+    """The nominal arm with only the tracker pose and the SMR offset fitted to `meas`.
+
+    This is "before calibration": what the arm's own kinematics achieve once the tracker is
+    registered. Works from 3 non-collinear poses (the SMR offset is then poorly determined).
+    """
+    nominal = Geometry.nominal(robot, smr=(0.0, 0.0, 0.0) if smr_guess is None else smr_guess)
+    state = _State.at(align_tracker(nominal, meas), meas.q)
+    state, _, _ = _levenberg_marquardt(state, meas.q, meas.p, _REGISTRATION, max_iter)
+    return state.geometry
+
+
+def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None, *,
+             reject_outliers: bool = True, alpha: float = 0.01, max_iter: int = 100,
+             correlation_threshold: float = 0.95) -> FitResult:
+    """Identify the calibration geometry of `robot` from `meas` (see the module docstring)."""
+    t0 = time.perf_counter()
+    check_design(meas, robot)
+    idx = identifiable_parameters(robot)
+    n, m = len(idx), len(meas)
+    nominal = Geometry.nominal(robot, smr=(0.0, 0.0, 0.0) if smr_guess is None else smr_guess)
+    start = align_tracker(nominal, meas)
+    used = np.ones(m, dtype=bool)
+    state = _State.at(start, meas.q)
+    initial_rms = float(np.sqrt(np.mean(np.sum((meas.p - state.p) ** 2, axis=1))))
+
+    # Tracker pose and SMR offset first: a far-off SMR guess otherwise drags the joints around.
+    state, iterations, _ = _levenberg_marquardt(state, meas.q, meas.p, _REGISTRATION, max_iter)
+    baseline = state.geometry
+    rejected: list[RejectedPose] = []
+    max_reject = min(m // 5, m - minimum_poses(n))
+    while True:
+        q_u, p_u = meas.q[used], meas.p[used]
+        sub = _State(state.geometry, state.p[used], state.J[used])
+        sub, its, converged = _levenberg_marquardt(sub, q_u, p_u, idx, max_iter)
+        iterations += its
+        state = _State.at(sub.geometry, meas.q)
+        res = meas.p - state.p
+        Jp = state.J[used][:, :, idx]
+        inv, sigma2, cond = _statistics(Jp.reshape(-1, n), res[used].ravel())
+        if not reject_outliers or len(rejected) >= max_reject:
+            break
+        k, pval = _worst_outlier(Jp, res[used], inv)
+        if k < 0 or pval >= alpha / used.sum():
+            break
+        row = int(np.flatnonzero(used)[k])
+        used[row] = False
+        rejected.append(RejectedPose(row, int(meas.lines[row]), float(np.linalg.norm(res[row])), pval))
+    if not converged:
+        raise IdentificationError(f"{meas.source}: the fit did not converge in {max_iter} iterations")
+    cov = sigma2 * inv
+    std = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(std, std)
+    names = [PARAMETER_NAMES[i] for i in idx]
+    correlated = [Correlation(names[a], names[b], float(corr[a, b]))
+                  for a in range(n) for b in range(a + 1, n)
+                  if abs(corr[a, b]) >= correlation_threshold]
+    correlated.sort(key=lambda c: -abs(c.rho))
+    reference = Geometry.nominal(robot)
+    values = deviation_from(reference, state.geometry)[idx]
+    norms = np.linalg.norm(res[used], axis=1)
+    return FitResult(
+        geometry=state.geometry, robot=robot, indices=idx, values=values, std=std, covariance=cov,
+        rms=float(np.sqrt(np.mean(norms**2))), max_error=float(norms.max()),
+        sigma=float(np.sqrt(sigma2)), initial_rms=initial_rms, iterations=iterations,
+        condition=cond, residuals=res, used=used, rejected=rejected, correlated=correlated,
+        baseline=baseline, seconds=time.perf_counter() - t0, source=meas.source, sha256=meas.sha256)
+
+
+@dataclass(frozen=True)
+class ErrorStats:
+    """Distances between predicted and measured (or true) points."""
+
+    count: int
+    mean: float
+    rms: float
+    max: float
+    errors: np.ndarray  # (m,) 3-D distances, metres
+
+    @classmethod
+    def of(cls, errors: np.ndarray) -> ErrorStats:
+        e = np.linalg.norm(np.asarray(errors, dtype=float).reshape(-1, 3), axis=1)
+        return cls(len(e), float(e.mean()), float(np.sqrt(np.mean(e**2))), float(e.max()), e)
+
+    def as_dict(self) -> dict[str, float | int]:
+        return {"count": self.count, "mean": self.mean, "rms": self.rms, "max": self.max}
+
+
+def validate(geometry: Geometry, meas: Measurements) -> ErrorStats:
+    """Errors of `geometry`'s predictions against measured points it was not fitted to."""
+    return ErrorStats.of(meas.p - Kinematics(geometry).points(meas.q))

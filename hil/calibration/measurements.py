@@ -1,0 +1,123 @@
+"""Reading and writing measurement and joint CSV files (the contract in DESIGN.md).
+
+A measurements file has the header ``q1,q2,q3,q4,q5,q6,x,y,z`` (joint radians, SMR position in the
+tracker frame in metres); extra columns are allowed and ignored. Every problem is reported as an
+InputError naming the file, the line and the column, because these files come from other tools and
+people and the first thing a user needs is where to look.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from hil.errors import InputError
+from hil.files.inputs import decode_input_text, read_input_bytes
+from hil.files.outputs import atomic_write_text, format_csv
+
+JOINT_COLUMNS: tuple[str, ...] = ("q1", "q2", "q3", "q4", "q5", "q6")
+POINT_COLUMNS: tuple[str, ...] = ("x", "y", "z")
+
+
+@dataclass(frozen=True)
+class Table:
+    """Numeric columns read from a CSV file, with the file line number of every row."""
+
+    source: str
+    columns: dict[str, np.ndarray]
+    lines: np.ndarray  # 1-based line numbers in the file
+    sha256: str
+
+    def __len__(self) -> int:
+        return len(self.lines)
+
+
+@dataclass(frozen=True)
+class Measurements:
+    """Joint configurations and the tracker's SMR positions, one row per pose."""
+
+    q: np.ndarray  # (m, 6) radians
+    p: np.ndarray  # (m, 3) metres, tracker frame
+    lines: np.ndarray  # (m,) 1-based line numbers in the source file
+    source: str = "<memory>"
+    sha256: str = ""
+
+    def __len__(self) -> int:
+        return len(self.q)
+
+    def subset(self, mask: np.ndarray) -> Measurements:
+        return Measurements(self.q[mask], self.p[mask], self.lines[mask], self.source, self.sha256)
+
+    @classmethod
+    def from_arrays(cls, q: np.ndarray, p: np.ndarray, source: str = "<memory>") -> Measurements:
+        """Measurements from arrays, with a digest of their bytes and line numbers as in a CSV."""
+        q = np.asarray(q, dtype=float).reshape(-1, 6)
+        p = np.asarray(p, dtype=float).reshape(-1, 3)
+        digest = hashlib.sha256(np.ascontiguousarray(np.hstack([q, p])).tobytes()).hexdigest()
+        return cls(q, p, np.arange(2, len(q) + 2), source, digest)
+
+
+def read_table(path: str | os.PathLike[str], required: Sequence[str]) -> Table:
+    """Read a CSV file whose header includes `required` numeric columns (others are ignored)."""
+    name = str(path)
+    raw = read_input_bytes(path, "a CSV file")
+    text = decode_input_text(raw, name)
+    rows = [(n, row) for n, row in enumerate(csv.reader(io.StringIO(text)), start=1)
+            if row and any(c.strip() for c in row) and not row[0].lstrip().startswith("#")]
+    if not rows:
+        raise InputError(f"{name}: empty file, expected a header with {','.join(required)}")
+    header_line, header = rows[0]
+    header = [h.strip() for h in header]
+    missing = [c for c in required if c not in header]
+    if missing:
+        raise InputError(f"{name}: line {header_line}: missing column(s) {', '.join(missing)} "
+                         f"(the header must include {','.join(required)})")
+    dupes = sorted({c for c in required if header.count(c) > 1})
+    if dupes:
+        raise InputError(f"{name}: line {header_line}: column(s) {', '.join(dupes)} appear twice")
+    where = {c: header.index(c) for c in required}
+    data = np.empty((len(rows) - 1, len(required)))
+    lines = np.empty(len(rows) - 1, dtype=int)
+    for k, (line, row) in enumerate(rows[1:]):
+        if len(row) != len(header):
+            raise InputError(f"{name}: line {line}: expected {len(header)} fields, got {len(row)}")
+        for j, col in enumerate(required):
+            cell = row[where[col]].strip()
+            try:
+                value = float(cell)
+            except ValueError:
+                raise InputError(f"{name}: line {line}, column {col}: {cell!r} is not a number") from None
+            if not math.isfinite(value):
+                raise InputError(f"{name}: line {line}, column {col}: {cell!r} is not a finite number")
+            data[k, j] = value
+        lines[k] = line
+    if len(lines) == 0:
+        raise InputError(f"{name}: no data rows after the header")
+    columns = {c: data[:, j] for j, c in enumerate(required)}
+    return Table(name, columns, lines, hashlib.sha256(raw).hexdigest())
+
+
+def read_joints(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Joint configurations (m, 6) and their line numbers from a CSV with columns q1..q6."""
+    table = read_table(path, JOINT_COLUMNS)
+    return np.column_stack([table.columns[c] for c in JOINT_COLUMNS]), table.lines
+
+
+def read_measurements(path: str | os.PathLike[str]) -> Measurements:
+    """A measurements CSV (q1..q6, x, y, z) as `Measurements`."""
+    table = read_table(path, JOINT_COLUMNS + POINT_COLUMNS)
+    q = np.column_stack([table.columns[c] for c in JOINT_COLUMNS])
+    p = np.column_stack([table.columns[c] for c in POINT_COLUMNS])
+    return Measurements(q, p, table.lines, table.source, table.sha256)
+
+
+def write_measurements(path: str | os.PathLike[str], q: np.ndarray, p: np.ndarray) -> None:
+    """Write a measurements CSV (q1..q6, x, y, z)."""
+    atomic_write_text(path, format_csv(JOINT_COLUMNS + POINT_COLUMNS, np.hstack([q, p])))

@@ -1,0 +1,125 @@
+"""The versioned JSON files that carry a geometry: calibrated models and simulator truths.
+
+``hil-model/1`` is the geometry block plus how the model was obtained: identified parameters with
+their standard deviations and covariance, fit statistics, the sha256 of the input data and the
+software versions, so a model can always be traced to its measurements. ``hil-truth/1`` is the
+geometry block plus the simulated station's noise. Unknown keys are ignored (newer writers may add
+some); missing ones are errors naming the key.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from hil import __version__
+from hil.arm.geometry import Geometry
+from hil.calibration.identification import FitResult
+from hil.calibration.synthetic import Noise
+from hil.errors import InputError
+from hil.files.inputs import read_input_text
+from hil.files.outputs import atomic_write_text
+
+MODEL_FORMAT = "hil-model/1"
+RESULT_FORMAT = "hil-result/1"  # a campaign result; it embeds the model
+TRUTH_FORMAT = "hil-truth/1"
+
+
+def software_versions() -> dict[str, str]:
+    """Versions of hil and of the numerical libraries a result depends on."""
+    import scipy
+
+    return {"hil": __version__, "pinocchio": pin.__version__, "numpy": np.__version__,
+            "scipy": scipy.__version__}
+
+
+def model_document(fit: FitResult, validation: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The ``hil-model/1`` JSON document of an identification result."""
+    doc: dict[str, Any] = {"format": MODEL_FORMAT, **fit.geometry.to_dict()}
+    doc["parameters"] = [
+        {"name": name, "value": float(v), "std": float(s)}
+        for name, v, s in zip(fit.names, fit.values, fit.std, strict=True)
+    ]
+    doc["covariance"] = {"parameters": fit.names, "matrix": fit.covariance.tolist()}
+    doc["fit"] = {
+        "poses": len(fit.used),
+        "used": int(fit.used.sum()),
+        "rms": fit.rms,
+        "max": fit.max_error,
+        "sigma": fit.sigma,
+        "initial_rms": fit.initial_rms,
+        "iterations": fit.iterations,
+        "condition": fit.condition,
+        "seconds": fit.seconds,
+        "rejected": [{"pose": r.index, "line": r.line, "residual": r.residual, "p_value": r.p_value}
+                     for r in fit.rejected],
+        "correlated": [{"a": c.a, "b": c.b, "rho": c.rho} for c in fit.correlated],
+    }
+    if validation is not None:
+        doc["validation"] = validation
+    doc["input"] = {"file": os.path.basename(fit.source), "sha256": fit.sha256}
+    doc["software"] = software_versions()
+    doc["created"] = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
+    return doc
+
+
+def truth_document(truth: Geometry, noise: Noise) -> dict[str, Any]:
+    """The ``hil-truth/1`` JSON document of a simulated arm."""
+    return {"format": TRUTH_FORMAT, **truth.to_dict(), "noise": noise.as_dict()}
+
+
+def write_json(path: str | os.PathLike[str], doc: dict[str, Any]) -> None:
+    """Write a JSON document atomically (floats at full precision)."""
+    atomic_write_text(path, json.dumps(doc, indent=2) + "\n")
+
+
+def read_json(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """Parse a JSON file; InputError naming the file and line when it is not valid JSON."""
+    name = str(path)
+    text = read_input_text(path, "a JSON file")
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{name}: line {exc.lineno}: not valid JSON ({exc.msg})") from None
+    if not isinstance(doc, dict):
+        raise InputError(f"{name}: expected a JSON object")
+    return doc
+
+
+def load_geometry(path: str | os.PathLike[str],
+                  formats: tuple[str, ...] = (MODEL_FORMAT, TRUTH_FORMAT)) -> tuple[Geometry, dict]:
+    """The geometry in a model or truth file, and the whole document.
+
+    Where a model is accepted, a campaign result (``hil-result/1``, what ``hil calibrate --out``
+    writes) is accepted too: it embeds the model, and an engineer should not have to dig it out.
+    """
+    doc = read_json(path)
+    fmt = doc.get("format")
+    if fmt == RESULT_FORMAT and MODEL_FORMAT in formats:
+        model = doc.get("model")
+        if not isinstance(model, dict):
+            raise InputError(f"{path}: the campaign result holds no model (status {doc.get('status')!r})")
+        doc, fmt = model, model.get("format")
+    if fmt not in formats:
+        raise InputError(f"{path}: field 'format' is {fmt!r}, expected {' or '.join(formats)}")
+    return Geometry.from_dict(doc, source=str(path)), doc
+
+
+def load_truth(path: str | os.PathLike[str]) -> tuple[Geometry, Noise]:
+    """A simulator truth: geometry and noise (the noise block is required)."""
+    geometry, doc = load_geometry(path, (TRUTH_FORMAT,))
+    block = doc.get("noise")
+    if not isinstance(block, dict):
+        raise InputError(f"{path}: missing field 'noise'")
+    values = {}
+    for key in ("tracker_sigma", "encoder_sigma"):
+        v = block.get(key)
+        if not isinstance(v, int | float) or not np.isfinite(v) or v < 0:
+            raise InputError(f"{path}: field 'noise.{key}' must be a non-negative number")
+        values[key] = float(v)
+    return geometry, Noise(**values)

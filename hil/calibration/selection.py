@@ -1,0 +1,195 @@
+"""Glue between hil's kinematic model and the `selector` package (which never imports hil).
+
+`SelectionModel` adapts a nominal `Geometry` to `selector.model.PoseModel`; `select_poses` runs the
+whole pipeline (candidates → selection → bound → visiting order) and returns the JSON-ready report
+that ``hil select`` writes. Every `selector.SelectorError` becomes an `InputError` here, so the CLI
+answers bad requests with one line and exit code 2.
+
+Choices made here:
+
+* **Geometry.** The nominal geometry of the robot with the user's SMR offset, and the tracker at the
+  user's position (`look_at_tracker`) or, without one, 2.5 m in front of the robot; the tracker pose only
+  reparametrises the tracker columns, which leaves O1 unchanged.
+* **Parameters.** hil's identifiable set (27 for a UR). If the SMR guess lies on the joint-6 axis one
+  of them is truly unobservable for *this* station; it is dropped (pivoted QR) and named in the report,
+  rather than making every design look singular.
+* **Expected error magnitudes** (column scaling "expected" for O2–O5): 0.5 mm and 1 mrad for joint and
+  flange placements (the synthetic truths' σ), 1 mm for the SMR offset and the tracker position,
+  1 mrad for the tracker orientation.
+* **Link thickness** scales with the upper-arm length: (|a2| / 0.425)^0.6 times a UR5e's.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+import scipy.linalg
+
+import selector
+from hil.arm.catalog import get_robot
+from hil.arm.geometry import Geometry, look_at_tracker
+from hil.arm.kinematics import PARAMETER_NAMES, Kinematics, identifiable_parameters
+from hil.errors import InputError
+from selector.arm import ArmShape
+from selector.bound import d_optimal_bound
+from selector.candidates import Constraints, generate_candidates
+from selector.design import check_count
+from selector.indices import SCALINGS, parse_index, scale_columns
+from selector.order import order_poses, travel_time
+from selector.search import METHODS, select
+from selector.tabu import TabuSettings
+
+DEFAULT_TRACKER_FOR_JACOBIAN = (2.5, 0.0, 0.5)
+FORMAT = "hil-poses/1"
+
+
+def _expected_magnitude(name: str) -> float:
+    group, axis = name.split(".")
+    if group == "smr":
+        return 1e-3
+    if group == "tracker":
+        return 1e-3
+    return 0.5e-3 if axis.startswith("t") else 1e-3
+
+
+class SelectionModel:
+    """`selector.model.PoseModel` for one arm + SMR + tracker (module docstring for the choices)."""
+
+    def __init__(self, robot: str, smr: Sequence[float] = (0.0, 0.0, 0.045),
+                 tracker: Sequence[float] | None = None) -> None:
+        self.spec = get_robot(robot)
+        position = DEFAULT_TRACKER_FOR_JACOBIAN if tracker is None else tracker
+        self.geometry = Geometry.nominal(self.spec, smr=np.asarray(smr, float),
+                                         tracker=look_at_tracker(position))
+        self.kinematics = Kinematics(self.geometry)
+        self.lower, self.upper = self.spec.lower.copy(), self.spec.upper.copy()
+        self.max_joint_speed = self.spec.max_joint_speed.copy()
+        self.smr = self.geometry.smr.copy()
+        self.arm = arm_shape(self.spec.name)
+        self._origins = np.array([M.homogeneous for M in self.geometry.joints])
+        self._flange = self.geometry.flange.homogeneous
+        self.parameters, self.unobservable = self._observable_parameters()
+        self.parameter_names = tuple(PARAMETER_NAMES[i] for i in self.parameters)
+        self.parameter_scale = np.array([_expected_magnitude(n) for n in self.parameter_names])
+
+    def _observable_parameters(self) -> tuple[np.ndarray, list[str]]:
+        idx = identifiable_parameters(self.spec.name)
+        q = np.random.default_rng(11).uniform(-math.pi, math.pi, size=(120, 6))
+        J = self.kinematics.jacobian(q, idx).reshape(-1, len(idx))
+        J = J / np.linalg.norm(J, axis=0)
+        _, r, piv = scipy.linalg.qr(J, mode="economic", pivoting=True)
+        d = np.abs(np.diag(r))
+        keep = np.sort(piv[d > 1e-7 * d[0]])
+        lost = [PARAMETER_NAMES[idx[i]] for i in np.sort(piv[d <= 1e-7 * d[0]])]
+        return idx[keep], lost
+
+    def frames(self, q: np.ndarray) -> np.ndarray:
+        """(N, 7, 4, 4) joint frames and flange in the base frame.
+
+        Each step is T ← T·origin (one (4N × 4)·(4 × 4) product) then the rotation about z, which
+        only mixes the first two columns — far cheaper than N separate 4 × 4 products.
+        """
+        Q = np.atleast_2d(np.asarray(q, dtype=float))
+        n = len(Q)
+        out = np.empty((n, 7, 4, 4))
+        T = np.broadcast_to(np.eye(4), (n, 4, 4))
+        c, s = np.cos(Q), np.sin(Q)
+        for j in range(6):
+            T = (T.reshape(4 * n, 4) @ self._origins[j]).reshape(n, 4, 4)
+            x, y = T[:, :, 0].copy(), T[:, :, 1]
+            T[:, :, 0] = c[:, j, None] * x + s[:, j, None] * y
+            T[:, :, 1] = c[:, j, None] * y - s[:, j, None] * x
+            out[:, j] = T
+        out[:, 6] = (T.reshape(4 * n, 4) @ self._flange).reshape(n, 4, 4)
+        return out
+
+    def jacobian(self, q: np.ndarray) -> np.ndarray:
+        """(N, 3, n) identification Jacobian of the observable parameters (hil's pinocchio model)."""
+        return self.kinematics.jacobian(q, self.parameters)
+
+
+def arm_shape(robot: str) -> ArmShape:
+    """The arm's link capsules: a UR5e's scaled by (|a2| / 0.425)^0.6 (see the module docstring)."""
+    return ArmShape.scaled((abs(get_robot(robot).dh.a[1]) / 0.425) ** 0.6)
+
+
+def parse_constraints(*, tracker: Sequence[float] | None, disabled: Sequence[str] = (),
+                      **settings: Any) -> Constraints:
+    """`Constraints` from CLI-style values; a bad value raises InputError."""
+    try:
+        return Constraints(tracker=None if tracker is None else tuple(map(float, tracker)),
+                           disabled=frozenset(disabled), **settings)
+    except selector.SelectorError as exc:
+        raise InputError(str(exc)) from None
+
+
+def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str = "O1",
+                 method: str = "tabu", seed: int = 0, smr: Sequence[float] = (0.0, 0.0, 0.045),
+                 constraints: Constraints | None = None, scaling: str = "expected",
+                 start: Sequence[float] | None = None, settings: TabuSettings | None = None,
+                 bound: bool = True) -> dict[str, Any]:
+    """Choose `count` measurement poses for `robot`; the JSON-ready report (see ``hil select``)."""
+    constraints = constraints or Constraints()
+    try:
+        index = parse_index(index)
+        if scaling not in SCALINGS:
+            raise selector.SelectorError(f"unknown column scaling {scaling!r}: choose one of "
+                                         f"{', '.join(SCALINGS)}")
+        if method not in METHODS:
+            raise selector.SelectorError(f"unknown method {method!r}: choose one of {', '.join(METHODS)}")
+        model = SelectionModel(robot, smr, constraints.tracker)
+        n = len(model.parameters)
+        check_count(count, candidates, n)
+        cands = generate_candidates(model, candidates, constraints, seed=seed)
+        check_count(count, len(cands), n)
+        G = scale_columns(cands.jacobian, scaling, model.parameter_scale)
+        options: dict[str, object] = {"settings": settings} if method == "tabu" and settings else {}
+        result = select(G, count, method=method, index=index, seed=seed, **options)
+        t0 = time.perf_counter()
+        b = d_optimal_bound(G) if bound else None
+        bound_seconds = time.perf_counter() - t0
+        Q = cands.q[result.chosen]
+        if start is not None and len(start) != 6:
+            raise selector.SelectorError("--start needs 6 joint values")
+        t0 = time.perf_counter()
+        perm, ordered = order_poses(Q, model.max_joint_speed, start)
+        order_seconds = time.perf_counter() - t0
+    except selector.SelectorError as exc:
+        raise InputError(str(exc)) from None
+    unordered = travel_time(Q, model.max_joint_speed, start)
+    report: dict[str, Any] = {
+        "format": FORMAT,
+        "robot": model.spec.name,
+        "index": index,
+        "value": result.value,
+        "o1": result.o1,
+        "bound": None if b is None else b.value,
+        "bound_index": "O1",
+        "percent_of_bound": None if b is None else 100.0 * result.o1 / b.value,
+        "bound_gap": None if b is None else b.gap,
+        "method": method,
+        "seed": seed,
+        "seconds": result.seconds,
+        "timings": {"candidates": cands.seconds, "selection": result.seconds, "bound": bound_seconds,
+                    "order": order_seconds},
+        "count": len(Q),
+        "parameters": n,
+        "parameter_names": list(model.parameter_names),
+        "unobservable": model.unobservable,
+        "scaling": scaling,
+        "smr": [float(v) for v in model.smr],
+        "candidates": {"requested": candidates, "found": len(cands), "sampled": cands.sampled,
+                       "rejected": cands.rejected},
+        "constraints": constraints.as_dict(),
+        "travel_time": {"ordered": ordered, "unordered": unordered,
+                        "saved_percent": 100.0 * (1.0 - ordered / unordered) if unordered > 0 else 0.0,
+                        "start": None if start is None else [float(v) for v in start],
+                        "model": "joint space, slowest joint at its maximum speed"},
+        "details": dict(result.details),
+        "poses": [[float(v) for v in q] for q in Q[perm]],
+    }
+    return report

@@ -1,0 +1,14 @@
+"""Running a calibration campaign: plans say what to do, one engine says how, events flow out.
+
+* `steps` — the plain steps a plan yields (move, settle, read joints, measure, checkpoint), dry runs
+  and the motion check of a whole plan;
+* `plan` — the calibration plan: bootstrap, select, measure, identify, validate;
+* `chooser` — the plan's pose chooser on a station (tabu calibration poses, random validation poses);
+* `engine` — the state machine that executes a plan: pause, resume, abort, checkpoints, suspenders;
+* `suspenders` — the station's faults mapped to pauses that clear by themselves or by the operator;
+* `events` — the frozen dataclasses every subscriber (store, TUI, CLI printer) receives;
+* `runner` — one campaign from devices to outcome, resumed from the store's state when asked.
+
+May import: `hil.station`, `hil.calibration`, `hil.arm`, `hil.files`, `hil.errors`, `selector`, `drivers`.
+Never the store, the report, the CLI or the TUI: they subscribe to its events.
+"""

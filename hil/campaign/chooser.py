@@ -1,0 +1,83 @@
+"""The campaign's pose chooser: the selector's poses for a station, under the station's constraints.
+
+It turns a `SelectionRequest` of the calibration plan into a `Choice`: calibration poses by the tabu
+search of `hil.calibration.selection`, validation poses at random among the same constraints'
+candidates. It lives with the campaign because it speaks the plan's request and answer types.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+import selector
+from hil.calibration.selection import SelectionModel, parse_constraints, select_poses
+from hil.campaign.plan import Choice, SelectionRequest
+from hil.errors import InputError
+from selector.candidates import Constraints, generate_candidates
+from selector.order import order_poses
+
+#: Degrees kept between the selector's acceptance cone and the SMR's own, so poses chosen with an
+#: approximate tracker position (a bootstrap estimate) are still visible.
+ACCEPTANCE_MARGIN_DEG = 5.0
+
+
+#: Joint ranges of campaign poses for a floor-mounted arm: the upper arm stays at or above horizontal
+#: (q2 in [-π, 0]), so a straight joint-space move between two poses never swings it through the floor.
+CAMPAIGN_LOWER = (-math.pi, -math.pi, -math.pi, -math.pi, -math.pi, -math.pi)
+
+
+CAMPAIGN_UPPER = (math.pi, 0.0, math.pi, math.pi, math.pi, math.pi)
+
+
+def campaign_chooser(config: Any) -> Any:
+    """The campaign's pose chooser (`hil.campaign.plan.ChoosePoses`) for a station configuration.
+
+    Calibration poses by the tabu search (with the bound, for the report); validation poses at random
+    among the same constraints' candidates, with another seed, because validation should sample the
+    workspace rather than the poses that are best for the fit.
+    """
+    from hil.campaign.plan import CALIBRATION, Choice
+
+    def choose(request: SelectionRequest) -> Choice:
+        half = max(1.0, request.acceptance_angle - ACCEPTANCE_MARGIN_DEG)
+        constraints = parse_constraints(
+            tracker=request.model.tracker.translation, half_angle_deg=half,
+            keep_in_lower=tuple(request.keep_in[0]), keep_in_upper=tuple(request.keep_in[1]),
+            floor=float(request.keep_in[0][2]), joint_lower=CAMPAIGN_LOWER, joint_upper=CAMPAIGN_UPPER)
+        if request.role != CALIBRATION:
+            return _random_poses(request, constraints)
+        report = select_poses(
+            request.model.robot, request.count, candidates=request.candidates, index=request.index,
+            method="tabu", seed=request.seed, smr=request.model.smr, constraints=constraints,
+            start=request.start, bound=True)
+        info = {k: report[k] for k in ("index", "value", "o1", "bound", "percent_of_bound", "method",
+                                       "seconds", "travel_time", "candidates", "parameters")}
+        return Choice(np.array(report["poses"]), info)
+
+    return choose
+
+
+def _random_poses(request: Any, constraints: Constraints) -> Any:
+    """Validation poses: a random sample of the constrained candidates, in visiting order.
+
+    No minimum count (validation identifies nothing) and no optimisation: validation should sample
+    the workspace the robot will work in, not the poses that suit the fit.
+    """
+    from hil.campaign.plan import Choice
+
+    try:
+        model = SelectionModel(request.model.robot, request.model.smr, constraints.tracker)
+        cands = generate_candidates(model, request.candidates, constraints, seed=request.seed)
+    except selector.SelectorError as exc:
+        raise InputError(str(exc)) from None
+    if len(cands) < request.count:
+        raise InputError(f"only {len(cands)} candidate poses satisfy the constraints, "
+                         f"{request.count} validation poses asked for")
+    rng = np.random.default_rng(request.seed)
+    Q = cands.q[rng.choice(len(cands), request.count, replace=False)]
+    perm, ordered = order_poses(Q, model.max_joint_speed, request.start)
+    return Choice(Q[perm], {"method": "random", "candidates": {"found": len(cands)},
+                            "travel_time": {"ordered": ordered}})

@@ -1,0 +1,421 @@
+"""One engine says how: it executes plans against devices and owns the run's state.
+
+States: idle → running ⇄ paused / suspended → stopping → aborted | done (| failed). Requests to
+pause, resume and abort come from other threads (the TUI, a signal handler) and take effect at step
+boundaries; an abort stops the arm. *Suspenders* are small conditions — beam lost, protective stop,
+connection lost, tracker unplugged — matched against the exception a device raised: the engine
+stops the arm, tells the operator what to do (a `Suspended` event), polls the condition until it
+clears (bounded by `suspend_timeout`) and re-runs the interrupted pose visit from its start.
+Anything no suspender claims ends the run: the arm is stopped, `RunFinished(status="failed")` is
+emitted and the exception propagates.
+
+The engine never prints. It emits events; the store subscribes as a critical subscriber, so a
+measurement is committed before the next move starts.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+from hil.arm.catalog import RobotSpec
+from hil.arm.geometry import Geometry
+from hil.arm.safety import check_target
+from hil.campaign.events import (
+    Event,
+    EventBus,
+    PhaseChanged,
+    PointMeasured,
+    PoseReached,
+    PoseSkipped,
+    PoseStarted,
+    Resumed,
+    StateChanged,
+    Suspended,
+)
+from hil.campaign.steps import (
+    Acquire,
+    Checkpoint,
+    Emit,
+    Measure,
+    Move,
+    Phase,
+    Plan,
+    PoseRecord,
+    ReadJoints,
+    Settle,
+    Step,
+)
+from hil.errors import HilError
+
+log = logging.getLogger(__name__)
+
+IDLE, RUNNING, PAUSED, SUSPENDED, STOPPING, ABORTED, DONE, FAILED = (
+    "idle", "running", "paused", "suspended", "stopping", "aborted", "done", "failed")
+
+
+class RunAborted(HilError):
+    """The operator (or the caller) aborted the run."""
+
+
+class SuspendTimeout(HilError):
+    """A suspender did not clear within its time limit."""
+
+
+class UnsafePathError(HilError):
+    """No safe way to a (safe) target from where the arm is: the pose is skipped."""
+
+
+def _transit(q: np.ndarray) -> np.ndarray:
+    """The upright posture above `q`'s base angle, wrist angles kept."""
+    out = np.array(q, dtype=float)
+    out[1], out[2] = -np.pi / 2, 0.0
+    return out
+
+
+class PoseSkippedError(HilError):
+    """A pose visit was given up (its suspender clears by skipping, e.g. a beam that never returns)."""
+
+
+class Clock(Protocol):
+    def monotonic(self) -> float: ...
+
+    def sleep(self, seconds: float) -> None: ...
+
+
+class RealClock:
+    """Wall-clock time; `speed` > 1 shortens the engine's own waits (fast-time simulation)."""
+
+    def __init__(self, speed: float = 1.0) -> None:
+        self.speed = speed
+
+    def monotonic(self) -> float:
+        return time.monotonic()
+
+    def sleep(self, seconds: float) -> None:
+        if seconds > 0:
+            time.sleep(seconds / self.speed)
+
+
+class RobotDevice(Protocol):
+    """What the engine needs from an arm (drivers.robot.URRobot has this shape)."""
+
+    def move_to(self, q: np.ndarray, *, speed: float | None = None,
+                acceleration: float | None = None) -> Any: ...
+
+    def read_joints(self, samples: int = 1) -> Any: ...  # .q and .spread arrays
+
+    def stop(self) -> None: ...
+
+
+class TrackerDevice(Protocol):
+    """What the engine needs from a tracker (drivers.tracker.Tracker has this shape)."""
+
+    def measure_point(self, samples: int = 1) -> Any: ...  # .xyz (or .position), .spread, .samples
+
+
+@dataclass
+class Suspender:
+    """A condition that pauses the run until it clears.
+
+    `matches` picks the exceptions it handles; `clear` is polled every `poll` seconds and returns
+    True once the run can go on (it may act: re-lock the tracker, reconnect); `message` is the
+    operator's instruction, shown verbatim by the UIs.
+    """
+
+    kind: str
+    matches: Callable[[BaseException], bool]
+    clear: Callable[[], bool]
+    message: str
+    poll: float = 0.5
+    backoff: float = 1.0  # the poll interval grows by this factor (reconnects back off)
+    timeout: float | None = None  # None: the engine's suspend_timeout
+    max_poll: float = 10.0
+    on_timeout: str = "fail"  # "fail": the run fails; "skip": the pose visit is skipped
+
+
+@dataclass
+class RunStats:
+    """Where the time went (seconds), for the report and the overhead benchmark."""
+
+    motion: float = 0.0
+    settle: float = 0.0
+    joints: float = 0.0
+    measure: float = 0.0
+    suspended: float = 0.0
+    compute: float = 0.0  # plan code between steps (selection, identification)
+    total: float = 0.0
+    retries: int = 0
+
+    def as_dict(self) -> dict[str, float]:
+        return {k: float(v) for k, v in self.__dict__.items()}
+
+
+@dataclass
+class Engine:
+    """Executes a plan; see the module docstring."""
+
+    robot: RobotDevice
+    tracker: TrackerDevice
+    campaign: str
+    spec: RobotSpec
+    bus: EventBus = field(default_factory=EventBus)
+    suspenders: Sequence[Suspender] = ()
+    clock: Clock = field(default_factory=RealClock)
+    keep_in: tuple[np.ndarray, np.ndarray] | None = None
+    check_model: Geometry | None = None  # nominal model (+ SMR guess) for keep-in checks
+    suspend_timeout: float = 600.0
+    max_retries: int = 5  # suspensions of the same pose visit before giving up
+    deviation: Callable[[PoseRecord], float | None] | None = None  # for PointMeasured events
+    home: np.ndarray | None = None  # a safe pose to route through when a direct path is unsafe
+
+    def __post_init__(self) -> None:
+        self.state = IDLE
+        self.stats = RunStats()
+        self._lock = threading.Lock()
+        self._pause = threading.Event()
+        self._abort = threading.Event()
+        self._resume = threading.Event()
+        self._last_q: np.ndarray | None = None
+        self.current: Acquire | None = None
+        self.records: list[PoseRecord] = []
+
+    # --- requests from other threads -------------------------------------------------------------
+    def request_pause(self) -> None:
+        self._pause.set()
+
+    def request_resume(self) -> None:
+        self._pause.clear()
+        self._resume.set()
+
+    def request_abort(self) -> None:
+        self._abort.set()
+        self._resume.set()
+
+    @property
+    def abort_requested(self) -> bool:
+        return self._abort.is_set()
+
+    # --- state ------------------------------------------------------------------------------------
+    def emit(self, event: Event) -> None:
+        self.bus.emit(event)
+
+    def _set_state(self, new: str) -> None:
+        with self._lock:
+            old, self.state = self.state, new
+        if old != new:
+            self.emit(StateChanged(campaign=self.campaign, state=new, previous=old))
+
+    def _stop_arm(self) -> None:
+        try:
+            self.robot.stop()
+        except Exception:  # stopping is best effort; the original error matters more
+            log.exception("stopping the arm failed")
+
+    def _between_steps(self) -> None:
+        """Honour pause and abort requests (only ever between steps)."""
+        if self._abort.is_set():
+            raise RunAborted("aborted by request")
+        if self._pause.is_set():
+            self._set_state(PAUSED)
+            while self._pause.is_set() and not self._abort.is_set():
+                self._resume.wait(0.1)
+                self._resume.clear()
+            if self._abort.is_set():
+                raise RunAborted("aborted by request while paused")
+            self._set_state(RUNNING)
+
+    # --- execution --------------------------------------------------------------------------------
+    def run(self, plan: Plan) -> Any:
+        """Execute `plan` to its end; returns the plan's return value."""
+        t0 = self.clock.monotonic()
+        self._set_state(RUNNING)
+        if self.home is not None:
+            self._last_q = np.asarray(self.home, dtype=float)
+        reply: Any = None
+        try:
+            mark = self.clock.monotonic()
+            step = next(plan)
+            while True:
+                self.stats.compute += self.clock.monotonic() - mark
+                self._between_steps()
+                reply = self._execute(step)
+                mark = self.clock.monotonic()
+                step = plan.send(reply)
+        except StopIteration as stop:
+            self._set_state(DONE)
+            return stop.value
+        except RunAborted:
+            self._set_state(STOPPING)
+            self._stop_arm()
+            self._set_state(ABORTED)
+            plan.close()
+            raise
+        except BaseException:
+            self._set_state(STOPPING)
+            self._stop_arm()
+            self._set_state(FAILED)
+            plan.close()
+            raise
+        finally:
+            self.stats.total = self.clock.monotonic() - t0
+
+    def _execute(self, step: Step) -> Any:
+        if isinstance(step, Acquire):
+            return self._acquire(step)
+        if isinstance(step, Phase):
+            self.emit(PhaseChanged(campaign=self.campaign, phase=step.name, detail=step.detail))
+            return None
+        if isinstance(step, Emit):
+            self.emit(step.event)
+            return None
+        if isinstance(step, Checkpoint):
+            return None
+        return self._with_suspenders(lambda: self._device_step(step))
+
+    def _device_step(self, step: Step) -> Any:
+        clock = self.clock
+        t = clock.monotonic()
+        if isinstance(step, Move):
+            result = None
+            for target in self._route(np.asarray(step.q, dtype=float)):
+                result = self.robot.move_to(target, speed=step.speed, acceleration=step.acceleration)
+                self._last_q = target
+            self.stats.motion += clock.monotonic() - t
+            return result
+        if isinstance(step, Settle):
+            clock.sleep(step.seconds)
+            self.stats.settle += clock.monotonic() - t
+            return None
+        if isinstance(step, ReadJoints):
+            result = self.robot.read_joints(step.samples)
+            self.stats.joints += clock.monotonic() - t
+            return result
+        if isinstance(step, Measure):
+            result = self.tracker.measure_point(step.samples)
+            self.stats.measure += clock.monotonic() - t
+            return result
+        raise TypeError(f"the engine cannot execute {step!r}")
+
+    def _route(self, q: np.ndarray) -> list[np.ndarray]:
+        """Targets to move through to reach `q` safely.
+
+        The target itself must be safe (joint limits, keep-in box), else InputError: the plan is wrong.
+        If the straight joint-space path from where the arm is leaves the box, two detours are tried:
+        through the home pose, then through the upright transit posture (q2 = −π/2, q3 = 0, a
+        floor-mounted arm's highest) above the current and the target base angles. If every leg of
+        none of them is safe, `UnsafePathError`: the pose is skipped, never approached. Nothing is
+        ever clamped.
+        """
+        check_target(q, self.spec, self.keep_in, self.check_model)
+        if self._last_q is None:
+            return [q]
+        here = self._last_q
+        routes = [[q]]
+        if self.home is not None:
+            routes.append([np.asarray(self.home, dtype=float), q])
+        routes.append([_transit(here), _transit(q), q])
+        for route in routes:
+            try:
+                start = here
+                for target in route:
+                    check_target(target, self.spec, self.keep_in, self.check_model, start)
+                    start = target
+                return route
+            except HilError:
+                continue
+        raise UnsafePathError(f"no safe path from {np.round(here, 3).tolist()} to "
+                              f"{np.round(q, 3).tolist()} inside the keep-in box (direct, via home, via "
+                              "the upright posture)")
+
+    def _acquire(self, group: Acquire) -> PoseRecord | None:
+        """Run one pose visit; after a suspension, run it again from its first step."""
+        self.current = group
+        self.emit(PoseStarted(campaign=self.campaign, index=group.index, role=group.role,
+                              target=list(group.target)))
+        t0 = self.clock.monotonic()
+        try:
+            results = self._with_suspenders(lambda: [self._device_step(s) for s in group.steps])
+        except (PoseSkippedError, UnsafePathError) as exc:
+            self.emit(PoseSkipped(campaign=self.campaign, index=group.index, role=group.role,
+                                  reason=str(exc)))
+            self.current = None
+            return None
+        reading = next(r for s, r in zip(group.steps, results, strict=True) if isinstance(s, ReadJoints))
+        point = next(r for s, r in zip(group.steps, results, strict=True) if isinstance(s, Measure))
+        xyz = np.asarray(point.xyz if hasattr(point, "xyz") else point.position, dtype=float)
+        record = PoseRecord(
+            index=group.index, role=group.role, target=np.array(group.target),
+            q=np.asarray(reading.q, float), q_spread=np.asarray(reading.spread, float),
+            p=xyz, p_spread=np.asarray(point.spread, float), samples=int(point.samples),
+            seconds=self.clock.monotonic() - t0)
+        self.emit(PoseReached(campaign=self.campaign, index=group.index, role=group.role,
+                              q=record.q.tolist(), q_spread=record.q_spread.tolist(),
+                              seconds=record.seconds))
+        dev = self.deviation(record) if self.deviation is not None else None
+        # The store is a critical subscriber: this returns only once the point is committed.
+        self.emit(PointMeasured(campaign=self.campaign, index=record.index, role=record.role,
+                                q=record.q.tolist(), p=record.p.tolist(),
+                                p_spread=record.p_spread.tolist(), samples=record.samples,
+                                deviation=dev, q_spread=record.q_spread.tolist(),
+                                target=record.target.tolist()))
+        self.records.append(record)
+        self.current = None
+        return record
+
+    def _with_suspenders(self, action: Callable[[], Any]) -> Any:
+        """Run `action`; when a suspender claims its exception, wait for it to clear and run it again."""
+        attempts = 0
+        while True:
+            try:
+                return action()
+            except BaseException as exc:
+                suspender = self._suspender_for(exc)
+                attempts += 1
+                if suspender is None or attempts > self.max_retries:
+                    raise
+                self.stats.retries += 1
+                self._suspend(suspender, exc)
+                self._between_steps()
+
+    def _suspender_for(self, exc: BaseException) -> Suspender | None:
+        if isinstance(exc, RunAborted | KeyboardInterrupt):
+            return None
+        return next((s for s in self.suspenders if s.matches(exc)), None)
+
+    def _suspend(self, suspender: Suspender, exc: BaseException) -> None:
+        """Stop, tell the operator, wait for the condition to clear (bounded), then go on."""
+        self._stop_arm()
+        self._last_q = None  # the arm may be anywhere now: check the next path from the target only
+        self._set_state(SUSPENDED)
+        self.emit(Suspended(campaign=self.campaign, kind=suspender.kind,
+                            message=f"{suspender.message} ({exc})"))
+        limit = suspender.timeout if suspender.timeout is not None else self.suspend_timeout
+        start = time.monotonic()
+        poll = suspender.poll
+        while True:
+            if self._abort.is_set():
+                raise RunAborted(f"aborted while suspended ({suspender.kind})")
+            try:
+                if suspender.clear():
+                    break
+            except Exception as err:  # a failing check is just "not clear yet"
+                log.debug("suspender %s check failed: %s", suspender.kind, err)
+            if time.monotonic() - start > limit:
+                self._set_state(RUNNING)
+                if suspender.on_timeout == "skip":
+                    raise PoseSkippedError(f"{suspender.kind} did not clear within {limit:.0f} s")
+                raise SuspendTimeout(f"{suspender.kind} did not clear within {limit:.0f} s: "
+                                     f"{suspender.message}") from exc
+            self._abort.wait(poll)
+            poll = min(poll * suspender.backoff, suspender.max_poll)
+        waited = time.monotonic() - start
+        self.stats.suspended += waited
+        self._set_state(RUNNING)
+        self.emit(Resumed(campaign=self.campaign, kind=suspender.kind, waited=waited))

@@ -1,0 +1,238 @@
+"""The calibration campaign as a plan: bootstrap, select, measure, identify, validate.
+
+`calibration_plan` is a generator of plain steps (see `hil.campaign.steps`); the engine executes it against
+a robot and a tracker, and the same plan runs headless (CLI) and under the TUI. The plan does no I/O:
+pose selection and identification are computations on what the engine sends back.
+
+* **Bootstrap** (only when the tracker's position is not configured): the operator has locked the
+  beam on the SMR at the arm's current pose; the plan measures a few small moves around it that keep
+  the SMR facing the same way, and fits the tracker pose in closed form so the selector can respect
+  line of sight.
+* **Select**: calibration poses by the injected chooser (the tabu selector in production), then
+  validation poses the fit never sees. `PlanReady` carries them to the store, so a resumed run visits
+  exactly the same poses.
+* **Measure**: each pose is one `Acquire` (move, settle, read joints, measure); the engine's
+  `PointMeasured` event reaches the store before the next move. Poses already measured (a resumed
+  run) are skipped.
+* **Identify** on the calibration (and bootstrap) points; **validate** on the others: before (the
+  nominal arm with only the tracker pose and SMR fitted) and after, plus ISO 9283 pose accuracy (AP)
+  and repeatability (RP) when validation poses are visited more than once.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from hil.arm.geometry import Geometry, look_at_tracker, pose_to_dict
+from hil.arm.kinematics import Kinematics
+from hil.calibration.identification import (
+    ErrorStats,
+    FitResult,
+    IdentificationError,
+    align_tracker,
+    identify,
+    validate,
+)
+from hil.calibration.measurements import Measurements
+from hil.calibration.model_file import model_document
+from hil.campaign.events import ModelIdentified, PlanReady, ValidationDone
+from hil.campaign.steps import Emit, Phase, Plan, PoseRecord, ReadJoints, acquire
+from hil.errors import InputError
+from hil.station.config import StationConfig
+
+BOOTSTRAP, CALIBRATION, VALIDATION = "bootstrap", "calibration", "validation"
+
+# Small moves of joints 1-3 around the start pose; joint 4 compensates joints 2+3 so the wrist, and
+# with it the SMR, keeps facing the tracker (joint 1 turns it by at most 0.15 rad ≈ 9°).
+_BOOTSTRAP_DELTAS = np.array([
+    (0.0, 0.0, 0.0), (0.15, 0.0, 0.0), (-0.15, 0.0, 0.0), (0.0, -0.12, 0.0),
+    (0.0, 0.0, 0.2), (0.1, 0.1, -0.2), (-0.1, -0.1, 0.15), (0.05, 0.15, -0.1),
+])
+
+
+@dataclass(frozen=True)
+class SelectionRequest:
+    """What the pose chooser is asked for."""
+
+    role: str
+    count: int
+    model: Geometry  # nominal arm, SMR guess, tracker estimate (base frame)
+    keep_in: tuple[np.ndarray, np.ndarray]
+    acceptance_angle: float  # degrees
+    index: str
+    candidates: int
+    seed: int
+    exclude: np.ndarray  # poses already chosen (validation must differ from calibration)
+    start: np.ndarray | None = None  # where the arm is (for the visiting order)
+
+
+@dataclass(frozen=True)
+class Choice:
+    """The chooser's answer: poses in visiting order and figures about them."""
+
+    poses: np.ndarray  # (count, 6)
+    info: dict[str, Any] = field(default_factory=dict)
+
+
+ChoosePoses = Callable[[SelectionRequest], Choice]
+
+
+@dataclass
+class ResumeState:
+    """What the store already holds of an interrupted campaign."""
+
+    poses: list[tuple[int, str, np.ndarray]] | None = None
+    tracker: pin.SE3 | None = None
+    records: dict[tuple[str, int], PoseRecord] = field(default_factory=dict)
+    selection: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class CampaignResult:
+    """Everything the report and the result file need."""
+
+    fit: FitResult
+    before: ErrorStats
+    after: ErrorStats
+    passed: bool
+    records: list[PoseRecord]
+    tracker_estimate: pin.SE3
+    selection: dict[str, Any]
+    iso9283: dict[str, Any] | None
+    model: dict[str, Any]
+
+
+def bootstrap_targets(start: np.ndarray, count: int) -> np.ndarray:
+    """Bootstrap poses around `start` (see `_BOOTSTRAP_DELTAS`)."""
+    deltas = _BOOTSTRAP_DELTAS[: max(4, min(count, len(_BOOTSTRAP_DELTAS)))]
+    out = np.repeat(np.asarray(start, float)[None, :], len(deltas), axis=0)
+    out[:, :3] += deltas
+    out[:, 3] -= deltas[:, 1] + deltas[:, 2]
+    return out
+
+
+def measurements_of(records: list[PoseRecord], source: str) -> Measurements:
+    """Records as identification input; a pose is named by its campaign index."""
+    return Measurements(np.array([r.q for r in records]), np.array([r.p for r in records]),
+                        np.array([r.index for r in records]), source, "")
+
+
+def iso9283(records: list[PoseRecord], geometry: Geometry) -> dict[str, Any] | None:
+    """ISO 9283 position accuracy AP and repeatability RP per repeated validation pose.
+
+    The commanded position of a pose is what `geometry` predicts for its target joints; AP is the
+    distance from the barycentre of the attained positions to it, RP = l̄ + 3·S_l over the distances
+    l_j of the attained positions to their barycentre. Needs poses visited at least twice.
+    """
+    groups: dict[tuple[float, ...], list[PoseRecord]] = {}
+    for r in records:
+        groups.setdefault(tuple(np.round(r.target, 9)), []).append(r)
+    rows = []
+    kin = Kinematics(geometry)
+    for target, visits in groups.items():
+        if len(visits) < 2:
+            continue
+        pts = np.array([v.p for v in visits])
+        bary = pts.mean(axis=0)
+        commanded = kin.points(np.array(target))[0]
+        dist = np.linalg.norm(pts - bary, axis=1)
+        rows.append({"target": list(target), "cycles": len(visits),
+                     "AP": float(np.linalg.norm(bary - commanded)),
+                     "RP": float(dist.mean() + 3 * dist.std(ddof=1))})
+    if not rows:
+        return None
+    return {"poses": rows, "AP_max": max(r["AP"] for r in rows), "RP_max": max(r["RP"] for r in rows)}
+
+
+def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
+                     resume: ResumeState | None = None, validation_cycles: int = 1) -> Plan:
+    """The whole campaign as a generator of steps; returns a `CampaignResult`."""
+    resume = resume or ResumeState()
+    robot = config.robot["type"]
+    camp = config.campaign
+    smr_guess = np.array(config.smr["offset"])
+    keep_in = (np.array(config.keep_in["min"]), np.array(config.keep_in["max"]))
+    visit = dict(settle=config.robot["settle_time"], joint_samples=config.robot["joint_samples"],
+                 samples=camp["samples"], speed=config.robot["speed"],
+                 acceleration=config.robot["acceleration"])
+    records = dict(resume.records)
+
+    # --- where is the tracker? -----------------------------------------------------------------
+    tracker = resume.tracker
+    if tracker is None and config.tracker["position"] is not None:
+        tracker = look_at_tracker(config.tracker["position"])
+    if tracker is None:
+        yield Phase("bootstrap", "locating the tracker from small moves around the start pose")
+        start = np.asarray((yield ReadJoints(config.robot["joint_samples"])).q, float)
+        for k, q in enumerate(bootstrap_targets(start, camp["bootstrap_poses"])):
+            record = yield acquire(k, BOOTSTRAP, q, **visit)
+            if record is not None:  # None: the visit was skipped (the engine said why)
+                records[(BOOTSTRAP, k)] = record
+        boot = [r for (role, _), r in sorted(records.items()) if role == BOOTSTRAP]
+        if len(boot) < 3:  # three points fix a frame; fewer is a station problem, not a fit failure
+            raise IdentificationError(
+                f"cannot locate the tracker: {len(boot)} of {camp['bootstrap_poses']} bootstrap points "
+                "measured (is the SMR facing the tracker with a clear line of sight at the start pose? "
+                "or set tracker.position in the configuration)")
+        tracker = align_tracker(Geometry.nominal(robot, smr_guess),
+                                measurements_of(boot, "bootstrap")).tracker
+    model = Geometry.nominal(robot, smr_guess, tracker)
+
+    # --- which poses? --------------------------------------------------------------------------
+    selection = dict(resume.selection)
+    if resume.poses is None:
+        yield Phase("select", f"{camp['calibration_poses']} calibration + "
+                              f"{camp['validation_poses']} validation poses")
+        base = dict(model=model, keep_in=keep_in, acceptance_angle=config.smr["acceptance_angle"],
+                    index=camp["index"], candidates=camp["candidates"])
+        cal = choose(SelectionRequest(CALIBRATION, camp["calibration_poses"], seed=camp["seed"],
+                                      exclude=np.zeros((0, 6)), **base))
+        val = choose(SelectionRequest(VALIDATION, camp["validation_poses"], seed=camp["seed"] + 1,
+                                      exclude=cal.poses, start=cal.poses[-1], **base))
+        first = 1 + max((i for _, i in records), default=-1)  # one numbering across roles
+        planned = [(first + i, CALIBRATION, q) for i, q in enumerate(cal.poses)]
+        n = first + len(planned)
+        for cycle in range(validation_cycles):
+            planned += [(n + cycle * len(val.poses) + i, VALIDATION, q) for i, q in enumerate(val.poses)]
+        selection = {"calibration": cal.info, "validation": val.info}
+    else:
+        planned = resume.poses
+    yield Emit(PlanReady(campaign=campaign, poses=[{"index": i, "role": r, "q": list(map(float, q))}
+                                                   for i, r, q in planned],
+                         tracker=pose_to_dict(tracker), selection=selection))
+
+    # --- measure -------------------------------------------------------------------------------
+    todo = [(i, r, q) for i, r, q in planned if (r, i) not in records]
+    yield Phase("measure", f"{len(todo)} of {len(planned)} poses to measure")
+    for i, role, q in todo:
+        record = yield acquire(i, role, q, **visit)
+        if record is not None:
+            records[(role, i)] = record
+
+    # --- identify and validate -----------------------------------------------------------------
+    yield Phase("identify")
+    fit_records = [r for (role, _), r in sorted(records.items()) if role in (BOOTSTRAP, CALIBRATION)]
+    try:
+        fit = identify(measurements_of(fit_records, f"campaign {campaign}"), robot, smr_guess)
+    except InputError as exc:  # too many poses skipped: the run failed, the input was fine
+        raise IdentificationError(f"cannot identify from the measured poses: {exc}") from None
+    yield Emit(ModelIdentified(campaign=campaign, rms=fit.rms, max=fit.max_error,
+                               iterations=fit.iterations, rejected=[r.line for r in fit.rejected],
+                               model=model_document(fit)))
+    yield Phase("validate")
+    val_records = [r for (role, _), r in sorted(records.items()) if role == VALIDATION]
+    held_out = measurements_of(val_records, f"campaign {campaign} validation")
+    before = validate(fit.baseline, held_out)
+    after = validate(fit.geometry, held_out)
+    passed = after.rms <= camp["acceptance"]
+    iso = iso9283(val_records, fit.geometry)
+    yield Emit(ValidationDone(campaign=campaign, before=before.as_dict(), after=after.as_dict(),
+                              passed=passed))
+    doc = model_document(fit, after.as_dict())
+    return CampaignResult(fit, before, after, passed, list(records.values()), tracker, selection,
+                          iso, doc)

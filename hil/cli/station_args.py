@@ -1,0 +1,51 @@
+"""The station a command runs on, from its options: ``--config station.toml`` or ``--sim``.
+
+Shared by ``hil calibrate``, ``hil moveb run`` and ``hil tui``, so each reads the same options the same
+way (and ``--truth``/``--speed`` are refused with ``--config``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+from collections.abc import Iterator
+from typing import Any
+
+from hil.errors import InputError
+from hil.station.config import StationConfig, load_config
+
+
+def config_overrides(args: argparse.Namespace) -> dict[str, Any]:
+    """The campaign keys a command's options override (--poses, --validation, --candidates, --accept)."""
+    out: dict[str, Any] = {}
+    for option, key in (("poses", "campaign__calibration_poses"),
+                        ("validation", "campaign__validation_poses"),
+                        ("candidates", "campaign__candidates"), ("accept", "campaign__acceptance")):
+        value = getattr(args, option)
+        if value is not None:
+            if not value > 0:
+                raise InputError(f"--{option} must be positive, got {value}")
+            out[key] = value
+    if args.cycles < 1:
+        raise InputError(f"--cycles must be at least 1, got {args.cycles}")
+    return out
+
+
+@contextlib.contextmanager
+def station_from_args(
+        args: argparse.Namespace) -> Iterator[tuple[StationConfig, dict[str, Any], dict | None]]:
+    """(config to run, config that identifies the run in the store, hidden truth or None)."""
+    if args.config:
+        if args.truth or args.speed != 1.0:
+            raise InputError("--truth and --speed go with --sim, not --config")
+        config = load_config(args.config)
+        config = config.with_overrides(**config_overrides(args)) if config_overrides(args) else config
+        yield config, config.as_dict(), None
+        return
+    if not args.speed > 0:
+        raise InputError(f"--speed must be positive, got {args.speed}")
+    from hil.station.simulated import simulated_station
+
+    with simulated_station(args.robot, args.truth, args.speed, args.seed, **config_overrides(args)) as (
+            config, identity, truth, _sim):
+        yield config, identity, truth

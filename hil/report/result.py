@@ -1,0 +1,65 @@
+"""What a finished campaign produces: the report's data and the ``hil-result/1`` document.
+
+Shared by ``hil calibrate`` and the TUI, so both write exactly the same result file and report.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from typing import Any
+
+import numpy as np
+
+from hil.campaign.events import Event, jsonable
+from hil.station.config import StationConfig
+
+
+def report_data(outcome: Any, config: StationConfig, events: list[Event], started: float) -> Any:
+    from hil.campaign.plan import BOOTSTRAP, CALIBRATION, VALIDATION, measurements_of
+    from hil.report import RobotInfo, report_data_from
+    from hil.report.data import Observability
+
+    r = outcome.result
+    by_role: dict[str, list[Any]] = {BOOTSTRAP: [], CALIBRATION: [], VALIDATION: []}
+    for rec in sorted(r.records, key=lambda x: x.index):
+        by_role[rec.role].append(rec)
+    fitted = by_role[BOOTSTRAP] + by_role[CALIBRATION]
+    sel = r.selection.get("calibration") or {}
+    obs = (Observability(sel.get("index", "O1"), float(sel["value"]), sel.get("bound"), sel.get("method", ""))
+           if sel.get("value") is not None else None)
+    iso = ({"AP (worst pose)": r.iso9283["AP_max"], "RP (worst pose)": r.iso9283["RP_max"]}
+           if r.iso9283 else None)
+    cal = measurements_of(fitted, "calibration")
+    val = measurements_of(by_role[VALIDATION], "validation")
+    digest = hashlib.sha256(np.hstack([cal.q, cal.p]).tobytes() + np.hstack([val.q, val.p]).tobytes())
+    return report_data_from(
+        r.fit, r.before, r.after, config, campaign=outcome.campaign,
+        robot=RobotInfo(config.robot["type"], outcome.robot_info.get("serial", ""),
+                        outcome.robot_info.get("software", "")),
+        started=started, finished=time.time(), calibration=cal, validation=val, iso9283=iso,
+        observability=obs, times=outcome.timing, events=events,
+        hashes={"measurements": digest.hexdigest()}, model=r.model)
+
+
+def result_document(outcome: Any, config: StationConfig, events: list[Event], started: float,
+            truth: dict | None) -> dict[str, Any]:
+    """The hil-result/1 document (the MES result when the campaign finished, else its status)."""
+    if outcome.result is not None:
+        from hil.report import mes_result
+
+        doc = mes_result(report_data(outcome, config, events, started))
+        if outcome.result.iso9283:
+            doc["validation"]["iso9283_poses"] = outcome.result.iso9283["poses"]
+        doc["selection"] = outcome.result.selection
+    else:
+        doc = {"format": "hil-result/1", "campaign": outcome.campaign, "passed": False,
+               "station": config.station["name"], "robot": config.robot["type"]}
+    doc["status"] = outcome.status
+    doc["exit_code"] = outcome.exit_code
+    doc["error"] = None if outcome.error is None else f"{type(outcome.error).__name__}: {outcome.error}"
+    doc["tracker"] = outcome.tracker_info
+    doc["robot_info"] = outcome.robot_info
+    if truth is not None:
+        doc["truth"] = truth
+    return jsonable(doc)

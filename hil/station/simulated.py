@@ -1,0 +1,46 @@
+"""The simulated station as a context: start the simulators, yield the configuration to run with.
+
+Shared by ``hil calibrate --sim``, ``hil moveb run --sim`` and ``hil tui --sim``. The simulator's
+address is random, so a run is identified in the store by what it simulates (robot, seed, truth
+file's hash) rather than by where it listens: re-running the same command resumes the same campaign.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+from hil.arm.catalog import get_robot
+from hil.station.config import StationConfig, default_config
+
+
+@contextlib.contextmanager
+def simulated_station(robot: str = "ur5e", truth: str | None = None, speed: float = 1.0, seed: int = 1,
+                      **overrides: Any) -> Iterator[tuple[StationConfig, dict[str, Any], dict, Any]]:
+    """(config to run, config identifying the run, hidden truth document, running simulator)."""
+    robot = get_robot(robot).name
+    truth_sha = ""
+    if truth:
+        from hil.calibration.model_file import load_truth
+
+        geometry, _ = load_truth(truth)  # a bad truth fails here, naming the key
+        truth = str(Path(truth).resolve())  # the simulator runs in a process of its own, elsewhere
+        robot = geometry.robot
+        truth_sha = hashlib.sha256(Path(truth).read_bytes()).hexdigest()
+    from mocks.station import start_station
+
+    sim = start_station(robot=robot, truth=truth, speed=speed, seed=seed)
+    try:
+        station = sim.info["services"][0]
+        base = default_config().with_overrides(
+            station__name="simulated station", robot__type=robot, robot__speed=1.0,
+            robot__acceleration=2.0, campaign__seed=seed, **overrides)
+        config = base.with_overrides(robot__address=sim.address, tracker__url=station["tracker_url"])
+        identity = base.with_overrides(robot__address="sim",
+                                       tracker__url=f"sim:seed={seed};truth={truth_sha}").as_dict()
+        yield config, identity, station["truth"], sim
+    finally:
+        sim.stop()

@@ -1,0 +1,237 @@
+"""The campaign report: self-contained, well-formed, escaped HTML; the MES result's stable keys."""
+
+from __future__ import annotations
+
+import base64
+import json
+import re
+import xml.etree.ElementTree as ET
+from html.parser import HTMLParser
+
+import numpy as np
+import pytest
+
+from hil.calibration.identification import identify, validate
+from hil.calibration.measurements import Measurements
+from hil.calibration.model_file import write_json
+from hil.calibration.synthetic import Noise, measure, random_configurations, random_truth
+from hil.campaign.events import Message, PoseSkipped, Resumed, Suspended
+from hil.cli import main
+from hil.report import (
+    Observability,
+    RobotInfo,
+    mes_result,
+    render_html,
+    report_data_from,
+    report_data_from_result,
+    summarise_events,
+    write_report,
+)
+from hil.station.config import default_config
+
+HOSTILE = '<script>alert("x")</script> & \'cell\''
+MES_KEYS = {"format", "campaign", "station", "robot", "robot_serial", "robot_software", "passed",
+            "accept_rms", "started", "finished", "validation", "fit", "observability", "times",
+            "suspensions", "notes", "hashes", "software", "config", "model", "per_pose"}
+
+
+@pytest.fixture(scope="module")
+def campaign():
+    """A real identification of a simulated UR5e with one planted outlier, and its validation."""
+    rng = np.random.default_rng(7)
+    truth = random_truth("ur5e", rng)
+    q, p = measure(truth, random_configurations("ur5e", 30, rng), Noise(), rng)
+    p[4] += [4e-4, -3e-4, 2e-4]
+    qv, pv = measure(truth, random_configurations("ur5e", 25, rng), Noise(), rng)
+    cal = Measurements.from_arrays(q, p, "cal.csv")
+    val = Measurements.from_arrays(qv, pv, "val.csv")
+    fit = identify(cal, "ur5e")
+    return fit, cal, val, validate(fit.baseline, val), validate(fit.geometry, val)
+
+
+def build(campaign, accept=1e-4, station="Cell 4", **kw):
+    fit, cal, val, before, after = campaign
+    config = default_config().with_overrides(station__name=station)
+    events = [Suspended(campaign="c", kind="beam_lost", message="Beam lost: <re-lock> & retry"),
+              Resumed(campaign="c", kind="beam_lost", waited=3.5),
+              PoseSkipped(campaign="c", index=3, role="calibration", reason="unreachable <x>"),
+              Message(campaign="c", level="info", text="not shown")]
+    args = dict(campaign="C-0042", robot=RobotInfo("ur5e", "2023<5500>123", "5.15"),
+                started=1.7e9, finished=1.7e9 + 600, accept_rms=accept, calibration=cal,
+                validation=val, iso9283={"AP": 3e-5, "RP": 1e-5},
+                observability=Observability("O1", 0.97, 1.0, "tabu"),
+                times={"motion": 300.0, "settle": 20.0, "measure": 90.0, "compute": 1.5}, events=events)
+    args.update(kw)
+    return report_data_from(fit, before, after, config, **args)
+
+
+@pytest.fixture(scope="module")
+def data(campaign):
+    return build(campaign, station=HOSTILE)
+
+
+@pytest.fixture(scope="module")
+def page(data):
+    return render_html(data, generated="2024-01-01T00:00:00+00:00")
+
+
+def xml_of(page: str) -> ET.Element:
+    assert page.startswith("<!DOCTYPE html>\n")
+    return ET.fromstring(page.split("\n", 1)[1])
+
+
+class _Collector(HTMLParser):
+    def __init__(self) -> None:
+        super().__init__()
+        self.tags: list[tuple[str, dict[str, str | None]]] = []
+
+    def handle_starttag(self, tag, attrs):
+        self.tags.append((tag, dict(attrs)))
+
+
+def test_html_is_well_formed_xml_and_html(page):
+    root = xml_of(page)
+    assert root.tag == "html"
+    assert root.find("head/title") is not None
+    parser = _Collector()
+    parser.feed(page)
+    parser.close()
+    assert any(tag == "table" for tag, _ in parser.tags)
+
+
+def test_self_contained_no_external_resources(page):
+    parser = _Collector()
+    parser.feed(page)
+    for tag, attrs in parser.tags:
+        assert tag not in ("script", "link", "iframe", "object", "embed"), tag
+        for name in ("src", "href"):
+            if attrs.get(name) is not None:
+                assert attrs[name].startswith(("data:", "#")), (tag, attrs[name][:60])
+    assert "http://" not in page and "https://" not in page
+    assert "@import" not in page and "url(" not in page
+
+
+def test_plots_are_embedded_pngs(page):
+    uris = [el.get("src") for el in xml_of(page).iter("img")]
+    assert len(uris) >= 4  # per-pose validation, histograms, per-axis, calibration residuals
+    for uri in uris:
+        assert uri.startswith("data:image/png;base64,")
+        assert base64.b64decode(uri.split(",", 1)[1]).startswith(b"\x89PNG\r\n\x1a\n")
+    assert all(el.get("alt") for el in xml_of(page).iter("img"))
+
+
+def test_hostile_strings_are_escaped(page):
+    assert "<script" not in page
+    assert "&lt;script&gt;alert(&quot;x&quot;)&lt;/script&gt; &amp; &#x27;cell&#x27;" in page
+    assert "2023&lt;5500&gt;123" in page
+    assert "Beam lost: &lt;re-lock&gt; &amp; retry" in page
+    assert "unreachable &lt;x&gt;" in page
+    text = "".join(xml_of(page).itertext())
+    assert HOSTILE in text  # and it still reads as the user wrote it
+
+
+def verdict(page: str) -> str:
+    (div,) = [d for d in xml_of(page).iter("div") if "verdict" in (d.get("class") or "")]
+    return div.get("class").split()[1], "".join(div.itertext())
+
+
+def test_pass_and_fail_are_shown(campaign, page):
+    cls, text = verdict(page)
+    assert cls == "pass" and "PASS" in text and "FAIL" not in text
+    failed = build(campaign, accept=1e-6)
+    assert not failed.passed
+    cls, text = verdict(render_html(failed))
+    assert cls == "fail" and "FAIL" in text and "PASS" not in text
+    assert "0.001 mm" in text  # the threshold, in mm
+
+
+def test_every_parameter_and_section_is_shown(data, page):
+    fit = data.parameters
+    assert len(fit) == 27
+    cells = {"".join(td.itertext()) for td in xml_of(page).iter("td")}
+    for p in fit:
+        assert p.name in cells
+    assert any(u in cells for u in ("mm", "mrad"))
+    for ident in ("validation", "calibration", "parameters", "correlated", "rejected", "observability",
+                  "campaign", "config", "provenance"):
+        assert f'id="{ident}"' in page
+    assert data.rejected and data.rejected[0].index == 4
+    assert str(data.rejected[0].line) in cells  # the file line of the rejected pose
+    for value in data.hashes.values():
+        assert value in page
+    headers = {"".join(th.itertext()) for th in xml_of(page).iter("th")}
+    assert {"robot.speed", "campaign.acceptance", "station.name"} <= headers  # station config
+    assert "pinocchio" in page and "motion" in page and "97.0 %" in page
+
+
+def test_report_data_from_defaults(campaign):
+    fit, _, _, before, after = campaign
+    d = report_data_from(fit, before, after, default_config(), campaign="x")
+    assert d.accept_rms == default_config().get("campaign.acceptance")
+    assert d.calibration_before is None and d.validation_after.vectors is None
+    assert d.model["format"] == "hil-model/1"
+    page = render_html(d)
+    assert "Not recorded for this campaign" in page  # observability
+    captions = ["".join(c.itertext()) for c in xml_of(page).iter("figcaption")]
+    assert len(captions) == 4
+    assert any("per-axis validation errors were not recorded" in c for c in captions)
+
+
+def test_events_are_summarised():
+    s, notes = summarise_events([
+        Suspended(campaign="c", kind="protective_stop", message="clear the cell"),
+        Suspended(campaign="c", kind="beam_lost", message="re-lock"),
+        Resumed(campaign="c", kind="beam_lost", waited=2.0),
+        Message(campaign="c", level="warning", text="drift"),
+    ])
+    assert [(x.kind, x.waited) for x in s] == [("protective_stop", None), ("beam_lost", 2.0)]
+    assert notes == ("warning: drift",)
+
+
+def test_mes_result_keys_and_round_trip(data, tmp_path):
+    doc = mes_result(data)
+    assert set(doc) == MES_KEYS
+    text = json.dumps(doc, allow_nan=False)  # strict JSON
+    doc = json.loads(text)
+    assert doc["format"] == "hil-result/1"
+    assert doc["campaign"] == "C-0042" and doc["station"] == HOSTILE
+    assert (doc["robot"], doc["robot_serial"]) == ("ur5e", "2023<5500>123")
+    assert doc["passed"] is True and doc["accept_rms"] == 1e-4
+    assert set(doc["validation"]) == {"before", "after", "iso9283"}
+    assert set(doc["validation"]["after"]) == {"count", "mean", "rms", "max"}
+    assert doc["validation"]["after"]["rms"] == pytest.approx(data.validation_after.rms)
+    assert doc["model"]["format"] == "hil-model/1" and len(doc["model"]["parameters"]) == 27
+    assert doc["fit"]["rejected_lines"] == [r.line for r in data.rejected]
+    assert doc["started"].startswith("2023-11-14T")
+    assert doc["suspensions"][0]["waited"] == 3.5
+    assert len(doc["per_pose"]["validation"]["after"]) == 25
+
+    back = report_data_from_result(doc)
+    assert back.passed == data.passed and back.station == data.station
+    assert back.validation_after.rms == pytest.approx(data.validation_after.rms)
+    assert np.allclose(back.validation_after.vectors, data.validation_after.vectors)
+    assert [p.name for p in back.parameters] == [p.name for p in data.parameters]
+    assert back.rejected == data.rejected and back.correlated == data.correlated
+    assert render_html(back, generated="g") == render_html(data, generated="g")
+
+
+def test_cli_rebuilds_a_report(data, tmp_path, capsys):
+    result, out = tmp_path / "result.json", tmp_path / "report.html"
+    doc = mes_result(data)
+    del doc["per_pose"]  # an offline result as `hil calibrate --sim` writes today
+    write_json(result, doc)
+    assert main(["report", "--result", str(result), "--out", str(out)]) == 0
+    page = out.read_text(encoding="utf-8")
+    assert "not recorded in this result" in page and verdict(page)[0] == "pass"
+    write_json(result, {"format": "hil-result/1", "model": {"fit": {}}, "validation": 1,
+                        "accept_rms": 1e-4, "passed": True})
+    assert main(["report", "--result", str(result), "--out", str(tmp_path / "bad.html")]) == 2
+    err = capsys.readouterr().err
+    assert str(result) in err and len(err.strip().splitlines()) == 1
+
+
+def test_write_report(data, tmp_path):
+    path = write_report(data, tmp_path / "sub" / "r.html", generated="now")
+    assert path.read_text(encoding="utf-8") == render_html(data, generated="now")
+    assert not [p for p in path.parent.iterdir() if p.name != "r.html"]  # no temp file left
+    assert re.search(r"validation RMS \d+\.\d{3} mm ≤ acceptance 0\.100 mm", path.read_text("utf-8"))
