@@ -155,7 +155,8 @@ def test_protective_stop_mid_move_fails_the_move_and_unlocks_after_5s(sim: SimPr
         timer.start()
         assert c.moveJ(Q_B, 0.3, 1.0) is False  # the blocking move returns False
         timer.join()
-        assert r.isProtectiveStopped() and c.isProgramRunning() is False
+        # the receive thread may still hold the frame before the stop: wait for the one that says it
+        assert wait_for(r.isProtectiveStopped, timeout=1.0) and c.isProgramRunning() is False
         assert wait_for(lambda: not sim.state()["moving"])
         db = dashboard_client.DashboardClient(sim.address)
         db.connect()
