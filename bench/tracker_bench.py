@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 
-from drivers.tracker import SerialConfig, Tracker, TrackerConfig
+from drivers.tracker import GeoComTracker, SerialConfig, TrackerConfig
 from drivers.tracker.geometry import cartesian_to_polar, polar_to_cartesian
 from mocks.geocom import GeoComInstrument, GeoComSimulator, InstrumentConfig, LinkConfig, SimulatorConfig
 from mocks.geocom.noise import NoiseSpec, mpe_m
@@ -28,7 +28,7 @@ def time_per_measurement(baud: int, samples: int, repeats: int) -> tuple[float, 
     ).start()
     try:
         cfg = TrackerConfig(SerialConfig(str(sim.pty_path), baudrate=baud), timeout=5.0)
-        with Tracker(cfg) as tr:
+        with GeoComTracker(cfg) as tr:
             tr.measure_point(1)  # warm-up
             times = []
             for _ in range(repeats):

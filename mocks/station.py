@@ -4,7 +4,14 @@
 simulator's process, because ur_rtde's client must not share an interpreter with the controller, and
 the tracker must see the simulated arm's true joints). It loads the hidden truth (or draws a random
 realistic one by seed), puts the arm at a start pose facing the tracker and serves GeoCOM on a pty
-and on TCP at the controller's loopback address.
+and on TCP, and emScon TPI on TCP (`mocks.emscon`, on the controller's clock), at the controller's
+loopback address. Both tracker simulators measure the same world.
+
+Faults it adds to the controller (``inject(name, **args)`` / the control channel): ``block_beam``
+(``on``, ``reason``), ``tracker_unplug``, ``tracker_garble`` (GeoCOM), ``emscon_drop`` (close the
+emScon client now), ``emscon_stall`` (``seconds``: wall seconds without reading or sending),
+``emscon_garbage`` (a few bytes that are not a TPI packet), ``emscon_laser_cold`` (``seconds``:
+simulated seconds with a cold laser).
 """
 
 from __future__ import annotations
@@ -15,6 +22,8 @@ import numpy as np
 
 from hil.calibration.model_file import load_truth, truth_document
 from hil.calibration.synthetic import Noise, random_truth
+from mocks.emscon.instrument import EmsconConfig
+from mocks.emscon.server import EmsconSimulator, ServerConfig
 from mocks.geocom.instrument import InstrumentConfig
 from mocks.geocom.server import GeoComSimulator, LinkConfig, SimulatorConfig
 from mocks.world import World
@@ -24,19 +33,32 @@ class StationService:
     """The tracker simulator and its world, as one service of the robot simulator's process."""
 
     def __init__(self, simulator: GeoComSimulator, world: World, truth_doc: dict[str, Any],
-                 home: np.ndarray) -> None:
+                 home: np.ndarray, emscon: EmsconSimulator | None = None) -> None:
         self.simulator = simulator
+        self.emscon = emscon
         self.world = world
         self.truth_doc = truth_doc
         self.home = home
 
     def start(self) -> dict[str, Any]:
         self.simulator.start()
-        return {"tracker_url": self.simulator.url, "tracker_pty": self.simulator.pty_path,
+        info = {"tracker_url": self.simulator.url, "tracker_pty": self.simulator.pty_path,
                 "truth": self.truth_doc, "home": self.home.tolist()}
+        if self.emscon is not None:
+            try:
+                self.emscon.start()
+            except BaseException:
+                self.simulator.stop()
+                raise
+            info["tracker_emscon_url"] = self.emscon.url
+        return info
 
     def stop(self) -> None:
-        self.simulator.stop()
+        try:
+            if self.emscon is not None:
+                self.emscon.stop()
+        finally:
+            self.simulator.stop()
 
 
 def station_service(controller: Any, truth: str | None = None, seed: int = 0,
@@ -54,13 +76,20 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
     config = SimulatorConfig(instrument=InstrumentConfig(seed=seed), link=LinkConfig(baudrate=baudrate),
                              address=controller.config.address, port=tracker_port)
     simulator = GeoComSimulator(world, config)
-    # the tracker's faults, reachable through the robot simulator's control channel
+    emscon = EmsconSimulator(world, ServerConfig(instrument=EmsconConfig(seed=seed),
+                                                 address=controller.config.address, port=0),
+                             clock=controller.clock.now)
+    # the trackers' faults, reachable through the robot simulator's control channel
     controller.extra_faults.update({
         "block_beam": world.block_beam,
         "tracker_unplug": lambda: simulator.faults.unplug(),
         "tracker_garble": lambda: simulator.faults.garble_next_reply(),
+        "emscon_drop": lambda: emscon.drop(),
+        "emscon_stall": lambda seconds: emscon.stall(float(seconds)),
+        "emscon_garbage": lambda: emscon.garbage(),
+        "emscon_laser_cold": lambda seconds: emscon.laser_cold(float(seconds)),
     })
-    return StationService(simulator, world, truth_document(geometry, noise), home)
+    return StationService(simulator, world, truth_document(geometry, noise), home, emscon)
 
 
 def station_spec(truth: str | None = None, seed: int = 0, acceptance_angle: float = 30.0,

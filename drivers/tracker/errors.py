@@ -41,8 +41,8 @@ class ProtocolError(TrackerError):
         self.rc_com = rc_com
 
 
-class GeoComError(TrackerError):
-    """The RPC ran and returned a non-OK return code that is not a lost target."""
+class InstrumentError(TrackerError):
+    """The instrument ran a command and refused it: `rc` its code, `rpc` the command's number."""
 
     def __init__(self, message: str, rc: int, rpc: int) -> None:
         super().__init__(message)
@@ -50,8 +50,25 @@ class GeoComError(TrackerError):
         self.rpc = rpc
 
 
+class GeoComError(InstrumentError):
+    """The RPC ran and returned a non-OK return code that is not a lost target."""
+
+
+
+class EmsconError(InstrumentError):
+    """An emScon command answered a status that is not a lost target (`rc`: ES_ResultStatus,
+    `rpc`: ES_Command; the message names both)."""
+
+
 class TargetLost(GeoComError):
-    """No distance to the SMR: rc 1285/1292/1294/8710/8725 or lock status 0 (no code says "beam broken")."""
+    """No distance to the SMR. GeoCOM: rc 1285/1292/1294/8710/8725 or lock status 0 (no code says "beam
+    broken"); emScon: ES_RS_MeasurementStatusNotReady, ES_RS_NoStationaryResult, a failed
+    ES_C_FindReflector, or the server's MeasStatus_NotReady event (`rc`/`rpc` then hold the emScon status
+    and command)."""
+
+
+class NotReady(TrackerError):
+    """The instrument cannot measure yet: laser warming up, not initialized, sensor not stable."""
 
 
 class UnstablePoint(TrackerError):

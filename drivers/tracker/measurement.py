@@ -1,14 +1,13 @@
-"""The measuring tracker: connect, correct for the atmosphere, measure points and paths.
+"""The GeoCOM tracker: connect, correct for the atmosphere, measure points and paths.
 
-`Tracker` is what the orchestrator holds. `measure_point` averages N samples in tracking mode,
-re-locks on a lost target (AUT_LockIn, then AUT_Search + AUT_LockIn) a bounded number of times,
-retries once after a transient link fault, and refuses an unstable point. `stream` samples at a
-fixed rate with timestamps for path measurements.
+`GeoComTracker` implements `drivers.tracker.device.Tracker`. `measure_point` averages N samples in
+tracking mode, re-locks on a lost target (AUT_LockIn, then AUT_Search + AUT_LockIn) a bounded number
+of times, retries once after a transient link fault, and refuses an unstable point. `stream` samples at
+a fixed rate with timestamps for path measurements.
 """
 
 from __future__ import annotations
 
-import enum
 import logging
 import math
 import threading
@@ -18,7 +17,6 @@ from dataclasses import dataclass, field
 from types import TracebackType
 
 import numpy as np
-from numpy.typing import NDArray
 
 from drivers.tracker.commands import (
     AtmosphericCorrection,
@@ -27,26 +25,13 @@ from drivers.tracker.commands import (
     PolarReading,
     TrackerCommands,
 )
+from drivers.tracker.device import Atmosphere, Identity, PointStatus, StreamSample, TrackerPoint
 from drivers.tracker.errors import GeoComError, LinkError, TargetLost, TrackerError, UnstablePoint
 from drivers.tracker.geometry import polar_to_cartesian
 from drivers.tracker.protocol import GeoComClient
 from drivers.tracker.transport import SerialConfig, SerialTransport
 
 log = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class Atmosphere:
-    """Air at the station, applied to the instrument at connect (TMC_SetAtmCorr).
-
-    ``wet_temperature_c`` defaults to the dry temperature; ``wavelength_m`` None keeps the
-    instrument's own EDM wavelength (read with TMC_GetAtmCorr), as Leica recommends.
-    """
-
-    temperature_c: float = 20.0
-    pressure_mbar: float = 1013.25
-    wet_temperature_c: float | None = None
-    wavelength_m: float | None = None
 
 
 @dataclass(frozen=True)
@@ -72,51 +57,8 @@ class TrackerConfig:
             raise ValueError("retry counts must be >= 0")
 
 
-class PointStatus(enum.Enum):
-    """How trustworthy a point is."""
-
-    OK = "ok"
-    WARNING = "warning"  # instrument flagged accuracy / correction (rc 1283/1284)
-
-
-@dataclass(frozen=True)
-class TrackerPoint:
-    """The SMR centre in the tracker frame (metres, see `drivers.tracker.geometry`)."""
-
-    position: tuple[float, float, float]
-    spread: tuple[float, float, float]  # per-axis sample standard deviation (ddof=1; 0 for one sample)
-    samples: int
-    status: PointStatus
-    relocks: int = 0
-
-    @property
-    def xyz(self) -> NDArray[np.float64]:
-        """Position as a numpy array."""
-        return np.array(self.position)
-
-
-@dataclass(frozen=True)
-class StreamSample:
-    """One sample of continuous mode: monotonic timestamp, position or None if the target was lost."""
-
-    t: float
-    position: tuple[float, float, float] | None
-    status: PointStatus | None  # None when lost
-    reason: str = ""
-
-
-@dataclass(frozen=True)
-class Identity:
-    """Who answered: model name, serial number, firmware and GeoCOM versions."""
-
-    name: str
-    serial_number: int
-    firmware: tuple[int, int, int]
-    geocom: tuple[int, int, int]
-
-
-class Tracker:
-    """A GeoCOM laser tracker. No I/O until `open()` (or ``with Tracker(cfg) as t:``)."""
+class GeoComTracker:
+    """A GeoCOM laser tracker (`drivers.tracker.device.Tracker`). No I/O until `open()`."""
 
     def __init__(self, config: TrackerConfig) -> None:
         self.config = config
@@ -127,7 +69,7 @@ class Tracker:
         self._tracking = False
 
     # --- lifecycle
-    def open(self) -> Tracker:
+    def open(self) -> GeoComTracker:
         """Connect, identify the instrument and apply the atmospheric correction."""
         self.transport.open()
         try:
@@ -135,7 +77,7 @@ class Tracker:
             cmd.null_proc()
             self.identity = Identity(
                 cmd.get_instrument_name(), cmd.get_instrument_number(), cmd.get_firmware_version(),
-                cmd.get_geocom_version(),
+                "GeoCOM " + ".".join(map(str, cmd.get_geocom_version())),
             )
             log.info("tracker %s", self.identity)
             if self.config.atmosphere is not None:
@@ -155,7 +97,7 @@ class Tracker:
         self._tracking = False
         self.transport.close()
 
-    def __enter__(self) -> Tracker:
+    def __enter__(self) -> GeoComTracker:
         return self.open()
 
     def __exit__(
@@ -191,6 +133,14 @@ class Tracker:
         except GeoComError as exc:
             log.info("search failed (%s)", exc)
             return False
+
+    def ready(self) -> bool:
+        """GeoCOM's RPCs used here expose no warm-up state, and this driver never raises NotReady."""
+        return True
+
+    def lock_status(self) -> str:
+        """MOT_ReadLockStatus in words ("locked in", "locked out", "prediction")."""
+        return self.commands.read_lock_status().name.lower().replace("_", " ")
 
     def _start_tracking(self) -> None:
         self.commands.do_measure(MeasureProgram.RTRK_DIST)

@@ -108,7 +108,8 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
                           if info is not None else {})
     ident = getattr(devices.tracker, "identity", None)
     outcome.tracker_info = ({"name": ident.name, "serial": ident.serial_number,
-                             "firmware": ".".join(map(str, ident.firmware))} if ident is not None else {})
+                             "firmware": ".".join(map(str, ident.firmware)), "interface": ident.interface}
+                            if ident is not None else {})
     try:
         home = np.asarray(devices.robot.read_joints(1).q, dtype=float)  # where the operator left it
     except Exception:  # no reading: the first move's path is then not checked from here

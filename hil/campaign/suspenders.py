@@ -10,6 +10,7 @@ beam_lost             tracker TargetLost (1285/1292/8710, lock 0)  a re-lock wor
 unstable_point        tracker UnstablePoint                        at once (the pose is measured again)
 tracker_link          tracker TrackerTimeout / GarbledReply        at once (the driver already resynced)
 tracker_unplugged     tracker ConnectionLost                       the link opens again
+tracker_not_ready     tracker NotReady (laser warm-up, not init.)  the tracker says it is ready
 protective_stop       robot ProtectiveStop                         the safety status is normal again
 connection_lost       robot ConnectionLost / ProgramStopped        a reconnect succeeds (with backoff)
 ====================  ===========================================  =====================================
@@ -25,7 +26,7 @@ from collections.abc import Callable
 from drivers.robot import errors as robot_errors
 from drivers.robot.isolated import IsolatedURRobot
 from drivers.tracker import errors as tracker_errors
-from drivers.tracker.measurement import Tracker
+from drivers.tracker.device import Tracker
 from hil.campaign.engine import Suspender
 from hil.station.devices import Devices
 
@@ -59,6 +60,16 @@ def _tracker_reopened(tracker: Tracker) -> Callable[[], bool]:
     return check
 
 
+def _tracker_ready(tracker: Tracker) -> Callable[[], bool]:
+    def check() -> bool:
+        try:
+            return tracker.ready()
+        except tracker_errors.TrackerError:
+            return False
+
+    return check
+
+
 def suspenders(devices: Devices, poll: float = 0.5, relock_timeout: float = 30.0) -> list[Suspender]:
     """The suspenders of a real (or simulated) station; see the module docstring.
 
@@ -75,8 +86,11 @@ def suspenders(devices: Devices, poll: float = 0.5, relock_timeout: float = 30.0
         Suspender("tracker_link", _is(tracker_errors.LinkError), lambda: True,
                   "the tracker's reply was garbled or late; asking again", poll),
         Suspender("tracker_unplugged", _is(tracker_errors.ConnectionLost), _tracker_reopened(tracker),
-                  "the tracker's serial link is gone: check the cable and the USB adapter; the run "
-                  "resumes when it is back", poll),
+                  "the tracker's link is gone: check the cable (serial/USB adapter, or the network to "
+                  "an emScon tracker); the run resumes when it is back", poll),
+        Suspender("tracker_not_ready", _is(tracker_errors.NotReady), _tracker_ready(tracker),
+                  "the tracker is not ready to measure (laser warming up or not initialized); the run "
+                  "goes on by itself when it is", poll, backoff=2.0),
         Suspender("protective_stop", _is(robot_errors.ProtectiveStop), _robot_ready(robot),
                   "protective stop: clear its cause and unlock it on the teach pendant; the run resumes "
                   "by itself", poll),

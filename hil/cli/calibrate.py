@@ -25,7 +25,7 @@ from pathlib import Path
 from hil.arm.catalog import ROBOT_NAMES
 from hil.campaign.events import Event, EventBus
 from hil.cli.progress import JsonLines, Progress
-from hil.cli.station_args import station_from_args
+from hil.cli.station_args import add_tracker_protocol, station_from_args
 from hil.errors import InputError
 from hil.files.outputs import atomic_write_text
 
@@ -52,6 +52,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     again.add_argument("--resume", action="store_true", help="continue the last unfinished campaign")
     again.add_argument("--new", action="store_true", help="start a new campaign even if one is unfinished")
     p.add_argument("--json", action="store_true", help="one JSON event per line on stdout")
+    add_tracker_protocol(p)
     p.add_argument("--out", metavar="result.json", help="write the result (embeds the model)")
     p.add_argument("--report", metavar="report.html", help="write the HTML report")
     p.set_defaults(func=run)

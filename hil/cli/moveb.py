@@ -16,7 +16,7 @@ from typing import Any
 
 from hil.arm.catalog import ROBOT_NAMES
 from hil.cli._common import print_json
-from hil.cli.station_args import station_from_args
+from hil.cli.station_args import add_tracker_protocol, station_from_args
 from hil.errors import InputError
 
 
@@ -40,6 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     src = run.add_mutually_exclusive_group(required=True)
     src.add_argument("--config", metavar="station.toml", help="station configuration")
     src.add_argument("--sim", action="store_true", help="use the simulated station")
+    add_tracker_protocol(run)
     run.add_argument("--model", metavar="model.json",
                      help="calibrated model (hil-model/1, a campaign result that embeds one, or a truth): "
                           "IK and the tracker pose")

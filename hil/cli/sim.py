@@ -1,7 +1,8 @@
-"""`hil sim`: run the simulated station (UR controller + GeoCOM tracker sharing one world).
+"""`hil sim`: run the simulated station (UR controller + a laser tracker sharing one world).
 
 It serves until Ctrl-C and prints one JSON line when ready: the robot's address and ports, the
-tracker's pty path and ``socket://`` URL, and the hidden truth (so a test can compare against it).
+tracker's GeoCOM pty path and ``socket://`` URL, its emScon TPI ``tcp://`` URL, and the hidden truth
+(so a test can compare against it).
 """
 
 from __future__ import annotations
@@ -43,7 +44,8 @@ def run(args: argparse.Namespace) -> int:
         station = info["services"][0]
         out = {"robot": {k: info[k] for k in ("address", "rtde_port", "dashboard_port", "script_port",
                                               "control_port")},
-               "tracker": {"url": station["tracker_url"], "pty": station["tracker_pty"]},
+               "tracker": {"url": station["tracker_url"], "pty": station["tracker_pty"],
+                           "emscon_url": station["tracker_emscon_url"]},
                "truth": station["truth"]}
         sys.stdout.write(json.dumps(out) + "\n")
         sys.stdout.flush()

@@ -15,6 +15,13 @@ from hil.errors import InputError
 from hil.station.config import StationConfig, load_config
 
 
+def add_tracker_protocol(parser: argparse.ArgumentParser) -> None:
+    """``--tracker-protocol`` for commands that can run on the simulated station."""
+    parser.add_argument("--tracker-protocol", choices=("geocom", "emscon"),
+                        help="--sim: talk to the simulated tracker by GeoCOM (serial line, the default) or "
+                             "by Leica's emScon TPI over TCP")
+
+
 def config_overrides(args: argparse.Namespace) -> dict[str, Any]:
     """The campaign keys a command's options override (--poses, --validation, --candidates, --accept)."""
     out: dict[str, Any] = {}
@@ -35,9 +42,11 @@ def config_overrides(args: argparse.Namespace) -> dict[str, Any]:
 def station_from_args(
         args: argparse.Namespace) -> Iterator[tuple[StationConfig, dict[str, Any], dict | None]]:
     """(config to run, config that identifies the run in the store, hidden truth or None)."""
+    protocol = getattr(args, "tracker_protocol", None)
     if args.config:
-        if args.truth or args.speed != 1.0:
-            raise InputError("--truth and --speed go with --sim, not --config")
+        if args.truth or args.speed != 1.0 or protocol:
+            raise InputError("--truth, --speed and --tracker-protocol go with --sim, not --config "
+                             "(the configuration's tracker.protocol says which tracker it has)")
         config = load_config(args.config)
         config = config.with_overrides(**config_overrides(args)) if config_overrides(args) else config
         yield config, config.as_dict(), None
@@ -46,6 +55,7 @@ def station_from_args(
         raise InputError(f"--speed must be positive, got {args.speed}")
     from hil.station.simulated import simulated_station
 
-    with simulated_station(args.robot, args.truth, args.speed, args.seed, **config_overrides(args)) as (
+    with simulated_station(args.robot, args.truth, args.speed, args.seed, protocol or "geocom",
+                           **config_overrides(args)) as (
             config, identity, truth, _sim):
         yield config, identity, truth

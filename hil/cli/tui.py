@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 
 from hil.arm.catalog import ROBOT_NAMES, get_robot
+from hil.cli.station_args import add_tracker_protocol
 from hil.errors import InputError
 
 
@@ -30,6 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--accept", type=float, metavar="METRES", help="validation RMS threshold")
     p.add_argument("--db", metavar="PATH", help="campaign database (default: config, $HIL_DB, data dir)")
     p.add_argument("--out-dir", default=".", metavar="DIR", help="where exports go (default: here)")
+    add_tracker_protocol(p)
     p.set_defaults(func=run, cycles=1)
 
 
@@ -41,8 +43,9 @@ def options_from(args: argparse.Namespace) -> object:
 
     overrides = config_overrides(args)
     if args.config:
-        if args.truth or args.speed != 1.0:
-            raise InputError("--truth and --speed go with --sim, not --config")
+        if args.truth or args.speed != 1.0 or args.tracker_protocol:
+            raise InputError("--truth, --speed and --tracker-protocol go with --sim, not --config "
+                             "(the configuration's tracker.protocol says which tracker it has)")
         return TuiOptions(config=load_config(args.config), db=args.db, out_dir=args.out_dir,
                           overrides=overrides)
     if not args.speed > 0:
@@ -52,7 +55,8 @@ def options_from(args: argparse.Namespace) -> object:
 
         load_truth(args.truth)  # a bad truth fails here, naming the key
     return TuiOptions(sim=True, speed=args.speed, seed=args.seed, robot=get_robot(args.robot).name,
-                      truth=args.truth, db=args.db, out_dir=args.out_dir, overrides=overrides)
+                      truth=args.truth, tracker_protocol=args.tracker_protocol or "geocom", db=args.db,
+                      out_dir=args.out_dir, overrides=overrides)
 
 
 def run(args: argparse.Namespace) -> int:

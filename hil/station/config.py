@@ -21,6 +21,7 @@ from hil.errors import InputError
 from hil.files.inputs import read_input_text
 
 EXAMPLE = Path(__file__).with_name("station.example.toml")
+PROTOCOLS = ("geocom", "emscon")
 
 
 @dataclass(frozen=True)
@@ -57,6 +58,10 @@ def _index(v: Any) -> str | None:
     return None if v in ("O1", "O2", "O3", "O4", "O5") else f"must be one of O1..O5, got {v!r}"
 
 
+def _protocol(v: Any) -> str | None:
+    return None if v in PROTOCOLS else f"must be one of {', '.join(PROTOCOLS)}, got {v!r}"
+
+
 def _parity(v: Any) -> str | None:
     return None if v in ("N", "E", "O", "M", "S") else f"must be one of N, E, O, M, S, got {v!r}"
 
@@ -74,7 +79,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "joint_samples": Key("int", 10, _positive, "joint readings averaged per pose"),
     },
     "tracker": {
-        "url": Key("str", "", help="serial device or socket://, rfc2217://, spy:// URL"),
+        "protocol": Key("str", "geocom", _protocol,
+                        "geocom (GeoCOM on a serial line) or emscon (Leica emScon TPI over TCP)"),
+        "url": Key("str", "", help="geocom: serial device or socket://, rfc2217://, spy:// URL; "
+                                   "emscon: tcp://host:700"),
         "baudrate": Key("int", 115200, _positive),
         "parity": Key("str", "N", _parity),
         "timeout": Key("float", 3.0, _positive, "reply timeout (s)"),
@@ -82,6 +90,11 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "temperature": Key("float", 20.0, help="air temperature (°C) for the atmospheric correction"),
         "pressure": Key("float", 1013.25, _positive, "air pressure (hPa)"),
         "humidity": Key("float", 50.0, _non_negative, "relative humidity (%)"),
+        "reflector": Key("str", "", help="emscon: reflector name as the tracker lists it (empty: keep the "
+                                         "tracker's current one)"),
+        "measure_time": Key("float", 0.5, _positive, "emscon: stationary measuring time per sample (s)"),
+        "warmup": Key("float", 0.0, _non_negative,
+                      "emscon: longest wait at connect for the laser to warm up (s); then the run waits"),
     },
     "smr": {
         "offset": Key("vec3", (0.0, 0.0, 0.045), help="SMR centre guess in the flange frame (m)"),

@@ -1,7 +1,8 @@
 """The station's devices: the real drivers built from the configuration, opened and closed together.
 
 This is where hil meets the hardware: the robot (ur_rtde, in its own process) and the tracker
-(GeoCOM over a serial line or a TCP socket), typed by the drivers' own errors (`HARDWARE_ERRORS`).
+(GeoCOM over a serial line, or Leica's emScon TPI over TCP, as `tracker.protocol` says), typed by the
+drivers' own errors (`HARDWARE_ERRORS`).
 What a campaign does when one of them fails is `hil.campaign.suspenders`.
 """
 
@@ -16,7 +17,9 @@ from drivers.robot import errors as robot_errors
 from drivers.robot.isolated import IsolatedURRobot
 from drivers.robot.model import KeepInZone, RobotConfig
 from drivers.tracker import errors as tracker_errors
-from drivers.tracker.measurement import Atmosphere, Tracker, TrackerConfig
+from drivers.tracker.device import Atmosphere, Tracker
+from drivers.tracker.emscon import EmsconConfig, EmsconTracker, TcpConfig
+from drivers.tracker.measurement import GeoComTracker, TrackerConfig
 from drivers.tracker.transport import SerialConfig
 from hil.arm.catalog import get_robot
 from hil.errors import InputError
@@ -43,18 +46,37 @@ def robot_config(config: StationConfig) -> RobotConfig:
         connect_timeout=config.timeouts["connect"], move_timeout=config.timeouts["move"])
 
 
-def tracker_config(config: StationConfig) -> TrackerConfig:
-    """The tracker driver's settings (serial line, atmosphere, stability threshold)."""
+def tracker_config(config: StationConfig) -> TrackerConfig | EmsconConfig:
+    """The tracker driver's settings for the configured protocol (GeoCOM line or emScon TCP)."""
     t = config.tracker
     if not t["url"]:
         raise InputError(f"{config.source}: tracker.url: the tracker's serial device or URL is required")
+    atmosphere = Atmosphere(temperature_c=t["temperature"], pressure_mbar=t["pressure"],
+                            humidity_percent=t["humidity"])
+    stability = config.campaign["stability"]
+    if t["protocol"] == "emscon":
+        try:
+            tcp = TcpConfig(t["url"], connect_timeout=config.timeouts["connect"])
+            return EmsconConfig(tcp, timeout=t["timeout"], atmosphere=atmosphere,
+                                reflector=t["reflector"] or None,
+                                measure_time_ms=max(1, round(t["measure_time"] * 1000)),
+                                warmup_timeout=t["warmup"], stability_threshold_m=stability)
+        except ValueError as exc:
+            raise InputError(f"{config.source}: tracker: {exc}") from None
     try:
         serial = SerialConfig(url=t["url"], baudrate=t["baudrate"], parity=t["parity"])
     except ValueError as exc:
         raise InputError(f"{config.source}: tracker: {exc}") from None
-    return TrackerConfig(serial=serial, timeout=t["timeout"],
-                         atmosphere=Atmosphere(temperature_c=t["temperature"], pressure_mbar=t["pressure"]),
-                         stability_threshold_m=config.campaign["stability"])
+    return TrackerConfig(serial=serial, timeout=t["timeout"], atmosphere=atmosphere,
+                         stability_threshold_m=stability)
+
+
+def make_tracker(config: StationConfig) -> Tracker:
+    """The configured tracker driver, not yet opened."""
+    settings = tracker_config(config)
+    if isinstance(settings, EmsconConfig):
+        return EmsconTracker(settings)
+    return GeoComTracker(settings)
 
 
 @dataclass
@@ -79,7 +101,7 @@ def open_devices(config: StationConfig) -> Devices:
     """Connect to the robot (through `IsolatedURRobot`) and the tracker (typed driver errors on failure;
     nothing left open)."""
     robot = IsolatedURRobot(robot_config(config))
-    tracker = Tracker(tracker_config(config))
+    tracker = make_tracker(config)
     robot.open()
     try:
         tracker.open()

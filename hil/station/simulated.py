@@ -19,8 +19,13 @@ from hil.station.config import StationConfig, default_config
 
 @contextlib.contextmanager
 def simulated_station(robot: str = "ur5e", truth: str | None = None, speed: float = 1.0, seed: int = 1,
+                      tracker_protocol: str = "geocom",
                       **overrides: Any) -> Iterator[tuple[StationConfig, dict[str, Any], dict, Any]]:
-    """(config to run, config identifying the run, hidden truth document, running simulator)."""
+    """(config to run, config identifying the run, hidden truth document, running simulator).
+
+    The simulated tracker speaks both protocols at once (GeoCOM on a pty and TCP, emScon TPI on TCP);
+    `tracker_protocol` chooses which one the run talks to.
+    """
     robot = get_robot(robot).name
     truth_sha = ""
     if truth:
@@ -37,8 +42,9 @@ def simulated_station(robot: str = "ur5e", truth: str | None = None, speed: floa
         station = sim.info["services"][0]
         base = default_config().with_overrides(
             station__name="simulated station", robot__type=robot, robot__speed=1.0,
-            robot__acceleration=2.0, campaign__seed=seed, **overrides)
-        config = base.with_overrides(robot__address=sim.address, tracker__url=station["tracker_url"])
+            robot__acceleration=2.0, campaign__seed=seed, tracker__protocol=tracker_protocol, **overrides)
+        url = station["tracker_emscon_url"] if tracker_protocol == "emscon" else station["tracker_url"]
+        config = base.with_overrides(robot__address=sim.address, tracker__url=url)
         identity = base.with_overrides(robot__address="sim",
                                        tracker__url=f"sim:seed={seed};truth={truth_sha}").as_dict()
         yield config, identity, station["truth"], sim

@@ -71,6 +71,7 @@ class TuiOptions:
     seed: int = 1
     robot: str = "ur5e"
     truth: str | None = None
+    tracker_protocol: str = "geocom"  # --sim: which of the simulated tracker's protocols to talk
     db: str | None = None
     out_dir: str = "."
     overrides: dict[str, Any] = field(default_factory=dict)  # "campaign.seed" or "campaign__seed" keys
@@ -94,7 +95,7 @@ def station_context(options: TuiOptions) -> Iterator[tuple[StationConfig, dict[s
     from hil.station.simulated import simulated_station
 
     with simulated_station(options.robot, options.truth, options.speed, options.seed,
-                           **_dotted(options.overrides)) as station:
+                           options.tracker_protocol, **_dotted(options.overrides)) as station:
         yield station
 
 
@@ -255,7 +256,7 @@ class Session:
         except robot_errors.RobotError as exc:
             st.safety = f"unknown ({_error(exc)})"
         try:
-            st.lock = devices.tracker.commands.read_lock_status().name.lower().replace("_", " ")
+            st.lock = devices.tracker.lock_status()
         except TrackerError as exc:
             st.lock = f"unknown ({_error(exc)})"
 

@@ -14,9 +14,9 @@ from drivers.tracker import (
     ChecksumError,
     ConnectionLost,
     GarbledReply,
+    GeoComTracker,
     SerialConfig,
     TargetLost,
-    Tracker,
     TrackerConfig,
     TrackerTimeout,
     UnstablePoint,
@@ -61,8 +61,8 @@ def url_of(s: GeoComSimulator, link: str) -> str:
     return s.pty_path if link == "pty" else s.url  # type: ignore[return-value]
 
 
-def tracker(url: str, **kw: object) -> Tracker:
-    return Tracker(TrackerConfig(SerialConfig(url), **{"timeout": 0.5, **kw}))  # type: ignore[arg-type]
+def tracker(url: str, **kw: object) -> GeoComTracker:
+    return GeoComTracker(TrackerConfig(SerialConfig(url), **{"timeout": 0.5, **kw}))  # type: ignore[arg-type]
 
 
 def test_identity_and_exact_point(sim: tuple[GeoComSimulator, StaticTarget], link: str) -> None:
@@ -147,7 +147,7 @@ def test_target_facing_away_is_lost(sim: tuple[GeoComSimulator, StaticTarget]) -
 
 
 # ------------------------------------------------------------------------------ link faults
-def simple_mea(tr: Tracker, timeout: float | None = None) -> np.ndarray:
+def simple_mea(tr: GeoComTracker, timeout: float | None = None) -> np.ndarray:
     r = tr.commands.client.call(2108, [100, 1], timeout=timeout)
     assert r.rc == 0
     return polar_to_cartesian(*(float(v) for v in r.values[:3]))

@@ -131,12 +131,13 @@ def test_kill_9_mid_campaign_then_rerun_resumes_without_losing_anything(tmp_path
 class Station:
     """The simulated station in its own process, and a run of the campaign in this one."""
 
-    def __init__(self, tmp_path: Path, seed: int = 5) -> None:
+    def __init__(self, tmp_path: Path, seed: int = 5, protocol: str = "geocom") -> None:
         self.sim = start_station(speed=SPEED, seed=seed)
         svc = self.sim.info["services"][0]
         self.truth = Geometry.from_dict(svc["truth"])
+        url = svc["tracker_emscon_url"] if protocol == "emscon" else svc["tracker_url"]
         self.config = default_config().with_overrides(
-            robot__address=self.sim.address, tracker__url=svc["tracker_url"], robot__speed=1.0,
+            robot__address=self.sim.address, tracker__protocol=protocol, tracker__url=url, robot__speed=1.0,
             robot__acceleration=2.0, campaign__calibration_poses=14, campaign__validation_poses=4,
             campaign__candidates=3000, timeouts__relock=20.0,
             timeouts__suspend=90.0)
@@ -188,6 +189,34 @@ def test_beam_lost_mid_campaign_relocks_and_resumes(tmp_path, pose):
     outcome = st.run()
     assert [e.kind for e in st.of(Suspended)] == ["beam_lost"]
     assert "line of sight" in st.of(Suspended)[0].message and len(st.of(Resumed)) == 1
+    st.check_nothing_lost(outcome)
+
+
+def test_full_campaign_through_emscon_matches_the_hidden_truth(tmp_path, truth_file):
+    """The same campaign, the simulated tracker spoken to by Leica's emScon TPI over TCP."""
+    out = tmp_path / "result.json"
+    proc = subprocess.run(cli(tmp_path, "--tracker-protocol", "emscon", "--out", str(out)),
+                          cwd=ROOT, capture_output=True, text=True, timeout=240)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    result = json.loads(out.read_text())
+    assert result["status"] == "accepted" and result["tracker"]["interface"] == "emScon TPI 3.6.0"
+    assert result["tracker"]["name"] == "AT960-SIM"
+    true_rms, predicted = held_out_error(result["model"], truth_file)
+    assert true_rms < 3 * predicted and true_rms < 30e-6
+
+
+def test_emscon_faults_mid_campaign_suspend_and_resume_without_losing_anything(tmp_path):
+    """A blocked beam, a dropped TCP connection and a cold laser, each at its own pose."""
+    st = Station(tmp_path, protocol="emscon")
+    st.on(PoseStarted, lambda e: e.index == 8, lambda e: (
+        st.sim.inject("block_beam", on=True, reason="a person walks through the beam"),
+        st.later(1.0, "block_beam", on=False)))
+    st.on(PoseStarted, lambda e: e.index == 11, lambda e: st.sim.inject("emscon_drop"))
+    st.on(PoseStarted, lambda e: e.index == 14, lambda e: st.sim.inject("emscon_laser_cold", seconds=30.0))
+    outcome = st.run()
+    kinds = [e.kind for e in st.of(Suspended)]
+    assert {"beam_lost", "tracker_unplugged", "tracker_not_ready"} <= set(kinds), kinds
+    assert "warming up" in next(e.message for e in st.of(Suspended) if e.kind == "tracker_not_ready")
     st.check_nothing_lost(outcome)
 
 

@@ -1,0 +1,685 @@
+"""The instrument side of emScon TPI: request packet in, reply packets out, plus a clock-driven part.
+
+No sockets here. `EmsconInstrument.handle(packet, now)` answers one command packet and
+`EmsconInstrument.tick(now)` produces what the tracker sends by itself (measurement results, beam
+events); both return the packets due at ``now`` (simulated seconds since the server started). All
+wire formats come from `drivers.tracker.emscon.packets`, which follows Leica's ``ES_C_API_Def.h``.
+
+Behaviour a plain TPI client can rely on
+----------------------------------------
+Units and frame: SetUnits accepts length METER(0) or MILLIMETER(1), angle RADIAN(0) or DEGREE(1),
+temperature CELSIUS, pressure MBAR, humidity RH; anything else answers ``WrongParameter``.
+Coordinates are right-handed Cartesian in the tracker frame (SetCoordinateSystemType accepts RHR
+only, any other type answers ``NotImplemented``). Lengths the tracker reports (positions, their
+standard deviations, reflector surface offsets, the distance range of GetTrackerInfo) are in the set
+length unit; the angle ranges of GetTrackerInfo in the set angle unit; meteo values are always °C,
+mbar and %RH. Defaults at start: metre, radian, RHR, stationary mode (1000 ms, ADM on), continuous
+time mode 10 ms / unlimited points, reflector 1, environment 20 °C / 1013.25 mbar / 50 %.
+
+Answers: every command gets exactly one answer packet (``encode_answer(command, status, ...)``),
+with results only when the status is ``AllOK`` — except GetReflectors, which answers one packet per
+reflector, as emScon does. A command this simulator does not implement (unknown or not tabled)
+answers ``NotImplemented``. A packet that does not decode raises `PacketError` here; the server
+closes the connection, because a TPI stream has no resynchronisation marker.
+
+* GetSystemStatus → (lastResultStatus (the status of the previous answer), trackerProcessorStatus
+  INITIALIZED(5) after Initialize else COMPENSATION_SET(4), laserStatus 3 when warm else 0,
+  admStatus 2 (ADM ready), emScon version 3.6.0, weatherMonitorStatus 0, flags 0, serial number).
+* GetTrackerStatus → READY(2) when initialized, warm and locked on the reflector, else NOT_READY(0).
+* GetTrackerInfo → (trackerType 13 = ES_LTS_AT901_B: the header has no AT960 entry, the AT901-B is
+  its closest predecessor; name, serial, compensation id, ADM/overview camera/nivel present, nivel
+  offset 0, max distance 20 m (Leica's AT960 datasheet: 40 m measuring-volume diameter for the
+  standard model), min distance 0.8 m, max data rate 1000 (the AT960's 1000 Hz output), 2 faces, Hz
+  range ±360° and Vt range ±145°, accuracy model 0, firmware). The minimum distance and the angular
+  ranges are the datasheet's figures as recalled when this was written: check them against the
+  current datasheet before relying on them.
+* GetSystemSoftwareVersion → "emScon 3.6.0 SIM". GetMeasurementStatusInfo → (lastResultStatus,
+  TRACKER_FOUND | TRACKER_COMPENSATION_FOUND | ADM_FOUND | ADM_COMPENSATION_FOUND | IN_FACE1 always,
+  INITIALIZED after Initialize, REFLECTOR_FOUND while the beam is locked).
+* Initialize answers AllOK after ``initialize_s`` simulated seconds (default 0); commands that
+  arrive meanwhile are queued and answered after it, in order. Before Initialize, StartMeasurement
+  and FindReflector answer ``TrackerNotInitialized``. During a measurement it answers ``ServerBusy``.
+* Laser: warm after ``warmup_s`` simulated seconds (default 0) and outside a `laser_cold` fault.
+  While cold, laserStatus is 0 and StartMeasurement answers ``SensorNotWarmedUp``.
+
+Beam lock: the tracker starts locked if the target is visible when the instrument is built. It looks
+at the target on every command, on every tick of a running measurement and whenever the server asks
+(``tick(..., watch=True)``). When it sees the target is not visible it drops the lock and sends
+``SystemStatusChange MEAS_STATUS_NOT_READY`` once per loss (pending continuous samples are sent
+first). It never re-acquires by itself: FindReflector(approximate distance) re-locks if the target
+is visible, answering AllOK followed by ``MEAS_STATUS_READY`` (sent on every successful
+FindReflector, so a client may wait for it), else answers ``ModuleTimedOut``. A search takes time:
+a failed one its whole timeout (SetSearchParams lTimeOut), a successful one ``find_s`` at most;
+commands that arrive meanwhile queue behind it, as behind Initialize. GoBirdBath answers
+AllOK and leaves the beam unlocked (NOT_READY follows if it was locked): the SMR is on the robot.
+
+Measurements: StartMeasurement while one runs answers ``ServerBusy``; not initialized →
+``TrackerNotInitialized``; laser cold → ``SensorNotWarmedUp``; beam not locked →
+``MeasurementStatusNotReady``; else AllOK and:
+
+* stationary: readings at ``stationary_rate_hz`` (AT960: 1000 Hz) over lMeasTime ms of simulated
+  time, each from the (linearly interpolated) true position with the GeoCOM simulator's physics;
+  then one `SingleMeasResult`: their mean, per-axis standard deviation and its total (root sum of
+  squares), the a-priori standard deviation of one reading from the `NoiseSpec` propagated to x, y, z,
+  pointing errors 0, the set meteo values, status 0. Beam lost before the end: ``MEAS_STATUS_NOT_READY``
+  then ``ErrorResponse(START_MEASUREMENT, NoStationaryResult)`` and no result.
+* continuous time: a sample every lTimeSeparation ms of simulated time from the start, each a
+  `MeasValue` with status 0 and its time on the tracker's clock (lTime1 whole seconds, lTime2
+  microseconds since the server started), sent in `MultiMeasResult` packets of at most
+  `packets.MAX_SAMPLES` whenever the server flushes (about every 100 ms of wall time, as emScon's
+  TcpDataPacketRate of 3..10 packets/s), at the end of the stream, before a beam-loss event and
+  before the answer to StopMeasurement. No samples while the beam is lost; after a FindReflector
+  re-lock the stream resumes on the same time grid. It stops after lNumberOfPoints samples (0 =
+  until StopMeasurement). Regions are not simulated (bUseRegion=1 answers ``NotImplemented``).
+
+StopMeasurement answers AllOK (also when idle) and ends the stream; a stationary measurement it
+interrupts sends no result. Changing units, measurement mode, mode parameters, coordinate system
+or reflector during a measurement answers ``ServerBusy``.
+
+Settings: SetReflector(id) takes the ids GetReflectors lists (else ``WrongParameter``); GetReflector
+answers the id. SetEnvironmentParams(T °C, p mbar, h %) outside −40..60 °C, 500..1200 mbar,
+0..100 % answers ``MeteoDataOutOfRange``; the distance error is the atmospheric ppm of the true air
+(config) against the set air, as in the GeoCOM simulator. SetStationaryModeParams(lMeasTime ≥ 1
+ms, bUseADM 0/1), SetContinuousTimeModeParams(lTimeSeparation ≥ 1 ms, lNumberOfPoints ≥ 0,
+bUseRegion 0/1), SetStatisticMode(0/1, 0/1), SetSearchParams(radius > 0, timeout > 0 ms),
+SwitchLaser(0/1), ClearCommandQueue answer AllOK, or ``WrongParameter1/2/3`` naming the bad field.
+The matching Get commands answer the stored values.
+"""
+
+from __future__ import annotations
+
+import heapq
+import logging
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from drivers.tracker.emscon.packets import (
+    MAX_SAMPLES,
+    AngleUnit,
+    Command,
+    CoordinateSystemType,
+    HumidityUnit,
+    LengthUnit,
+    MeasMode,
+    MeasurementStatusInfo,
+    MeasValue,
+    MultiMeasResult,
+    PressureUnit,
+    ResultStatus,
+    SingleMeasResult,
+    SystemStatusChange,
+    TargetType,
+    TemperatureUnit,
+    TrackerProcessorStatus,
+    TrackerStatus,
+    decode_request,
+    encode_answer,
+    encode_error,
+    encode_multi,
+    encode_single,
+    encode_status_change,
+)
+from drivers.tracker.geometry import cartesian_to_polar, polar_to_cartesian
+from mocks.geocom.noise import NoiseSpec, atmospheric_ppm
+from mocks.geocom.target import TargetSource, TargetState
+
+log = logging.getLogger(__name__)
+
+_AT901_B = 13  # ES_LTS_AT901_B: the header's closest sensor type to an AT960
+_ADM_READY = 2  # ES_AS_ADMReady
+_LASER_WARM = 3  # laserStatus reported when warm
+_ALWAYS_FOUND = (MeasurementStatusInfo.TRACKER_FOUND | MeasurementStatusInfo.TRACKER_COMPENSATION_FOUND
+                 | MeasurementStatusInfo.ADM_FOUND | MeasurementStatusInfo.ADM_COMPENSATION_FOUND
+                 | MeasurementStatusInfo.IN_FACE1)
+
+
+class _Answer(Exception):
+    """Raised by a handler to answer with a non-OK status."""
+
+    def __init__(self, status: ResultStatus) -> None:
+        super().__init__(status.name)
+        self.status = status
+
+
+@dataclass(frozen=True)
+class Reflector:
+    """One entry of GetReflectors."""
+
+    id: int
+    name: str
+    target_type: TargetType
+    surface_offset_m: float
+
+
+DEFAULT_REFLECTORS: tuple[Reflector, ...] = (
+    Reflector(1, "RRR 1.5in", TargetType.RRR15, 0.01905),
+    Reflector(2, "RRR 0.5in", TargetType.RRR05, 0.00635),
+    Reflector(3, "TBR 0.5in", TargetType.TBR05, 0.00635),
+)
+
+
+@dataclass(frozen=True)
+class TrackerIdentity:
+    """What the identity commands answer."""
+
+    name: str = "AT960-SIM"
+    serial_number: int = 960_001
+    compensation_id: int = 1
+    firmware: tuple[int, int] = (1, 4)  # LCP firmware major, minor
+    emscon_version: tuple[int, int, int] = (3, 6, 0)
+    software_version: str = "emScon 3.6.0 SIM"
+
+
+@dataclass(frozen=True)
+class EmsconConfig:
+    """Physics, identity and timing of the simulated tracker (times in simulated seconds)."""
+
+    identity: TrackerIdentity = field(default_factory=TrackerIdentity)
+    noise: NoiseSpec = field(default_factory=NoiseSpec)
+    seed: int | None = 0
+    true_temperature_c: float = 20.0
+    true_pressure_mbar: float = 1013.25
+    warmup_s: float = 0.0  # laser warm-up after the server starts
+    initialize_s: float = 0.0  # how long Initialize takes (the real one: tens of seconds)
+    # How long a FindReflector takes when the SMR is where the beam points: the search spirals out from
+    # the last direction and a nearby SMR is caught early. An assumption (the TPI header gives no
+    # figure), bounded by the search timeout of SetSearchParams, which a failed search takes whole
+    # (``failed_search_s`` None) unless told otherwise.
+    find_s: float = 0.5
+    failed_search_s: float | None = None
+    stationary_rate_hz: float = 1000.0  # readings averaged by a stationary measurement
+    reflectors: tuple[Reflector, ...] = DEFAULT_REFLECTORS
+    max_distance_m: float = 20.0
+    min_distance_m: float = 0.8
+    max_data_rate_hz: int = 1000
+    hz_range_deg: float = 360.0
+    vt_range_deg: float = 145.0
+
+    def __post_init__(self) -> None:
+        if not (self.warmup_s >= 0 and self.initialize_s >= 0 and self.stationary_rate_hz > 0):
+            raise ValueError("warmup_s and initialize_s must be >= 0, stationary_rate_hz > 0")
+        if not self.reflectors or len({r.id for r in self.reflectors}) != len(self.reflectors):
+            raise ValueError("reflector ids must be present and unique")
+
+
+@dataclass
+class _Stationary:
+    start: float
+    end: float
+    count: int  # readings in total
+    taken: list[NDArray[np.float64]] = field(default_factory=list)  # blocks of (n, 3) readings
+
+    @property
+    def count_taken(self) -> int:
+        return sum(len(block) for block in self.taken)
+
+    def time_of(self, i: int) -> float:
+        return self.start + (i + 1) * (self.end - self.start) / self.count
+
+
+@dataclass
+class _Continuous:
+    start: float
+    separation: float  # seconds
+    limit: int  # 0 = until stopped
+    next_k: int = 0
+    produced: int = 0
+    pending: list[MeasValue] = field(default_factory=list)
+
+    def time_of(self, k: int) -> float:
+        return self.start + k * self.separation
+
+
+class EmsconInstrument:
+    """State and command handlers of the simulated tracker (not thread-safe: the server serialises)."""
+
+    def __init__(self, source: TargetSource, config: EmsconConfig | None = None, now: float = 0.0) -> None:
+        self.source = source
+        self.config = config or EmsconConfig()
+        self._rng = np.random.default_rng(self.config.seed)
+        self._outbox: list[tuple[float, int, bytes]] = []
+        self._seq = 0
+        self._busy_until = 0.0
+        self.last_status = ResultStatus.AllOK
+        self.initialized = False
+        self.cold_until = 0.0
+        self.units = (LengthUnit.METER, AngleUnit.RADIAN, TemperatureUnit.CELSIUS, PressureUnit.MBAR,
+                      HumidityUnit.RH)
+        self.coordinate_system = CoordinateSystemType.RHR
+        self.mode = MeasMode.STATIONARY
+        self.stationary_params = (1000, 1)  # lMeasTime ms, bUseADM
+        self.continuous_params = (10, 0, 0, 0)  # lTimeSeparation ms, lNumberOfPoints, bUseRegion, region
+        self.statistic_mode = (0, 0)
+        self.search_params = (0.05, 10_000)  # radius (m), timeout (ms)
+        self.reflector_id = self.config.reflectors[0].id
+        self.environment = (20.0, 1013.25, 50.0)
+        self._measurement: _Stationary | _Continuous | None = None
+        state = self.source.target()
+        self._anchors = ((now, state.position), (now, state.position))
+        self.locked = state.visible
+        self._seen = state
+        self.commands = 0
+        self._handlers = {
+            Command.GET_SYSTEM_STATUS: self._get_system_status,
+            Command.GET_TRACKER_STATUS: self._get_tracker_status,
+            Command.SET_UNITS: self._set_units,
+            Command.GET_UNITS: lambda t, p: tuple(int(u) for u in self.units),
+            Command.INITIALIZE: self._initialize,
+            Command.SWITCH_LASER: self._switch_laser,
+            Command.SET_ENVIRONMENT_PARAMS: self._set_environment,
+            Command.GET_ENVIRONMENT_PARAMS: lambda t, p: self.environment,
+            Command.SET_MEASUREMENT_MODE: self._set_measurement_mode,
+            Command.GET_MEASUREMENT_MODE: lambda t, p: (int(self.mode),),
+            Command.SET_COORDINATE_SYSTEM_TYPE: self._set_coordinate_system,
+            Command.GET_COORDINATE_SYSTEM_TYPE: lambda t, p: (int(self.coordinate_system),),
+            Command.SET_STATIONARY_MODE_PARAMS: self._set_stationary_params,
+            Command.GET_STATIONARY_MODE_PARAMS: lambda t, p: self.stationary_params,
+            Command.SET_CONTINUOUS_TIME_MODE_PARAMS: self._set_continuous_params,
+            Command.GET_CONTINUOUS_TIME_MODE_PARAMS: lambda t, p: self.continuous_params,
+            Command.SET_REFLECTOR: self._set_reflector,
+            Command.GET_REFLECTOR: lambda t, p: (self.reflector_id,),
+            Command.GET_REFLECTORS: lambda t, p: self._get_reflectors(),
+            Command.SET_SEARCH_PARAMS: self._set_search_params,
+            Command.GET_SEARCH_PARAMS: lambda t, p: (self.search_params[0] * self._length_scale,
+                                                     self.search_params[1]),
+            Command.START_MEASUREMENT: self._start_measurement,
+            Command.STOP_MEASUREMENT: self._stop_measurement,
+            Command.GO_BIRD_BATH: self._go_bird_bath,
+            Command.FIND_REFLECTOR: self._find_reflector,
+            Command.SET_STATISTIC_MODE: self._set_statistic_mode,
+            Command.GET_MEASUREMENT_STATUS_INFO: self._get_measurement_status_info,
+            Command.CLEAR_COMMAND_QUEUE: lambda t, p: (),
+            Command.GET_TRACKER_INFO: self._get_tracker_info,
+            Command.GET_SYSTEM_SOFTWARE_VERSION: lambda t, p: (self.config.identity.software_version,),
+        }
+
+    # ------------------------------------------------------------------------------ public
+    def handle(self, packet: bytes, now: float) -> list[bytes]:
+        """Answer one client packet; the packets due at ``now`` (a `PacketError` if it does not decode)."""
+        request = decode_request(packet)
+        self.commands += 1
+        t = max(now, self._busy_until)  # commands queue behind a running Initialize
+        self._seen = self._observe(now, t)
+        try:
+            command: Command | int = Command(request.command)
+            handler = self._handlers.get(command)
+        except ValueError:
+            command, handler = request.command, None
+        status, results = ResultStatus.AllOK, ()
+        if handler is None:
+            status = ResultStatus.NotImplemented
+        else:
+            try:
+                results = handler(t, request.params)
+            except _Answer as answer:
+                status, results = answer.status, ()
+        if command == Command.GET_REFLECTORS and status == ResultStatus.AllOK:
+            for row in results:
+                self._emit(t, encode_answer(command, status, *row))
+        else:
+            slow = command in (Command.INITIALIZE, Command.FIND_REFLECTOR)
+            due = max(t, self._busy_until) if slow else t
+            self._emit(due, encode_answer(command, status, *results))
+            t = due
+        self.last_status = status
+        self._after_answer(t, command, status)
+        return self._drain(now)
+
+    def tick(self, now: float, flush: bool = True, watch: bool = False) -> list[bytes]:
+        """Advance a running measurement to ``now``; the packets due.
+
+        ``flush`` sends the continuous samples collected so far; ``watch`` looks at the target even
+        when no measurement runs (a real tracker notices a broken beam by itself).
+        """
+        m = self._measurement
+        if m is not None and now >= m.start:
+            self._observe(now, now)
+            if isinstance(m, _Stationary):
+                self._advance_stationary(m, now)
+            else:
+                self._advance_continuous(m, now, flush)
+        elif watch:
+            self._observe(now, now)
+        return self._drain(now)
+
+    def laser_cold(self, seconds: float, now: float) -> None:
+        """Fault: the laser is not warm for ``seconds`` of simulated time from ``now``."""
+        if not 0 <= seconds < 86_400:
+            raise ValueError("laser cold seconds must be in [0, 86400)")
+        self.cold_until = max(self.cold_until, now + seconds)
+
+    def disconnect(self) -> None:
+        """The client left: its measurement ends and whatever was not sent is forgotten."""
+        self._measurement = None
+        self._outbox.clear()
+
+    def warm(self, now: float) -> bool:
+        return now >= self.config.warmup_s and now >= self.cold_until
+
+    @property
+    def measuring(self) -> bool:
+        return self._measurement is not None
+
+    # ------------------------------------------------------------------------------ plumbing
+    def _emit(self, t: float, packet: bytes) -> None:
+        self._seq += 1
+        heapq.heappush(self._outbox, (t, self._seq, packet))
+
+    def _drain(self, now: float) -> list[bytes]:
+        out: list[bytes] = []
+        while self._outbox and self._outbox[0][0] <= now:
+            out.append(heapq.heappop(self._outbox)[2])
+        return out
+
+    @property
+    def _length_scale(self) -> float:
+        return 1000.0 if self.units[0] == LengthUnit.MILLIMETER else 1.0
+
+    @property
+    def _angle_scale(self) -> float:
+        return 1.0 if self.units[1] == AngleUnit.DEGREE else math.pi / 180.0
+
+    def _observe(self, now: float, t: float) -> TargetState:
+        """Look at the target; drop the lock (and say so, once) when it is not visible."""
+        state = self.source.target()
+        if now > self._anchors[1][0]:
+            self._anchors = (self._anchors[1], (now, state.position))
+        else:
+            self._anchors = (self._anchors[0], (self._anchors[1][0], state.position))
+        if self.locked and not state.visible:
+            log.debug("beam lost: %s", state.reason)
+            self._lose(t)
+        return state
+
+    def _lose(self, t: float) -> None:
+        self.locked = False
+        if isinstance(self._measurement, _Continuous):
+            self._flush(self._measurement, t)
+        self._emit(t, encode_status_change(SystemStatusChange.MEAS_STATUS_NOT_READY))
+
+    def _truths(self, times: list[float]) -> NDArray[np.float64]:
+        """True positions (n, 3) at ``times``: linear between the last two looks at the target."""
+        (t0, p0), (t1, p1) = self._anchors
+        p0, p1 = np.asarray(p0, dtype=float), np.asarray(p1, dtype=float)
+        if t1 <= t0 or np.array_equal(p0, p1):
+            return np.tile(p1, (len(times), 1))
+        a = np.clip((np.asarray(times, dtype=float) - t0) / (t1 - t0), 0.0, 1.0)[:, None]
+        return (1.0 - a) * p0 + a * p1
+
+    def _readings(self, times: list[float]) -> NDArray[np.float64]:
+        """Noisy tracker-frame readings (n, 3) in metres at ``times``, as the GeoCOM simulator measures."""
+        cfg = self.config
+        t_set, p_set, _ = self.environment
+        scale = 1.0 + 1e-6 * (atmospheric_ppm(t_set, p_set)
+                              - atmospheric_ppm(cfg.true_temperature_c, cfg.true_pressure_mbar))
+        polar = np.empty((len(times), 3))
+        previous: NDArray[np.float64] | None = None
+        hz = v = d = 0.0
+        for i, p in enumerate(self._truths(times)):
+            if previous is None or not np.array_equal(p, previous):  # a still target: convert once
+                hz, v, d = cartesian_to_polar(p)
+                previous = p
+            polar[i] = cfg.noise.perturb(hz, v, d * scale, self._rng)
+        return polar_to_cartesian(polar[:, 0], polar[:, 1], polar[:, 2]).reshape(-1, 3)
+
+    def _apriori(self, position: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Per-axis σ (m) of one reading at ``position``: the `NoiseSpec` propagated to x, y, z."""
+        hz, v, d = cartesian_to_polar(position)
+        sv, cv, sh, ch = math.sin(v), math.cos(v), math.sin(hz), math.cos(hz)
+        J = np.array([[d * sv * ch, d * cv * sh, sv * sh],
+                      [-d * sv * sh, d * cv * ch, sv * ch],
+                      [0.0, -d * sv, cv]])
+        s = self.config.noise
+        cov = J @ np.diag([s.angle_sigma_rad**2, s.angle_sigma_rad**2, s.distance_sigma_m**2]) @ J.T
+        return np.sqrt(np.diag(cov))
+
+    def _after_answer(self, t: float, command: Command | int, status: ResultStatus) -> None:
+        if command == Command.FIND_REFLECTOR and status == ResultStatus.AllOK:
+            self._emit(t, encode_status_change(SystemStatusChange.MEAS_STATUS_READY))
+        elif command == Command.GO_BIRD_BATH and status == ResultStatus.AllOK and self.locked:
+            self._lose(t)
+        elif command == Command.STOP_MEASUREMENT:
+            self._measurement = None
+
+    # ------------------------------------------------------------------------------ measurements
+    def _advance_stationary(self, m: _Stationary, now: float) -> None:
+        if not self.locked:
+            self._measurement = None
+            self._emit(now, encode_error(Command.START_MEASUREMENT, ResultStatus.NoStationaryResult))
+            return
+        upto = min(now, m.end)
+        first = m.count_taken
+        last = first
+        while last < m.count and m.time_of(last) <= upto + 1e-12:
+            last += 1
+        if last > first:
+            m.taken.append(self._readings([m.time_of(i) for i in range(first, last)]))
+        if now < m.end:
+            return
+        self._measurement = None
+        readings = np.vstack(m.taken)
+        mean = readings.mean(axis=0)
+        std = readings.std(axis=0, ddof=1) if len(readings) > 1 else np.zeros(3)
+        apriori = self._apriori(mean)
+        k = self._length_scale
+        T, p, h = self.environment
+        self._emit(now, encode_single(SingleMeasResult(
+            status=0, mode=int(MeasMode.STATIONARY), try_mode=False,
+            position=_triple(mean * k), std=_triple(std * k), std_total=float(np.linalg.norm(std)) * k,
+            pointing_error=(0.0, 0.0, 0.0), apriori_std=_triple(apriori * k),
+            apriori_std_total=float(np.linalg.norm(apriori)) * k, temperature=T, pressure=p, humidity=h)))
+
+    def _advance_continuous(self, m: _Continuous, now: float, flush: bool) -> None:
+        due: list[int] = []
+        k = m.next_k
+        while m.time_of(k) <= now + 1e-12 and not (m.limit and m.produced + len(due) >= m.limit):
+            due.append(k)
+            k += 1
+        m.next_k = k
+        if due and self.locked:
+            times = [m.time_of(i) for i in due]
+            readings = (self._readings(times) * self._length_scale).tolist()
+            for t, (x, y, z) in zip(times, readings, strict=True):
+                t1, t2 = divmod(round(t * 1e6), 1_000_000)
+                m.pending.append(MeasValue(0, t1, t2, (x, y, z)))
+            m.produced += len(due)
+        done = bool(m.limit and m.produced >= m.limit)
+        if flush or done:
+            self._flush(m, now)
+        if done:
+            self._measurement = None
+
+    def _flush(self, m: _Continuous, t: float) -> None:
+        T, p, h = self.environment
+        for i in range(0, len(m.pending), MAX_SAMPLES):
+            chunk = tuple(m.pending[i:i + MAX_SAMPLES])
+            self._emit(t, encode_multi(MultiMeasResult(0, int(MeasMode.CONTINUOUS_TIME), False, T, p, h,
+                                                       chunk)))
+        m.pending.clear()
+
+    # ------------------------------------------------------------------------------ handlers
+    def _not_while_measuring(self) -> None:
+        if self._measurement is not None:
+            raise _Answer(ResultStatus.ServerBusy)
+
+    def _get_system_status(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        tps = TrackerProcessorStatus.COMPENSATION_SET
+        if self.initialized:
+            tps = TrackerProcessorStatus.INITIALIZED
+        major, minor, build = self.config.identity.emscon_version
+        return (int(self.last_status), int(tps), _LASER_WARM if self.warm(t) else 0, _ADM_READY,
+                major, minor, build, 0, 0, self.config.identity.serial_number)
+
+    def _get_tracker_status(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        ready = self.initialized and self.warm(t) and self.locked
+        return (int(TrackerStatus.READY if ready else TrackerStatus.NOT_READY),)
+
+    def _get_measurement_status_info(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        flags = _ALWAYS_FOUND
+        if self.initialized:
+            flags |= MeasurementStatusInfo.INITIALIZED
+        if self.locked:
+            flags |= MeasurementStatusInfo.REFLECTOR_FOUND
+        return (int(self.last_status), int(flags))
+
+    def _get_tracker_info(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        cfg, ident = self.config, self.config.identity
+        k, a = self._length_scale, self._angle_scale
+        return (_AT901_B, ident.name, ident.serial_number, ident.compensation_id, 1, 1, 1, 0.0,
+                cfg.max_distance_m * k, cfg.min_distance_m * k, cfg.max_data_rate_hz, 2,
+                cfg.hz_range_deg * a, cfg.vt_range_deg * a, 0, *ident.firmware)
+
+    def _set_units(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        self._not_while_measuring()
+        length, angle, temperature, pressure, humidity = params
+        if (length not in (LengthUnit.METER, LengthUnit.MILLIMETER)
+                or angle not in (AngleUnit.RADIAN, AngleUnit.DEGREE)
+                or temperature != TemperatureUnit.CELSIUS or pressure != PressureUnit.MBAR
+                or humidity != HumidityUnit.RH):
+            raise _Answer(ResultStatus.WrongParameter)
+        self.units = (LengthUnit(length), AngleUnit(angle), TemperatureUnit(temperature),
+                      PressureUnit(pressure), HumidityUnit(humidity))
+        return ()
+
+    def _initialize(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        self._not_while_measuring()
+        self.initialized = True
+        self._busy_until = t + self.config.initialize_s
+        return ()
+
+    def _switch_laser(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        (on,) = params
+        if on not in (0, 1):
+            raise _Answer(ResultStatus.WrongParameter)
+        return ()
+
+    def _set_environment(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        T, p, h = (float(x) for x in params)
+        if not (-40.0 <= T <= 60.0 and 500.0 <= p <= 1200.0 and 0.0 <= h <= 100.0):
+            raise _Answer(ResultStatus.MeteoDataOutOfRange)
+        self.environment = (T, p, h)
+        return ()
+
+    def _set_measurement_mode(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        self._not_while_measuring()
+        (mode,) = params
+        if mode in (MeasMode.STATIONARY, MeasMode.CONTINUOUS_TIME):
+            self.mode = MeasMode(mode)
+            return ()
+        if 0 <= mode <= 11:  # the other ES_MeasMode values (distance, grid, sphere, 6D...)
+            raise _Answer(ResultStatus.NotImplemented)
+        raise _Answer(ResultStatus.WrongParameter)
+
+    def _set_coordinate_system(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        self._not_while_measuring()
+        if params[0] != CoordinateSystemType.RHR:
+            raise _Answer(ResultStatus.NotImplemented)
+        return ()
+
+    def _set_stationary_params(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        self._not_while_measuring()
+        meas_time, use_adm = params
+        if not 1 <= meas_time <= 3_600_000:
+            raise _Answer(ResultStatus.WrongParameter1)
+        if use_adm not in (0, 1):
+            raise _Answer(ResultStatus.WrongParameter2)
+        self.stationary_params = (meas_time, use_adm)
+        return ()
+
+    def _set_continuous_params(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        self._not_while_measuring()
+        separation, points, use_region, region = params
+        if not 1 <= separation <= 3_600_000:
+            raise _Answer(ResultStatus.WrongParameter1)
+        if points < 0:
+            raise _Answer(ResultStatus.WrongParameter2)
+        if use_region not in (0, 1):
+            raise _Answer(ResultStatus.WrongParameter3)
+        if use_region:
+            raise _Answer(ResultStatus.NotImplemented)
+        self.continuous_params = (separation, points, use_region, region)
+        return ()
+
+    def _set_statistic_mode(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        stationary, continuous = params
+        if stationary not in (0, 1):
+            raise _Answer(ResultStatus.WrongParameter1)
+        if continuous not in (0, 1):
+            raise _Answer(ResultStatus.WrongParameter2)
+        self.statistic_mode = (stationary, continuous)
+        return ()
+
+    def _set_search_params(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        radius, timeout = params
+        if not 0.0 < radius < math.inf:
+            raise _Answer(ResultStatus.WrongParameter1)
+        if timeout <= 0:
+            raise _Answer(ResultStatus.WrongParameter2)
+        self.search_params = (radius / self._length_scale, timeout)
+        return ()
+
+    def _set_reflector(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        self._not_while_measuring()
+        if params[0] not in {r.id for r in self.config.reflectors}:
+            raise _Answer(ResultStatus.WrongParameter)
+        self.reflector_id = params[0]
+        return ()
+
+    def _get_reflectors(self) -> tuple[tuple[Any, ...], ...]:
+        n = len(self.config.reflectors)
+        return tuple((n, r.id, int(r.target_type), r.surface_offset_m * self._length_scale, r.name)
+                     for r in self.config.reflectors)
+
+    def _start_measurement(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        if self._measurement is not None:
+            raise _Answer(ResultStatus.ServerBusy)
+        if not self.initialized:
+            raise _Answer(ResultStatus.TrackerNotInitialized)
+        if not self.warm(t):
+            raise _Answer(ResultStatus.SensorNotWarmedUp)
+        if not self.locked:
+            raise _Answer(ResultStatus.MeasurementStatusNotReady)
+        if self.mode == MeasMode.STATIONARY:
+            duration = self.stationary_params[0] / 1000.0
+            count = max(1, round(duration * self.config.stationary_rate_hz))
+            self._measurement = _Stationary(t, t + duration, count)
+        else:
+            separation, points, _, _ = self.continuous_params
+            self._measurement = _Continuous(t, separation / 1000.0, points)
+        return ()
+
+    def _stop_measurement(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        m = self._measurement
+        if isinstance(m, _Continuous) and t >= m.start:
+            self._advance_continuous(m, t, flush=True)
+        return ()
+
+    def _go_bird_bath(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        return ()
+
+    def _find_reflector(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
+        (distance,) = params
+        if not 0.0 <= distance < math.inf:
+            raise _Answer(ResultStatus.WrongParameter1)
+        if not self.initialized:
+            raise _Answer(ResultStatus.TrackerNotInitialized)
+        timeout = self.search_params[1] / 1000.0
+        if not self._seen.visible:  # the search spirals until its timeout
+            failed = self.config.failed_search_s
+            self._busy_until = t + (timeout if failed is None else min(timeout, failed))
+            raise _Answer(ResultStatus.ModuleTimedOut)
+        self._busy_until = t + min(timeout, self.config.find_s)
+        if not self.locked:
+            self.locked = True
+            m = self._measurement
+            if isinstance(m, _Continuous):  # resume on the time grid, from now on
+                m.next_k = max(m.next_k, math.ceil((t - m.start) / m.separation - 1e-9))
+        return ()
+
+
+def _triple(a: NDArray[np.float64]) -> tuple[float, float, float]:
+    return float(a[0]), float(a[1]), float(a[2])

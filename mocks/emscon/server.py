@@ -1,0 +1,281 @@
+"""Serve an `EmsconInstrument` over TCP as emScon does: one client at a time, binary TPI packets.
+
+``EmsconSimulator(source).start()`` listens on a loopback address (``.url``, ``tcp://127.0.0.1:<port>``).
+Time: the instrument runs on simulated seconds since `start()`, read from the ``clock`` given (the
+robot simulator's ``SimClock.now`` in the station, so both simulators agree) or, without one, from
+the wall clock times ``ServerConfig.time_scale``. A session thread reads commands, answers them, ticks
+the instrument every ``poll_s`` of wall time and lets continuous samples out every ``batch_s`` (emScon's
+TcpDataPacketRate: 3..10 packets/s).
+
+A second connection while a client is served gets ``ErrorResponse(ES_C_Unknown,
+MultiConnectionsNotAllowed)`` and is closed; once the client leaves, the next one is accepted. A packet
+that does not frame or decode closes the connection. Faults (for tests and the station's control
+channel): `drop` (close the client now), `stall` (neither read nor send for N wall seconds), `garbage`
+(a few random bytes that are not a packet), `laser_cold` (the laser is not warm for N simulated
+seconds).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import random
+import select
+import socket
+import struct
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from types import TracebackType
+
+from drivers.tracker.emscon.packets import (
+    MAX_PACKET,
+    PacketError,
+    PacketReader,
+    ResultStatus,
+    encode_error,
+)
+from mocks.emscon.instrument import EmsconConfig, EmsconInstrument
+from mocks.geocom.target import TargetSource
+
+log = logging.getLogger(__name__)
+
+ES_C_UNKNOWN = 64  # ES_C_Unknown: the command an unsolicited refusal names
+
+
+@dataclass(frozen=True)
+class ServerConfig:
+    """Everything `EmsconSimulator` needs besides the target (times in wall seconds)."""
+
+    instrument: EmsconConfig = field(default_factory=EmsconConfig)
+    address: str = "127.0.0.1"  # any 127.x.y.z
+    port: int = 0  # 0: pick a free one
+    time_scale: float = 1.0  # simulated seconds per wall second, when no clock is given
+    poll_s: float = 0.01  # how often the session ticks the instrument and notices stop()
+    batch_s: float = 0.1  # continuous samples leave about this often
+    send_timeout_s: float = 2.0  # a client that does not read for this long is dropped
+    seed: int | None = 0  # garbage bytes
+
+    def __post_init__(self) -> None:
+        if not self.address.startswith("127."):
+            raise ValueError(f"the simulator serves loopback only (127.x.y.z), not {self.address}")
+        if not (self.time_scale > 0 and self.poll_s > 0 and self.batch_s > 0 and self.send_timeout_s > 0):
+            raise ValueError("time_scale, poll_s, batch_s and send_timeout_s must be positive")
+
+
+class EmsconSimulator:
+    """The simulated emScon server; `start()` / `stop()` or a context manager."""
+
+    def __init__(self, source: TargetSource, config: ServerConfig | None = None,
+                 clock: Callable[[], float] | None = None) -> None:
+        self.config = config or ServerConfig()
+        self._clock = clock if clock is not None else self._scaled_wall
+        self._t0_wall = time.monotonic()
+        self._t0 = self._clock()
+        self.instrument = EmsconInstrument(source, self.config.instrument, now=0.0)
+        self.stopping = threading.Event()
+        self._lock = threading.Lock()  # the instrument and the client socket
+        self._listener: socket.socket | None = None
+        self._client: socket.socket | None = None
+        self._threads: list[threading.Thread] = []
+        self._stall_until = 0.0
+        self._garbage = 0  # garbage bursts to send
+        self._dropped: socket.socket | None = None
+        self._rand = random.Random(self.config.seed)
+        self.port: int | None = None
+        self.refused = 0  # connections turned away
+
+    def _scaled_wall(self) -> float:
+        return (time.monotonic() - self._t0_wall) * self.config.time_scale
+
+    def now(self) -> float:
+        """Simulated seconds since the server started (the tracker's clock)."""
+        return self._clock() - self._t0
+
+    @property
+    def url(self) -> str:
+        """``tcp://<address>:<port>`` (after `start()`)."""
+        if self.port is None:
+            raise RuntimeError("simulator not started")
+        return f"tcp://{self.config.address}:{self.port}"
+
+    @property
+    def connected(self) -> bool:
+        return self._client is not None
+
+    # ------------------------------------------------------------------------------ lifecycle
+    def start(self) -> EmsconSimulator:
+        """Listen and serve."""
+        self.stopping.clear()
+        self._t0_wall = time.monotonic()
+        self._t0 = self._clock()
+        sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind((self.config.address, self.config.port))
+        sock.listen(4)
+        sock.settimeout(self.config.poll_s)
+        self._listener = sock
+        self.port = sock.getsockname()[1]
+        self._spawn(self._accept_loop, "emscon-accept")
+        log.info("emScon simulator on %s", self.url)
+        return self
+
+    def stop(self, timeout: float = 2.0) -> None:
+        """Stop all threads and close every socket (idempotent)."""
+        self.stopping.set()
+        self.drop()
+        for t in self._threads:
+            t.join(timeout)
+        self._threads.clear()
+        if self._listener is not None:
+            self._listener.close()
+            self._listener = None
+
+    def __enter__(self) -> EmsconSimulator:
+        return self.start()
+
+    def __exit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self.stop()
+
+    def _spawn(self, target: Callable[[], None], name: str) -> None:
+        self._threads = [t for t in self._threads if t.is_alive()]
+        thread = threading.Thread(target=target, name=name, daemon=True)
+        thread.start()
+        self._threads.append(thread)
+
+    # ------------------------------------------------------------------------------ faults
+    def drop(self) -> None:
+        """Close the client connection now (the session thread notices and cleans up)."""
+        conn = self._client
+        if conn is not None:
+            self._dropped = conn
+            with contextlib.suppress(OSError):
+                conn.shutdown(socket.SHUT_RDWR)
+
+    def stall(self, seconds: float) -> None:
+        """Neither read, answer nor send anything for ``seconds`` of wall time."""
+        if not 0 <= seconds < 3600:
+            raise ValueError("stall seconds must be in [0, 3600)")
+        self._stall_until = time.monotonic() + seconds
+
+    def garbage(self) -> None:
+        """Send the client a few random bytes that are not a packet (between two packets)."""
+        with self._lock:
+            self._garbage += 1
+
+    def laser_cold(self, seconds: float) -> None:
+        """The laser is not warm for ``seconds`` of simulated time from now."""
+        with self._lock:
+            self.instrument.laser_cold(seconds, self.now())
+
+    def _garbage_bytes(self) -> bytes:
+        # a size field no packet can have, so a reader knows at once that the stream is out of step
+        low, high = self._rand.randint(-(2**31), 7), self._rand.randint(MAX_PACKET + 1, 2**31 - 1)
+        size = self._rand.choice([low, high])
+        return struct.pack("<i", size) + self._rand.randbytes(self._rand.randint(4, 12))
+
+    # ------------------------------------------------------------------------------ serving
+    def _accept_loop(self) -> None:
+        listener = self._listener
+        assert listener is not None
+        while not self.stopping.is_set():
+            try:
+                conn, peer = listener.accept()
+            except TimeoutError:
+                continue
+            except OSError:
+                return
+            conn.settimeout(self.config.send_timeout_s)
+            conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            if self._busy():
+                self.refused += 1
+                log.info("emScon: refusing a second client from %s", peer)
+                with contextlib.suppress(OSError):
+                    conn.sendall(encode_error(ES_C_UNKNOWN, ResultStatus.MultiConnectionsNotAllowed))
+                _close(conn)
+                continue
+            log.info("emScon client connected from %s", peer)
+            self._client = conn
+            self._spawn(lambda c=conn: self._session(c), "emscon-session")
+
+    def _stalled(self) -> bool:
+        return time.monotonic() < self._stall_until
+
+    def _busy(self) -> bool:
+        """Whether a client is being served (one that has just hung up is waited out, not counted)."""
+        conn = self._client
+        if conn is None:
+            return False
+        if _peer_closed(conn):
+            deadline = time.monotonic() + 1.0
+            while self._client is conn and time.monotonic() < deadline:
+                self.stopping.wait(0.002)
+        return self._client is not None
+
+    def _session(self, conn: socket.socket) -> None:
+        reader = PacketReader()
+        last_flush = time.monotonic()
+        try:
+            while not self.stopping.is_set() and self._dropped is not conn:
+                if self._stalled():
+                    self.stopping.wait(self.config.poll_s)
+                    continue
+                ready, _, _ = select.select([conn], [], [], self.config.poll_s)
+                if self._stalled():  # (a stall that began while waiting holds what just arrived)
+                    continue
+                if ready:
+                    data = conn.recv(65536)
+                    if not data:
+                        return  # the client closed (or a drop fault shut the socket)
+                    try:
+                        packets = reader.feed(data)
+                    except PacketError as exc:
+                        log.info("emScon: closing a stream out of step: %s", exc)
+                        return
+                    for packet in packets:
+                        with self._lock:
+                            try:
+                                out = self.instrument.handle(packet, self.now())
+                            except PacketError as exc:
+                                log.info("emScon: closing after an undecodable packet: %s", exc)
+                                return
+                        self._send(conn, out)
+                flush = time.monotonic() - last_flush >= self.config.batch_s
+                if flush:
+                    last_flush = time.monotonic()
+                with self._lock:
+                    out = self.instrument.tick(self.now(), flush=flush, watch=flush)
+                    bursts, self._garbage = self._garbage, 0
+                out += [self._garbage_bytes() for _ in range(bursts)]
+                self._send(conn, out)
+        except OSError as exc:
+            log.info("emScon: client link error %s", exc)
+        finally:
+            with self._lock:
+                self.instrument.disconnect()
+            self._client = None
+            _close(conn)
+            log.info("emScon client gone")
+
+    def _send(self, conn: socket.socket, packets: list[bytes]) -> None:
+        if packets:
+            conn.sendall(b"".join(packets))
+
+
+def _peer_closed(conn: socket.socket) -> bool:
+    """Whether the other end has closed (an EOF is waiting); unread data is not consumed."""
+    try:
+        ready, _, _ = select.select([conn], [], [], 0)
+        return bool(ready) and conn.recv(1, socket.MSG_PEEK | socket.MSG_DONTWAIT) == b""
+    except (OSError, ValueError):
+        return True
+
+
+def _close(conn: socket.socket) -> None:
+    with contextlib.suppress(OSError):
+        conn.shutdown(socket.SHUT_RDWR)
+    with contextlib.suppress(OSError):
+        conn.close()
