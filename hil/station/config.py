@@ -93,6 +93,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "reflector": Key("str", "", help="emscon: reflector name as the tracker lists it (empty: keep the "
                                          "tracker's current one)"),
         "measure_time": Key("float", 0.5, _positive, "emscon: stationary measuring time per sample (s)"),
+        "bird_bath": Key("bool", False, help="emscon: after a failed search for the SMR, send the beam to "
+                                             "the bird bath for an operator to catch"),
         "warmup": Key("float", 0.0, _non_negative,
                       "emscon: longest wait at connect for the laser to warm up (s); then the run waits"),
     },

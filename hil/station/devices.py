@@ -60,7 +60,8 @@ def tracker_config(config: StationConfig) -> TrackerConfig | EmsconConfig:
             return EmsconConfig(tcp, timeout=t["timeout"], atmosphere=atmosphere,
                                 reflector=t["reflector"] or None,
                                 measure_time_ms=max(1, round(t["measure_time"] * 1000)),
-                                warmup_timeout=t["warmup"], stability_threshold_m=stability)
+                                warmup_timeout=t["warmup"], stability_threshold_m=stability,
+                                bird_bath_on_loss=t["bird_bath"])
         except ValueError as exc:
             raise InputError(f"{config.source}: tracker: {exc}") from None
     try:

@@ -9,6 +9,9 @@ is not initialized yet; stationary measurement mode with the configured measurin
 tracker's name, serial number and software version for the record. A laser that is still warming up
 is waited for up to ``warmup_timeout`` and is otherwise `NotReady` (the campaign pauses on it).
 
+A lost beam is searched for with ES_C_FindReflector; with ``bird_bath_on_loss`` a failed search
+sends the beam to the bird bath (ES_C_GoBirdBath), where an operator can catch it and carry it back.
+
 Points: `measure_point(samples)` runs ``samples`` stationary measurements (each one averaged inside
 the tracker over the measuring time; ES_C_StartMeasurement answers, then a SingleMeasResultT follows)
 and reports their mean and spread. A lost beam (ES_RS_MeasurementStatusNotReady, an
@@ -96,6 +99,7 @@ class EmsconConfig:
     link_retries: int = 1
     search_radius_m: float = 0.05  # ES_C_SetSearchParams
     search_timeout_ms: int = 5000
+    bird_bath_on_loss: bool = False  # after a failed search, park the beam in the bird bath for an operator
 
     def __post_init__(self) -> None:
         for name in ("timeout", "initialize_timeout"):
@@ -279,6 +283,9 @@ class EmsconTracker:
             self.client.beam_locked = True
             return True
         log.info("FindReflector failed: %s", status_name(answer.status))
+        if self.config.bird_bath_on_loss:
+            # an operator catches the beam there with a hand-held SMR and carries it back to the robot
+            self.go_bird_bath()
         return False
 
     def measure_point(self, samples: int = 1) -> TrackerPoint:
@@ -340,8 +347,9 @@ class EmsconTracker:
     def stream(self, rate_hz: float, *, duration: float | None = None, max_samples: int | None = None,
                stop: threading.Event | None = None, clock: Callable[[], float] = time.monotonic,
                sleep: Callable[[float], None] = time.sleep) -> Iterator[StreamSample]:
-        """Continuous-time samples at about ``rate_hz`` (module docstring); a lost beam yields one
-        sample without a position, and no re-lock is tried mid-path (the caller decides)."""
+        """Continuous-time samples at about ``rate_hz`` (module docstring). While the beam is lost the
+        stream yields a sample without a position every period, as the GeoCOM stream does; no re-lock
+        is tried mid-path (the caller decides)."""
         if not 0 < rate_hz < math.inf:
             raise ValueError("rate_hz must be positive and finite")
         if duration is None and max_samples is None and stop is None:
@@ -360,6 +368,8 @@ class EmsconTracker:
             count = 0
             offset: float | None = None
             heard = time.monotonic()  # when the tracker last sent anything
+            lost_at: float | None = None  # when the beam was lost (no re-lock mid-path)
+            lost_slots = 0
             while True:
                 if stop is not None and stop.is_set():
                     return
@@ -375,8 +385,16 @@ class EmsconTracker:
                     raise TrackerTimeout("emScon: no continuous samples within the timeout")
                 if client.beam_changes != losses:
                     losses = client.beam_changes
-                    yield StreamSample(clock(), None, None, "beam lost (emScon MeasStatus_NotReady)")
-                    count += 1
+                    lost_at = clock()
+                    lost_slots = -1
+                if client.beam_locked is False and lost_at is not None:
+                    # one lost sample per period while the beam is gone, as the GeoCOM stream yields them
+                    while lost_slots < (clock() - lost_at) * rate_hz and (max_samples is None or
+                                                                           count < max_samples):
+                        lost_slots += 1
+                        yield StreamSample(lost_at + lost_slots / rate_hz, None, None,
+                                           "beam lost (emScon MeasStatus_NotReady)")
+                        count += 1
                 if client.errors:
                     self._raise(Command.START_MEASUREMENT, client.errors.popleft().status, "error packet")
                 while client.multis:

@@ -195,7 +195,8 @@ def test_beam_lost_mid_campaign_relocks_and_resumes(tmp_path, pose):
 def test_full_campaign_through_emscon_matches_the_hidden_truth(tmp_path, truth_file):
     """The same campaign, the simulated tracker spoken to by Leica's emScon TPI over TCP."""
     out = tmp_path / "result.json"
-    proc = subprocess.run(cli(tmp_path, "--tracker-protocol", "emscon", "--out", str(out)),
+    proc = subprocess.run(cli(tmp_path, "--tracker-protocol", "emscon", "--poses", "18", "--validation", "6",
+                              "--out", str(out)),
                           cwd=ROOT, capture_output=True, text=True, timeout=240)
     assert proc.returncode == 0, proc.stderr[-2000:]
     result = json.loads(out.read_text())

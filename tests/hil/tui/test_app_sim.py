@@ -137,3 +137,33 @@ def test_pause_then_quit_mid_run_asks_and_leaves_the_campaign_resumable(tmp_path
                                         robot_serial=record.robot.serial) == campaign
 
     asyncio.run(scenario())
+
+
+def test_the_same_job_through_an_emscon_tracker_with_a_blocked_beam(tmp_path):
+    """Leica's emScon TPI instead of GeoCOM: the operator's screens and the run behave the same."""
+    async def scenario():
+        app = sim_app(tmp_path, tracker_protocol="emscon")
+        async with app.run_test(size=SIZE) as pilot:
+            st = app.session.station
+            await wait_for(pilot, lambda: st.phase == "connected" and st.lock == "locked in", 30,
+                           "the station to connect")
+            assert app.session.config.tracker["protocol"] == "emscon"
+            assert "AT960" in screen_text(app)
+            await pilot.press("m")
+            await wait_for(pilot, lambda: st.last_point.startswith("x "), 20, "a measured point")
+            await pilot.press("3", "g")
+            run = app.run_state
+            await wait_for(pilot, lambda: run.measured >= 10, 90, "ten points")
+            inject_later(app, "block_beam", on=True, reason="a forklift")
+            await wait_for(pilot, lambda: run.suspended is not None, 30, "the suspension")
+            assert run.suspended.kind == "beam_lost"
+            await pilot.pause()
+            assert "line of sight" in screen_text(app)
+            inject_later(app, "block_beam", on=False)
+            await wait_for(pilot, lambda: run.finished is not None, 120, "the end of the campaign")
+            assert run.finished.status == "accepted", run.finished.detail
+            await pilot.press("q")
+        with Store.open(tmp_path / "hil.db") as store:
+            assert store.campaign(run.campaign).summary.status == "accepted"
+
+    asyncio.run(scenario())

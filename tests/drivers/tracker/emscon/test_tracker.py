@@ -296,9 +296,11 @@ def test_a_beam_lost_mid_stream_yields_a_lost_sample_and_no_relock(target: Stati
     threading.Timer(0.6, stop.set).start()
     samples = list(tracker.stream(200.0, stop=stop))
     lost = [s for s in samples if s.position is None]
-    assert len(lost) == 1 and "beam lost" in lost[0].reason
-    assert samples.index(lost[0]) > 0  # measured before the loss
-    assert all(s.position is None for s in samples[samples.index(lost[0]):])  # nothing after it
+    first = samples.index(lost[0])
+    assert first > 0 and all("beam lost" in s.reason for s in lost)  # measured before the loss
+    assert all(s.position is None for s in samples[first:])  # no re-lock mid-path
+    assert 0.25 * 200 < len(lost) < 0.5 * 200 + 5  # one per 5 ms period of the ~0.45 s without beam
+    assert np.allclose(np.diff([s.t for s in lost]), 1 / 200)
     target.set(TRUTH, visible=True)
     assert tracker.relock() and tracker.measure_point(1).samples == 1
 
@@ -310,3 +312,18 @@ def _wait(pred: object, timeout: float = 2.0) -> bool:
             return True
         time.sleep(0.01)
     return False
+
+
+def test_a_failed_search_can_park_the_beam_in_the_bird_bath(target: StaticTarget,
+                                                            sim: EmsconSimulator) -> None:
+    proxy = Recorder(sim.url)
+    try:
+        with opened(proxy.url, bird_bath_on_loss=True, search_timeout_ms=200) as tr:
+            target.set(TRUTH, visible=False)
+            assert not tr.relock()
+            assert proxy.sent[-2:] == [command(63, "d", 2.0), command(54)]  # FindReflector, GoBirdBath
+            target.set(TRUTH, visible=True)  # the SMR is back, but the beam waits in the bird bath
+            assert tr.lock_status() == "locked out"
+            assert tr.relock() and tr.measure_point(1).samples == 1
+    finally:
+        proxy.close()
