@@ -50,7 +50,8 @@ def test_connect_measure_plan_run_with_a_protective_stop_then_results_export_his
             plan = app.views["plan"]
             await wait_for(pilot, lambda: plan.result is not None or plan.error, 60, "the selection")
             assert not plan.error, plan.error
-            assert "of bound" in screen_text(app) and plan.result["report"]["count"] == 12
+            await wait_for(pilot, lambda: "of bound" in screen_text(app), 5, "the selection drawn")
+            assert plan.result["report"]["count"] == 12
 
             # run: a protective stop mid-campaign shows the banner with the instruction, then clears
             await pilot.press("3", "g")
@@ -142,7 +143,8 @@ def test_pause_then_quit_mid_run_asks_and_leaves_the_campaign_resumable(tmp_path
 def test_the_same_job_through_an_emscon_tracker_with_a_blocked_beam(tmp_path):
     """Leica's emScon TPI instead of GeoCOM: the operator's screens and the run behave the same."""
     async def scenario():
-        app = sim_app(tmp_path, tracker_protocol="emscon")
+        app = create_app(sim=True, speed=40.0, seed=5, db=str(tmp_path / "hil.db"), tracker_protocol="emscon",
+                         out_dir=str(tmp_path / "out"), overrides={**SMALL, "timeouts.relock": 5.0})
         async with app.run_test(size=SIZE) as pilot:
             st = app.session.station
             await wait_for(pilot, lambda: st.phase == "connected" and st.lock == "locked in", 30,
