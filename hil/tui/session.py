@@ -209,7 +209,8 @@ class Session:
             st.robot = ({"model": info.model, "serial": info.serial, "software": info.software_version}
                         if info is not None else {})
             st.tracker = ({"name": ident.name, "serial": str(ident.serial_number),
-                           "firmware": ".".join(map(str, ident.firmware))} if ident is not None else {})
+                           "firmware": ".".join(map(str, ident.firmware)), "interface": ident.interface}
+                          if ident is not None else {})
             st.phase = "connected"
             self._read_status()
         self.changed()

@@ -79,10 +79,16 @@ class StationScreen(HilScreen):
             ("link", st.tracker_url, ""),
             ("name", tracker.get("name", ""), ""),
             ("serial", tracker.get("serial", ""), ""),
-            ("firmware", tracker.get("firmware", ""), ""),
+            ("firmware", _firmware(tracker), ""),
             ("lock", st.lock, lock_style),
         ]))
         self.query_one("#last-point", Static).update(
             Text(st.last_point or "not measured yet", style="" if st.last_point else "dim"))
         self.query_one("#station-error", Static).update(Text(st.error, style="bold red"))
         self.query_one(NavBar).refresh()
+
+
+def _firmware(tracker: dict) -> str:
+    """Firmware, and the interface the tracker is spoken to by ("3.6.0 (emScon TPI 3.6.0)")."""
+    interface = tracker.get("interface")
+    return f"{tracker.get('firmware', '')} ({interface})" if interface else tracker.get("firmware", "")
