@@ -15,9 +15,16 @@ One package per concern, each importing only those below it (checked by tests/te
 `selector` (pose selection) and `drivers` (hardware) are separate packages that know nothing of hil.
 """
 
-from importlib.metadata import PackageNotFoundError, version
 
-try:
-    __version__ = version("hil")
-except PackageNotFoundError:  # running from a source checkout that is not installed
-    __version__ = "0.1.0+src"
+def __getattr__(name: str) -> str:
+    """`hil.__version__`, looked up on first use (importlib.metadata costs a command's start-up time)."""
+    if name != "__version__":
+        raise AttributeError(f"module 'hil' has no attribute {name!r}")
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        value = version("hil")
+    except PackageNotFoundError:  # running from a source checkout that is not installed
+        value = "0.1.0+src"
+    globals()["__version__"] = value
+    return value

@@ -24,6 +24,7 @@ Wolfowitz). The returned `value` is that certified upper bound.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -75,11 +76,13 @@ def _moment(G: np.ndarray, w: np.ndarray) -> np.ndarray:
 
 
 def d_optimal_bound(G: np.ndarray, *, tol: float = 1e-3, max_iterations: int = 20000,
-                    active_size: int = 400, inner_iterations: int = 3000) -> Bound:
+                    active_size: int = 400, inner_iterations: int = 3000,
+                    progress: Callable[[int, float], None] | None = None) -> Bound:
     """Certified upper bound on O1 for designs drawn from candidate blocks `G` (N, 3, n).
 
     Iterates until the certified relative gap √(d̄/n) − 1 is at most `tol` (0.1 % by default) or the
     iteration budget is spent (the bound is then valid but looser; `gap` says how much).
+    `progress(iterations, gap)` is called after each pass over all candidates, if given.
     """
     G = check_blocks(G)
     N, _, n = G.shape
@@ -125,6 +128,8 @@ def d_optimal_bound(G: np.ndarray, *, tol: float = 1e-3, max_iterations: int = 2
         violators = np.flatnonzero(d > inner_target)
         violators = violators[np.argsort(-d[violators])][:active_size // 2]
         active = np.union1d(active[wa > 1e-9], violators)
+        if progress is not None:
+            progress(iterations, math.sqrt(max(float(d.max()), n) / n) - 1.0)
     sign, logdet = np.linalg.slogdet(M)
     achieved = math.exp(logdet / (2 * n)) if sign > 0 else 0.0
     value = achieved * math.sqrt(max(float(d.max()), n) / n)

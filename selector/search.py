@@ -21,12 +21,18 @@ METHODS: tuple[str, ...] = ("tabu", "exchange", "random")
 
 def select(G: np.ndarray, count: int, *, method: str = "tabu", index: str = "O1", seed: int = 0,
            **options: object) -> Selection:
-    """Dispatch to one method by name ("tabu", "exchange", "random"); options go to that method."""
+    """Dispatch to one method by name ("tabu", "exchange", "random"); options go to that method.
+
+    The ``progress`` option (``progress(done, total)``) is reported by the tabu search and ignored by the
+    others (single passes).
+    """
+    progress = options.pop("progress", None)
     if method == "tabu":
         settings = options.pop("settings", None) or TabuSettings()
         if options:
             raise SelectorError(f"unknown tabu options: {', '.join(sorted(options))}")
-        return tabu_select(G, count, index=index, seed=seed, settings=settings)  # type: ignore[arg-type]
+        return tabu_select(G, count, index=index, seed=seed, settings=settings,  # type: ignore[arg-type]
+                           progress=progress)  # type: ignore[arg-type]
     if options:
         raise SelectorError(f"method {method!r} takes no options ({', '.join(sorted(options))})")
     if method == "exchange":

@@ -37,6 +37,7 @@ index from the eigenvalues of their information matrices.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -202,8 +203,12 @@ def _prune(state: DesignState, index: str) -> DesignState:
 
 
 def tabu_select(G: np.ndarray, count: int, *, index: str = "O1", seed: int = 0,
-                settings: TabuSettings | None = None) -> Selection:
-    """Choose `count` of the candidate blocks `G` (N, 3, n) by the patent method (module docstring)."""
+                settings: TabuSettings | None = None,
+                progress: Callable[[int, int], None] | None = None) -> Selection:
+    """Choose `count` of the candidate blocks `G` (N, 3, n) by the patent method (module docstring).
+
+    `progress(done, total)` is called after each of the outer iterations (restarts), if given.
+    """
     t0 = time.perf_counter()
     G = check_blocks(G)
     index = parse_index(index)
@@ -215,7 +220,7 @@ def tabu_select(G: np.ndarray, count: int, *, index: str = "O1", seed: int = 0,
     state = DesignState(G, rng.choice(len(G), size=count, replace=False))
     best_set, best = state.chosen.copy(), _objective(state, index)
     evaluations, removed_total = 0, 0
-    for _ in range(settings.outer_iterations):
+    for outer in range(settings.outer_iterations):
         sampler = _Sampler(settings, len(G))
         run_set, run_value, evals = _tabu_run(state, index, rng, settings.tabu_iterations, length, k, best,
                                               sampler)
@@ -231,6 +236,8 @@ def tabu_select(G: np.ndarray, count: int, *, index: str = "O1", seed: int = 0,
             in_set[keep] = True
             refill = random_fill(rng, in_set, count - len(keep))
             state = DesignState(G, np.concatenate([keep, refill]))
+        if progress is not None:
+            progress(outer + 1, settings.outer_iterations)
     final = DesignState(G, best_set)
     if settings.prune:
         final = _prune(final, index)

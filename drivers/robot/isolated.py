@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import multiprocessing as mp
+import signal
 import threading
 from multiprocessing.connection import Connection
 from typing import Any
@@ -31,10 +32,33 @@ _START_TIMEOUT = 30.0  # seconds for the child to import ur_rtde and answer
 _MARGIN = 10.0  # seconds added to the driver's own timeouts before the proxy gives up on a call
 _FK_BUDGET = 0.05  # seconds allowed per keep-in FK check of a trajectory (about 4 ms measured)
 _SLOWER = 1.5  # a servo loop may run this much slower than the controller rate before time-out
+_TERMINAL_SIGNALS = {signal.SIGINT, signal.SIGHUP}  # what a terminal sends its whole process group
+
+
+@contextlib.contextmanager
+def _terminal_signals_blocked() -> Any:
+    """Block Ctrl-C and SIGHUP in this thread while a child starts, so the child inherits them blocked
+    (the mask survives fork and exec) and cannot die of one, with a traceback, before `_serve` makes
+    it ignore them. A signal arriving meanwhile is delivered to this process when unblocked.
+    (multiprocessing's resource tracker is started the same way.)"""
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, _TERMINAL_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 def _serve(commands: Connection, stops: Connection, config: RobotConfig) -> None:
-    """Child process: run calls on a URRobot until the pipe closes."""
+    """Child process: run calls on a URRobot until the pipe closes.
+
+    Ctrl-C and a closed terminal signal the whole foreground process group, this child included; it
+    ignores them (it started with them blocked, see `_terminal_signals_blocked`): the parent decides
+    what an interruption means — it stops the arm through this child and then closes the pipes,
+    which ends it. SIGTERM keeps its default (multiprocessing ends daemonic children with it).
+    """
+    for sig in _TERMINAL_SIGNALS:
+        signal.signal(sig, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, _TERMINAL_SIGNALS)
     from drivers.robot.ur import URRobot
 
     robot = URRobot(config)
@@ -108,7 +132,7 @@ class IsolatedURRobot:
         stop_parent, stop_child = ctx.Pipe()
         proc = ctx.Process(target=_serve, args=(cmd_child, stop_child, self.config), daemon=True,
                            name=f"ur-client-{self.config.host}")
-        with _real_stderr():
+        with _real_stderr(), _terminal_signals_blocked():
             proc.start()
         cmd_child.close()
         stop_child.close()
@@ -145,6 +169,10 @@ class IsolatedURRobot:
                 self._kill()
                 raise ConnectionLost(f"the robot client process died during {name}() "
                                      f"(exit code {code}); reconnect to continue") from None
+            except (KeyboardInterrupt, SystemExit):  # Ctrl-C or a signal handler's exit, mid-call
+                self.stop()  # the arm may be moving under the call: stop it now
+                self._kill()  # the call's late reply must not answer the next one
+                raise
         if status == "err":
             raise value
         return value

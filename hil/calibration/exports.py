@@ -15,17 +15,18 @@ from __future__ import annotations
 
 import hashlib
 import json
-from typing import Any
-from xml.sax.saxutils import quoteattr
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pinocchio as pin
-import yaml
 
-from hil import __version__
+import hil
 from hil.arm.catalog import JOINT_NAMES, get_robot
-from hil.arm.geometry import Geometry, pose
 from hil.errors import InputError
+
+if TYPE_CHECKING:  # pinocchio (and the geometry built on it) load on first use: `hil show` needs FORMATS
+    import pinocchio as pin
+
+    from hil.arm.geometry import Geometry
 
 ROS_SEGMENTS: tuple[str, ...] = ("shoulder", "upper_arm", "forearm", "wrist_1", "wrist_2", "wrist_3")
 LINK_NAMES: tuple[str, ...] = ("shoulder_link", "upper_arm_link", "forearm_link", "wrist_1_link",
@@ -38,6 +39,8 @@ def _num(v: float) -> str:
 
 
 def _origin(M: pin.SE3) -> str:
+    import pinocchio as pin
+
     rpy = pin.rpy.matrixToRpy(M.rotation)
     xyz = " ".join(_num(v) for v in M.translation)
     return f'<origin xyz="{xyz}" rpy="{" ".join(_num(v) for v in rpy)}"/>'
@@ -45,6 +48,10 @@ def _origin(M: pin.SE3) -> str:
 
 def to_urdf(geometry: Geometry, comment: str = "") -> str:
     """URDF of the calibrated arm (kinematics only: no meshes or inertias)."""
+    from xml.sax.saxutils import quoteattr  # pulls in urllib: only when writing a URDF
+
+    from hil.arm.geometry import pose
+
     spec = get_robot(geometry.robot)
     lines = ['<?xml version="1.0"?>']
     if comment:
@@ -81,6 +88,10 @@ def to_urdf(geometry: Geometry, comment: str = "") -> str:
 
 
 def _check_flange_nominal(geometry: Geometry, source: str) -> None:
+    import pinocchio as pin
+
+    from hil.arm.geometry import Geometry
+
     nominal = Geometry.nominal(geometry.robot).flange
     diff = pin.log6(nominal.inverse() * geometry.flange).vector
     if np.max(np.abs(diff)) > 1e-12:
@@ -90,6 +101,9 @@ def _check_flange_nominal(geometry: Geometry, source: str) -> None:
 
 def to_ros_kinematics(geometry: Geometry, comment: str = "", source: str = "model") -> str:
     """``ur_description`` kinematics YAML of the calibrated joint origins, with a hash."""
+    import pinocchio as pin
+    import yaml
+
     _check_flange_nominal(geometry, source)
     segments: dict[str, Any] = {}
     for name, M in zip(ROS_SEGMENTS, geometry.joints, strict=True):
@@ -104,6 +118,10 @@ def to_ros_kinematics(geometry: Geometry, comment: str = "", source: str = "mode
 
 def from_ros_kinematics(text: str, robot: str, source: str = "kinematics.yaml") -> Geometry:
     """The geometry (nominal flange, no SMR, tracker at the base) of a ``ur_description`` YAML."""
+    import yaml
+
+    from hil.arm.geometry import Geometry, pose
+
     try:
         doc = yaml.safe_load(text)
     except yaml.YAMLError as exc:
@@ -134,8 +152,8 @@ def to_json(document: dict[str, Any]) -> str:
 def export(document: dict[str, Any], geometry: Geometry, fmt: str, source: str = "model") -> str:
     """Text of `geometry` in format `fmt` (one of FORMATS)."""
     provenance = document.get("input", {}) if isinstance(document.get("input"), dict) else {}
-    comment = (f"calibrated by hil {__version__} from {provenance.get('file', source)} "
-               f"sha256 {provenance.get('sha256', 'unknown')}")
+    comment = (f"calibrated by hil {hil.__version__} from {provenance.get('file') or source} "
+               f"sha256 {provenance.get('sha256') or 'unknown (not recorded in the model)'}")
     if fmt == "urdf":
         return to_urdf(geometry, comment)
     if fmt == "ros-kinematics":

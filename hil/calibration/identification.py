@@ -40,7 +40,7 @@ from hil.arm.kinematics import (
     identifiable_parameters,
     numerical_rank,
 )
-from hil.calibration.measurements import Measurements
+from hil.calibration.measurements import Measurements, measurements_sha256
 from hil.errors import HilError, InputError
 
 #: Smallest spread (rad) of a joint's values for it to count as having moved.
@@ -293,7 +293,8 @@ def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
         rms=float(np.sqrt(np.mean(norms**2))), max_error=float(norms.max()),
         sigma=float(np.sqrt(sigma2)), initial_rms=initial_rms, iterations=iterations,
         condition=cond, residuals=res, used=used, rejected=rejected, correlated=correlated,
-        baseline=baseline, seconds=time.perf_counter() - t0, source=meas.source, sha256=meas.sha256)
+        baseline=baseline, seconds=time.perf_counter() - t0, source=meas.source,
+        sha256=meas.sha256 or measurements_sha256(meas.q, meas.p))  # a model always names its data
 
 
 @dataclass(frozen=True)

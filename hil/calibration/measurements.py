@@ -56,12 +56,26 @@ class Measurements:
         return Measurements(self.q[mask], self.p[mask], self.lines[mask], self.source, self.sha256)
 
     @classmethod
-    def from_arrays(cls, q: np.ndarray, p: np.ndarray, source: str = "<memory>") -> Measurements:
-        """Measurements from arrays, with a digest of their bytes and line numbers as in a CSV."""
+    def from_arrays(cls, q: np.ndarray, p: np.ndarray, source: str = "<memory>",
+                    lines: np.ndarray | None = None) -> Measurements:
+        """Measurements from arrays, hashed by `measurements_sha256`; line numbers as in that CSV
+        unless `lines` names the poses otherwise (a campaign names them by pose index)."""
         q = np.asarray(q, dtype=float).reshape(-1, 6)
         p = np.asarray(p, dtype=float).reshape(-1, 3)
-        digest = hashlib.sha256(np.ascontiguousarray(np.hstack([q, p])).tobytes()).hexdigest()
-        return cls(q, p, np.arange(2, len(q) + 2), source, digest)
+        lines = np.arange(2, len(q) + 2) if lines is None else np.asarray(lines, dtype=int)
+        return cls(q, p, lines, source, measurements_sha256(q, p))
+
+
+def measurements_sha256(q: np.ndarray, p: np.ndarray) -> str:
+    """The sha256 of measurements held in memory (a campaign's): that of the measurements CSV
+    `write_measurements` writes for them (header q1..q6,x,y,z, full-precision rows, "\\n" line ends).
+
+    `hil identify` hashes the bytes of the CSV it reads; measurements that never were a file are
+    hashed as the file they would be, so writing them out and running ``sha256sum`` gives the same
+    digest, and a model always names the data it was fitted to.
+    """
+    rows = np.hstack([np.asarray(q, dtype=float).reshape(-1, 6), np.asarray(p, dtype=float).reshape(-1, 3)])
+    return hashlib.sha256(format_csv(JOINT_COLUMNS + POINT_COLUMNS, rows).encode("utf-8")).hexdigest()
 
 
 def read_table(path: str | os.PathLike[str], required: Sequence[str]) -> Table:

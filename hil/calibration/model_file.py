@@ -38,6 +38,52 @@ def software_versions() -> dict[str, str]:
             "scipy": scipy.__version__}
 
 
+#: What the ``parameters`` of a model are (the document says it too, under ``parameter_coordinates``).
+PARAMETER_COORDINATES = (
+    "joint<i>.*, flange.* and tracker.* (tx ty tz m, rx ry rz rad) are se(3) log coordinates of "
+    "nominal^-1 * identified placement (for the tracker the nominal is the identity: they are the log "
+    "coordinates of the tracker pose, not its position or angles, which are 'tracker' and "
+    "'tracker_pose'); smr.x/y/z (m) is the SMR centre in the flange frame. std is one standard "
+    "deviation in the local error coordinates at the solution (T * exp(delta))."
+)
+_TRACKER_AXES = ("tracker.tx", "tracker.ty", "tracker.tz", "tracker.rx", "tracker.ry", "tracker.rz")
+
+
+def _xyz_rpy(M: pin.SE3) -> np.ndarray:
+    return np.r_[M.translation, pin.rpy.matrixToRpy(M.rotation)]
+
+
+def tracker_pose(tracker: pin.SE3, names: list[str] | tuple[str, ...] = (),
+                 covariance: Any = None) -> dict[str, Any]:
+    """The tracker frame in the robot base frame in plain terms, with standard deviations.
+
+    ``xyz`` (m) and ``rpy`` (rad, URDF convention R = Rz(yaw)·Ry(pitch)·Rx(roll)), as the geometry
+    block's ``tracker``; ``xyz_std`` and ``rpy_std`` propagate the fit's covariance of the
+    ``tracker.tx … tracker.rz`` parameters (se(3) log coordinates, local at the solution) to first
+    order. A coordinate the fit did not identify counts as exact (σ 0); without a covariance the
+    standard deviations are None.
+    """
+    value = _xyz_rpy(tracker)
+    out: dict[str, Any] = {"xyz": value[:3].tolist(), "rpy": value[3:].tolist(), "xyz_std": None,
+                           "rpy_std": None}
+    picked = [(k, names.index(n)) for k, n in enumerate(_TRACKER_AXES) if n in names]
+    if covariance is None or not picked:
+        return out
+    C = np.asarray(covariance, dtype=float)
+    h = 1e-6
+    J = np.zeros((6, len(picked)))
+    for col, (k, _) in enumerate(picked):
+        d = np.zeros(6)
+        d[k] = h
+        diff = _xyz_rpy(tracker * pin.exp6(d)) - _xyz_rpy(tracker * pin.exp6(-d))
+        diff[3:] = (diff[3:] + np.pi) % (2 * np.pi) - np.pi  # an angle crossing ±π
+        J[:, col] = diff / (2 * h)
+    sub = C[np.ix_([i for _, i in picked], [i for _, i in picked])]
+    std = np.sqrt(np.maximum(np.diag(J @ sub @ J.T), 0.0))
+    out["xyz_std"], out["rpy_std"] = std[:3].tolist(), std[3:].tolist()
+    return out
+
+
 def model_document(fit: FitResult, validation: dict[str, Any] | None = None) -> dict[str, Any]:
     """The ``hil-model/1`` JSON document of an identification result."""
     doc: dict[str, Any] = {"format": MODEL_FORMAT, **fit.geometry.to_dict()}
@@ -45,6 +91,8 @@ def model_document(fit: FitResult, validation: dict[str, Any] | None = None) -> 
         {"name": name, "value": float(v), "std": float(s)}
         for name, v, s in zip(fit.names, fit.values, fit.std, strict=True)
     ]
+    doc["parameter_coordinates"] = PARAMETER_COORDINATES
+    doc["tracker_pose"] = tracker_pose(fit.geometry.tracker, fit.names, fit.covariance)
     doc["covariance"] = {"parameters": fit.names, "matrix": fit.covariance.tolist()}
     doc["fit"] = {
         "poses": len(fit.used),

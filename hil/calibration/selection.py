@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -36,7 +36,7 @@ from hil.arm.kinematics import PARAMETER_NAMES, Kinematics, identifiable_paramet
 from hil.errors import InputError
 from selector.arm import ArmShape
 from selector.bound import d_optimal_bound
-from selector.candidates import Constraints, generate_candidates
+from selector.candidates import CONSTRAINT_NAMES, Constraints, evaluate, generate_candidates
 from selector.design import check_count
 from selector.indices import SCALINGS, parse_index, scale_columns
 from selector.order import order_poses, travel_time
@@ -131,8 +131,13 @@ def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str
                  method: str = "tabu", seed: int = 0, smr: Sequence[float] = (0.0, 0.0, 0.045),
                  constraints: Constraints | None = None, scaling: str = "expected",
                  start: Sequence[float] | None = None, settings: TabuSettings | None = None,
-                 bound: bool = True) -> dict[str, Any]:
-    """Choose `count` measurement poses for `robot`; the JSON-ready report (see ``hil select``)."""
+                 bound: bool = True, progress: Callable[[str, str], None] | None = None) -> dict[str, Any]:
+    """Choose `count` measurement poses for `robot`; the JSON-ready report (see ``hil select``).
+
+    `progress(phase, text)` hears what is going on ("candidates", "search", "bound", "order"): repeated
+    calls with one phase update the same line of a display.
+    """
+    say = progress or (lambda _phase, _text: None)
     constraints = constraints or Constraints()
     try:
         index = parse_index(index)
@@ -144,13 +149,29 @@ def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str
         model = SelectionModel(robot, smr, constraints.tracker)
         n = len(model.parameters)
         check_count(count, candidates, n)
+        say("candidates", f"drawing up to {candidates} feasible configurations of the {model.spec.name}")
         cands = generate_candidates(model, candidates, constraints, seed=seed)
+        say("candidates", f"{len(cands)} found ({cands.sampled} drawn) in {cands.seconds:.1f} s")
         check_count(count, len(cands), n)
         G = scale_columns(cands.jacobian, scaling, model.parameter_scale)
         options: dict[str, object] = {"settings": settings} if method == "tabu" and settings else {}
-        result = select(G, count, method=method, index=index, seed=seed, **options)
         t0 = time.perf_counter()
-        b = d_optimal_bound(G) if bound else None
+        say("search", f"{method} search for {count} poses maximising {index}")
+        if method == "tabu":
+            options["progress"] = lambda done, total: say(
+                "search", f"{method}, restart {done}/{total}, {time.perf_counter() - t0:.1f} s")
+        result = select(G, count, method=method, index=index, seed=seed, **options)
+        say("search", f"{method}, {index} = {result.value:.4g} in {result.seconds:.1f} s")
+        t0 = time.perf_counter()
+        if bound:
+            say("bound", "the D-optimal bound on O1 (--no-bound skips it)")
+            b = d_optimal_bound(G, progress=lambda iterations, gap: say(
+                "bound", f"gap {100 * gap:.2f} % (stops at 0.1 %) after {iterations} iterations, "
+                         f"{time.perf_counter() - t0:.1f} s"))
+            say("bound", f"O1 <= {b.value:.4g}; the selection reaches "
+                         f"{100.0 * result.o1 / b.value:.1f} % of it ({time.perf_counter() - t0:.1f} s)")
+        else:
+            b = None
         bound_seconds = time.perf_counter() - t0
         Q = cands.q[result.chosen]
         if start is not None and len(start) != 6:
@@ -193,3 +214,29 @@ def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str
         "poses": [[float(v) for v in q] for q in Q[perm]],
     }
     return report
+
+
+#: Degrees kept from the SMR's acceptance half-angle when a planned pose is checked again during the run.
+RECHECK_MARGIN_DEG = 2.0
+
+
+def hidden_reason(robot: str, smr: Sequence[float], tracker: Sequence[float], q: Sequence[float],
+                  acceptance_angle: float) -> str | None:
+    """Why the tracker would not see the SMR at `q` (None: it would), by the selector's own checks.
+
+    Used during a campaign with the tracker position and SMR offset fitted to the points measured so
+    far, which are far better known than when the poses were chosen: the SMR must face the tracker
+    within the acceptance half-angle less `RECHECK_MARGIN_DEG`, and the beam must clear the arm's
+    enveloping capsules (thicker than the links).
+    """
+    model = SelectionModel(robot, smr, tracker)
+    names = ("acceptance", "line-of-sight")
+    constraints = Constraints(tracker=tuple(map(float, tracker)),
+                              half_angle_deg=max(1.0, acceptance_angle - RECHECK_MARGIN_DEG),
+                              disabled=frozenset(CONSTRAINT_NAMES) - set(names))
+    passes, _ = evaluate(model, np.asarray(q, dtype=float)[None], constraints)
+    if not passes["acceptance"][0]:
+        return f"the SMR would face away from the tracker (more than {constraints.half_angle_deg:.0f}°)"
+    if not passes["line-of-sight"][0]:
+        return "the arm would block the tracker's line of sight"
+    return None

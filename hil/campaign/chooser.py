@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 import selector
-from hil.calibration.selection import SelectionModel, parse_constraints, select_poses
+from hil.calibration.selection import SelectionModel, hidden_reason, parse_constraints, select_poses
 from hil.campaign.plan import Choice, SelectionRequest
 from hil.errors import InputError
 from selector.candidates import Constraints, generate_candidates
@@ -57,6 +57,8 @@ def campaign_chooser(config: Any) -> Any:
                                        "seconds", "travel_time", "candidates", "parameters")}
         return Choice(np.array(report["poses"]), info)
 
+    # the same line-of-sight and acceptance tests, asked again during the run (`plan._SightCheck`)
+    choose.hidden = hidden_reason  # type: ignore[attr-defined]
     return choose
 
 

@@ -1,8 +1,11 @@
 """One engine says how: it executes plans against devices and owns the run's state.
 
-States: idle → running ⇄ paused / suspended → stopping → aborted | done (| failed). Requests to
-pause, resume and abort come from other threads (the TUI, a signal handler) and take effect at step
-boundaries; an abort stops the arm. *Suspenders* are small conditions — beam lost, protective stop,
+States: idle → running ⇄ paused / suspended → stopping → aborted | interrupted | done (| failed).
+Requests to pause, resume and abort come from other threads (the TUI) and take effect at step
+boundaries; an abort stops the arm. A `KeyboardInterrupt` (Ctrl-C, or `RunInterrupted`, which the
+headless CLI raises for SIGINT, SIGTERM and SIGHUP) ends the run wherever it lands: the arm is
+stopped, the state becomes ``interrupted`` and the exception propagates — an interruption is not an
+abort: the campaign stays resumable. *Suspenders* are small conditions — beam lost, protective stop,
 connection lost, tracker unplugged — matched against the exception a device raised: the engine
 stops the arm, tells the operator what to do (a `Suspended` event), polls the condition until it
 clears (bounded by `suspend_timeout`) and re-runs the interrupted pose visit from its start.
@@ -38,6 +41,7 @@ from hil.campaign.events import (
     Resumed,
     StateChanged,
     Suspended,
+    SuspendExtended,
 )
 from hil.campaign.steps import (
     Acquire,
@@ -56,16 +60,52 @@ from hil.errors import HilError
 
 log = logging.getLogger(__name__)
 
-IDLE, RUNNING, PAUSED, SUSPENDED, STOPPING, ABORTED, DONE, FAILED = (
-    "idle", "running", "paused", "suspended", "stopping", "aborted", "done", "failed")
+IDLE, RUNNING, PAUSED, SUSPENDED, STOPPING, ABORTED, INTERRUPTED, DONE, FAILED = (
+    "idle", "running", "paused", "suspended", "stopping", "aborted", "interrupted", "done", "failed")
 
 
 class RunAborted(HilError):
     """The operator (or the caller) aborted the run."""
 
 
+_SIGNAL_NAMES = {2: "Ctrl-C (SIGINT)", 15: "SIGTERM", 1: "a closed terminal (SIGHUP)"}
+
+
+class RunInterrupted(KeyboardInterrupt):
+    """The process was told to stop by signal `signum` (SIGINT, SIGTERM, SIGHUP).
+
+    A KeyboardInterrupt, so no ``except Exception`` on the way swallows it. Unlike `RunAborted`
+    (final), an interrupted campaign stays resumable, as after ``kill -9``.
+    """
+
+    def __init__(self, signum: int = 2) -> None:
+        super().__init__(signum)
+        self.signum = int(signum)
+
+    def __str__(self) -> str:
+        return f"stopped by {_SIGNAL_NAMES.get(self.signum, f'signal {self.signum}')}"
+
+
+class StopRequested(RunInterrupted):
+    """`Engine.request_interrupt`: the operator stopped the run to continue it later (a UI's quit).
+
+    An interruption like Ctrl-C (the campaign stays resumable), with the operator's words as its text.
+    """
+
+    def __init__(self, reason: str = "stopped on request") -> None:
+        super().__init__(2)
+        self.reason = reason
+
+    def __str__(self) -> str:
+        return self.reason
+
+
 class SuspendTimeout(HilError):
     """A suspender did not clear within its time limit."""
+
+    def __init__(self, text: str, kind: str = "", limit: float = 0.0, instruction: str = "") -> None:
+        super().__init__(text)
+        self.kind, self.limit, self.instruction = kind, limit, instruction
 
 
 class UnsafePathError(HilError):
@@ -182,6 +222,10 @@ class Engine:
         self._pause = threading.Event()
         self._abort = threading.Event()
         self._resume = threading.Event()
+        self._interrupt: str | None = None  # request_interrupt's reason
+        self._skip = threading.Event()  # request_skip: give up the suspended pose visit now
+        self._extend = 0  # request_extend: pending "wait longer" requests for the current suspension
+        self._poke = threading.Event()  # wakes a suspension's wait for any request
         self._last_q: np.ndarray | None = None
         self.current: Acquire | None = None
         self.records: list[PoseRecord] = []
@@ -197,6 +241,35 @@ class Engine:
     def request_abort(self) -> None:
         self._abort.set()
         self._resume.set()
+        self._poke.set()
+
+    def request_interrupt(self, reason: str = "stopped on request") -> None:
+        """Stop the arm now and end the run as interrupted (resumable), wherever it is.
+
+        Called from another thread (a UI's quit): the arm's stop is sent at once — a move in progress
+        ends there — and the engine raises `StopRequested` instead of going on.
+        """
+        self._interrupt = reason
+        self.request_abort()
+        self._stop_arm()
+
+    def request_skip(self) -> None:
+        """Give up the pose visit of the current suspension now, as its time-out would (only for a
+        suspender that skips on time-out, e.g. a lost beam); ignored when nothing is suspended."""
+        self._skip.set()
+        self._poke.set()
+
+    def request_extend(self) -> None:
+        """Wait longer for the current suspension: its time limit moves by its own length again."""
+        with self._lock:
+            self._extend += 1
+        self._poke.set()
+
+    def _stop_error(self, what: str) -> BaseException:
+        """The exception an abort (final) or an interruption (resumable) request ends the run with."""
+        if self._interrupt is not None:
+            return StopRequested(self._interrupt)
+        return RunAborted(what)
 
     @property
     def abort_requested(self) -> bool:
@@ -221,14 +294,14 @@ class Engine:
     def _between_steps(self) -> None:
         """Honour pause and abort requests (only ever between steps)."""
         if self._abort.is_set():
-            raise RunAborted("aborted by request")
+            raise self._stop_error("aborted by request")
         if self._pause.is_set():
             self._set_state(PAUSED)
             while self._pause.is_set() and not self._abort.is_set():
                 self._resume.wait(0.1)
                 self._resume.clear()
             if self._abort.is_set():
-                raise RunAborted("aborted by request while paused")
+                raise self._stop_error("aborted by request while paused")
             self._set_state(RUNNING)
 
     # --- execution --------------------------------------------------------------------------------
@@ -255,6 +328,12 @@ class Engine:
             self._set_state(STOPPING)
             self._stop_arm()
             self._set_state(ABORTED)
+            plan.close()
+            raise
+        except KeyboardInterrupt:
+            self._stop_arm()  # first: nothing (not even an event) before the arm is stopped
+            self._set_state(STOPPING)
+            self._set_state(INTERRUPTED)
             plan.close()
             raise
         except BaseException:
@@ -376,6 +455,9 @@ class Engine:
             try:
                 return action()
             except BaseException as exc:
+                if self._abort.is_set() and not isinstance(exc, RunAborted | KeyboardInterrupt):
+                    # the device call ended because of the request (a stopped move): not a fault
+                    raise self._stop_error("aborted by request") from exc
                 suspender = self._suspender_for(exc)
                 attempts += 1
                 if suspender is None or attempts > self.max_retries:
@@ -394,14 +476,31 @@ class Engine:
         self._stop_arm()
         self._last_q = None  # the arm may be anywhere now: check the next path from the target only
         self._set_state(SUSPENDED)
-        self.emit(Suspended(campaign=self.campaign, kind=suspender.kind,
-                            message=f"{suspender.message} ({exc})"))
         limit = suspender.timeout if suspender.timeout is not None else self.suspend_timeout
+        what = suspender.kind.replace("_", " ")
+        with self._lock:  # requests made before this suspension are not for it
+            self._skip.clear()
+            self._extend = 0
+            self._poke.clear()
+        self.emit(Suspended(campaign=self.campaign, kind=suspender.kind, message=suspender.message,
+                            detail=f"{type(exc).__name__}: {exc}", timeout=limit,
+                            on_timeout=suspender.on_timeout))
         start = time.monotonic()
         poll = suspender.poll
         while True:
             if self._abort.is_set():
-                raise RunAborted(f"aborted while suspended ({suspender.kind})")
+                raise self._stop_error(f"aborted while suspended ({what})")
+            if self._skip.is_set() and suspender.on_timeout == "skip":
+                self._set_state(RUNNING)
+                raise PoseSkippedError(f"skipped by the operator after {time.monotonic() - start:.0f} s "
+                                       f"waiting ({what})")
+            with self._lock:
+                extend, self._extend = self._extend, 0
+            if extend:
+                original = suspender.timeout if suspender.timeout is not None else self.suspend_timeout
+                limit += extend * original
+                self.emit(SuspendExtended(campaign=self.campaign, kind=suspender.kind,
+                                          timeout=max(0.0, limit - (time.monotonic() - start))))
             try:
                 if suspender.clear():
                     break
@@ -410,10 +509,12 @@ class Engine:
             if time.monotonic() - start > limit:
                 self._set_state(RUNNING)
                 if suspender.on_timeout == "skip":
-                    raise PoseSkippedError(f"{suspender.kind} did not clear within {limit:.0f} s")
+                    raise PoseSkippedError(f"gave up after {limit:.0f} s waiting ({what})")
                 raise SuspendTimeout(f"{suspender.kind} did not clear within {limit:.0f} s: "
-                                     f"{suspender.message}") from exc
-            self._abort.wait(poll)
+                                     f"{suspender.message}", suspender.kind, limit,
+                                     suspender.message) from exc
+            self._poke.wait(poll)
+            self._poke.clear()
             poll = min(poll * suspender.backoff, suspender.max_poll)
         waited = time.monotonic() - start
         self.stats.suspended += waited

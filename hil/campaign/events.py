@@ -131,7 +131,18 @@ class PoseSkipped(Event):
 @dataclass(frozen=True, kw_only=True)
 class Suspended(Event):
     kind: str  # beam_lost, protective_stop, connection_lost, tracker_unplugged, ...
-    message: str  # what the operator should do
+    message: str  # what the operator should do, in plain words
+    detail: str = ""  # the device's error, for the log ("TargetLost: ...")
+    timeout: float | None = None  # seconds from `t` until `on_timeout` happens
+    on_timeout: str = ""  # "skip": the pose is skipped; "fail": the run stops
+
+
+@dataclass(frozen=True, kw_only=True)
+class SuspendExtended(Event):
+    """The operator chose to wait longer: the suspension's limit is now `timeout` s from `t`."""
+
+    kind: str
+    timeout: float
 
 
 @dataclass(frozen=True, kw_only=True)

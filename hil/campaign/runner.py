@@ -2,14 +2,17 @@
 
 Shared by the headless CLI and the TUI so both behave the same: it opens the station's devices,
 emits `RunStarted`, runs the calibration plan on the engine with the station's suspenders, and
-always emits `RunFinished` (accepted, rejected, aborted or failed) and closes the devices — whatever
-happened in between.
+always emits `RunFinished` (accepted, rejected, aborted, interrupted or failed) and closes the
+devices — whatever happened in between. A `KeyboardInterrupt` (the CLI's `RunInterrupted` for
+SIGINT, SIGTERM, SIGHUP) is an interruption, not an abort: status ``interrupted``, which the store
+keeps resumable, so re-running the same command continues the campaign as after ``kill -9``.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
 import secrets
+import signal
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -22,9 +25,9 @@ from hil.arm.geometry import Geometry
 from hil.arm.kinematics import Kinematics
 from hil.calibration.identification import register
 from hil.calibration.measurements import Measurements
-from hil.campaign.engine import Clock, Engine, RealClock, RunAborted
+from hil.campaign.engine import Clock, Engine, RealClock, RunAborted, RunInterrupted
 from hil.campaign.events import EventBus, PlanReady, RunFinished, RunStarted
-from hil.campaign.plan import CampaignResult, ChoosePoses, ResumeState, calibration_plan
+from hil.campaign.plan import BOOTSTRAP, CampaignResult, ChoosePoses, ResumeState, calibration_plan
 from hil.campaign.steps import PoseRecord
 from hil.campaign.suspenders import suspenders
 from hil.errors import InputError
@@ -41,7 +44,7 @@ def new_campaign_id() -> str:
 class RunOutcome:
     """How a run ended, for exit codes and the result file."""
 
-    status: str  # accepted, rejected, aborted, failed
+    status: str  # accepted, rejected, aborted, interrupted, failed
     campaign: str
     result: CampaignResult | None = None
     error: BaseException | None = None
@@ -51,13 +54,16 @@ class RunOutcome:
 
     @property
     def exit_code(self) -> int:
-        """0 accepted, 1 rejected, 3 hardware fault, 4 aborted (bad input raises before a run)."""
+        """0 accepted, 1 rejected, 3 hardware fault, 4 aborted, 128 + the signal number interrupted
+        (130 for Ctrl-C, the shell's convention); bad input raises before a run."""
         if self.status == "accepted":
             return 0
         if self.status == "rejected":
             return 1
         if self.status == "aborted":
             return 4
+        if self.status == "interrupted":
+            return 128 + int(getattr(self.error, "signum", signal.SIGINT))
         return 3
 
 
@@ -110,41 +116,48 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
     outcome.tracker_info = ({"name": ident.name, "serial": ident.serial_number,
                              "firmware": ".".join(map(str, ident.firmware)), "interface": ident.interface}
                             if ident is not None else {})
-    try:
-        home = np.asarray(devices.robot.read_joints(1).q, dtype=float)  # where the operator left it
-    except Exception:  # no reading: the first move's path is then not checked from here
-        home = None
-    engine = Engine(
-        devices.robot, devices.tracker, campaign, spec, bus=bus, home=home,
-        suspenders=suspenders(devices, relock_timeout=config.timeouts["relock"]),
-        clock=clock or RealClock(), suspend_timeout=config.timeouts["suspend"],
-        keep_in=(np.array(config.keep_in["min"]), np.array(config.keep_in["max"])),
-        check_model=Geometry.nominal(spec, config.smr["offset"]),
-        deviation=_nominal_deviation(config))
-    if engine_ready is not None:
-        engine_ready(engine)
-    planned = (config.campaign["calibration_poses"]
-               + config.campaign["validation_poses"] * validation_cycles)
-    bus.emit(RunStarted(campaign=campaign, robot=spec.name, station=config.station["name"],
-                        poses=planned, resumed=resume is not None,
-                        measured=len(resume.records) if resume else 0))
-
-    try:
+    engine: Engine | None = None
+    try:  # from here on the devices are closed and RunFinished emitted, even on Ctrl-C
+        try:
+            home = np.asarray(devices.robot.read_joints(1).q, dtype=float)  # where the operator left it
+        except Exception:  # no reading: the first move's path is then not checked from here
+            home = None
+        engine = Engine(
+            devices.robot, devices.tracker, campaign, spec, bus=bus, home=home,
+            suspenders=suspenders(devices, relock_timeout=config.timeouts["relock"]),
+            clock=clock or RealClock(), suspend_timeout=config.timeouts["suspend"],
+            keep_in=(np.array(config.keep_in["min"]), np.array(config.keep_in["max"])),
+            check_model=Geometry.nominal(spec, config.smr["offset"]),
+            deviation=_nominal_deviation(config))
+        if engine_ready is not None:
+            engine_ready(engine)
+        # One count everywhere (Run screen, progress bar, history): calibration + validation poses, the
+        # plan's; the bootstrap's points locate the tracker and are not among them.
+        camp = config.campaign
+        planned = (len(resume.poses) if resume is not None and resume.poses else
+                   camp["calibration_poses"] + camp["validation_poses"] * validation_cycles)
+        measured = sum(1 for role, _ in resume.records if role != BOOTSTRAP) if resume else 0
+        bus.emit(RunStarted(campaign=campaign, robot=spec.name, station=config.station["name"],
+                            poses=planned, resumed=resume is not None, measured=measured))
         result: CampaignResult = engine.run(
             calibration_plan(config, choose, campaign, resume, validation_cycles))
         outcome.result = result
         outcome.status = "accepted" if result.passed else "rejected"
         detail = (f"validation RMS {result.after.rms * 1e3:.4f} mm "
                   f"{'<=' if result.passed else '>'} {config.campaign['acceptance'] * 1e3:.4f} mm")
-    except (RunAborted, KeyboardInterrupt) as exc:
-        outcome.status, outcome.error, detail = "aborted", exc, str(exc) or "interrupted"
+    except RunAborted as exc:
+        outcome.status, outcome.error, detail = "aborted", exc, str(exc) or "aborted"
+    except KeyboardInterrupt as exc:
+        outcome.status, outcome.error = "interrupted", exc
+        detail = str(exc) if isinstance(exc, RunInterrupted) else "interrupted"
     except InputError as exc:  # an unsafe target found before moving: bad input, not a fault
         bus.emit(RunFinished(campaign=campaign, status="failed", detail=str(exc)))
         raise
     except Exception as exc:  # hardware faults, suspensions that never cleared, failed fits
         outcome.status, outcome.error, detail = "failed", exc, f"{type(exc).__name__}: {exc}"
     finally:
-        outcome.timing = engine.stats.as_dict()
+        if engine is not None:
+            outcome.timing = engine.stats.as_dict()
         devices.close()
     bus.emit(RunFinished(campaign=campaign, status=outcome.status, detail=detail,
                          result={"software": __version__}))

@@ -9,6 +9,8 @@ traceback at the user:
 * 2 — bad input (a file, a flag, a config value), with one line naming what is wrong;
 * 3 — a hardware fault (robot or tracker) ended the run;
 * 4 — the run was aborted;
+* 130 — interrupted by Ctrl-C; in general 128 + the signal number (143 SIGTERM, 129 SIGHUP), the
+  shell's convention. ``hil calibrate`` stops the arm and leaves the campaign resumable;
 * 70 — an unexpected internal error (one line; ``--debug`` shows the traceback).
 
 The top of hil: it may import every package below it; nothing imports it.
@@ -17,11 +19,14 @@ The top of hil: it may import every package below it; nothing imports it.
 from __future__ import annotations
 
 import argparse
+import functools
 import importlib
 import sys
 from collections.abc import Sequence
+from typing import Any
 
-from hil import __version__
+import hil
+from hil.cli._common import quiet_on_closed_stdout
 from hil.errors import HilError, InputError
 
 # Modules of hil.cli that each add one subcommand (in help order).
@@ -40,35 +45,118 @@ COMMAND_MODULES: tuple[str, ...] = (
     "tui",
 )
 
+# The subcommands each module adds, with their one-line help: `hil --help` lists them from here
+# without importing the modules (and what they pull in: numpy, scipy, pinocchio, matplotlib...);
+# tests/hil/cli/test_help.py checks this table against what the modules register.
+COMMAND_HELP: dict[str, tuple[tuple[str, str], ...]] = {
+    "calibrate": (("calibrate", "run a whole calibration campaign"),),
+    "identify": (("identify", "identify a calibrated model from measurements"),),
+    "validate": (("validate", "check a model against held-out measurements"),),
+    "fk": (("fk", "forward kinematics of a model"),),
+    "export": (("export", "export a model (URDF, ROS kinematics YAML, JSON)"),),
+    "synth": (("synth", "write a synthetic truth and simulated measurements"),),
+    "select": (("select", "choose optimal measurement poses (JSON out)"),),
+    "sim": (("sim", "run the simulated station (robot + tracker)"),),
+    "history": (("history", "list calibration campaigns"),
+                ("show", "print one campaign; export its model or measurements")),
+    "report": (("report", "write the HTML report of a saved calibration result"),),
+    "moveb": (("moveb", "smooth error-controlled trajectories (plan, run)"),),
+    "tui": (("tui", "the operator's terminal app (keyboard only, 80x24 and larger)"),),
+}
+
 EXIT_OK = 0
 EXIT_FAILED = 1
 EXIT_BAD_INPUT = 2
 EXIT_HARDWARE = 3
 EXIT_ABORTED = 4
+EXIT_INTERRUPTED = 130  # Ctrl-C; 128 + the signal number for SIGTERM (143) and SIGHUP (129)
 EXIT_INTERNAL = 70
 
 
+class _ShowDefaults(argparse.HelpFormatter):
+    """Adds "(default: X)" to an option's help when it has a default and the help does not say it."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text, default = action.help or "", action.default
+        if (not action.option_strings or "%(default)" in text or "default" in text.lower()
+                or default is None or default is False or default is argparse.SUPPRESS or default == []):
+            return action.help
+        return f"{text} (default: %(default)s)"
+
+
+@functools.cache
+def _with_defaults(formatter: type[argparse.HelpFormatter]) -> type[argparse.HelpFormatter]:
+    return formatter if issubclass(formatter, _ShowDefaults) else type(
+        f"{formatter.__name__}ShowingDefaults", (_ShowDefaults, formatter), {})
+
+
 class _Parser(argparse.ArgumentParser):
-    """argparse that reports usage errors as one line and exit code 2."""
+    """argparse that reports usage errors as one line and exit code 2, and shows options' defaults."""
+
+    def __init__(self, *args: Any, formatter_class: type[argparse.HelpFormatter] = argparse.HelpFormatter,
+                 **kwargs: Any) -> None:
+        super().__init__(*args, formatter_class=_with_defaults(formatter_class), **kwargs)
 
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The parser with every subcommand registered."""
+class _Version(argparse.Action):
+    """``--version``, which looks the version up only when asked (see `hil.__getattr__`)."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: object,
+                 option_string: str | None = None) -> None:
+        print(f"hil {hil.__version__}")
+        parser.exit(0)
+
+
+def _command_of(argv: Sequence[str]) -> str:
+    """The subcommand a command line names (its first word that is not an option), or ""."""
+    return next((a for a in argv if not a.startswith("-")), "")
+
+
+def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The parser; without `argv` every subcommand is registered in full.
+
+    Given the command line, only the module of the subcommand it names is imported and registered; the
+    others are listed by name and one-line help (`COMMAND_HELP`), so ``hil --help`` or ``hil history``
+    does not pay for the numerical libraries other subcommands need.
+    """
     parser = _Parser(prog="hil", description="Kinematic calibration of Universal Robots arms.")
-    parser.add_argument("--version", action="version", version=f"hil {__version__}")
+    parser.add_argument("--version", action=_Version, nargs=0, help="show hil's version and exit")
     parser.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    wanted = None if argv is None else _command_of(argv)
     for name in COMMAND_MODULES:
-        importlib.import_module(f"hil.cli.{name}").register(sub)
+        listed = COMMAND_HELP.get(name, ())
+        if wanted is None or not listed or any(command == wanted for command, _ in listed):
+            importlib.import_module(f"hil.cli.{name}").register(sub)
+        else:
+            for command, summary in listed:
+                sub.add_parser(command, help=summary)
+    _guard_stdout(parser)
     return parser
+
+
+def _guard_stdout(parser: argparse.ArgumentParser) -> None:
+    """Every subcommand ends quietly when its stdout's reader goes away (`quiet_on_closed_stdout`)."""
+    func = parser.get_default("func")
+    if func is not None and not hasattr(func, "__wrapped__"):
+        parser.set_defaults(func=quiet_on_closed_stdout(func))
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for child in action.choices.values():
+                _guard_stdout(child)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; returns the process exit code."""
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    try:
+        parser = build_parser(argv)
+    except KeyboardInterrupt:  # Ctrl-C while the subcommands' modules load
+        print("hil: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # usage errors, --help and --version end here, not in the caller
@@ -84,9 +172,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except HilError as exc:
         print(f"hil: failed: {exc}", file=sys.stderr)
         return EXIT_FAILED
-    except KeyboardInterrupt:
-        print("hil: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:  # Ctrl-C, or a RunInterrupted (SIGTERM, SIGHUP) outside a run
+        signum = getattr(exc, "signum", None)
+        print(f"hil: interrupted{f' ({exc})' if signum else ''}", file=sys.stderr)
+        return EXIT_INTERRUPTED if signum is None else 128 + signum
     except Exception as exc:  # the one place that keeps tracebacks away from the user
         if args.debug:
             raise

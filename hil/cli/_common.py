@@ -4,15 +4,16 @@ from __future__ import annotations
 
 import json
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
-from hil.arm.geometry import parse_triplet
+if TYPE_CHECKING:
+    import numpy as np
 
 
 def triplet_or_none(text: str | None, option: str) -> np.ndarray | None:
     """An optional "X,Y,Z" option as a vector (InputError naming the option when malformed)."""
+    from hil.arm.geometry import parse_triplet  # pinocchio: not for commands that only print help
+
     return None if text is None else parse_triplet(text, option)
 
 
@@ -21,7 +22,99 @@ def mm(value: float) -> str:
     return f"{value * 1e3:.3f} mm"
 
 
+#: Largest plausible RMS acceptance threshold (m): a calibrated arm is judged on tenths of a millimetre,
+#: so a larger value is a threshold typed in millimetres (``--accept 0.1`` would pass at 100 mm).
+MAX_RMS_THRESHOLD = 0.01
+RMS_THRESHOLD_HELP = "in METRES, e.g. 0.0001 for 0.1 mm, at most 0.01 = 10 mm"
+
+
+def rms_threshold(text: str) -> float:
+    """argparse ``type`` of an RMS acceptance threshold in metres (``--accept``, ``--max-rms``):
+    a positive finite number up to `MAX_RMS_THRESHOLD`; anything else is a one-line usage error."""
+    import argparse
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of metres") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"must be a positive number of metres, got {text}")
+    if value > MAX_RMS_THRESHOLD:
+        raise argparse.ArgumentTypeError(
+            f"{text} m ({value * 1e3:g} mm) is not a plausible RMS threshold: the value is in metres "
+            f"and at most {MAX_RMS_THRESHOLD:g} ({MAX_RMS_THRESHOLD * 1e3:g} mm); for 0.1 mm give 0.0001")
+    return value
+
+
 def print_json(doc: Any) -> None:
     """One JSON document on stdout."""
     json.dump(doc, sys.stdout, indent=2)
     sys.stdout.write("\n")
+
+
+def wants_json(args: Any) -> bool:
+    """JSON on stdout when asked (``--json``) or when stdout is not a terminal (a pipe, a file: scripts
+    read JSON, as they always did); a readable summary on a terminal."""
+    return bool(getattr(args, "json", False)) or not sys.stdout.isatty()
+
+
+def wrote(path: Any, what: str = "") -> None:
+    """The one line every command that writes a file prints: on stderr, so stdout stays clean."""
+    print(f"wrote {path}" + (f" ({what})" if what else ""), file=sys.stderr)
+
+
+#: Exit code of a command whose reader closed stdout early (``hil show last --json | head -1``):
+#: 128 + SIGPIPE, what the shell reports for any Unix tool that stopped writing for that reason.
+EXIT_STDOUT_CLOSED = 141
+
+
+class StdoutClosed(BrokenPipeError):
+    """Stdout's reader went away (as opposed to a broken pipe to a device)."""
+
+
+class _GuardedStdout:
+    """A stand-in for ``sys.stdout`` that tells a closed stdout apart from other broken pipes."""
+
+    def __init__(self, stream: Any) -> None:
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        try:
+            return int(self._stream.write(text))
+        except BrokenPipeError as exc:
+            raise StdoutClosed(*exc.args) from None
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError as exc:
+            raise StdoutClosed(*exc.args) from None
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
+
+
+def quiet_on_closed_stdout(func: Any) -> Any:
+    """`func(args)` of a subcommand, ending quietly (exit code 141) when stdout's reader goes away."""
+
+    def run(args: Any) -> Any:
+        stream = sys.stdout
+        sys.stdout = _GuardedStdout(stream)  # type: ignore[assignment]
+        try:
+            code = func(args)
+            sys.stdout.flush()
+            return code
+        except StdoutClosed:
+            try:  # what is left in the buffer must not fail again when the interpreter exits
+                import os
+
+                os.dup2(os.open(os.devnull, os.O_WRONLY), stream.fileno())
+            except (AttributeError, OSError, ValueError):
+                pass  # not a real file (captured in a test): nothing to silence
+            return EXIT_STDOUT_CLOSED
+        finally:
+            sys.stdout = stream
+
+    run.__wrapped__ = func  # type: ignore[attr-defined]
+    return run

@@ -10,8 +10,15 @@ serial number) and configuration — after ``kill -9`` included — measuring on
 
 Progress goes to stderr (a bar with ETA on a terminal, plain lines otherwise); ``--json`` prints one
 event per line on stdout; ``--out`` writes the final result (``hil-result/1``, the calibrated model
-under ``model``) and ``--report`` a self-contained HTML report. Exit codes: 0 accepted, 1 finished
-above the acceptance threshold, 2 bad input, 3 hardware fault, 4 aborted.
+under ``model``) and ``--report`` a self-contained HTML report — both only when the campaign
+finishes (accepted, rejected, aborted): an interrupted or failed run, which is resumable, leaves an
+earlier file at that path as it was.
+
+Ctrl-C (SIGINT), SIGTERM and a closed terminal (SIGHUP) interrupt the run: the arm is stopped at
+once, the campaign is recorded as ``interrupted`` and stays resumable (re-running the same command
+continues it, nothing measured twice), and the exit is clean. Exit codes: 0 accepted, 1 finished
+above the acceptance threshold, 2 bad input, 3 hardware fault, 4 aborted, 130 interrupted
+(128 + the signal number: 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP).
 """
 
 from __future__ import annotations
@@ -24,6 +31,7 @@ from pathlib import Path
 
 from hil.arm.catalog import ROBOT_NAMES
 from hil.campaign.events import Event, EventBus
+from hil.cli._common import RMS_THRESHOLD_HELP, rms_threshold
 from hil.cli.progress import JsonLines, Progress
 from hil.cli.station_args import add_tracker_protocol, station_from_args
 from hil.errors import InputError
@@ -44,7 +52,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--poses", type=int, help="calibration poses (overrides the config)")
     p.add_argument("--validation", type=int, help="validation poses (overrides the config)")
     p.add_argument("--candidates", type=int, help="selector candidates (overrides the config)")
-    p.add_argument("--accept", type=float, metavar="METRES", help="validation RMS threshold")
+    p.add_argument("--accept", type=rms_threshold, metavar="METRES",
+                   help=f"validation RMS threshold, {RMS_THRESHOLD_HELP}; overrides the config")
     p.add_argument("--cycles", type=int, default=1,
                    help="visits of each validation pose (>1 adds ISO 9283 AP/RP)")
     p.add_argument("--db", metavar="PATH", help="campaign database (default: config, $HIL_DB, data dir)")
@@ -59,16 +68,23 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from hil.cli.interrupts import interruptible
+
+    for path in (args.out, args.report):
+        if path and Path(path).is_dir():
+            raise InputError(f"{path}: is a directory")
+    with interruptible():  # Ctrl-C, SIGTERM, SIGHUP: the arm stops, the campaign stays resumable
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     from hil.campaign.chooser import campaign_chooser
     from hil.campaign.engine import RealClock
     from hil.campaign.runner import plan_saver, resume_state, run_campaign
     from hil.report.result import report_data, result_document
     from hil.station.devices import HARDWARE_ERRORS, open_devices
-    from hil.store import Store
+    from hil.store import FINISHED, Store
 
-    for path in (args.out, args.report):
-        if path and Path(path).is_dir():
-            raise InputError(f"{path}: is a directory")
     with station_from_args(args) as (config, identity, truth):
         store = Store.open(args.db, config=config)
         try:
@@ -104,10 +120,19 @@ def run(args: argparse.Namespace) -> int:
             store.set_status(campaign, outcome.status, result=result)
         finally:
             store.close()
+    if outcome.status not in FINISHED:  # interrupted or failed: resumable, so no result (yet)
+        if outcome.status == "interrupted":
+            print(f"hil: campaign {campaign} is resumable: re-run the same command to continue it",
+                  file=sys.stderr)
+        return outcome.exit_code  # an earlier result at --out / --report stays as it was
+    from hil.cli._common import wrote
+
     if args.out:
         atomic_write_text(args.out, json.dumps(result, indent=2, allow_nan=False) + "\n")
+        wrote(args.out, "hil-result/1")
     if args.report and outcome.result is not None:
         from hil.report import write_report
 
         write_report(report_data(outcome, config, events, started), args.report)
+        wrote(args.report, "HTML report")
     return outcome.exit_code

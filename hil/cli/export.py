@@ -4,21 +4,28 @@ from __future__ import annotations
 
 import argparse
 
-from hil.calibration.exports import FORMATS, export
-from hil.calibration.model_file import MODEL_FORMAT, load_geometry
-from hil.files.outputs import atomic_write_text
+from hil.calibration.exports import FORMATS
+from hil.cli._common import wrote
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("export", help="export a model (URDF, ROS kinematics YAML, JSON)",
                        description="Write a calibrated model in a format other tools load.")
-    p.add_argument("--model", required=True, metavar="model.json")
-    p.add_argument("--format", required=True, choices=FORMATS)
-    p.add_argument("--out", required=True, metavar="FILE")
+    p.add_argument("--model", required=True, metavar="model.json",
+                   help="calibrated model to export (hil-model/1, from hil identify)")
+    p.add_argument("--format", required=True, choices=FORMATS,
+                   help="urdf: a URDF of the calibrated arm; ros-kinematics: ur_description's "
+                        "kinematics_params YAML; json: the model itself")
+    p.add_argument("--out", required=True, metavar="FILE", help="file to write")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    from hil.calibration.exports import export
+    from hil.calibration.model_file import MODEL_FORMAT, load_geometry
+    from hil.files.outputs import atomic_write_text
+
     geometry, doc = load_geometry(args.model, (MODEL_FORMAT,))
     atomic_write_text(args.out, export(doc, geometry, args.format, source=args.model))
+    wrote(args.out, args.format)
     return 0

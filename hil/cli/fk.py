@@ -4,10 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from hil.arm.kinematics import Kinematics
-from hil.calibration.measurements import read_joints
-from hil.calibration.model_file import load_geometry
-from hil.files.outputs import atomic_write_text, format_csv
+from hil.cli._common import wrote
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -15,16 +12,26 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description="Write x,y,z (metres) of the SMR or flange for each row of a joints "
                                    "CSV (q1..q6, radians).")
     p.add_argument("--model", required=True, metavar="model.json", help="hil-model/1 or hil-truth/1")
-    p.add_argument("--joints", required=True, metavar="Q.csv")
-    p.add_argument("--frame", choices=("tracker", "base"), default="tracker")
-    p.add_argument("--point", choices=("smr", "flange"), default="smr")
-    p.add_argument("--out", required=True, metavar="P.csv")
+    p.add_argument("--joints", required=True, metavar="Q.csv",
+                   help="joint configurations: CSV with columns q1..q6 (radians)")
+    p.add_argument("--frame", choices=("tracker", "base"), default="tracker",
+                   help="frame of the positions written: the tracker's (as it would measure them) or "
+                        "the robot base's")
+    p.add_argument("--point", choices=("smr", "flange"), default="smr",
+                   help="which point: the SMR centre or the flange centre (tool0)")
+    p.add_argument("--out", required=True, metavar="P.csv", help="CSV to write (x,y,z in metres)")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    from hil.arm.kinematics import Kinematics
+    from hil.calibration.measurements import read_joints
+    from hil.calibration.model_file import load_geometry
+    from hil.files.outputs import atomic_write_text, format_csv
+
     geometry, _ = load_geometry(args.model)
     q, _ = read_joints(args.joints)
     points = Kinematics(geometry).points(q, frame=args.frame, point=args.point)
     atomic_write_text(args.out, format_csv(("x", "y", "z"), points))
+    wrote(args.out, f"{len(points)} positions, {args.point} in the {args.frame} frame")
     return 0

@@ -15,14 +15,12 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
-from hil.arm.geometry import Geometry
 from hil.calibration.exports import FORMATS, export
-from hil.calibration.measurements import write_measurements
 from hil.cli._common import mm, print_json
 from hil.errors import InputError
 from hil.files.outputs import atomic_write_text
 from hil.station.config import load_config
-from hil.store import ROLES, CampaignRecord, CampaignSummary, Store, resolve_path
+from hil.store import INTERRUPTED, ROLES, CampaignRecord, CampaignSummary, Store, resolve_path
 
 # File suffixes that say which export format is meant when --format is not given.
 _SUFFIX_FORMATS = {".urdf": "urdf", ".xml": "urdf", ".yaml": "ros-kinematics", ".yml": "ros-kinematics",
@@ -47,7 +45,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     s = sub.add_parser("show", help="print one campaign; export its model or measurements",
                        description="Print a campaign (configuration, poses, model fit, validation, "
                                    "events). ID is a campaign id, a unique prefix of one, or 'last'.")
-    s.add_argument("id", metavar="ID")
+    s.add_argument("id", metavar="ID",
+                   help="campaign id (from hil history), a unique prefix of one, or 'last'")
     _add_db_options(s)
     s.add_argument("--export-model", metavar="FILE", help="write the campaign's calibrated model")
     s.add_argument("--format", choices=FORMATS,
@@ -72,15 +71,24 @@ def _mm(value: float | None) -> str:
     return "-" if value is None else mm(value)
 
 
-# 79 columns: fits the 80x24 terminal. The id already says when the campaign was created, so the
-# table shows the last activity instead (a "running" campaign idle for days was killed).
-_ROW = "{:<20} {:<14} {:<10} {:<5} {:<9} {:>7} {:>8}"
+# 78 columns: fits the 80x24 terminal. The id already says when (and in which year) the campaign was
+# created, so the table shows the last activity instead, without the year: the status needs the room.
+_ROW = "{:<20} {:<11} {:<10} {:<5} {:<11} {:>7} {:>8}"
+
+# Below the table when it lists an interrupted campaign: what that status means.
+_INTERRUPTED_NOTE = (f"{INTERRUPTED} (resumable): re-run the same `hil calibrate` command to continue "
+                     "it")
+
+
+def _status(c: CampaignSummary) -> str:
+    """The status as `hil show` prints it: an interrupted campaign says it can be resumed."""
+    return f"{c.status} (resumable)" if c.status == INTERRUPTED else c.status
 
 
 def _history_line(c: CampaignSummary) -> str:
     rms = "-" if c.validation_rms is None else f"{c.validation_rms * 1e3:.3f}"
-    return _ROW.format(c.id, _when(c.updated, "%y-%m-%d %H:%M"), c.station[:10], c.robot[:5],
-                       c.status[:9], f"{c.measured}/{c.planned}", rms)
+    return _ROW.format(c.id, _when(c.updated, "%m-%d %H:%M"), c.station[:10], c.robot[:5],
+                       c.status[:11], f"{c.measured}/{c.planned}", rms)
 
 
 def run_history(args: argparse.Namespace) -> int:
@@ -92,12 +100,15 @@ def run_history(args: argparse.Namespace) -> int:
     if args.json:
         print_json({"database": str(where), "campaigns": [r.as_dict() for r in rows]})
         return 0
+    print(f"database: {os.path.abspath(where)}", file=sys.stderr)  # which store (stdout: the table)
     if not rows:
         print(f"no campaigns in {where}")
         return 0
     print(_ROW.format("ID", "UPDATED", "STATION", "ROBOT", "STATUS", "POSES", "VAL [mm]"))
     for r in rows:
         print(_history_line(r))
+    if any(r.status == INTERRUPTED for r in rows):
+        print(_INTERRUPTED_NOTE)
     return 0
 
 
@@ -108,6 +119,9 @@ def _export_format(args: argparse.Namespace) -> str:
 
 
 def _export(args: argparse.Namespace, store: Store, rec: CampaignRecord) -> list[str]:
+    from hil.arm.geometry import Geometry  # pinocchio: only when exporting
+    from hil.calibration.measurements import write_measurements
+
     written = []
     if args.export_model:
         if rec.model is None:
@@ -135,7 +149,7 @@ def _show_text(rec: CampaignRecord) -> list[str]:
     extra = ", ".join(x for x in (robot.model, f"software {robot.software}" if robot.software else "")
                       if x)
     lines = [
-        f"campaign {s.id}: {s.status}" + (f" ({rec.detail})" if rec.detail else ""),
+        f"campaign {s.id}: {_status(s)}" + (f" — {rec.detail}" if rec.detail else ""),
         f"  station     {s.station}",
         f"  robot       {s.robot}, {ident}" + (f" ({extra})" if extra else ""),
         f"  created     {_when(s.created)}  (updated {_when(s.updated)}, hil {rec.software or '?'})",

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
 
 from hil.arm.catalog import ROBOT_NAMES, get_robot
-from hil.calibration.identification import FitResult, identify, validate
-from hil.calibration.measurements import read_measurements
-from hil.calibration.model_file import model_document, write_json
-from hil.cli._common import mm, print_json, triplet_or_none
+from hil.cli._common import mm, print_json, triplet_or_none, wrote
+
+if TYPE_CHECKING:
+    from hil.calibration.identification import FitResult
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -38,6 +39,10 @@ def summary(fit: FitResult) -> dict:
 
 
 def run(args: argparse.Namespace) -> int:
+    from hil.calibration.identification import identify, validate
+    from hil.calibration.measurements import read_measurements
+    from hil.calibration.model_file import model_document, write_json
+
     robot = get_robot(args.robot).name
     smr = triplet_or_none(args.smr, "--smr")
     meas = read_measurements(args.measurements)
@@ -45,6 +50,7 @@ def run(args: argparse.Namespace) -> int:
     fit = identify(meas, robot, smr, reject_outliers=not args.no_reject)
     validation = validate(fit.geometry, held_out).as_dict() if held_out is not None else None
     write_json(args.out, model_document(fit, validation))
+    wrote(args.out, f"hil-model/1, {len(fit.indices)} parameters")
     info = summary(fit)
     if validation is not None:
         info["validation"] = validation
@@ -63,5 +69,4 @@ def run(args: argparse.Namespace) -> int:
         print(f"  rejected pose {r.index} (line {r.line}): residual {mm(r.residual)}")
     for c in fit.correlated[:10]:
         print(f"  correlated: {c.a} ~ {c.b}  ρ = {c.rho:+.3f}")
-    print(f"wrote {args.out}")
     return 0

@@ -1,9 +1,12 @@
-"""`hil moveb`: error-controlled smooth trajectories (seed 001).
+"""`hil moveb`: smooth tool paths that keep within the program's error bounds, planned and measured.
 
 ``hil moveb plan PROGRAM [--continuity G2|G3] --out samples.csv`` plans the program and writes dense
-samples (``s,x,y,z,i,j,k,u,v,w,curvature``: mm, unit tool Z and X axes, 1/mm) and prints a JSON
-summary. ``hil moveb run PROGRAM --config station.toml`` (or ``--sim``) streams the timed trajectory
-through the robot's servo loop, samples the tracker continuously and prints the path accuracy.
+samples (``s,x,y,z,i,j,k,u,v,w,curvature``: mm, unit tool Z and X axes, 1/mm) and prints a summary.
+``hil moveb run PROGRAM --config station.toml`` (or ``--sim``) streams the timed trajectory through the
+robot's servo loop, samples the tracker continuously and prints the path accuracy.
+
+Both print a readable summary on a terminal, and JSON with ``--json`` or when stdout is not a terminal
+(a pipe or a file: what scripts have always read).
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from hil.arm.catalog import ROBOT_NAMES
-from hil.cli._common import print_json
+from hil.cli._common import print_json, wants_json, wrote
 from hil.cli.station_args import add_tracker_protocol, station_from_args
 from hil.errors import InputError
 
@@ -25,18 +28,20 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description=__doc__.split("\n\n")[0])
     moveb = p.add_subparsers(dest="moveb_command", metavar="ACTION")
     plan = moveb.add_parser("plan", help="plan a MOVEB program and write dense samples")
-    plan.add_argument("program", metavar="PROGRAM")
-    plan.add_argument("--continuity", choices=("G2", "G3"), default="G2")
-    plan.add_argument("--out", required=True, metavar="samples.csv")
+    plan.add_argument("program", metavar="PROGRAM", help="MOVEB program (hil/moveb/examples/ has two)")
+    plan.add_argument("--continuity", choices=("G2", "G3"), default="G2", help=_CONTINUITY)
+    plan.add_argument("--out", required=True, metavar="samples.csv",
+                      help="CSV of dense samples to write (s,x,y,z,i,j,k,u,v,w,curvature)")
     plan.add_argument("--step", type=float, default=0.5, metavar="MM",
                       help="sample spacing on straight parts (every bridge gets 64 samples too)")
     plan.add_argument("--rate", type=float, default=500.0, metavar="HZ",
                       help="controller rate for the cycle time in the summary (500 e-series, 125 CB3)")
     _limit_options(plan)
+    _json_option(plan)
     plan.set_defaults(func=run_plan)
 
     run = moveb.add_parser("run", help="run a MOVEB program on the robot and measure it")
-    run.add_argument("program", metavar="PROGRAM")
+    run.add_argument("program", metavar="PROGRAM", help="MOVEB program (hil/moveb/examples/ has two)")
     src = run.add_mutually_exclusive_group(required=True)
     src.add_argument("--config", metavar="station.toml", help="station configuration")
     src.add_argument("--sim", action="store_true", help="use the simulated station")
@@ -47,9 +52,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--ik", choices=("model", "nominal"), default="model",
                      help="with --model: solve the joints on the model (default), or on the nominal arm "
                           "and measure in the model's frame (how far off the uncalibrated arm is)")
-    run.add_argument("--continuity", choices=("G2", "G3"), default="G2")
-    run.add_argument("--frame", choices=("base", "current"), default="base",
-                     help="program frame: the robot base, or anchored at the arm's current TCP pose")
+    run.add_argument("--continuity", choices=("G2", "G3"), default="G2", help=_CONTINUITY)
+    run.add_argument("--frame", choices=FRAMES, default=None,
+                     help="where the program runs: 'base' as written, in the robot base frame; 'current' "
+                          "anchored at the arm's current TCP pose (jog the SMR to face the tracker first); "
+                          "'tracker' centred in front of the robot towards the tracker, the tool facing it "
+                          "(needs --sim or --model, which know where the tracker stands). Default: 'tracker' "
+                          "with --sim (its tracker stands at a random place), else 'base'")
     _limit_options(run)
     run.add_argument("--joint-speed", type=float, default=1.0, metavar="F",
                      help="allowed fraction of the datasheet joint speeds (0 < F <= 1); the feed slows "
@@ -57,7 +66,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--joint-acceleration", type=float, default=None, metavar="RAD/S2",
                      help="largest joint acceleration at the controller samples (every joint; UR "
                           "publishes none, so none by default: the peak is reported either way)")
-    run.add_argument("--tracker-rate", type=float, default=100.0, metavar="HZ")
+    run.add_argument("--tracker-rate", type=float, default=100.0, metavar="HZ",
+                     help="rate at which the tracker is sampled during the motion")
     run.add_argument("--min-coverage", type=float, default=0.9, metavar="F",
                      help="share of the path the tracker must measure; below it the run is reported "
                           "'incomplete' (exit code 1)")
@@ -68,16 +78,31 @@ def register(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--out", metavar="result.json", help="write the path-accuracy result")
     run.add_argument("--plot", metavar="run.png",
                      help="write a figure: commanded and measured path, deviation along the path")
+    _json_option(run)
     run.set_defaults(func=run_run)
     p.set_defaults(func=lambda args: (p.print_help(sys.stderr), 2)[1])
 
 
+FRAMES = ("base", "current", "tracker")
+_CONTINUITY = ("smoothness at the corners: G2 (continuous curvature) or G3 (continuous change of "
+               "curvature too: smoother, slightly longer bridges)")
+
+
 def _limit_options(p: argparse.ArgumentParser) -> None:
     """The Cartesian limits of the feed profile (tool point)."""
-    p.add_argument("--velocity", type=float, default=100.0, metavar="MM/S")
-    p.add_argument("--acceleration", type=float, default=1000.0, metavar="MM/S2")
-    p.add_argument("--jerk", type=float, default=10000.0, metavar="MM/S3")
-    p.add_argument("--normal-acceleration", type=float, default=1000.0, metavar="MM/S2")
+    p.add_argument("--velocity", type=float, default=100.0, metavar="MM/S",
+                   help="largest tool speed along the path")
+    p.add_argument("--acceleration", type=float, default=1000.0, metavar="MM/S2",
+                   help="largest tool acceleration along the path")
+    p.add_argument("--jerk", type=float, default=10000.0, metavar="MM/S3",
+                   help="largest jerk along the path")
+    p.add_argument("--normal-acceleration", type=float, default=1000.0, metavar="MM/S2",
+                   help="largest acceleration across the path (v²·curvature): slows the feed at corners")
+
+
+def _json_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--json", action="store_true",
+                   help="print JSON even on a terminal (it always is when stdout is piped or redirected)")
 
 
 def run_plan(args: argparse.Namespace) -> int:
@@ -94,13 +119,58 @@ def run_plan(args: argparse.Namespace) -> int:
         raise InputError(f"--rate must be positive, got {args.rate}")
     limits = Limits(args.velocity, args.acceleration, args.jerk, args.normal_acceleration)
     plan = plan_program(load_program(args.program), args.continuity)
-    write_samples(args.out, plan.dense(args.step))
+    dense = plan.dense(args.step)
+    write_samples(args.out, dense)
+    wrote(args.out, f"{len(dense.s)} samples")
     law, _samples = plan.timed(limits, args.rate)
     # the Cartesian limits only: joint speeds depend on where the arm runs it (`hil moveb run`)
-    print_json(dict(summary(plan), cycle_time_s=law.cycle_time, rate_hz=args.rate,
-                    limits={"velocity": limits.velocity, "acceleration": limits.acceleration,
-                            "jerk": limits.jerk, "normal_acceleration": limits.normal_acceleration}))
+    doc = dict(summary(plan), cycle_time_s=law.cycle_time, rate_hz=args.rate,
+               limits={"velocity": limits.velocity, "acceleration": limits.acceleration,
+                       "jerk": limits.jerk, "normal_acceleration": limits.normal_acceleration})
+    if wants_json(args):
+        print_json(doc)
+    else:
+        sys.stdout.write(_plan_text(doc))
     return 0
+
+
+def _plan_text(doc: dict[str, Any]) -> str:
+    """`hil moveb plan`'s summary for a person."""
+    lim = doc["limits"]
+    lines = [f"{doc['points']} points, {doc['length_mm']:.1f} mm of path, {doc['continuity']}, "
+             f"{doc['bridges']} corners bridged (planned in {doc['planning_ms']:.0f} ms)",
+             f"cycle time {doc['cycle_time_s']:.3f} s at {doc['rate_hz']:g} Hz under the Cartesian limits "
+             f"(velocity {lim['velocity']:g} mm/s, acceleration {lim['acceleration']:g} mm/s², "
+             f"jerk {lim['jerk']:g} mm/s³, normal acceleration {lim['normal_acceleration']:g} mm/s²)"]
+    for g in doc["groups"]:
+        lines.append(f"  lines {g['lines'][0]}-{g['lines'][1]}: {g['points']} points, corner deviation D "
+                     f"{g['D']:g} mm, point error E {g['E']:g} mm: largest point error "
+                     f"{g['max_point_error']:.4f} mm")
+    return "\n".join(lines) + "\n"
+
+
+def _run_text(doc: dict[str, Any]) -> str:
+    """`hil moveb run`'s result for a person."""
+    lines = [f"{doc.get('program') or 'moveb run'}: {doc.get('status')}"]
+    if doc.get("error"):
+        lines.append(f"  {doc['error']}")
+    if doc.get("frame"):
+        lines.append(f"  program frame   {doc['frame']}")
+    if doc.get("cycle_time_s") is not None:
+        lines.append(f"  cycle time      {doc['cycle_time_s']:.3f} s")
+    if doc.get("coverage") is not None:
+        lines.append(f"  measured        {doc['coverage']:.0%} of the path "
+                     f"({doc.get('lost_samples', 0)} samples lost)")
+    for title, key in (("path deviation", "path_accuracy"), ("rigidly fitted", "path_accuracy_registered")):
+        acc = doc.get(key)
+        if acc:
+            note = " (rigidly fitted: no model)" if key == "path_accuracy" and doc.get("registered") else ""
+            lines.append(f"  {title:<15} max {acc['max_deviation_mm']:.3f} mm, "
+                         f"RMS {acc['rms_deviation_mm']:.3f} mm{note}")
+    peak = (doc.get("joint_speeds") or {}).get("peak_fraction")
+    if peak:
+        lines.append("  joint speeds    peak " + ", ".join(f"{v:.0%}" for v in peak) + " of the allowed")
+    return "\n".join(lines) + "\n"
 
 
 def run_run(args: argparse.Namespace) -> int:
@@ -113,7 +183,11 @@ def run_run(args: argparse.Namespace) -> int:
         from hil.files.outputs import atomic_write_text
 
         atomic_write_text(args.out, json.dumps(doc, indent=2, allow_nan=False) + "\n")
-    print_json(doc)
+        wrote(args.out, "hil-moveb-run/1")
+    if wants_json(args):
+        print_json(doc)
+    else:
+        sys.stdout.write(_run_text(doc))
     return int(doc.get("exit_code", 0))
 
 
@@ -129,7 +203,7 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
     from hil.moveb.accuracy import distance_to_path
     from hil.moveb.plan import plan_program
     from hil.moveb.program import load_program
-    from hil.moveb.run import execute, program_in_frame
+    from hil.moveb.run import NothingMeasured, execute, facing_frame, program_in_frame
     from hil.moveb.timing import Limits
     from hil.station.devices import HARDWARE_ERRORS, open_devices
 
@@ -147,18 +221,25 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
     for name in ("poses", "validation", "candidates", "accept"):  # read by `station_from_args`
         setattr(args, name, None)
     args.cycles = 1
-    with station_from_args(args) as (config, _identity, _truth):
+    place = args.frame or ("tracker" if args.sim else "base")
+    if place == "tracker" and not (args.sim or model is not None):
+        raise InputError("--frame tracker: needs --model (its tracker pose) or --sim")
+    with station_from_args(args) as (config, _identity, truth):
         geometry = model or Geometry.nominal(config.robot["type"], smr=config.smr["offset"])
         if model is not None and args.ik == "nominal":
             # the uncalibrated arm, measured in the model's base frame (its tracker pose and SMR):
             # the absolute path error calibration removes, not only its non-rigid part
             geometry = Geometry.nominal(model.robot, smr=model.smr, tracker=model.tracker)
+        if place == "tracker":  # where the tracker stands: the model's, else the simulated world's
+            where = (model.tracker if model is not None else Geometry.from_dict(truth, source="sim")
+                     .tracker).translation
+            program = program_in_frame(program, facing_frame(program, where, geometry.spec.reach))
         try:
             devices = open_devices(config)
         except HARDWARE_ERRORS as exc:
             return {"status": "hardware fault", "error": f"{type(exc).__name__}: {exc}", "exit_code": 3}
         try:
-            if args.frame == "current":
+            if place == "current":
                 q = np.asarray(devices.robot.read_joints(1).q, dtype=float)
                 F = Kinematics(geometry).flange_poses(q)[0]
                 anchor = F.copy()
@@ -171,6 +252,10 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
                              joint_acceleration=args.joint_acceleration, keep_in=keep_in)
         except HARDWARE_ERRORS as exc:
             return {"status": "hardware fault", "error": f"{type(exc).__name__}: {exc}", "exit_code": 3}
+        except NothingMeasured as exc:  # where the tracker stands, not a fault of the hardware
+            return {"format": "hil-moveb-run/1", "status": "incomplete", "exit_code": 1, "error": str(exc),
+                    "program": args.program, "frame": place, "coverage": 0.0, "lost_samples": exc.lost,
+                    "path_accuracy": None}
         finally:
             devices.close()
     if args.plot:
@@ -190,7 +275,7 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
                    error=f"the tracker measured {cov.fraction:.0%} of the path ({result.lost} records lost; "
                          f"longest unmeasured stretch s = {a:.1f}-{b:.1f} mm): the figures describe only "
                          "the measured part; keep the SMR facing the tracker with a clear line of sight")
-    doc.update({"program": args.program, "continuity": args.continuity, "model": args.model,
+    doc.update({"program": args.program, "frame": place, "continuity": args.continuity, "model": args.model,
                 "ik": "nominal" if model is None else args.ik, "registered": result.registered,
                 "cycle_time_s": result.cycle_time, "lost_samples": result.lost,
                 "coverage": None if cov is None else cov.fraction,

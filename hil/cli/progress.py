@@ -78,10 +78,11 @@ class Progress:
         if isinstance(event, RunStarted):
             self.total, self.done = event.poses, event.measured
             what = "resuming" if event.resumed else "starting"
+            done = f", {event.measured} measured" if event.resumed else ""
             self._line(f"{what} campaign {event.campaign} on {event.robot} ({event.station}), "
-                       f"{event.poses} poses planned")
-        elif isinstance(event, PlanReady):
-            self.total = sum(1 for p in event.poses if p["role"] != "bootstrap") + self.done
+                       f"{event.poses} poses planned (calibration + validation){done}")
+        elif isinstance(event, PlanReady):  # the plan's own count (a resumed plan includes the measured)
+            self.total = sum(1 for p in event.poses if p["role"] != "bootstrap")
         elif isinstance(event, PhaseChanged):
             self._line(f"{event.phase}: {event.detail}" if event.detail else event.phase)
         elif isinstance(event, PointMeasured):

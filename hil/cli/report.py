@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 
 from hil.calibration.model_file import read_json
+from hil.cli._common import wrote
 from hil.report import report_data_from_result, write_report
 
 
@@ -18,13 +19,14 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description="Rebuild the self-contained HTML report of a campaign from its "
                                    "result JSON (hil calibrate --out). Results without per-pose data "
                                    "give a report without the per-pose plots.")
-    p.add_argument("--result", required=True, metavar="result.json")
-    p.add_argument("--out", required=True, metavar="report.html")
+    p.add_argument("--result", required=True, metavar="result.json",
+                   help="the campaign's result (hil calibrate --out)")
+    p.add_argument("--out", required=True, metavar="report.html", help="HTML file to write")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     data = report_data_from_result(read_json(args.result), source=args.result)
     write_report(data, args.out)
-    print(f"wrote {args.out} ({'PASS' if data.passed else 'FAIL'})")
+    wrote(args.out, "PASS" if data.passed else "FAIL")
     return 0

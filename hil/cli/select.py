@@ -1,4 +1,4 @@
-"""`hil select`: choose the measurement poses of a calibration (method 000), JSON out.
+"""`hil select`: choose the measurement poses of a calibration, JSON out.
 
     hil select --robot ur5e --count 30 [--candidates 20000] [--index O1] [--method tabu|exchange|random]
                [--seed S] [--tracker X,Y,Z] [--smr X,Y,Z] [--out poses.json] [constraint options]
@@ -6,7 +6,9 @@
 The JSON (``hil-poses/1``) has robot, index, value, bound (O1's D-optimal bound), percent_of_bound,
 method, seconds (the selection itself), poses (6-lists in radians, in visiting order), the travel time
 ordered vs unordered, the candidate statistics and every constraint setting used. Without --out it goes
-to stdout. Bad input is one line on stderr and exit code 2, and nothing is written.
+to stdout. Progress (what it is doing, candidates found, search progress, the bound) goes to stderr;
+``--no-bound`` skips the bound (often most of the time): ``bound`` and ``percent_of_bound`` are then null.
+Bad input is one line on stderr and exit code 2, and nothing is written.
 """
 
 from __future__ import annotations
@@ -17,16 +19,11 @@ import math
 import sys
 from typing import Any
 
-import numpy as np
-
-from hil.arm.geometry import parse_triplet
-from hil.calibration.selection import parse_constraints, select_poses
+from hil.cli._common import wrote
 from hil.errors import InputError
-from hil.files.outputs import atomic_write_text
 from selector.candidates import CONSTRAINT_NAMES
 from selector.indices import INDEX_NAMES, SCALINGS
 from selector.search import METHODS
-from selector.tabu import TabuSettings
 
 DEFAULT_SMR = "0,0,0.045"
 
@@ -37,28 +34,35 @@ def register(sub: Any) -> None:
                        description=__doc__.split("\n\n")[0])
     p.add_argument("--robot", required=True, help="robot type, e.g. ur5e")
     p.add_argument("--count", required=True, type=int, help="number of poses to choose")
-    p.add_argument("--candidates", type=int, default=20_000, help="candidate configurations (20000)")
-    p.add_argument("--index", default="O1", help=f"observability index: {', '.join(INDEX_NAMES)} (O1)")
-    p.add_argument("--method", default="tabu", help=f"{', '.join(METHODS)} (tabu)")
-    p.add_argument("--seed", type=int, default=0, help="random seed; equal seeds give equal output (0)")
+    p.add_argument("--candidates", type=int, default=20_000,
+                   help="random feasible configurations to choose from")
+    p.add_argument("--index", default="O1",
+                   help=f"what to maximise: observability index {', '.join(INDEX_NAMES)}")
+    p.add_argument("--method", default="tabu",
+                   help=f"search method: {', '.join(METHODS)} (the last two are baselines to compare with)")
+    p.add_argument("--seed", type=int, default=0, help="random seed; equal seeds give equal output")
     p.add_argument("--tracker", help="tracker position X,Y,Z in the robot base frame (m); without it the "
                                      "range, acceptance and line-of-sight constraints are off")
     p.add_argument("--smr", default=DEFAULT_SMR,
-                   help=f"SMR centre in the flange frame X,Y,Z (m) ({DEFAULT_SMR})")
+                   help="SMR centre in the flange frame X,Y,Z (m)")
     p.add_argument("--scaling", default="expected", help=f"column scaling for O2–O5: {', '.join(SCALINGS)}")
     p.add_argument("--keep-in", help="SMR keep-in box XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (m, base frame)")
-    p.add_argument("--floor", type=float, default=0.0, help="height of the mounting surface (m) (0)")
-    p.add_argument("--range", dest="tracker_range", help="tracker distance MIN,MAX (m) (0.8,20)")
-    p.add_argument("--half-angle", type=float, default=30.0, help="SMR acceptance half-angle (deg) (30)")
-    p.add_argument("--wrist-margin", type=float, default=10.0, help="min |q5| from 0/π (deg) (10)")
-    p.add_argument("--elbow-margin", type=float, default=10.0, help="min |q3| from 0/π (deg) (10)")
+    p.add_argument("--floor", type=float, default=0.0, help="height of the mounting surface (m)")
+    p.add_argument("--range", dest="tracker_range", help="tracker distance MIN,MAX (m) (default: 0.8,20)")
+    p.add_argument("--half-angle", type=float, default=30.0, help="SMR acceptance half-angle (deg)")
+    p.add_argument("--wrist-margin", type=float, default=10.0, help="min |q5| from 0/π (deg)")
+    p.add_argument("--elbow-margin", type=float, default=10.0, help="min |q3| from 0/π (deg)")
     p.add_argument("--shoulder-margin", type=float, default=0.05,
-                   help="min distance of the wrist point from the shoulder singularity (m) (0.05)")
+                   help="min distance of the wrist point from the shoulder singularity (m)")
     p.add_argument("--disable", action="append", default=[],
                    help=f"switch constraints off (comma list; repeatable): {', '.join(CONSTRAINT_NAMES)}")
     p.add_argument("--start", help="current joint configuration q1..q6 (rad): the route starts there")
     p.add_argument("--prune", action="store_true",
-                   help="drop redundant poses of the result (the patent's step 5): may return fewer")
+                   help="drop poses that add nothing to the result: may return fewer than --count")
+    p.add_argument("--no-bound", dest="bound", action="store_false",
+                   help="skip the D-optimal bound (often most of the run time): bound and "
+                        "percent_of_bound are then null")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.add_argument("--out", help="output JSON file (default: stdout)")
     p.set_defaults(func=run)
 
@@ -84,6 +88,13 @@ def _finite(value: float, name: str) -> float:
 
 def run(args: argparse.Namespace) -> int:
     """Validate everything, select, then write the JSON (nothing is written on bad input)."""
+    import numpy as np
+
+    from hil.arm.geometry import parse_triplet  # pinocchio: not for `hil select --help`
+    from hil.calibration.selection import parse_constraints, select_poses
+    from hil.files.outputs import atomic_write_text
+    from selector.tabu import TabuSettings
+
     if args.candidates < 1:
         raise InputError(f"--candidates must be at least 1, got {args.candidates}")
     tracker = None if args.tracker is None else tuple(parse_triplet(args.tracker, "--tracker"))
@@ -104,13 +115,47 @@ def run(args: argparse.Namespace) -> int:
         settings["tracker_range"] = rng
     start = _numbers(args.start, 6, "--start")
     constraints = parse_constraints(tracker=tracker, disabled=disabled, **settings)
-    report = select_poses(args.robot, args.count, candidates=args.candidates, index=args.index,
-                          method=args.method, seed=args.seed, smr=smr, constraints=constraints,
-                          scaling=args.scaling, start=None if start is None else np.array(start),
-                          settings=TabuSettings(prune=True) if args.prune else None)
+    status = StatusLine(None if args.quiet else sys.stderr)
+    try:
+        report = select_poses(args.robot, args.count, candidates=args.candidates, index=args.index,
+                              method=args.method, seed=args.seed, smr=smr, constraints=constraints,
+                              scaling=args.scaling, start=None if start is None else np.array(start),
+                              settings=TabuSettings(prune=True) if args.prune else None,
+                              bound=args.bound, progress=status)
+    except BaseException:
+        status.close(keep=False)  # the error is then the one line below the finished phases
+        raise
+    status.close(keep=True)
     text = json.dumps(report, indent=2) + "\n"
     if args.out:
         atomic_write_text(args.out, text)
+        wrote(args.out, f"{report['count']} poses")
     else:
         sys.stdout.write(text)
     return 0
+
+
+class StatusLine:
+    """Progress on a terminal: one line per phase, redrawn while the phase runs; nothing elsewhere
+    (a log or a script keeps seeing only errors, one line each)."""
+
+    def __init__(self, stream: Any | None) -> None:
+        self.stream = stream if stream is not None and stream.isatty() else None
+        self.phase = ""
+        self.text = ""
+
+    def __call__(self, phase: str, text: str) -> None:
+        if self.stream is None:
+            return
+        if self.text and phase != self.phase:
+            self.stream.write("\n")  # the finished phase keeps its last line
+        self.phase, self.text = phase, text
+        self.stream.write(f"\r\x1b[K{phase}: {text}"[:160])
+        self.stream.flush()
+
+    def close(self, keep: bool) -> None:
+        """End the display: keep the last line (the run finished) or erase it (it failed)."""
+        if self.stream is not None and self.text:
+            self.stream.write("\n" if keep else "\r\x1b[K")
+            self.stream.flush()
+            self.text = ""

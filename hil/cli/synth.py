@@ -11,6 +11,7 @@ from hil.arm.catalog import ROBOT_NAMES, get_robot
 from hil.calibration.measurements import write_measurements
 from hil.calibration.model_file import load_truth, truth_document, write_json
 from hil.calibration.synthetic import Noise, measure, random_configurations, random_truth
+from hil.cli._common import wrote
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -20,12 +21,13 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "and validation.csv into --out-dir.")
     p.add_argument("--robot", default="ur5e", help=f"robot type ({', '.join(ROBOT_NAMES)})")
     p.add_argument("--truth", metavar="truth.json", help="use this hil-truth/1 instead of a random one")
-    p.add_argument("--poses", type=int, default=30, help="calibration poses (default 30)")
-    p.add_argument("--validation", type=int, default=100, help="validation poses (default 100)")
+    p.add_argument("--poses", type=int, default=30, help="calibration poses (measurements.csv)")
+    p.add_argument("--validation", type=int, default=100, help="validation poses (validation.csv)")
     p.add_argument("--noise", type=float, default=None, metavar="METRES",
                    help="tracker noise per axis (default 20e-6, or the truth's)")
-    p.add_argument("--seed", type=int, default=1)
-    p.add_argument("--out-dir", required=True, metavar="DIR")
+    p.add_argument("--seed", type=int, default=1,
+                   help="random seed of the truth, the poses and the noise; equal seeds give equal files")
+    p.add_argument("--out-dir", required=True, metavar="DIR", help="directory to write the three files to")
     p.set_defaults(func=run)
 
 
@@ -49,6 +51,7 @@ def run(args: argparse.Namespace) -> int:
     write_json(out / "truth.json", truth_document(truth, noise))
     write_measurements(out / "measurements.csv", q, p)
     write_measurements(out / "validation.csv", qv, pv)
-    print(f"wrote {out / 'truth.json'}, {out / 'measurements.csv'} ({args.poses} poses), "
-          f"{out / 'validation.csv'} ({args.validation} poses)")
+    wrote(out / "truth.json", "the hidden truth")
+    wrote(out / "measurements.csv", f"{args.poses} poses")
+    wrote(out / "validation.csv", f"{args.validation} poses")
     return 0

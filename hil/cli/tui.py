@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 
 from hil.arm.catalog import ROBOT_NAMES, get_robot
+from hil.cli._common import RMS_THRESHOLD_HELP, rms_threshold
 from hil.cli.station_args import add_tracker_protocol
 from hil.errors import InputError
 
@@ -28,7 +29,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--poses", type=int, help="calibration poses (overrides the config)")
     p.add_argument("--validation", type=int, help="validation poses (overrides the config)")
     p.add_argument("--candidates", type=int, help="selector candidates (overrides the config)")
-    p.add_argument("--accept", type=float, metavar="METRES", help="validation RMS threshold")
+    p.add_argument("--accept", type=rms_threshold, metavar="METRES",
+                   help=f"validation RMS threshold, {RMS_THRESHOLD_HELP}; overrides the config")
     p.add_argument("--db", metavar="PATH", help="campaign database (default: config, $HIL_DB, data dir)")
     p.add_argument("--out-dir", default=".", metavar="DIR", help="where exports go (default: here)")
     add_tracker_protocol(p)

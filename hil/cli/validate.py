@@ -7,16 +7,19 @@ import argparse
 from hil.calibration.identification import validate
 from hil.calibration.measurements import read_measurements
 from hil.calibration.model_file import load_geometry
-from hil.cli._common import mm, print_json
+from hil.cli._common import RMS_THRESHOLD_HELP, mm, print_json, rms_threshold
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("validate", help="check a model against held-out measurements",
                        description="Distances between a model's predicted SMR positions and measured "
                                    "ones (CSV q1..q6,x,y,z). Exit code 1 when --max-rms is exceeded.")
-    p.add_argument("--model", required=True, metavar="model.json")
-    p.add_argument("--measurements", required=True, metavar="V.csv")
-    p.add_argument("--max-rms", type=float, metavar="METRES", help="acceptance threshold on the RMS")
+    p.add_argument("--model", required=True, metavar="model.json",
+                   help="model to check (hil-model/1, or a hil-truth/1 to see the noise floor)")
+    p.add_argument("--measurements", required=True, metavar="V.csv",
+                   help="measurements the model was not fitted to: CSV q1..q6,x,y,z")
+    p.add_argument("--max-rms", type=rms_threshold, metavar="METRES",
+                   help=f"acceptance threshold on the RMS, {RMS_THRESHOLD_HELP}")
     p.add_argument("--json", action="store_true", help="print the statistics as JSON")
     p.set_defaults(func=run)
 

@@ -35,7 +35,7 @@ from hil.arm.geometry import Geometry
 from hil.arm.ik import solve_path
 from hil.arm.kinematics import Kinematics
 from hil.arm.safety import check_target
-from hil.errors import InputError
+from hil.errors import HilError, InputError
 from hil.moveb.accuracy import Coverage, coverage, path_accuracy
 from hil.moveb.joints import JointSpeedError, JointSpeeds, joint_speed_ceiling, retime
 from hil.moveb.orientation import rotation_matrices
@@ -56,6 +56,45 @@ def program_in_frame(program: Program, anchor: np.ndarray) -> Program:
     pts = tuple(MovebPoint(p.line, R @ (p.position - p0.position) + anchor[:3, 3], R @ p.z_axis,
                            R @ p.x_axis, p.d, p.e) for p in program.points)
     return Program(pts, program.source)
+
+
+def facing_frame(program: Program, tracker: np.ndarray, reach: float, *, out: float = 0.5,
+                 height: float = 0.3) -> np.ndarray:
+    """The anchor (4x4, mm) that puts `program` in front of the robot, facing a tracker at `tracker`.
+
+    The program's centre goes `out` × `reach` from the base towards the tracker (horizontally), `height`
+    metres up, and its first point's tool Z axis points at the tracker: the SMR then faces it (within
+    the program's own orientation changes) and the arm stays behind the SMR, out of the beam. For a
+    station whose tracker position is known (the simulated one, or a model's tracker pose) and a
+    program written without a cell in mind (``hil/moveb/examples``).
+    """
+    t = np.asarray(tracker, dtype=float)
+    ahead = np.array([t[0], t[1], 0.0])
+    norm = float(np.linalg.norm(ahead))
+    ahead = ahead / norm if norm > 1e-9 else np.array([1.0, 0.0, 0.0])
+    centre = out * reach * ahead + np.array([0.0, 0.0, height])
+    z = t - centre
+    z /= np.linalg.norm(z)
+    x = np.cross([0.0, 0.0, 1.0], z)
+    x = x / np.linalg.norm(x) if np.linalg.norm(x) > 1e-9 else np.array([1.0, 0.0, 0.0])
+    anchor = np.eye(4)
+    anchor[:3, :3] = np.column_stack([x, np.cross(z, x), z])
+    # program_in_frame maps p -> R (p - p0) + anchor; choose the anchor so the centre lands there
+    p0 = program.points[0]
+    R0 = np.column_stack([p0.x_axis, np.cross(p0.z_axis, p0.x_axis), p0.z_axis])
+    R = anchor[:3, :3] @ R0.T
+    middle = 0.5 * (program.positions.min(axis=0) + program.positions.max(axis=0))
+    anchor[:3, 3] = centre * 1e3 - R @ (middle - p0.position)
+    return anchor
+
+
+class NothingMeasured(HilError):
+    """The tracker streamed, but saw the SMR at fewer than three points: a line-of-sight problem."""
+
+    def __init__(self, lost: int) -> None:
+        super().__init__(f"the tracker measured nothing during the motion ({lost} records lost): keep the "
+                         "SMR facing the tracker with a clear line of sight along the whole path")
+        self.lost = lost
 
 
 def tool_targets(samples_pos_mm: np.ndarray, z: np.ndarray, x: np.ndarray, smr: np.ndarray) -> list[pin.SE3]:
@@ -204,11 +243,12 @@ def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, reg
     measured = np.array([r.position is not None for r in during], dtype=bool)
     got = [r for r, ok in zip(during, measured, strict=True) if ok]
     lost = len(during) - len(got)
-    if len(got) < 3:
+    if not during:  # not a single record while the arm moved: the tracker itself failed
         from drivers.tracker.errors import TrackerError
 
-        raise TrackerError(f"the tracker measured {len(got)} points during the motion ({lost} lost): keep "
-                           "the SMR facing the tracker with a clear line of sight along the whole path")
+        raise TrackerError("the tracker sent no samples during the motion")
+    if len(got) < 3:  # it streamed but could not see the SMR: where it stands, not a fault
+        raise NothingMeasured(lost)
     m = np.array([r.position for r in got]) * 1e3  # mm, tracker frame
     dense = plan.dense(0.2)
     path = dense.position  # mm, base frame

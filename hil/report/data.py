@@ -162,7 +162,9 @@ class ReportData:
     calibration_before: ErrorSet | None = None  # baseline residuals on the calibration poses
     calibration_after: ErrorSet | None = None  # calibrated residuals on the calibration poses
     calibration_used: np.ndarray | None = None  # (m,) bool: not rejected as outliers
-    calibration_lines: np.ndarray | None = None  # (m,) input file lines
+    calibration_lines: np.ndarray | None = None  # (m,) input file lines, or campaign pose numbers
+    line_kind: str = "input line"  # what the *_lines are: "input line" (a CSV) or "pose" (a campaign)
+    validation_lines: np.ndarray | None = None  # (n,) as calibration_lines, for the validation poses
     correlated: tuple[Correlation, ...] = ()
     rejected: tuple[RejectedPose, ...] = ()
     iso9283: Mapping[str, float] | None = None  # e.g. {"AP": m, "RP": m} on repeated poses
@@ -176,6 +178,7 @@ class ReportData:
     started: str | None = None  # ISO 8601
     finished: str | None = None
     model: Mapping[str, Any] | None = None  # the hil-model/1 document, for the MES result
+    tracker_pose: Mapping[str, Any] | None = None  # plain tracker pose (model_file.tracker_pose)
 
 
 def _iso(t: float | str | _dt.datetime | None) -> str | None:
@@ -226,6 +229,7 @@ def report_data_from(
     events: Iterable[Event] = (),
     hashes: Mapping[str, str] | None = None,
     model: Mapping[str, Any] | None = None,
+    line_kind: str = "input line",
 ) -> ReportData:
     """Assemble a `ReportData` from what the campaign engine has at the end of a run.
 
@@ -238,9 +242,11 @@ def report_data_from(
       per-axis plot falls back to the calibration residuals;
     * ``accept_rms`` defaults to the config's ``campaign.acceptance``;
     * ``hashes`` is merged over the fit's own input digest (and the validation data's);
-    * ``model`` defaults to ``model_document(fit, validation_after.as_dict())``.
+    * ``model`` defaults to ``model_document(fit, validation_after.as_dict())``;
+    * ``line_kind`` says what the calibration measurements' ``lines`` are: ``"input line"`` (rows of a
+      CSV file) or ``"pose"`` (a campaign's pose numbers).
     """
-    from hil.calibration.model_file import model_document, software_versions
+    from hil.calibration.model_file import model_document, software_versions, tracker_pose
 
     if isinstance(config, StationConfig):
         cfg: dict[str, Any] = config.as_dict()
@@ -263,11 +269,12 @@ def report_data_from(
         lines = np.asarray(calibration.lines, dtype=int)
     cal_after = ErrorSet.of_vectors(fit.residuals)
 
-    v_before = v_after = None
+    v_before = v_after = v_lines = None
     if validation is not None and len(validation) == validation_after.count:
         if fit.baseline is not None:
             v_before = validation.p - Kinematics(fit.baseline).points(validation.q)
         v_after = validation.p - Kinematics(fit.geometry).points(validation.q)
+        v_lines = np.asarray(validation.lines, dtype=int)
 
     digests = {}
     if fit.sha256:
@@ -278,6 +285,8 @@ def report_data_from(
 
     suspensions, notes = summarise_events(events)
     after = ErrorSet.of_stats(validation_after, v_after)
+    if model is None:
+        model = model_document(fit, validation_after.as_dict())
     return ReportData(
         campaign=campaign,
         station=station,
@@ -295,6 +304,8 @@ def report_data_from(
         calibration_after=cal_after,
         calibration_used=np.asarray(fit.used, dtype=bool).copy(),
         calibration_lines=lines,
+        line_kind=line_kind,
+        validation_lines=v_lines,
         correlated=tuple(fit.correlated),
         rejected=tuple(fit.rejected),
         iso9283=dict(iso9283) if iso9283 else None,
@@ -307,7 +318,8 @@ def report_data_from(
         notes=notes,
         started=_iso(started),
         finished=_iso(finished),
-        model=model if model is not None else model_document(fit, validation_after.as_dict()),
+        model=model,
+        tracker_pose=tracker_pose(fit.geometry.tracker, fit.names, fit.covariance),
     )
 
 
@@ -360,6 +372,13 @@ def _from_result(doc: Mapping[str, Any], source: str) -> ReportData:
             raise InputError(f"{source}: missing field '{where}{key}'")
         return d[key]
 
+    if not isinstance(doc.get("model"), Mapping):
+        status = doc.get("status")
+        if status is not None:  # aborted, failed: the campaign stopped before it had a model
+            error = f" ({doc['error']})" if doc.get("error") else ""
+            raise InputError(f"{source}: campaign {doc.get('campaign') or '?'} did not finish (status "
+                             f"{status!r}{error}): it has no calibrated model, so there is no report to "
+                             "build; resume the campaign (run the same hil calibrate command again)")
     model = need(doc, "model", "")
     fit_block = need(model, "fit", "model.")
     validation = need(doc, "validation", "")
@@ -412,6 +431,8 @@ def _from_result(doc: Mapping[str, Any], source: str) -> ReportData:
         calibration_after=cal_after,
         calibration_used=used,
         calibration_lines=lines,
+        line_kind=str(pc.get("line_kind") or "pose"),  # a hil-result/1 is a campaign's: pose numbers
+        validation_lines=np.asarray(pv["lines"], dtype=int) if pv.get("lines") else None,
         correlated=tuple(Correlation(str(c["a"]), str(c["b"]), _num(c.get("rho"), "rho"))
                          for c in fit_block.get("correlated", [])),
         rejected=tuple(RejectedPose(int(r["pose"]), int(r["line"]), _num(r.get("residual"), "residual"),
@@ -429,4 +450,27 @@ def _from_result(doc: Mapping[str, Any], source: str) -> ReportData:
         started=doc.get("started"),
         finished=doc.get("finished"),
         model=model,
+        tracker_pose=_tracker_pose(model, source),
     )
+
+
+def _tracker_pose(model: Mapping[str, Any], source: str) -> Mapping[str, Any] | None:
+    """The model's plain tracker pose: its ``tracker_pose`` block, or (older models) computed from
+    the geometry's ``tracker`` and the covariance."""
+    from hil.arm.geometry import pose
+    from hil.calibration.model_file import tracker_pose
+
+    if isinstance(model.get("tracker_pose"), Mapping):
+        return dict(model["tracker_pose"])
+    block = model.get("tracker")
+    if not isinstance(block, Mapping):
+        return None
+    try:
+        M = pose(block["xyz"], block["rpy"])
+    except (KeyError, TypeError, ValueError):
+        raise InputError(f"{source}: field 'model.tracker' needs xyz and rpy triples") from None
+    cov = model.get("covariance") if isinstance(model.get("covariance"), Mapping) else {}
+    names = [str(n) for n in cov.get("parameters") or []]
+    matrix = cov.get("matrix")
+    ok = names and isinstance(matrix, list) and np.shape(matrix) == (len(names), len(names))
+    return tracker_pose(M, names, matrix if ok else None)

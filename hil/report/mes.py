@@ -30,6 +30,16 @@ def _plain(value: Any) -> Any:
     return value
 
 
+#: The ``units`` block of every result: what its numbers are in (it is in SI; the report and the
+#: terminal show millimetres and milliradians).
+UNITS = {
+    "length": "m",  # accept_rms, validation, fit, per_pose, tracker_pose.xyz, model (geometry, parameters)
+    "angle": "rad",  # tracker_pose.rpy (URDF roll/pitch/yaw), model rpy and rotation parameters
+    "time": "s",  # times (except times.retries, a count), fit seconds, suspensions waited
+    "timestamps": "ISO 8601 (started, finished); Unix seconds (suspensions t)",
+}
+
+
 def _per_pose(errors: ErrorSet | None) -> list[Any] | None:
     if errors is None or not errors.per_pose:
         return None
@@ -53,14 +63,22 @@ def mes_result(data: ReportData) -> dict[str, Any]:
     * ``fit``: ``{"rms", "max", "sigma", "initial_rms", "iterations", "condition", "poses", "used",
       "rejected_lines"}`` (a summary; the full block is in ``model.fit``)
     * ``observability``: ``{"index", "value", "bound", "percent", "method"}`` or null
-    * ``times``: ``{"motion", "settle", "measure", "compute", ...}`` seconds, or null
+    * ``times``: ``{"motion", "settle", "measure", "compute", ...}`` seconds per phase, plus
+      ``total`` (the run's wall time, not a phase) and ``retries`` (a count of retried pose visits),
+      or null
     * ``suspensions``: list of ``{"kind", "message", "waited", "t"}``; ``notes``: list of strings
     * ``hashes``: ``{what: sha256}`` of the input data; ``software``: ``{package: version}``
     * ``config``: the station configuration as validated
-    * ``model``: the full ``hil-model/1`` document (geometry, parameters, covariance, fit, ...)
-    * ``per_pose``: ``{"validation": {"before", "after"}, "calibration": {"before", "after",
-      "used", "lines"}}`` — per-pose errors as ``[x, y, z]`` lists (or distances), so the HTML
-      report can be rebuilt from this file (``hil report``); entries may be null
+    * ``model``: the full ``hil-model/1`` document (geometry, parameters, covariance, fit, ...);
+      its ``tracker.tx … tracker.rz`` parameters are se(3) log coordinates, not a position
+    * ``tracker_pose``: the tracker frame in the robot base frame in plain terms, ``{"xyz": m,
+      "rpy": rad (URDF roll, pitch, yaw), "xyz_std", "rpy_std"}``
+    * ``per_pose``: ``{"validation": {"before", "after", "lines"}, "calibration": {"before", "after",
+      "used", "lines", "line_kind"}}`` — per-pose errors as ``[x, y, z]`` lists (or distances), so
+      the HTML report can be rebuilt from this file (``hil report``); entries may be null. ``lines``
+      name the poses: campaign pose numbers (``line_kind`` ``"pose"``) or input file lines
+      (``"input line"``)
+    * ``units``: what the numbers above are in (`UNITS`: metres, radians, seconds)
     """
     obs = data.observability
     return _plain({
@@ -97,14 +115,20 @@ def mes_result(data: ReportData) -> dict[str, Any]:
         "software": dict(data.software),
         "config": dict(data.config),
         "model": dict(data.model) if data.model is not None else None,
+        "tracker_pose": dict(data.tracker_pose) if data.tracker_pose is not None else None,
+        "units": UNITS,
         "per_pose": {
-            "validation": {"before": _per_pose(data.validation_before),
-                           "after": _per_pose(data.validation_after)},
+            "validation": {
+                "before": _per_pose(data.validation_before),
+                "after": _per_pose(data.validation_after),
+                "lines": None if data.validation_lines is None else data.validation_lines.tolist(),
+            },
             "calibration": {
                 "before": _per_pose(data.calibration_before),
                 "after": _per_pose(data.calibration_after),
                 "used": None if data.calibration_used is None else data.calibration_used.tolist(),
                 "lines": None if data.calibration_lines is None else data.calibration_lines.tolist(),
+                "line_kind": data.line_kind,
             },
         },
     })

@@ -58,8 +58,15 @@ def data_uri(png_bytes: bytes) -> str:
     return "data:image/png;base64," + base64.b64encode(png_bytes).decode("ascii")
 
 
+def pose_axis_label(xlabel: str, lines: np.ndarray | None, line_kind: str = "input line") -> str:
+    """The x-axis label of a per-pose plot: a campaign's poses are labelled by their pose numbers
+    (``line_kind`` ``"pose"``: the label is left as it is), a file's by their input lines."""
+    return xlabel + (f" ({line_kind})" if lines is not None and line_kind != "pose" else "")
+
+
 def _pose_ticks(ax: Axes, n: int, labels: np.ndarray | None = None) -> None:
-    """At most ~25 pose labels: 1-based pose numbers, or the input file lines when known."""
+    """At most ~25 pose labels: 1-based pose numbers, or the poses' own labels (input file lines or
+    campaign pose numbers) when known."""
     step = max(1, int(np.ceil(n / 25)))
     ticks = np.arange(0, n, step)
     ax.set_xticks(ticks)
@@ -69,7 +76,7 @@ def _pose_ticks(ax: Axes, n: int, labels: np.ndarray | None = None) -> None:
 
 def errors_per_pose(before: ErrorSet | None, after: ErrorSet, *, accept_rms: float | None = None,
                     rejected: np.ndarray | None = None, lines: np.ndarray | None = None,
-                    xlabel: str = "validation pose") -> bytes:
+                    xlabel: str = "validation pose", line_kind: str = "input line") -> bytes:
     """Grouped bars of each pose's error before and after calibration, on a log axis (mm).
 
     Dashed lines mark each RMS, a red line the acceptance threshold (on the RMS); poses the fit
@@ -87,7 +94,7 @@ def errors_per_pose(before: ErrorSet | None, after: ErrorSet, *, accept_rms: flo
     if both:
         ax.bar(x - w / 2, before.norms * 1e3, w, color=BEFORE, label="before")
         ax.axhline(before.rms * 1e3, color="#6b7684", ls="--", lw=1)
-        handles.append(Patch(color=BEFORE, label=f"before (RMS {before.rms * 1e3:.3f} mm)"))
+        handles.append(Patch(color=BEFORE, label=f"before calibration (RMS {before.rms * 1e3:.3f} mm)"))
     colors = np.full(n, AFTER, dtype=object)
     if rejected is not None and np.any(rejected):
         colors[np.asarray(rejected, dtype=bool)] = REJECTED
@@ -96,7 +103,7 @@ def errors_per_pose(before: ErrorSet | None, after: ErrorSet, *, accept_rms: flo
     rms_after = float(np.sqrt(np.mean(kept**2))) if kept.size else float("nan")
     ax.axhline(rms_after * 1e3, color=AFTER, ls="--", lw=1)
     used = " over used poses" if rejected is not None and np.any(rejected) else ""
-    handles.append(Patch(color=AFTER, label=f"after (RMS {rms_after * 1e3:.3f} mm{used})"))
+    handles.append(Patch(color=AFTER, label=f"after calibration (RMS {rms_after * 1e3:.3f} mm{used})"))
     if rejected is not None and np.any(rejected):
         handles.append(Patch(color=REJECTED, label="rejected outlier"))
     if accept_rms is not None:
@@ -111,7 +118,7 @@ def errors_per_pose(before: ErrorSet | None, after: ErrorSet, *, accept_rms: flo
         ax.set_ylim(lo, hi)
         ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
     ax.set_ylabel("3-D error (mm, log scale)", fontsize=9)
-    ax.set_xlabel(xlabel + (" (input line)" if lines is not None else ""), fontsize=9)
+    ax.set_xlabel(pose_axis_label(xlabel, lines, line_kind), fontsize=9)
     _pose_ticks(ax, n, lines)
     ax.legend(handles=handles, fontsize=8, ncols=len(handles), loc="lower center",
               bbox_to_anchor=(0.5, 1.0), frameon=False)
@@ -140,7 +147,7 @@ def histograms(before: ErrorSet | None, after: ErrorSet, *, accept_rms: float | 
 
 
 def per_axis(vectors: np.ndarray, *, xlabel: str = "validation pose",
-             lines: np.ndarray | None = None) -> bytes:
+             lines: np.ndarray | None = None, line_kind: str = "input line") -> bytes:
     """Signed x, y, z errors (mm) of each pose after calibration, and their spread per axis."""
     v = np.asarray(vectors, dtype=float).reshape(-1, 3) * 1e3
     n = len(v)
@@ -154,7 +161,7 @@ def per_axis(vectors: np.ndarray, *, xlabel: str = "validation pose",
         left.bar(x + (k - 1) * w, v[:, k], w, color=color, label=name)
     left.axhline(0, color="#555", lw=0.6)
     left.set_ylabel("error (mm)", fontsize=9)
-    left.set_xlabel(xlabel + (" (input line)" if lines is not None else ""), fontsize=9)
+    left.set_xlabel(pose_axis_label(xlabel, lines, line_kind), fontsize=9)
     _pose_ticks(left, n, lines)
     left.legend(fontsize=8, ncols=3, loc="lower center", bbox_to_anchor=(0.5, 1.0), frameon=False)
     box = right.boxplot([v[:, 0], v[:, 1], v[:, 2]], tick_labels=["x", "y", "z"], widths=0.6,

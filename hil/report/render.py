@@ -27,6 +27,8 @@ from hil.report.data import ErrorSet, ReportData
 from hil.report.plots import data_uri, errors_per_pose, histograms, per_axis
 
 _ANGLE_SUFFIXES = (".rx", ".ry", ".rz")
+#: What "before calibration" is, wherever the report shows it (tables, plots, summary).
+BEFORE_MEANS = "nominal arm, only the tracker pose and SMR fitted"
 
 
 def esc(value: Any) -> str:
@@ -134,16 +136,20 @@ def _summary(d: ReportData) -> str:
 def _validation(d: ReportData) -> str:
     b, a = d.validation_before, d.validation_after
     rows = [(label, str(s.count), fmt_mm(s.mean), fmt_mm(s.rms), fmt_mm(s.max))
-            for label, s in (("before calibration (nominal arm)", b), ("after calibration", a))]
+            for label, s in ((f"before calibration ({BEFORE_MEANS})", b), ("after calibration", a))]
     parts = [_table(["model", "poses", "mean", "RMS", "max"], [[esc(c) for c in r] for r in rows])]
     if d.iso9283:
         parts.append("<h3>ISO 9283</h3>" + _kv((esc(k), esc(fmt_mm(v))) for k, v in d.iso9283.items()))
+    lines = d.validation_lines  # the poses' names: campaign pose numbers or input file lines
+    if lines is not None and len(lines) != len(a.norms):
+        lines = None
     if a.per_pose:
         before = b if b.per_pose and len(b.norms) == len(a.norms) else None
-        parts.append(_figure(errors_per_pose(before, a, accept_rms=d.accept_rms),
+        parts.append(_figure(errors_per_pose(before, a, accept_rms=d.accept_rms, lines=lines,
+                                             line_kind=d.line_kind),
                              "validation error per pose, before and after calibration",
-                             "3-D error of each held-out pose, before (grey) and after (blue) "
-                             "calibration. Dashed: RMS; dotted red: acceptance threshold on the RMS."))
+                             f"3-D error of each held-out pose before calibration (grey: {BEFORE_MEANS}) "
+                             "and after (blue). Dashed: RMS; dotted red: acceptance threshold on the RMS."))
         parts.append(_figure(histograms(before, a, accept_rms=d.accept_rms),
                              "histograms of validation errors",
                              "Distribution of the validation errors before and after calibration."))
@@ -151,13 +157,14 @@ def _validation(d: ReportData) -> str:
         parts.append('<p class="muted">Per-pose validation errors were not recorded in this result; '
                      "only the summary figures are shown.</p>")
     if a.vectors is not None and a.per_pose:
-        parts.append(_figure(per_axis(a.vectors), "per-axis validation errors after calibration",
+        parts.append(_figure(per_axis(a.vectors, lines=lines, line_kind=d.line_kind),
+                             "per-axis validation errors after calibration",
                              "Signed x, y, z errors (tracker frame) of each held-out pose after "
                              "calibration, and their spread per axis."))
     elif (d.calibration_after is not None and d.calibration_after.vectors is not None
           and d.calibration_after.per_pose):
         parts.append(_figure(per_axis(d.calibration_after.vectors, xlabel="calibration pose",
-                                            lines=d.calibration_lines),
+                                      lines=d.calibration_lines, line_kind=d.line_kind),
                              "per-axis calibration residuals",
                              "Signed x, y, z residuals (tracker frame) of each calibration pose after "
                              "the fit (per-axis validation errors were not recorded)."))
@@ -166,43 +173,80 @@ def _validation(d: ReportData) -> str:
 
 def _calibration(d: ReportData) -> str:
     f = d.fit
-    parts = [_kv([
-        ("poses measured", esc(f.poses)), ("poses used", esc(f.used)),
-        ("RMS before the fit (tracker aligned, SMR at its guess)", esc(fmt_mm(f.initial_rms))),
-        ("fit RMS / max", esc(f"{fmt_mm(f.rms)} / {fmt_mm(f.max)}")),
+    before = d.calibration_before
+    after = d.calibration_after
+    if before is not None and (after is None or len(before.norms) != len(after.norms)):
+        before = None
+    rows = [("poses measured", esc(f.poses)), ("poses used", esc(f.used))]
+    if before is not None and before.per_pose:
+        rows.append((esc(f"RMS before calibration ({BEFORE_MEANS})"), esc(fmt_mm(before.rms))))
+    rows += [
+        ("fit RMS / max (after calibration)", esc(f"{fmt_mm(f.rms)} / {fmt_mm(f.max)}")),
         ("estimated noise σ (per axis)", esc(fmt_mm(f.sigma, 4))),
         ("iterations", esc(f.iterations)), ("condition number", esc(fmt_num(f.condition, ".2f"))),
-    ])]
-    after = d.calibration_after
+        ("RMS at the start of the fit (tracker aligned in closed form, SMR at its initial guess: the "
+         "fit's starting point, not the arm's error)", esc(fmt_mm(f.initial_rms))),
+    ]
+    parts = [_kv(rows)]
     if after is not None and after.per_pose:
-        before = d.calibration_before
-        if before is not None and len(before.norms) != len(after.norms):
-            before = None
         rejected = None if d.calibration_used is None else ~d.calibration_used
-        parts.append(_figure(errors_per_pose(before, after, rejected=rejected,
-                                                   lines=d.calibration_lines, xlabel="calibration pose"),
+        parts.append(_figure(errors_per_pose(before, after, rejected=rejected, lines=d.calibration_lines,
+                                             xlabel="calibration pose", line_kind=d.line_kind),
                              "calibration residual per pose",
-                             "Residual of each calibration pose with the nominal arm (grey, only the "
-                             "tracker pose and SMR fitted) and with the calibrated model (blue); "
-                             "rejected outliers in red."))
+                             f"Residual of each calibration pose before calibration (grey: {BEFORE_MEANS}) "
+                             "and with the calibrated model (blue); rejected outliers in red."
+                             + (" Poses are numbered as in the campaign." if d.line_kind == "pose" else "")))
     return "".join(parts)
 
 
-def _parameters(d: ReportData) -> str:
+def _parameter_rows(params: Iterable[Any]) -> list[list[str]]:
     rows = []
-    for p in d.parameters:
+    for p in params:
         unit, scale = parameter_unit(p.name)
         # The SMR offset and tracker pose are absolute placements, not errors: no significance.
         placement_error = p.name.startswith(("joint", "flange"))
         ratio = abs(p.value) / p.std if placement_error and _finite(p.std) and p.std > 0 else math.nan
         rows.append([esc(p.name), esc(fmt_num(p.value * scale, ".4f")), esc(fmt_num(p.std * scale, ".4f")),
                      esc(unit), esc(fmt_num(ratio, ".1f"))])
+    return rows
+
+
+def _tracker_placement(pose: Mapping[str, Any]) -> str:
+    """The tracker frame in the robot base frame: position in mm, roll/pitch/yaw in degrees."""
+    def cells(values: Any, stds: Any, scale: float, unit: str) -> list[list[str]]:
+        stds = stds if isinstance(stds, list | tuple) and len(stds) == 3 else (None,) * 3
+        return [[esc(fmt_num(v * scale, ".3f")), esc(fmt_num(s * scale if _finite(s) else None, ".4f")),
+                 esc(unit)] for v, s in zip(values, stds, strict=True)]
+
+    rows = [[esc(name), *c] for name, c in zip(
+        ("x", "y", "z", "roll", "pitch", "yaw"),
+        cells(pose["xyz"], pose.get("xyz_std"), 1e3, "mm")
+        + cells(pose["rpy"], pose.get("rpy_std"), 180.0 / math.pi, "deg"), strict=True)]
+    return ("<h3>Tracker placement</h3>"
+            '<p class="muted">Where the tracker is: its frame in the robot base frame, position (mm) and '
+            "orientation as roll, pitch, yaw about the fixed x, y, z axes (degrees, URDF convention "
+            "R = Rz(yaw)·Ry(pitch)·Rx(roll)).</p>"
+            + _table(["tracker", "value", "σ", "unit"], rows, "num"))
+
+
+def _parameters(d: ReportData) -> str:
+    tracker = [p for p in d.parameters if p.name.startswith("tracker.")]
+    rest = [p for p in d.parameters if not p.name.startswith("tracker.")]
     note = ('<p class="muted">Deviations from the nominal geometry as 6-D placement errors of each '
-            "joint origin and the flange (translations in mm, rotations in mrad), the SMR centre in the "
-            "flange frame and the tracker pose in the robot base frame. σ is one standard deviation; "
-            "|value|/σ below about 3 means the deviation is not distinguishable from noise (not shown "
-            "for the SMR and tracker, which are placements rather than errors).</p>")
-    return note + _table(["parameter", "value", "σ", "unit", "|value|/σ"], rows, "num")
+            "joint origin and the flange (se(3) log coordinates: translations tx, ty, tz in mm, "
+            "rotations rx, ry, rz in mrad) and the SMR centre in the flange frame. σ is one standard "
+            "deviation; |value|/σ below about 3 means the deviation is not distinguishable from noise "
+            "(not shown for the SMR, a placement rather than an error).</p>")
+    parts = [note, _table(["parameter", "value", "σ", "unit", "|value|/σ"], _parameter_rows(rest), "num")]
+    if d.tracker_pose is not None:
+        parts.append(_tracker_placement(d.tracker_pose))
+    if tracker:
+        parts.append('<p class="muted">The tracker pose as the fit estimates it: se(3) log coordinates '
+                     "of the tracker frame in the robot base frame (tx, ty, tz are not its position, nor "
+                     "rx, ry, rz its angles; see the tracker placement above).</p>"
+                     + _table(["parameter (se(3) log coordinate)", "value", "σ", "unit", "|value|/σ"],
+                              _parameter_rows(tracker), "num"))
+    return "".join(parts)
 
 
 def _correlated(d: ReportData) -> str:
@@ -215,8 +259,12 @@ def _correlated(d: ReportData) -> str:
 def _rejected(d: ReportData) -> str:
     if not d.rejected:
         return '<p class="muted">No pose was rejected as an outlier.</p>'
-    return ('<p class="muted">Poses removed by the leave-one-out F test (Bonferroni, α = 1 %); '
-            "the line is the row of the measurement file.</p>"
+    test = '<p class="muted">Poses removed by the leave-one-out F test (Bonferroni, α = 1 %)'
+    if d.line_kind == "pose":  # a campaign: its poses are named by their pose numbers
+        return (test + ".</p>" + _table(
+            ["pose", "residual", "p-value"],
+            [[esc(r.line), esc(fmt_mm(r.residual)), esc(f"{r.p_value:.2e}")] for r in d.rejected], "num"))
+    return (test + "; the line is the row of the measurement file.</p>"
             + _table(["pose", "file line", "residual", "p-value"],
                      [[esc(r.index), esc(r.line), esc(fmt_mm(r.residual)), esc(f"{r.p_value:.2e}")]
                       for r in d.rejected], "num"))
@@ -238,20 +286,45 @@ def _observability(d: ReportData) -> str:
     return _kv(rows)
 
 
+#: Keys of the campaign's time breakdown that are not phases: the run's wall time and a count.
+_NOT_PHASES = ("total", "retries")
+_OTHER = "other (between steps: events, store, I/O)"
+
+
+def wall_time(times: Mapping[str, Any]) -> tuple[dict[str, float], float, int | None]:
+    """The phases (seconds), which sum to the total, the total and the retried pose visits.
+
+    ``total`` is the run's wall time and ``retries`` a count: neither is a phase. Time no phase
+    accounts for shows as one more phase (`_OTHER`); a total below the phases' sum (or none) is
+    replaced by that sum.
+    """
+    phases = {str(k): float(v) for k, v in times.items() if k not in _NOT_PHASES and _finite(v)}
+    accounted = sum(phases.values())
+    given = times.get("total")
+    total = float(given) if _finite(given) and given >= accounted else accounted
+    if total - accounted > 1e-9 * max(total, 1.0):
+        phases[_OTHER] = total - accounted
+    retries = times.get("retries")
+    return phases, total, int(retries) if _finite(retries) else None
+
+
 def _campaign(d: ReportData) -> str:
     parts = []
     if d.times:
-        total = sum(v for v in d.times.values() if _finite(v))
-        colors = ["#1f6fb4", "#7fb3e0", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b"]
-        bar = "".join(f'<span style="width: {100 * v / total:.2f}%; background: {colors[i % 6]}" '
-                      f'title="{esc(k)}"></span>'
-                      for i, (k, v) in enumerate(d.times.items()) if _finite(v) and total > 0)
-        rows = [[f'<span class="swatch" style="background: {colors[i % 6]}"></span>{esc(k)}',
+        phases, total, retries = wall_time(d.times)
+        colors = ["#1f6fb4", "#7fb3e0", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#a3acb9"]
+        color = {k: colors[i % len(colors)] for i, k in enumerate(phases)}
+        bar = "".join(f'<span style="width: {100 * v / total:.2f}%; background: {color[k]}" '
+                      f'title="{esc(k)}"></span>' for k, v in phases.items() if total > 0)
+        rows = [[f'<span class="swatch" style="background: {color[k]}"></span>{esc(k)}',
                  esc(f"{v:.1f} s"), esc(f"{100 * v / total:.1f} %" if total > 0 else "—")]
-                for i, (k, v) in enumerate(d.times.items()) if _finite(v)]
-        rows.append(["<b>total</b>", f"<b>{esc(f'{total:.1f} s')}</b>", ""])
+                for k, v in phases.items()]
+        rows.append(["<b>total (wall time of the run)</b>", f"<b>{esc(f'{total:.1f} s')}</b>",
+                     "<b>100 %</b>" if total > 0 else ""])
         parts.append("<h3>Wall time</h3>" + f'<div class="stack">{bar}</div>'
                      + _table(["phase", "time", "share"], rows, "num"))
+        if retries is not None:
+            parts.append(_kv([("pose visits retried after a suspension", esc(retries))]))
     parts.append("<h3>Suspensions</h3>")
     if d.suspensions:
         parts.append(_table(["kind", "message", "waited"],

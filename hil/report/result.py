@@ -5,12 +5,12 @@ Shared by ``hil calibrate`` and the TUI, so both write exactly the same result f
 
 from __future__ import annotations
 
-import hashlib
 import time
 from typing import Any
 
 import numpy as np
 
+from hil.calibration.measurements import measurements_sha256
 from hil.campaign.events import Event, jsonable
 from hil.station.config import StationConfig
 
@@ -32,14 +32,16 @@ def report_data(outcome: Any, config: StationConfig, events: list[Event], starte
            if r.iso9283 else None)
     cal = measurements_of(fitted, "calibration")
     val = measurements_of(by_role[VALIDATION], "validation")
-    digest = hashlib.sha256(np.hstack([cal.q, cal.p]).tobytes() + np.hstack([val.q, val.p]).tobytes())
+    # Every pose the campaign measured (fitted, then held out), hashed as one measurements CSV; the
+    # calibration and validation sets are hashed on their own too (see `measurements_sha256`).
+    digest = measurements_sha256(np.vstack([cal.q, val.q]), np.vstack([cal.p, val.p]))
     return report_data_from(
         r.fit, r.before, r.after, config, campaign=outcome.campaign,
         robot=RobotInfo(config.robot["type"], outcome.robot_info.get("serial", ""),
                         outcome.robot_info.get("software", "")),
         started=started, finished=time.time(), calibration=cal, validation=val, iso9283=iso,
         observability=obs, times=outcome.timing, events=events,
-        hashes={"measurements": digest.hexdigest()}, model=r.model)
+        hashes={"measurements": digest}, model=r.model, line_kind="pose")
 
 
 def result_document(outcome: Any, config: StationConfig, events: list[Event], started: float,

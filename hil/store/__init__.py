@@ -12,6 +12,7 @@ from hil.store.core import Store, StoreError, UnknownCampaignError, new_campaign
 from hil.store.paths import ENV_VAR, default_path, resolve_path
 from hil.store.records import (
     FINISHED,
+    INTERRUPTED,
     ROLES,
     CampaignRecord,
     CampaignSummary,
@@ -26,6 +27,7 @@ from hil.store.schema import SCHEMA_VERSION, config_hash
 __all__ = [
     "ENV_VAR",
     "FINISHED",
+    "INTERRUPTED",
     "ROLES",
     "SCHEMA_VERSION",
     "CampaignRecord",

@@ -25,6 +25,7 @@ recording a measurement with its raw samples and then emitting the PointMeasured
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import math
@@ -53,9 +54,11 @@ from hil.campaign.events import (
     ValidationDone,
 )
 from hil.errors import HilError, InputError
+from hil.store.owner import is_gone, this_process
 from hil.store.paths import resolve_path
 from hil.store.records import (
     FINISHED,
+    INTERRUPTED,
     ROLES,
     CampaignRecord,
     CampaignSummary,
@@ -151,21 +154,30 @@ def _measurement(row: Sequence[Any]) -> Measurement:
                        samples=samples, deviation=deviation, t=t)
 
 
+# planned / measured / skipped count the campaign's calibration and validation poses: the count the
+# progress bar, the Run screen and the history share (the bootstrap's points only locate the tracker).
 _SUMMARY_SQL = """
 SELECT c.id, c.created, c.updated, s.name, c.robot_type, COALESCE(r.serial, ''), c.status,
-       (SELECT count(*) FROM poses WHERE campaign = c.id),
-       (SELECT count(*) FROM poses WHERE campaign = c.id AND status = 'measured'),
-       (SELECT count(*) FROM poses WHERE campaign = c.id AND status = 'skipped'),
+       (SELECT count(*) FROM poses WHERE campaign = c.id AND role != 'bootstrap'),
+       (SELECT count(*) FROM poses WHERE campaign = c.id AND role != 'bootstrap' AND status = 'measured'),
+       (SELECT count(*) FROM poses WHERE campaign = c.id AND role != 'bootstrap' AND status = 'skipped'),
        (SELECT rms FROM models WHERE campaign = c.id ORDER BY id DESC LIMIT 1),
        (SELECT rms FROM validations WHERE campaign = c.id ORDER BY id DESC LIMIT 1),
-       (SELECT passed FROM validations WHERE campaign = c.id ORDER BY id DESC LIMIT 1)
+       (SELECT passed FROM validations WHERE campaign = c.id ORDER BY id DESC LIMIT 1),
+       CASE WHEN c.status IN ({live}) THEN (SELECT data FROM events WHERE campaign = c.id
+                                            AND type = 'RunStarted' ORDER BY seq DESC LIMIT 1) END
 FROM campaigns c JOIN stations s ON s.id = c.station LEFT JOIN robots r ON r.id = c.robot
-"""
+""".format(live=", ".join(f"'{s}'" for s in sorted(_LIVE_STATES)))
 
 
 def _summary(row: Sequence[Any]) -> CampaignSummary:
-    *head, passed = row
-    return CampaignSummary(*head, passed=None if passed is None else bool(passed))
+    """A summary row; a live status whose run's process is gone (kill -9, power cut) reads as
+    ``interrupted``, which it is: resumable (the file itself is left as it is — a reader never writes)."""
+    *head, passed, started = row
+    summary = CampaignSummary(*head, passed=None if passed is None else bool(passed))
+    if started is not None and is_gone(json.loads(started).get("owner")):
+        summary = dataclasses.replace(summary, status=INTERRUPTED)
+    return summary
 
 
 class Store:
@@ -289,25 +301,25 @@ class Store:
         """One write transaction, committed on exit; any SQLite failure becomes a StoreError."""
         conn = self._conn()
         try:
-            conn.execute("BEGIN IMMEDIATE")
+            # BEGIN inside the try: a Ctrl-C landing just after it must not leave the transaction open
+            # (the run records its end on this connection next)
             try:
+                conn.execute("BEGIN IMMEDIATE")
                 yield conn
+                conn.execute("COMMIT")
             except BaseException:
-                if conn.in_transaction:
+                if conn.in_transaction:  # the body failed, COMMIT did (busy, I/O), or an interrupt
                     conn.execute("ROLLBACK")
                 raise
-            conn.execute("COMMIT")
         except sqlite3.Error as exc:
-            if conn.in_transaction:  # a failed COMMIT (busy, I/O) leaves the transaction open
-                conn.execute("ROLLBACK")
             raise StoreError(f"{self.path}: cannot {what}: {exc}") from exc
 
     @contextmanager
     def _read(self) -> Iterator[sqlite3.Connection]:
         """A read transaction: the queries inside see one consistent snapshot."""
         conn = self._conn()
-        conn.execute("BEGIN")
         try:
+            conn.execute("BEGIN")
             yield conn
         finally:
             if conn.in_transaction:
@@ -451,6 +463,8 @@ class Store:
                     "WHERE campaign = ? ORDER BY id", (campaign,))]
             counts = dict(conn.execute("SELECT type, count(*) FROM events WHERE campaign = ? "
                                        "GROUP BY type ORDER BY min(seq)", (campaign,)).fetchall())
+        if summary.status == INTERRUPTED and not detail:  # read so: its process is gone (`_summary`)
+            detail = "its process ended before the run did (killed, or the machine went down)"
         return CampaignRecord(
             summary=summary,
             robot=RobotInfo(type=rtype, serial=serial or "", model=model or "", software=rsoft or ""),
@@ -675,13 +689,20 @@ class Store:
     # --- events -------------------------------------------------------------------------------
     def record_event(self, event: Event) -> int:
         """Append `event` to its campaign's log and apply what it implies, in one transaction;
-        returns the event's sequence number. Raises StoreError on any failure (critical)."""
+        returns the event's sequence number. Raises StoreError on any failure (critical).
+
+        A `RunStarted` is logged with an ``owner`` key added (`hil.store.owner.this_process`): the
+        process recording a run's start is the one running it, and readers use it to tell a live run
+        from one whose process died (`campaigns` then says ``interrupted``)."""
+        data = event.to_dict()
+        if isinstance(event, RunStarted):
+            data["owner"] = this_process()
         with self._write(f"record {event.name}") as conn:
             self._require_campaign(conn, event.campaign)
             seq = conn.execute("SELECT COALESCE(max(seq), 0) + 1 FROM events WHERE campaign = ?",
                                (event.campaign,)).fetchone()[0]
             conn.execute("INSERT INTO events (campaign, seq, t, type, data) VALUES (?, ?, ?, ?, ?)",
-                         (event.campaign, seq, float(event.t), event.name, _dumps(event.to_dict())))
+                         (event.campaign, seq, float(event.t), event.name, _dumps(data)))
             self._apply(conn, event)
             self._touch(conn, event.campaign, float(event.t))
         return int(seq)
@@ -694,8 +715,8 @@ class Store:
 
     def _apply(self, conn: sqlite3.Connection, ev: Event) -> None:
         cid, t = ev.campaign, float(ev.t)
-        if isinstance(ev, RunStarted):
-            self._set_status(conn, cid, "running", None, None, t)
+        if isinstance(ev, RunStarted):  # a new run: the last one's detail (e.g. why it stopped) is old
+            self._set_status(conn, cid, "running", "", None, t)
         elif isinstance(ev, StateChanged) and ev.state in _LIVE_STATES:
             self._set_status(conn, cid, ev.state, None, None, t)
         elif isinstance(ev, PoseStarted) and ev.role in ROLES:

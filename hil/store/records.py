@@ -18,6 +18,10 @@ ROLES: tuple[str, ...] = ("bootstrap", "calibration", "validation")
 # fixed, re-running the command continues the campaign with its measurements.
 FINISHED: frozenset[str] = frozenset({"accepted", "rejected", "aborted"})
 
+# Stopped before the end without being aborted — Ctrl-C, SIGTERM, a closed terminal, quitting the TUI
+# mid-run, or a process that died (the store reads a run whose owner is gone as this): resumable.
+INTERRUPTED = "interrupted"
+
 
 def _plain(value: Any) -> Any:
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
@@ -91,7 +95,7 @@ class CampaignSummary(_AsDict):
     robot: str  # type
     serial: str
     status: str
-    planned: int
+    planned: int  # calibration + validation poses (bootstrap points not counted)
     measured: int
     skipped: int
     fit_rms: float | None  # of the latest model (m)

@@ -34,15 +34,16 @@ from hil.tui.messages import (
     StationChanged,
 )
 from hil.tui.screens.base import HilScreen
-from hil.tui.screens.dialogs import Confirm, HelpScreen, ResumeDialog
+from hil.tui.screens.dialogs import Confirm, HelpScreen, ResumeDialog, Stopping
 from hil.tui.screens.history import HistoryScreen
 from hil.tui.screens.plan import PlanScreen
 from hil.tui.screens.results import ResultsScreen
 from hil.tui.screens.run import RunScreen
 from hil.tui.screens.station import StationScreen
-from hil.tui.session import Session, TuiOptions
+from hil.tui.session import STOP_WAIT, Session, TuiOptions
 from hil.tui.state import RunState
 from hil.tui.widgets.nav import SCREENS
+from hil.tui.words import plain
 
 __all__ = ["HilApp", "TuiOptions", "create_app"]
 
@@ -59,6 +60,7 @@ class HilApp(App[int]):
         *(Binding(key, f"show('{name}')", title, show=False) for key, name, title in SCREENS),
         Binding("question_mark", "help", "Help"),
         Binding("q", "quit_app", "Quit"),
+        Binding("ctrl+c", "quit_app", "Quit", show=False, priority=True),  # not Textual's "use ctrl+q"
     ]
 
     def __init__(self, options: TuiOptions, *, now: Callable[[], float] = time.time) -> None:
@@ -68,7 +70,8 @@ class HilApp(App[int]):
         self.session = Session(options, self.post_message)
         self.run_state = RunState()
         self.exit_code = 0
-        self._quit_requested = False
+        self._stop_dialog: Stopping | None = None  # shown from the quit's "yes" until the app exits
+        self._closing_station = False  # the station is being closed: the app exits when it is
         self.views: dict[str, HilScreen] = {
             "station": StationScreen(), "plan": PlanScreen(), "run": RunScreen(),
             "results": ResultsScreen(), "history": HistoryScreen()}
@@ -84,8 +87,12 @@ class HilApp(App[int]):
         self.set_interval(1.0, self._tick)
 
     def on_unmount(self) -> None:
-        # Closes the devices, the store and the simulator; quick when no run is going (see action_quit_app).
-        self.session.abort(quitting=True)
+        # Every way out goes through action_quit_app, which has done this already (with a visible
+        # "stopping..."); this is the last resort when the app ends otherwise.
+        if self.session.run_active:
+            self.session.interrupt()
+            if not self.session.wait_for_run(STOP_WAIT):
+                self.session.abandon_run()
         self.session.shutdown()
 
     def _poll(self) -> None:
@@ -103,8 +110,7 @@ class HilApp(App[int]):
 
     def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
         if event.state == WorkerState.ERROR and event.worker.error is not None:
-            err = event.worker.error
-            self.notify(f"{event.worker.name}: {type(err).__name__}: {err}", severity="error", timeout=10)
+            self.notify(f"{event.worker.name}: {plain(event.worker.error)}", severity="error", timeout=10)
 
     # --- navigation ----------------------------------------------------------------------------------
     def action_show(self, name: str) -> None:
@@ -132,20 +138,72 @@ class HilApp(App[int]):
             self.views[name].refresh_view()
 
     # --- quitting ------------------------------------------------------------------------------------
+    def action_quit(self) -> None:  # ctrl+q and the command palette's "Quit"
+        self.action_quit_app()
+
+    def action_help_quit(self) -> None:  # Textual's ctrl+c
+        self.action_quit_app()
+
     def action_quit_app(self) -> None:
+        """Every way out (q, ctrl+c, ctrl+q, the palette): one question mid-run, then the arm stops at
+        once, the campaign is left interrupted (resumable) and the app closes, saying so meanwhile."""
+        if self._stop_dialog is not None or any(isinstance(s, Confirm) and s.kind == "quit"
+                                             for s in self.screen_stack):
+            return
         if not self.session.run_active:
-            self.exit(self.exit_code)
+            self._stop_screen("closing the station...")
+            self._close_station()
             return
 
         def answer(yes: bool | None) -> None:
-            if yes:
-                self._quit_requested = True
-                self.notify("stopping the arm; the campaign stays resumable", severity="warning")
-                self.session.abort(quitting=True)
+            if yes and self.session.run_active:
+                self._stop_run_and_quit()
+            elif yes:
+                self._stop_screen("closing the station...")
+                self._close_station()
 
         self.push_screen(Confirm("A campaign is running. Quit?\nThe arm stops now; every measured point is "
                                  "kept and the next start resumes the campaign.", yes="Quit",
-                                 no="Keep running"), answer)
+                                 no="Keep running", kind="quit"), answer)
+
+    def _stop_screen(self, stage: str) -> None:
+        if self._stop_dialog is None:
+            self._stop_dialog = Stopping(stage)
+            self.push_screen(self._stop_dialog)
+        else:
+            self._stop_dialog.stage(stage)
+
+    def _stop_run_and_quit(self) -> None:
+        self._stop_screen("stopping the arm; the campaign stays resumable...")
+        self._work(self.session.interrupt, "stop")
+        self.set_timer(STOP_WAIT, self._give_up_on_run)
+
+    def _give_up_on_run(self) -> None:
+        """The run did not end in time (busy computing): mark its campaign interrupted and close."""
+        if self._closing_station or not self.session.run_active:
+            return
+        self._stop_screen("the run is busy computing: saving the campaign as interrupted...")
+
+        def give_up() -> None:
+            self.session.abandon_run()
+            self.call_from_thread(self._close_station)
+
+        self.exit_code = 4
+        self._work(give_up, "stop")
+
+    def _close_station(self) -> None:
+        """Close the devices, the store and the simulator off the UI thread, then exit."""
+        if self._closing_station:
+            return
+        self._closing_station = True
+        if self._stop_dialog is not None and self.session.run_active is False:
+            self._stop_dialog.stage("closing the station...")
+
+        def close() -> None:
+            self.session.shutdown()
+            self.call_from_thread(self.exit, self.exit_code)
+
+        self._work(close, "close")
 
     # --- station -------------------------------------------------------------------------------------
     def action_toggle_connection(self) -> None:
@@ -224,9 +282,9 @@ class HilApp(App[int]):
     def on_resume_question(self, message: ResumeQuestion) -> None:
         def answer(choice: str | None) -> None:
             if choice == "resume":
-                self._work(self.session.run, "run", message.campaign)
+                self.session.start_run(message.campaign)
             elif choice == "new":
-                self._work(self.session.run, "run", None)
+                self.session.start_run(None)
 
         self.push_screen(ResumeDialog(message.campaign, message.measured, message.planned), answer)
 
@@ -236,6 +294,31 @@ class HilApp(App[int]):
             return
         paused = self.session.pause()
         self.notify("pausing after the current step" if paused else "resuming")
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        """Skip / wait longer only while the run waits on a suspension (skip: one that can skip)."""
+        s = self.run_state.suspended
+        if action == "skip_pose":
+            return s is not None and s.on_timeout == "skip"
+        if action == "wait_longer":
+            return s is not None
+        return True
+
+    def action_skip_pose(self) -> None:
+        """Give up the pose the run is waiting on (a lost beam), now rather than at the time-out."""
+        s = self.run_state.suspended
+        if s is None or s.on_timeout != "skip":
+            self.notify("no pose to skip: the run is not waiting on a lost beam", severity="warning")
+            return
+        self.session.skip_pose()
+        self.notify("skipping this pose")
+
+    def action_wait_longer(self) -> None:
+        s = self.run_state.suspended
+        if s is None:
+            self.notify("the run is not waiting on anything", severity="warning")
+            return
+        self.session.wait_longer()
 
     def action_abort(self) -> None:
         if not self.session.run_active:
@@ -253,7 +336,10 @@ class HilApp(App[int]):
 
     def on_engine_event(self, message: EngineEvent) -> None:
         event = message.event
+        suspended = self.run_state.suspended
         self.run_state.apply(event)
+        if (suspended is None) != (self.run_state.suspended is None):
+            self.views["run"].refresh_bindings()  # skip / wait longer come and go with a suspension
         if isinstance(event, RunStarted) and not isinstance(self.screen, ModalScreen):
             self.action_show("run")
         if isinstance(event, PlanReady):
@@ -268,13 +354,18 @@ class HilApp(App[int]):
 
     def on_run_ended(self, message: RunEnded) -> None:
         self.exit_code = {"accepted": 0, "rejected": 1, "aborted": 4, "interrupted": 4}.get(message.status, 3)
-        if message.quitting or self._quit_requested:
-            self.exit(self.exit_code)
+        self.run_state.end(message.status, message.detail)
+        self.views["run"].refresh_bindings()
+        if message.quitting or self._stop_dialog is not None:
+            self._stop_screen("closing the station...")
+            self._close_station()
             return
         severity = "information" if message.status == "accepted" else "warning"
+        if self.session.station.fault:
+            severity = "error"
         self.notify(f"campaign {message.campaign}: {message.status}"
                     + (f" ({message.detail})" if message.detail else ""), severity=severity, timeout=8)
-        self._refresh("run")
+        self._refresh("run", "station")
         if message.campaign:
             self.open_campaign(message.campaign, switch=message.status in ("accepted", "rejected"))
 
@@ -338,7 +429,11 @@ class HilApp(App[int]):
                     ("protective_stop", "Simulator: protective stop", {}),
                     ("clear", "Simulator: clear the protective stop", {}),
                     ("block_beam", "Simulator: block the tracker beam", {"on": True}),
-                    ("block_beam", "Simulator: unblock the tracker beam", {"on": False})):
+                    ("block_beam", "Simulator: unblock the tracker beam", {"on": False}),
+                    ("emergency_stop", "Simulator: emergency stop", {}),
+                    ("release_emergency_stop", "Simulator: release the emergency stop", {}),
+                    ("power_on", "Simulator: power the arm on", {}),
+                    ("brake_release", "Simulator: release the brakes", {})):
                 yield SystemCommand(title, f"inject {fault} into the simulated station",
                                     lambda f=fault, a=args: self._inject(f, a))
         yield from super().get_system_commands(screen)

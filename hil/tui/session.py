@@ -7,9 +7,13 @@ same campaign as a headless one. Two differences, both for the operator at the t
 
 * the robot and tracker stay connected between runs (the Station screen reads their status and can
   measure the SMR); a run takes the open devices over and the session reconnects afterwards;
-* quitting mid-run aborts the engine but records the campaign as ``interrupted`` rather than
-  ``aborted``: ``aborted`` is final in the store, ``interrupted`` is resumable, so the next start (from
-  the app or ``hil calibrate``) continues it.
+* quitting mid-run (`interrupt`) stops the arm at once and ends the run as ``interrupted`` rather
+  than ``aborted``: ``aborted`` is final in the store, ``interrupted`` is resumable, so the next start
+  (from the app or ``hil calibrate``) continues it. An emergency stop ends the run the same way: the
+  campaign waits for the operator to recover the arm and resume it;
+* the run works on a daemon thread of its own (`start_run`), not on one of Textual's workers, which
+  the process waits for on exit: a quit never waits for a run stuck in a long computation — after
+  `STOP_WAIT` seconds the app marks the campaign interrupted itself (`abandon_run`) and closes.
 
 The simulated station's process is started and stopped by one long-lived thread (`_host_main`): the
 simulator dies with the thread that started it (PR_SET_PDEATHSIG), so a short-lived worker must not
@@ -31,7 +35,7 @@ import numpy as np
 from textual.message import Message
 
 from hil.campaign.engine import Engine, RealClock
-from hil.campaign.events import Event, EventBus
+from hil.campaign.events import Event, EventBus, RunFinished
 from hil.errors import InputError
 from hil.station.config import StationConfig
 from hil.tui.messages import (
@@ -47,10 +51,13 @@ from hil.tui.messages import (
     StationChanged,
 )
 from hil.tui.state import StationState
+from hil.tui.words import ESTOP_STEPS, plain, technical
 
 log = logging.getLogger(__name__)
 
 INTERRUPTED = "interrupted"  # not in hil.store.FINISHED: resumable
+QUIT_REASON = "quit from the terminal app mid-run; resumable"
+STOP_WAIT = 8.0  # seconds a quit waits for the run to stop before marking the campaign itself
 
 #: Export actions of the Results screen: key -> (file suffix, hil.calibration.exports format or "html").
 EXPORTS: dict[str, tuple[str, str]] = {
@@ -100,7 +107,9 @@ def station_context(options: TuiOptions) -> Iterator[tuple[StationConfig, dict[s
 
 
 def _error(exc: BaseException) -> str:
-    return f"{type(exc).__name__}: {exc}"
+    """The error in the operator's words; its class and text go to the log."""
+    log.info("%s", technical(exc))
+    return plain(exc)
 
 
 def _dotted(overrides: dict[str, Any]) -> dict[str, Any]:
@@ -123,8 +132,12 @@ class Session:
         self.engine: Engine | None = None
         self.plan_overrides: dict[str, Any] = {}  # campaign.* keys set on the Plan screen
         self.run_active = False
+        self.run_campaign: str = ""  # the campaign of the run going on (once it has one)
         self.paused = False
         self.quitting = False
+        self._run_thread: threading.Thread | None = None
+        self._store_lock = threading.Lock()  # the run's store writes vs. `abandon_run`
+        self._abandoned = False  # the app gave up waiting for the run: it writes nothing more
         self._device_lock = threading.Lock()
         self._stop = threading.Event()
         self.ready = threading.Event()
@@ -201,6 +214,7 @@ class Session:
                 devices = open_devices(self.config)
             except Exception as exc:  # every driver error, and a bad tracker URL, is the operator's to see
                 st.phase, st.error = "disconnected", f"cannot connect: {_error(exc)}"
+                self._safety_fault(exc)
                 self.notice(st.error, "error")
                 self.changed()
                 return
@@ -213,7 +227,36 @@ class Session:
                           if ident is not None else {})
             st.phase = "connected"
             self._read_status()
+        self.check_unfinished()
         self.changed()
+
+    def _safety_fault(self, exc: BaseException | None) -> None:
+        """The safety reading and the fault the operator must clear by hand, from a robot error."""
+        from drivers.robot import errors as robot_errors
+
+        st = self.station
+        if isinstance(exc, robot_errors.EmergencyStop):
+            st.safety, st.fault, st.steps = "EMERGENCY STOP", "EMERGENCY STOP", ESTOP_STEPS
+        elif isinstance(exc, robot_errors.ProtectiveStop):
+            st.safety = "PROTECTIVE STOP"
+        elif exc is None:
+            st.fault, st.steps = "", ()
+
+    def check_unfinished(self) -> None:
+        """Look for a resumable campaign of this station, robot and configuration (Station and Run
+        screens say so at start-up and after a run, not only once g is pressed)."""
+        st, store = self.station, self.store
+        if store is None or self.identity is None or self.run_active:
+            return
+        devices = self.devices
+        info = getattr(devices.robot, "info", None) if devices is not None else None
+        try:
+            campaign = store.find_resumable(self.run_identity(), robot_serial=info.serial if info else None)
+            summary = store.campaign(campaign).summary if campaign else None
+        except Exception as exc:
+            log.info("looking for an unfinished campaign: %s", technical(exc))
+            return
+        st.unfinished = (campaign, summary.measured, summary.planned) if campaign and summary else None
 
     def disconnect(self) -> None:
         with self._device_lock:
@@ -246,10 +289,11 @@ class Session:
                 devices.robot.reconnect()
                 devices.robot.check_status()
             st.safety = "normal"
+            self._safety_fault(None)
         except robot_errors.ProtectiveStop:
             st.safety = "PROTECTIVE STOP"
-        except robot_errors.EmergencyStop:
-            st.safety = "EMERGENCY STOP"
+        except robot_errors.EmergencyStop as exc:
+            self._safety_fault(exc)
         except robot_errors.ProgramStopped:
             st.safety = "program stopped"
         except robot_errors.SpeedSliderReduced as exc:
@@ -336,7 +380,22 @@ class Session:
         except Exception as exc:
             self.notice(f"store: {_error(exc)}", "error")
             return
-        self.run(None)
+        self.start_run(None)
+
+    def start_run(self, resume_campaign: str | None) -> None:
+        """`run` on a daemon thread of its own (see the module docstring); returns at once."""
+        if self.run_active or (self._run_thread is not None and self._run_thread.is_alive()):
+            self.notice("a run is already going", "warning")
+            return
+
+        def main() -> None:
+            try:
+                self.run(resume_campaign)
+            except BaseException:  # never a traceback over the operator's screen
+                log.exception("the run thread failed")
+
+        self._run_thread = threading.Thread(target=main, name="hil-run", daemon=True)
+        self._run_thread.start()
 
     def run(self, resume_campaign: str | None) -> None:
         """One campaign, as ``hil calibrate`` runs it (a new one, or `resume_campaign` continued)."""
@@ -347,9 +406,21 @@ class Session:
 
         if self.run_active or self.config is None or self.store is None:
             return
-        self.run_active = True
+        self.run_active, self._abandoned = True, False
         st, store = self.station, self.store
         campaign = resume_campaign or ""
+        self.run_campaign = campaign
+        record = store.as_subscriber()
+
+        def to_store(event: Event) -> None:  # critical; silent once the app has given the run up
+            with self._store_lock:
+                if not self._abandoned:
+                    record(event)
+
+        def to_station(event: Event) -> None:  # the Station screen's readings, from the run's events
+            if st.apply(event):
+                self.changed()
+
         try:
             config = self.run_config()
             with self._device_lock:
@@ -363,44 +434,101 @@ class Session:
                      "model": info.model if info else "", "software": info.software_version if info else ""}
             resume = resume_state(store, resume_campaign) if resume_campaign else None
             campaign = resume_campaign or store.create_campaign(self.run_identity(), robot)
+            self.run_campaign = campaign
+            st.unfinished = None
             events: list[Event] = []
             bus = EventBus()
-            bus.subscribe(store.as_subscriber(), critical=True)
+            bus.subscribe(to_store, critical=True)
             bus.subscribe(plan_saver(store, campaign), critical=True)
             bus.subscribe(events.append)
+            bus.subscribe(to_station)
             bus.subscribe(lambda event: self.post(EngineEvent(event)))
             started = time.time()
             outcome = run_campaign(config, campaign_chooser(config), bus=bus, campaign=campaign,
                                    resume=resume, devices=devices,
                                    clock=RealClock(self.options.speed if self.options.sim else 1.0),
                                    engine_ready=self._engine_ready)
-            status, detail = outcome.status, ""
-            if outcome.error is not None:
-                detail = _error(outcome.error)
-            if self.quitting and status == "aborted":
-                status, detail = INTERRUPTED, "quit from the terminal app mid-run; resumable"
+            status, detail, error = self._final(outcome, events)
             result = result_document(outcome, config, events, started, self.truth)
             result["status"] = status
-            store.set_status(campaign, status, detail=detail or None, result=result)
+            with self._store_lock:
+                if not self._abandoned:
+                    store.set_status(campaign, status, detail=detail or None, result=result)
         except Exception as exc:  # bad input found before motion, a store failure, a connect failure
-            status, detail = "failed", _error(exc)
-            self.notice(f"the run stopped: {detail}", "error")
+            status, detail, error = "failed", _error(exc), exc
+            if self.quitting:
+                status = INTERRUPTED
+            else:
+                self.notice(f"the run stopped: {detail}", "error")
             if campaign:
-                with contextlib.suppress(Exception):
-                    store.set_status(campaign, "failed", detail=detail)
+                with self._store_lock, contextlib.suppress(Exception):
+                    if not self._abandoned:
+                        store.set_status(campaign, status, detail=detail)
         finally:
             self.engine = None
             self.run_active = False
             st.phase, st.safety, st.lock = "disconnected", "-", "-"
             self.changed()
+        self._safety_fault(error)
         self.post(RunEnded(campaign, status, detail, self.quitting))
         if not self.quitting and not self._stop.is_set():
             self.connect()
+            if self.devices is None:
+                self.check_unfinished()
+                self.changed()
+
+    def _final(self, outcome: Any, events: list[Event]) -> tuple[str, str, BaseException | None]:
+        """The campaign's status in the store, its plain-words detail and the error that ended it.
+
+        An emergency stop, and whatever a quit ends the run with, leave it ``interrupted``
+        (resumable): nothing is wrong with the campaign, the operator carries on after recovering.
+        """
+        from drivers.robot.errors import EmergencyStop
+
+        error = outcome.error
+        if error is None:
+            finished = next((e for e in reversed(events) if isinstance(e, RunFinished)), None)
+            return outcome.status, finished.detail if finished is not None else "", None
+        detail = _error(error)
+        if isinstance(error, EmergencyStop):
+            return INTERRUPTED, f"{detail}; recover the arm, then resume the campaign", error
+        if self.quitting and outcome.status in ("aborted", "failed", INTERRUPTED):
+            return INTERRUPTED, QUIT_REASON, error
+        return outcome.status, detail, error
 
     def _engine_ready(self, engine: Engine) -> None:
         self.engine, self.paused = engine, False
         if self.quitting:
-            engine.request_abort()
+            engine.request_interrupt(QUIT_REASON)
+
+    def interrupt(self) -> None:
+        """Every way out of the app mid-run: stop the arm now and end the run as interrupted."""
+        self.quitting = True
+        engine = self.engine
+        if engine is not None:
+            engine.request_interrupt(QUIT_REASON)
+
+    def wait_for_run(self, timeout: float) -> bool:
+        """Wait (bounded) for the run thread to end; True if no run is left."""
+        thread = self._run_thread
+        if thread is not None:
+            thread.join(timeout)
+        return not self.run_active
+
+    def abandon_run(self) -> str:
+        """The run did not stop in time (a long computation): mark its campaign interrupted here and
+        let the run write nothing more; returns the campaign (or "")."""
+        with self._store_lock:
+            if not self.run_active or self._abandoned:
+                return ""
+            self._abandoned = True
+            campaign = self.run_campaign
+            if campaign and self.store is not None:
+                try:
+                    self.store.set_status(campaign, INTERRUPTED, detail=QUIT_REASON)
+                except Exception as exc:
+                    log.info("marking %s interrupted: %s", campaign, technical(exc))
+        return campaign
 
     def pause(self) -> bool:
         """Pause (True) or resume (False) the run; takes effect between steps."""
@@ -415,10 +543,20 @@ class Session:
         engine.request_pause()
         return True
 
-    def abort(self, quitting: bool = False) -> None:
-        self.quitting = self.quitting or quitting
+    def abort(self) -> None:
+        """End the run as aborted (final), after the current step."""
         if self.engine is not None:
             self.engine.request_abort()
+
+    def skip_pose(self) -> None:
+        """Give up the suspended pose now (a lost beam that does not come back)."""
+        if self.engine is not None:
+            self.engine.request_skip()
+
+    def wait_longer(self) -> None:
+        """Keep waiting for the suspension to clear: its time limit moves by its length again."""
+        if self.engine is not None:
+            self.engine.request_extend()
 
     # --- planning ------------------------------------------------------------------------------------
     def select(self, count: int, validation: int, candidates: int, index: str, seed: int) -> None:

@@ -7,7 +7,7 @@ state from canned events.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from hil.campaign.events import (
     Event,
@@ -23,8 +23,19 @@ from hil.campaign.events import (
     RunStarted,
     StateChanged,
     Suspended,
+    SuspendExtended,
     ValidationDone,
 )
+
+# Suspended.kind -> (station field, reading while suspended, reading once resumed); the run's own
+# events keep the Station screen current while the run has the devices (it does not poll them then).
+_SUSPENSION_READINGS: dict[str, tuple[str, str, str]] = {
+    "beam_lost": ("lock", "BEAM LOST (the run waits)", "locked in"),
+    "tracker_unplugged": ("lock", "link lost (the run waits)", "-"),
+    "tracker_not_ready": ("lock", "not ready (the run waits)", "-"),
+    "protective_stop": ("safety", "PROTECTIVE STOP", "normal"),
+    "connection_lost": ("safety", "link lost (the run waits)", "normal"),
+}
 
 
 @dataclass
@@ -43,10 +54,23 @@ class StationState:
     lock: str = "-"
     last_point: str = ""
     error: str = ""
+    fault: str = ""  # a fault the operator must clear by hand, e.g. "EMERGENCY STOP"
+    steps: tuple[str, ...] = ()  # what to do about `fault`, in order
+    unfinished: tuple[str, int, int] | None = None  # resumable campaign: id, measured, planned
 
     @property
     def connected(self) -> bool:
         return self.phase in ("connected", "in run")
+
+    def apply(self, event: Event) -> bool:
+        """Fold one of the run's events into the readings; True if something shown changed."""
+        before = (self.safety, self.lock)
+        if isinstance(event, Suspended | Resumed) and event.kind in _SUSPENSION_READINGS:
+            name, suspended, resumed = _SUSPENSION_READINGS[event.kind]
+            setattr(self, name, suspended if isinstance(event, Suspended) else resumed)
+        elif isinstance(event, PointMeasured):  # the arm reached the pose and the tracker measured it
+            self.safety, self.lock = "normal", "locked in"
+        return before != (self.safety, self.lock)
 
 
 @dataclass
@@ -77,6 +101,7 @@ class RunState:
     rows: dict[tuple[str, int], PoseRow] = field(default_factory=dict)
     deviations: list[float] = field(default_factory=list)  # in measuring order (m)
     suspended: Suspended | None = None
+    suspend_deadline: float | None = None  # when the suspension's time-out acts (Unix time)
     last_resumed: Resumed | None = None
     started_t: float | None = None
     measured_times: list[float] = field(default_factory=list)  # event times of this run's points
@@ -84,6 +109,7 @@ class RunState:
     validation: ValidationDone | None = None
     plan: PlanReady | None = None
     messages: list[str] = field(default_factory=list)
+    ended: bool = False  # the session's final word on the run arrived (see `end`)
 
     @property
     def measured(self) -> int:
@@ -110,6 +136,8 @@ class RunState:
             self.resumed_with, self.started_t = event.measured, event.t
         elif isinstance(event, StateChanged):
             self.state = event.state
+            if event.state != "suspended":  # resumed, or the pose given up, or the run ended
+                self.suspended, self.suspend_deadline = None, None
         elif isinstance(event, PhaseChanged):
             self.phase, self.detail = event.phase, event.detail
         elif isinstance(event, PlanReady):
@@ -134,11 +162,25 @@ class RunState:
             row.status, row.reason = "skipped", event.reason
         elif isinstance(event, Suspended):
             self.suspended = event
+            self.suspend_deadline = event.t + event.timeout if event.timeout is not None else None
+        elif isinstance(event, SuspendExtended):
+            if self.suspended is not None:
+                self.suspend_deadline = event.t + event.timeout
         elif isinstance(event, Resumed):
-            self.suspended, self.last_resumed = None, event
+            self.suspended, self.last_resumed, self.suspend_deadline = None, event, None
         elif isinstance(event, ValidationDone):
             self.validation = event
         elif isinstance(event, Message):
             self.messages.append(f"{event.level}: {event.text}")
         elif isinstance(event, RunFinished):
             self.finished, self.active, self.suspended = event, False, None
+            self.suspend_deadline = None
+
+    def end(self, status: str, detail: str) -> None:
+        """The session's final status and plain-words detail of the run (RunEnded): it may differ
+        from the engine's RunFinished (an e-stop or a quit leaves the campaign resumable)."""
+        self.active, self.suspended, self.suspend_deadline, self.ended = False, None, None, True
+        if self.finished is not None:
+            self.finished = replace(self.finished, status=status, detail=detail)
+        elif self.campaign:
+            self.finished = RunFinished(campaign=self.campaign, status=status, detail=detail)

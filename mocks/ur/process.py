@@ -168,8 +168,10 @@ class SimProcess:
         env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
         env["UR_SIM_LOG_LEVEL"] = str(self.log_level)
         cmd = [sys.executable, "-m", "mocks.ur", json.dumps(self.config.to_dict()), *self.services]
+        # Its own process group: a controller does not die of the operator's Ctrl-C (or a closed
+        # terminal) — the process that started it stops the arm first, then stops the simulator.
         self._proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
-                                      env=env, cwd=root, preexec_fn=_die_with_parent)
+                                      env=env, cwd=root, preexec_fn=_die_with_parent, process_group=0)
         assert self._proc.stdout is not None
         line = ""
         with selectors.DefaultSelector() as sel:

@@ -1,9 +1,11 @@
-"""Modal dialogs: help, a yes/no question (quit or abort mid-run), resume-or-new."""
+"""Modal dialogs: help, a yes/no question (quit or abort mid-run), resume-or-new, "stopping..."."""
 
 from __future__ import annotations
 
+import time
 from typing import ClassVar
 
+from rich.text import Text
 from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
@@ -12,18 +14,20 @@ from textual.widgets import Button, Static
 
 HELP = """\
 [b]Screens[/b]   1 Station  2 Plan  3 Run  4 Results  5 History
-[b]Anywhere[/b]  ? help  q quit  ctrl+p commands  tab next field
+[b]Anywhere[/b]  ? help  q quit (ctrl+c too)  ctrl+p commands  tab next field
 [b]Station[/b]   c connect/disconnect  m measure SMR now  r refresh
 [b]Plan[/b]      s select poses  u use for next run  esc leave field
 [b]Run[/b]       g start or resume  p pause/resume  a abort
+          s skip the pose (beam lost)  w wait longer
 [b]Results[/b]   m model  u URDF  y ROS YAML  h HTML report  x all
 [b]History[/b]   enter open in Results  r reload
 
 """
 
 HELP += ("A run pauses by itself when the beam is lost, on a protective stop or when a link drops, "
-         "says what to do, and goes on once the cause is cleared. Quitting mid-run stops the arm and "
-         "keeps the campaign resumable: the next start (here or hil calibrate) continues it.")
+         "says what to do, and goes on once the cause is cleared; a lost beam skips its pose after a "
+         "countdown. Quitting mid-run stops the arm at once and keeps the campaign resumable, as an "
+         "emergency stop does: the next start (here or hil calibrate) continues it.")
 
 
 class HelpScreen(ModalScreen[None]):
@@ -43,9 +47,9 @@ class Confirm(ModalScreen[bool]):
     BINDINGS: ClassVar[list[BindingType]] = [Binding("y", "answer(True)", "Yes"),
                                              Binding("n,escape", "answer(False)", "No")]
 
-    def __init__(self, question: str, yes: str = "Yes", no: str = "No") -> None:
+    def __init__(self, question: str, yes: str = "Yes", no: str = "No", kind: str = "") -> None:
         super().__init__()
-        self.question, self.yes, self.no = question, yes, no
+        self.question, self.yes, self.no, self.kind = question, yes, no, kind
 
     def compose(self) -> ComposeResult:
         with Vertical(id="dialog"):
@@ -88,3 +92,29 @@ class ResumeDialog(ModalScreen[str]):
 
     def on_button_pressed(self, event: Button.Pressed) -> None:
         self.dismiss(str(event.button.id))
+
+
+class Stopping(ModalScreen[None]):
+    """Shown from a quit's "yes" until the app exits: what it is doing, and for how long so far."""
+
+    def __init__(self, stage: str) -> None:
+        super().__init__()
+        self._stage, self._t0 = stage, time.monotonic()
+
+    def compose(self) -> ComposeResult:
+        with Vertical(id="dialog"):
+            yield Static(id="stopping")
+
+    def on_mount(self) -> None:
+        self._show()
+        self.set_interval(0.5, self._show)
+
+    def stage(self, text: str) -> None:
+        self._stage = text
+        if self.is_mounted:
+            self._show()
+
+    def _show(self) -> None:
+        waited = time.monotonic() - self._t0
+        self.query_one("#stopping", Static).update(Text.assemble(
+            ("Stopping... ", "bold"), f"{waited:.0f} s\n{self._stage}\nThe app closes by itself."))

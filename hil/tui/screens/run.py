@@ -13,14 +13,41 @@ from textual.binding import Binding, BindingType
 from textual.widgets import DataTable, Footer, ProgressBar, Static
 
 from hil.tui.screens.base import HilScreen
+from hil.tui.screens.plan import FIELDS, count_problem
+from hil.tui.screens.station import fault_text, unfinished_text
 from hil.tui.state import PoseRow, RunState
 from hil.tui.widgets.nav import NavBar
 from hil.tui.widgets.plot import PlotView, Series
+from hil.tui.words import kind_words
 
-COLUMNS = (("#", "idx"), ("role", "role"), ("target q [deg]", "target"), ("Δq [mdeg]", "dq"),
-           ("measured [mm]", "p"), ("dev [mm]", "dev"))
+#: The table's columns, most telling first: at 80 columns everything up to "measured" is in view and
+#: the joint targets (the widest, the least read) scroll in from the right.
+COLUMNS = (("#", "idx"), ("role", "role"), ("status", "status"), ("dev [mm]", "dev"), ("Δq [mdeg]", "dq"),
+           ("measured [mm]", "p"), ("target q [deg]", "target"))
 _ROLE = {"bootstrap": "boot", "calibration": "cal", "validation": "val"}
-_STATUS_STYLE = {"moving": "yellow", "reached": "yellow", "skipped": "red", "measured": ""}
+_STATUS = {"moving": ("moving", "yellow"), "reached": ("measuring", "yellow"), "skipped": ("skipped", "red"),
+           "measured": ("measured", "")}
+#: A deviation this many times the run's median (of at least `OUTLIER_AFTER` points) is shown red: a
+#: point unlike the others (a slipped SMR, a disturbed reading) rather than the arm's error.
+OUTLIER_FACTOR = 3.0
+OUTLIER_AFTER = 5
+
+
+def deviation_style(deviation: float | None, acceptance: float | None, outlier: float | None) -> str:
+    """Green within the acceptance threshold, yellow above it (the error calibration removes), red
+    above `outlier` (see `OUTLIER_FACTOR`)."""
+    if deviation is None or acceptance is None:
+        return ""
+    if outlier is not None and deviation > outlier:
+        return "bold red"
+    return "green" if deviation <= acceptance else "yellow"
+
+
+def outlier_level(deviations: list[float]) -> float | None:
+    """The deviation above which a point is an outlier (None until `OUTLIER_AFTER` points)."""
+    if len(deviations) < OUTLIER_AFTER:
+        return None
+    return OUTLIER_FACTOR * float(np.median(deviations))
 
 
 def clock(seconds: float | None) -> str:
@@ -32,22 +59,32 @@ def clock(seconds: float | None) -> str:
     return f"{h}:{m // 60:02d}:{m % 60:02d}" if h else f"{m // 60}:{m % 60:02d}"
 
 
-def row_cells(row: PoseRow) -> tuple[Text, ...]:
-    style = _STATUS_STYLE.get(row.status, "")
+def row_cells(row: PoseRow, acceptance: float | None = None,
+              outlier: float | None = None) -> tuple[Text, ...]:
+    """The cells of one pose, in `COLUMNS` order (deviations coloured by `deviation_style`)."""
+    status, style = _STATUS.get(row.status, (row.status, ""))
     target = " ".join(f"{math.degrees(v):4.0f}" for v in row.target) if row.target else "-"
     dq = "-"
     if row.q is not None and row.target:
         dq = f"{1e3 * math.degrees(float(np.max(np.abs(np.subtract(row.q, row.target))))):.1f}"
-    if row.status == "skipped":
-        p = "skipped"
-    elif row.p is not None:
-        p = " ".join(f"{1e3 * v:.1f}" for v in row.p)
-    else:
-        p = row.status + "..."
+    p = " ".join(f"{1e3 * v:.1f}" for v in row.p) if row.p is not None else "-"
     dev = f"{1e3 * row.deviation:.3f}" if row.deviation is not None else "-"
-    return (Text(str(row.index), style=style), Text(_ROLE.get(row.role, row.role), style=style),
-            Text(target, style=style), Text(dq, style=style), Text(p, style=style),
-            Text(dev, style=style, justify="right"))
+    return (Text(str(row.index), justify="right"), Text(_ROLE.get(row.role, row.role)),
+            Text(status, style=style),
+            Text(dev, style=deviation_style(row.deviation, acceptance, outlier), justify="right"),
+            Text(dq, justify="right"), Text(p), Text(target, style="dim"))
+
+
+def pose_counts(run: RunState) -> tuple[int, int, int, int]:
+    """(measured, planned, skipped, bootstrap points) of the run: the calibration and validation poses,
+    the count the progress bar of ``hil calibrate`` and the history show too; the bootstrap's points
+    (they locate the tracker) apart."""
+    planned = run.planned
+    if run.plan is not None:  # the plan itself (a resumed campaign keeps its own)
+        planned = sum(1 for p in run.plan.poses if p["role"] != "bootstrap")
+    skipped = sum(1 for (role, _), r in run.rows.items() if role != "bootstrap" and r.status == "skipped")
+    boot = sum(1 for (role, _), r in run.rows.items() if role == "bootstrap" and r.status == "measured")
+    return run.measured, planned, skipped, boot
 
 
 class RunScreen(HilScreen):
@@ -55,14 +92,16 @@ class RunScreen(HilScreen):
 
     name_key = "run"
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("g", "app.start_run", "Start"),
+        Binding("g", "start_run", "Start"),
         Binding("p", "app.pause", "Pause/resume"),
         Binding("a", "app.abort", "Abort"),
+        Binding("s", "app.skip_pose", "Skip"),  # short: the footer holds them all at 80 columns
+        Binding("w", "app.wait_longer", "Wait"),
     ]
 
     def __init__(self) -> None:
         super().__init__()
-        self._shown: dict[str, tuple[str, ...]] = {}  # row key -> cells as shown
+        self._shown: dict[str, tuple[tuple[str, str], ...]] = {}  # row key -> cells (text, style) as shown
 
     def compose(self) -> ComposeResult:
         yield NavBar("run")
@@ -74,7 +113,8 @@ class RunScreen(HilScreen):
         for label, key in COLUMNS:
             table.add_column(Text(label), key=key)  # Text: "[deg]" is not markup
         yield table
-        yield PlotView("deviation from nominal [mm] per pose", y_floor=0.0, id="errors")
+        yield PlotView("deviation from nominal [mm]", y_floor=0.0, x_label="point", integer_x=True,
+                       id="errors")
         yield Footer()
 
     def on_mount(self) -> None:
@@ -89,9 +129,41 @@ class RunScreen(HilScreen):
         self._banner(run)
         self._status(run)
         self._table(run)
-        errors = self.query_one("#errors", PlotView)
+        self._errors(run)
+
+    async def action_start_run(self) -> None:
+        """Start a campaign, unless its counts cannot calibrate (said before the arm moves)."""
+        config = self.hil.session.config
+        if config is not None and not self.hil.session.run_active:
+            run = self.hil.session.run_config()
+            problem = count_problem({dotted: run.get(dotted) for _, _, dotted in FIELDS}, run.robot["type"])
+            if problem is not None:
+                self.hil.notify(f"{problem} (Plan screen, 2)", severity="error", timeout=10)
+                return
+        await self.app.run_action("app.start_run")
+
+    def _acceptance(self) -> float | None:
+        """The validation RMS threshold of the run (m), the deviations' colour boundary."""
+        if self.hil.session.config is None:
+            return None
+        return float(self.hil.session.run_config().campaign["acceptance"])
+
+    def _errors(self, run: RunState) -> None:
+        """The deviations in measuring order, the acceptance threshold and the outliers (as the table)."""
         d = 1e3 * np.asarray(run.deviations, float)
-        errors.plot([Series(np.arange(1, len(d) + 1, dtype=float), d, style="red", line=True)])
+        x = np.arange(1, len(d) + 1, dtype=float)
+        series = [Series(x, d, style="yellow", line=True, label="deviation")]
+        acceptance = self._acceptance()
+        if acceptance is not None and len(d):
+            ends = np.array([x[0], x[-1]])
+            series.append(Series(ends, np.full(2, 1e3 * acceptance), style="green", line=True,
+                                 label=f"acceptance {1e3 * acceptance:g}"))
+        level = outlier_level(list(run.deviations))
+        if level is not None and np.any(d > 1e3 * level):
+            out = d > 1e3 * level
+            series.append(Series(x[out], d[out], style="bold red", marker="•",
+                                 label=f"> {OUTLIER_FACTOR:g}× median"))
+        self.query_one("#errors", PlotView).plot(series)
 
     def tick(self) -> None:
         """Once a second: the elapsed wait in the banner and the ETA."""
@@ -102,36 +174,53 @@ class RunScreen(HilScreen):
     def _banner(self, run: RunState) -> None:
         banner = self.query_one("#banner", Static)
         s = run.suspended
-        banner.display = s is not None
+        st = self.hil.session.station
+        fault = st.fault if not run.active else ""
+        banner.display = s is not None or bool(fault)
         if s is None:
+            if fault:
+                banner.update(fault_text(fault, st.steps))
             return
-        waited = self.hil.now() - s.t
-        banner.update(Text.assemble(
-            (f" {s.kind.replace('_', ' ').upper()} ", "bold reverse"),
-            f"  waiting {clock(waited)}  (resumes by itself once cleared)\n",
-            (s.message, "bold")))
+        now = self.hil.now()
+        line = Text.assemble((f" {kind_words(s.kind).upper()} ", "bold reverse"),
+                             f"  waiting {clock(now - s.t)}")
+        if run.suspend_deadline is not None and s.on_timeout == "skip":
+            line.append(f"; skips the pose in {clock(run.suspend_deadline - now)}", "bold")
+            line.append(" (s skip now, w wait longer)")
+        elif run.suspend_deadline is not None:
+            line.append(f"; the run stops in {clock(run.suspend_deadline - now)}")
+            line.append("  (w wait longer)")
+        else:
+            line.append("  (resumes by itself once cleared)")
+        banner.update(Text.assemble(line, "\n", (s.message, "bold")))
 
     def _status(self, run: RunState) -> None:
         status = self.query_one("#run-status", Static)
         bar = self.query_one("#run-progress", ProgressBar)
         step = self.query_one("#run-step", Static)
         if not run.campaign:
-            status.update(Text("no run yet: g starts a campaign with the Plan screen's counts", style="dim"))
+            unfinished = self.hil.session.station.unfinished
+            status.update(unfinished_text(unfinished, line=True) if unfinished else
+                          Text("no run yet: g starts a campaign with the Plan screen's counts", style="dim"))
             bar.update(total=1, progress=0)
             step.update("")
             return
-        done = run.measured + run.skipped
-        bar.update(total=max(1, run.planned), progress=min(done, run.planned))
+        measured, planned, skipped, boot = pose_counts(run)
+        bar.update(total=max(1, planned), progress=min(measured + skipped, planned))
         state = run.finished.status if run.finished else run.state
         text = Text.assemble((run.campaign, "bold"), "  ", (state.upper(), _state_style(state)),
-                             f"  {run.measured}/{run.planned} poses")
-        if run.skipped:
-            text.append(f", {run.skipped} skipped", "red")
+                             f"  {measured}/{planned} poses")
+        if skipped:
+            text.append(f", {skipped} skipped", "red")
+        if boot:
+            text.append(f" (+{boot} bootstrap)", "dim")
         if run.active and not run.finished:
             text.append(f"  ETA {clock(run.eta())}")
         status.update(text)
         if run.finished is not None:
-            step.update(Text(f"finished: {run.finished.detail}", style=_state_style(run.finished.status)))
+            detail = run.finished.detail if run.ended else "closing the run..."
+            step.update(Text(f"finished: {detail}" if detail else "finished",
+                             style=_state_style(run.finished.status)))
             return
         current = next((r for r in reversed(run.rows.values()) if r.status in ("moving", "reached")), None)
         phase = f"{run.phase}: {run.detail}" if run.detail else run.phase
@@ -147,10 +236,11 @@ class RunScreen(HilScreen):
             table.clear()
             self._shown = {}
         at_end = table.cursor_row >= table.row_count - 1
+        acceptance, outlier = self._acceptance(), outlier_level(list(run.deviations))
         for (role, index), row in run.rows.items():
             key = f"{role}:{index}"
-            cells = row_cells(row)
-            plain = tuple(c.plain for c in cells)
+            cells = row_cells(row, acceptance, outlier)
+            plain = tuple((c.plain, str(c.style)) for c in cells)  # a colour may change alone
             if self._shown.get(key) == plain:
                 continue
             if key in self._shown:

@@ -45,6 +45,7 @@ class StationScreen(HilScreen):
             yield Static(id="tracker", classes="panel")
         yield Static(id="last-point", classes="panel")
         yield Static(id="station-error")
+        yield Static(id="station-note")
         yield Footer()
 
     def on_mount(self) -> None:
@@ -84,8 +85,35 @@ class StationScreen(HilScreen):
         ]))
         self.query_one("#last-point", Static).update(
             Text(st.last_point or "not measured yet", style="" if st.last_point else "dim"))
-        self.query_one("#station-error", Static).update(Text(st.error, style="bold red"))
+        self.query_one("#station-error", Static).update(fault_text(st.fault, st.steps, st.error))
+        self.query_one("#station-note", Static).update(unfinished_text(st.unfinished))
         self.query_one(NavBar).refresh()
+
+
+def fault_text(fault: str, steps: tuple[str, ...], error: str = "") -> Text:
+    """A fault the operator must clear by hand and the steps that clear it, then the last error."""
+    text = Text()
+    if fault:
+        text.append(f" {fault} ", "bold reverse red")
+        text.append("  the arm is stopped. To go on:\n", "bold red")
+        for k, step in enumerate(steps, 1):
+            text.append(f"  {k}. {step}\n")
+    if error:
+        text.append(error, "bold red")
+    return text
+
+
+def unfinished_text(unfinished: tuple[str, int, int] | None, line: bool = False) -> Text:
+    """The resumable campaign of this station, and how to resume it (`line`: on one line)."""
+    if unfinished is None:
+        return Text()
+    campaign, measured, planned = unfinished
+    if line:
+        return Text.assemble(("unfinished ", "bold yellow"), (campaign, "bold"),
+                             f" ({measured}/{planned or '?'} measured): ", ("g resumes it", "bold"))
+    return Text.assemble(("Unfinished campaign ", "bold yellow"), (campaign, "bold"),
+                         f": {measured} of {planned or '?'} poses measured.\n",
+                         ("g on the Run screen (3) resumes it", "bold"), ", or starts a new one.")
 
 
 def _firmware(tracker: dict) -> str:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import signal
 import threading
 import time
 from collections.abc import Iterator
@@ -178,6 +180,41 @@ def test_isolated_client_survives_the_death_of_its_process(sim: SimProcess) -> N
         assert_arm_stopped(sim)
     finally:
         robot.close()
+
+
+def test_isolated_client_ignores_the_terminals_signals_and_ctrl_c_mid_call_stops_the_arm(
+        sim: SimProcess, capfd: pytest.CaptureFixture[str]) -> None:
+    robot = IsolatedURRobot(config(sim))
+    robot.open()
+    try:
+        child = robot._proc
+        for sig in (signal.SIGINT, signal.SIGHUP):  # Ctrl-C and a hang-up reach the whole process group
+            os.kill(child.pid, sig)
+        assert robot.read_joints(2).samples == 2 and child.is_alive()  # the parent decides what they mean
+
+        def interrupt(*_: object) -> None:
+            raise KeyboardInterrupt
+
+        def when_moving() -> None:
+            end = time.monotonic() + 5.0
+            while not sim.state()["moving"] and time.monotonic() < end:
+                time.sleep(0.005)
+            os.kill(os.getpid(), signal.SIGUSR1)
+
+        previous = signal.signal(signal.SIGUSR1, interrupt)  # stands for Ctrl-C in this process
+        try:
+            threading.Thread(target=when_moving).start()
+            with pytest.raises(KeyboardInterrupt):
+                robot.move_to(Q_FAR)
+        finally:
+            signal.signal(signal.SIGUSR1, previous)
+        assert_arm_stopped(sim)
+        assert robot._proc is None and not child.is_alive()  # the call's late reply can answer nothing
+        robot.reconnect()
+        assert robot.read_joints(2).samples == 2
+    finally:
+        robot.close()
+    assert "Traceback" not in capfd.readouterr().err
 
 
 def test_program_stopped_mid_move(robot: URRobot, sim: SimProcess) -> None:

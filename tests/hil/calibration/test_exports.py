@@ -119,3 +119,36 @@ def test_missing_keys_are_named(tmp_path, calibrated):
     path.write_text('{"format": "hil-model/1",\n "robot": }')
     with pytest.raises(InputError, match="broken.json: line 2: not valid JSON"):
         load_geometry(path)
+
+
+def test_a_campaign_model_carries_the_hash_of_its_measurements(rng, tmp_path):
+    """A campaign's poses never were a file: they are hashed as the measurements CSV they make, so the
+    model, its URDF and its YAML name the data (`sha256sum` of the exported CSV gives the same)."""
+    import hashlib
+
+    from hil.calibration.measurements import write_measurements
+    from hil.campaign.plan import measurements_of
+    from hil.campaign.steps import PoseRecord
+
+    truth = random_truth("ur5e", rng)
+    q, p = measure(truth, random_configurations("ur5e", 30, rng), Noise(), rng)
+    records = [PoseRecord(i + 6, "calibration", q[i], q[i], np.zeros(6), p[i], np.zeros(3), 5)
+               for i in range(len(q))]
+    meas = measurements_of(records, "campaign C-1")
+    write_measurements(tmp_path / "m.csv", q, p)
+    assert meas.sha256 == hashlib.sha256((tmp_path / "m.csv").read_bytes()).hexdigest()
+    assert list(meas.lines) == [r.index for r in records]  # poses named by their campaign number
+
+    fit = identify(meas, "ur5e")
+    doc = model_document(fit)
+    assert doc["input"]["sha256"] == meas.sha256
+    for fmt in ("urdf", "ros-kinematics"):
+        assert f"sha256 {meas.sha256}" in export(doc, fit.geometry, fmt)
+
+    # measurements built without a digest still give a model that names its data
+    bare = Measurements(q, p, np.arange(len(q)), "live", "")
+    assert identify(bare, "ur5e").sha256 == meas.sha256
+    # and a model that carries none (older files) says so instead of an empty hash
+    doc["input"]["sha256"] = ""
+    header = export(doc, fit.geometry, "urdf").splitlines()[1]
+    assert "sha256 unknown" in header and not header.rstrip(" ->").endswith("sha256")

@@ -119,6 +119,9 @@ def test_kill_9_mid_campaign_then_rerun_resumes_without_losing_anything(tmp_path
     events = [json.loads(line) for line in again.stdout.splitlines()]
     assert events[0]["event"] == "RunStarted" and events[0]["resumed"]
     assert events[0]["campaign"] == summary.id
+    # one count (Run screen, progress bar, history): the plan's calibration + validation poses
+    assert events[0]["poses"] == sum(1 for p in planned if p.role != "bootstrap")
+    assert events[0]["measured"] == sum(1 for m in kept.values() if m.role != "bootstrap")
     remeasured = {e["index"] for e in events if e["event"] == "PointMeasured"}
     assert not remeasured & set(kept)  # nothing measured twice
     todo = {p.index for p in planned if p.role != "bootstrap"} - set(kept)

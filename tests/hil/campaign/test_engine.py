@@ -1,4 +1,6 @@
+import signal
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -11,13 +13,25 @@ from hil.campaign.engine import (
     ABORTED,
     DONE,
     FAILED,
+    INTERRUPTED,
     Engine,
     RealClock,
     RunAborted,
+    RunInterrupted,
+    StopRequested,
     Suspender,
     SuspendTimeout,
 )
-from hil.campaign.events import EventBus, PlanReady, PointMeasured, Resumed, StateChanged, Suspended
+from hil.campaign.events import (
+    EventBus,
+    PlanReady,
+    PointMeasured,
+    PoseSkipped,
+    Resumed,
+    StateChanged,
+    Suspended,
+    SuspendExtended,
+)
 from hil.campaign.plan import CALIBRATION, Choice, ResumeState, calibration_plan
 from hil.campaign.steps import Acquire, Move, acquire, check_motion, dry_run
 from hil.errors import InputError
@@ -146,6 +160,28 @@ def test_suspender_that_never_clears_times_out():
     assert st.engine.state == FAILED
 
 
+def test_ctrl_c_mid_move_stops_the_arm_first_and_ends_interrupted_not_aborted():
+    st = Station()
+    original = st.arm.move_to
+    stops_at_event = []
+    st.engine.bus.subscribe(lambda e: stops_at_event.append(st.arm.stops) if isinstance(e, StateChanged)
+                            else None)
+
+    def move(q, **kw):
+        if st.arm.moves == 4:
+            raise RunInterrupted(signal.SIGTERM)  # what the CLI's handler raises, wherever it lands
+        return original(q, **kw)
+
+    st.arm.move_to = move
+    with pytest.raises(RunInterrupted):
+        st.engine.run(st.plan())
+    assert st.engine.state == INTERRUPTED and st.arm.stops == 1
+    states = [e.state for e in st.of(StateChanged)]
+    assert states[-2:] == ["stopping", "interrupted"] and "aborted" not in states
+    assert stops_at_event[-2:] == [1, 1]  # the arm was stopped before anything else happened
+    assert not st.of(Suspended)  # an interruption is never a suspension to wait out
+
+
 def test_abort_from_another_thread_stops_the_arm():
     st = Station(cal=30, val=10)
     original = st.arm.move_to
@@ -161,6 +197,83 @@ def test_abort_from_another_thread_stops_the_arm():
         st.engine.run(st.plan())
     assert st.engine.state == ABORTED and st.arm.stops == 1
     assert len(st.of(PointMeasured)) < 40
+
+
+def test_interrupt_stops_a_move_in_progress_and_ends_the_run_interrupted():
+    """A UI's quit: the arm's stop goes out at once (not after the pose visit) and the run ends
+    interrupted (resumable), not failed by the stopped move's error nor aborted."""
+    st = Station(cal=30, val=10)
+    stopped = threading.Event()
+    original_move, original_stop = st.arm.move_to, st.arm.stop
+
+    def long_move(q, **kw):
+        if st.arm.moves == 5:  # the 6th move runs until the arm is stopped
+            st.arm.moves += 1
+            threading.Thread(target=st.engine.request_interrupt, args=("quit mid-run",)).start()
+            assert stopped.wait(5.0), "the arm was not stopped during the move"
+            raise FakeHardwareFault("motion aborted by stop()")
+        return original_move(q, **kw)
+
+    def stop():
+        stopped.set()
+        original_stop()
+
+    st.arm.move_to, st.arm.stop = long_move, stop
+    with pytest.raises(StopRequested, match="quit mid-run"):
+        st.engine.run(st.plan())
+    assert st.engine.state == INTERRUPTED
+    assert len(st.of(PointMeasured)) == 5
+    assert "failed" not in [e.state for e in st.of(StateChanged)]
+
+
+def beam_station(timeout: float, clear) -> Station:
+    """A station whose first measurement loses the beam; the beam suspender skips on time-out."""
+    st = Station()
+    st.tracker.lose_beam = 1
+    st.engine.suspenders = [Suspender("beam_lost", lambda e: isinstance(e, FakeBeamLost), clear,
+                                      "clear the line of sight", poll=0.01, timeout=timeout,
+                                      on_timeout="skip")]
+    return st
+
+
+def test_the_operator_skips_a_suspended_pose_now():
+    st = beam_station(60.0, lambda: False)
+    st.engine.bus.subscribe(lambda e: isinstance(e, Suspended) and st.engine.request_skip())
+    result = st.engine.run(st.plan())
+    suspended = st.of(Suspended)[0]
+    assert (suspended.timeout, suspended.on_timeout) == (60.0, "skip")
+    assert suspended.message == "clear the line of sight" and "FakeBeamLost" in suspended.detail
+    [skipped] = st.of(PoseSkipped)
+    assert "skipped by the operator" in skipped.reason and "beam lost" in skipped.reason
+    assert len(st.of(PointMeasured)) == 17 and result.passed
+
+
+def test_a_skip_asked_for_before_a_suspension_is_not_applied_to_it():
+    st = beam_station(60.0, lambda: True)
+    st.engine.request_skip()
+    st.engine.run(st.plan())
+    assert not st.of(PoseSkipped) and len(st.of(Resumed)) == 1
+
+
+def test_waiting_longer_moves_the_time_limit_of_the_suspension():
+    start = []
+
+    def clear():  # the beam comes back after 0.5 s: past the 0.2 s limit, within the extended one
+        return time.monotonic() - start[0] > 0.5
+
+    st = beam_station(0.2, clear)
+
+    def extend(event):
+        if isinstance(event, Suspended):
+            start.append(time.monotonic())
+            for _ in range(5):
+                st.engine.request_extend()
+
+    st.engine.bus.subscribe(extend)
+    st.engine.run(st.plan())
+    [extended] = st.of(SuspendExtended)
+    assert extended.kind == "beam_lost" and 0.9 < extended.timeout <= 1.2
+    assert not st.of(PoseSkipped) and [e.kind for e in st.of(Resumed)] == ["beam_lost"]
 
 
 def test_pause_and_resume_between_poses():

@@ -133,3 +133,21 @@ def test_console_entry_point_runs_as_a_process(tmp_path):
                            "--measurements", str(tmp_path / "missing.csv"), "--out", str(out)],
                           cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2 and proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
+
+
+def test_rms_thresholds_are_metres_and_plausible(tmp_path, capsys, station):
+    """--accept and --max-rms are metres (so say their help and metavar); a value that can only be
+    millimetres (0.1 would pass at 100 mm), or none that is positive and finite, is refused."""
+    out = tmp_path / "result.json"
+    m, truth = str(station / "validation.csv"), str(station / "truth.json")
+    for option, argv in (("--accept", ["calibrate", "--sim", "--out", str(out)]),
+                         ("--accept", ["tui", "--sim"]),
+                         ("--max-rms", ["validate", "--model", truth, "--measurements", m])):
+        for bad in ("0.1", "0.0101", "0", "-1e-4", "nan", "inf", "abc"):
+            err = run_bad(capsys, [*argv, f"{option}={bad}"], out)
+            assert option in err and "metres" in err, err
+        assert main([argv[0], "--help"]) == 0
+        text = " ".join(capsys.readouterr().out.split())
+        assert f"{option} METRES" in text and "in METRES, e.g. 0.0001 for 0.1 mm" in text
+    assert "10 mm" in run_bad(capsys, ["validate", "--model", truth, "--measurements", m, "--max-rms", "0.1"])
+    assert main(["validate", "--model", truth, "--measurements", m, "--max-rms", "0.01"]) == 0

@@ -92,6 +92,46 @@ def test_history_text_and_json(db, capsys):
     assert "no campaigns" in capsys.readouterr().out
 
 
+def test_history_says_which_database_it_reads(db, capsys, monkeypatch):
+    """One line on stderr names the database (absolute), so stdout stays the table; the JSON has it."""
+    monkeypatch.chdir(db.parent)
+    assert main(["history", "--db", db.name]) == 0
+    captured = capsys.readouterr()
+    assert captured.err.strip().splitlines() == [f"database: {db.resolve()}"]
+    assert captured.out.splitlines()[0].startswith("ID ") and str(db) not in captured.out
+    assert main(["history", "--db", db.name, "--station", "elsewhere"]) == 0
+    assert capsys.readouterr().err.strip() == f"database: {db.resolve()}"
+    assert main(["history", "--db", db.name, "--json"]) == 0
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["database"] == db.name and captured.err == ""
+
+
+def test_a_campaign_whose_process_died_is_interrupted_and_resumable(db, capsys, monkeypatch):
+    """`running` in the file, but the process that ran it is gone (kill -9, power cut)."""
+    from hil.store import owner
+
+    gone = subprocess.Popen(["true"])
+    gone.wait()
+    monkeypatch.setattr("hil.store.core.this_process", lambda: {**owner.this_process(), "pid": gone.pid})
+    with Store.open(db) as s:
+        cid = s.create_campaign(default_config().as_dict(), RobotInfo("ur5e", "2023550003"), now=1.7e9 + 200)
+        s.save_plan(cid, [(i, "calibration", [0.1 * i] * 6) for i in range(4)])
+        s.record_event(RunStarted(campaign=cid, robot="ur5e", station="station", poses=4))
+        s.record_event(PointMeasured(campaign=cid, index=0, role="calibration", q=[0.0] * 6,
+                                     p=[1.0, 2.0, 3.0], p_spread=[0] * 3, samples=5))
+    assert main(["history", "--db", str(db)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[1].startswith(cid) and " interrupted " in lines[1] and "1/4" in lines[1]
+    assert lines[-1].startswith("interrupted (resumable): re-run the same `hil calibrate` command")
+    assert "running" in lines[3]  # an older hil's run (no owner recorded): cannot tell, as it was
+    assert all(len(line) < 80 for line in lines)
+    assert main(["show", cid, "--db", str(db)]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"campaign {cid}: interrupted (resumable) — its process ended")
+    assert main(["history", "--db", str(db), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["campaigns"][0]["status"] == "interrupted"
+
+
 def test_history_uses_hil_db_and_config(db, tmp_path, capsys, monkeypatch):
     monkeypatch.setenv("HIL_DB", str(db))
     assert main(["history", "--json"]) == 0

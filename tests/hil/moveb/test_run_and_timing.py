@@ -186,8 +186,9 @@ def test_cli_run_on_the_simulated_station_and_what_the_model_changes(tmp_path: P
 
 
 def test_cli_run_the_tracker_saw_only_in_part_is_incomplete(tmp_path: Path) -> None:
-    """On the default simulated arm, the square anchored at the start pose turns the SMR out of the
-    tracker's sight after its first side: the figures then cover only that side, and say so."""
+    """On the default simulated arm, the square anchored at the start pose (``--frame current``) moves
+    the beam onto the arm's own upper arm after its first side: the tracker loses the SMR, the figures
+    cover only that side, and say so."""
     doc = _moveb_run(tmp_path, EXAMPLES / "square.moveb", "square", exit_code=1)
     assert doc["status"] == "incomplete" and doc["exit_code"] == 1
     assert doc["coverage"] < 0.5 and doc["lost_samples"] > 100

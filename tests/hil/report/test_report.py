@@ -9,6 +9,7 @@ import xml.etree.ElementTree as ET
 from html.parser import HTMLParser
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from hil.calibration.identification import identify, validate
@@ -32,7 +33,8 @@ from hil.station.config import default_config
 HOSTILE = '<script>alert("x")</script> & \'cell\''
 MES_KEYS = {"format", "campaign", "station", "robot", "robot_serial", "robot_software", "passed",
             "accept_rms", "started", "finished", "validation", "fit", "observability", "times",
-            "suspensions", "notes", "hashes", "software", "config", "model", "per_pose"}
+            "suspensions", "notes", "hashes", "software", "config", "model", "per_pose",
+            "tracker_pose", "units"}
 
 
 @pytest.fixture(scope="module")
@@ -223,6 +225,7 @@ def test_cli_rebuilds_a_report(data, tmp_path, capsys):
     assert main(["report", "--result", str(result), "--out", str(out)]) == 0
     page = out.read_text(encoding="utf-8")
     assert "not recorded in this result" in page and verdict(page)[0] == "pass"
+    assert f"wrote {out}" in capsys.readouterr().err  # the one line every command writing a file prints
     write_json(result, {"format": "hil-result/1", "model": {"fit": {}}, "validation": 1,
                         "accept_rms": 1e-4, "passed": True})
     assert main(["report", "--result", str(result), "--out", str(tmp_path / "bad.html")]) == 2
@@ -235,3 +238,139 @@ def test_write_report(data, tmp_path):
     assert path.read_text(encoding="utf-8") == render_html(data, generated="now")
     assert not [p for p in path.parent.iterdir() if p.name != "r.html"]  # no temp file left
     assert re.search(r"validation RMS \d+\.\d{3} mm ≤ acceptance 0\.100 mm", path.read_text("utf-8"))
+
+
+# --- issue 16: the report and the files ------------------------------------------------------------
+
+def section(page: str, ident: str) -> ET.Element:
+    (sec,) = [s for s in xml_of(page).iter("section") if s.get("id") == ident]
+    return sec
+
+
+def rows_of(table: ET.Element) -> list[list[str]]:
+    return [["".join(td.itertext()) for td in tr] for tr in table.find("tbody")]
+
+
+def test_wall_time_phases_sum_to_the_total(campaign):
+    """`total` (wall time) and `retries` (a count) are not phases: the phases sum to the total."""
+    times = {"motion": 3.98, "settle": 0.2, "joints": 0.54, "measure": 0.71, "suspended": 0.0,
+             "compute": 15.89, "total": 22.95, "retries": 2.0}
+    page = render_html(build(campaign, times=times))
+    table = section(page, "campaign").find("table")
+    rows = rows_of(table)
+    phases = [r for r in rows if not r[0].startswith("total")]
+    [total] = [r for r in rows if r[0].startswith("total")]
+    names = [r[0] for r in phases]
+    assert "retries" not in names and "total" not in names
+    assert sum(float(r[1].removesuffix(" s")) for r in phases) == pytest.approx(22.95, abs=0.05 * len(phases))
+    assert total[1] == f"{22.95:.1f} s"
+    assert any(n.startswith("other") for n in names)  # 1.63 s no phase accounts for
+    assert sum(float(r[2].removesuffix(" %")) for r in phases) == pytest.approx(100, abs=0.1 * len(phases))
+    assert "pose visits retried after a suspension" in page and ">2<" in page
+
+
+def test_tracker_pose_in_plain_terms(campaign, data, page):
+    """The tracker is reported as x, y, z (mm) and roll, pitch, yaw (deg); tx…rz only as log coords."""
+    fit = campaign[0]
+    T = fit.geometry.tracker
+    xyz, rpy = T.translation, pin.rpy.matrixToRpy(T.rotation)
+    sec = section(page, "parameters")
+    tables = list(sec.iter("table"))
+    placement = next(t for t in tables if "".join(t.find("thead").itertext()).startswith("tracker"))
+    got = {r[0]: (float(r[1]), r[3]) for r in rows_of(placement)}
+    for k, axis in enumerate("xyz"):
+        assert got[axis] == (pytest.approx(xyz[k] * 1e3, abs=1e-3), "mm")
+    for k, angle in enumerate(("roll", "pitch", "yaw")):
+        assert got[angle] == (pytest.approx(np.degrees(rpy[k]), abs=1e-3), "deg")
+    # the log coordinates are in a table that says so, and only there
+    for t in tables:
+        names = [r[0] for r in rows_of(t)]
+        if any(n.startswith("tracker.") for n in names):
+            assert "se(3) log" in "".join(t.find("thead").itertext())
+            assert all(n.startswith("tracker.") for n in names)
+
+    # the result: the same pose with its σ, plus the model's own block, and labelled parameters
+    doc = json.loads(json.dumps(mes_result(data)))
+    tp = doc["tracker_pose"]
+    assert tp["xyz"] == pytest.approx(xyz) and tp["rpy"] == pytest.approx(rpy)
+    assert doc["model"]["tracker_pose"] == tp and "log" in doc["model"]["parameter_coordinates"]
+    names = list(fit.names)
+    sel = [names.index(f"tracker.{a}") for a in ("tx", "ty", "tz")]
+    cov_v = fit.covariance[np.ix_(sel, sel)]
+    R = T.rotation  # T·exp(δ): the position moves by R·v to first order
+    assert tp["xyz_std"] == pytest.approx(np.sqrt(np.diag(R @ cov_v @ R.T)), rel=1e-3)
+    assert all(s > 0 for s in tp["rpy_std"])
+    # an older result without the block: the same pose, computed from the geometry and covariance
+    del doc["model"]["tracker_pose"], doc["tracker_pose"]
+    back = report_data_from_result(doc)
+    assert back.tracker_pose["xyz"] == pytest.approx(tp["xyz"])
+    assert back.tracker_pose["xyz_std"] == pytest.approx(tp["xyz_std"], rel=1e-6)
+
+
+def _figures(monkeypatch) -> list:
+    import hil.report.plots as plots
+
+    drawn = []
+    real = plots.png
+
+    def keep(fig):
+        drawn.append(fig)
+        return real(fig)
+
+    monkeypatch.setattr(plots, "png", keep)
+    return drawn
+
+
+def test_before_calibration_is_one_figure_and_campaign_poses_are_poses(campaign, monkeypatch):
+    """"Before calibration" is the nominal arm with the tracker and SMR fitted, in the table and in
+    the plot alike; the fit's starting RMS is labelled as such; campaign poses are labelled "pose"."""
+    drawn = _figures(monkeypatch)
+    d = build(campaign, line_kind="pose")
+    page = render_html(d)
+    kv = {"".join(tr.find("th").itertext()): "".join(tr.find("td").itertext())
+          for tr in section(page, "calibration").iter("tr")}
+    before = [v for k, v in kv.items() if "before" in k.lower()]
+    assert before == [f"{d.calibration_before.rms * 1e3:.3f} mm"]
+    start = [k for k, v in kv.items() if v == f"{d.fit.initial_rms * 1e3:.3f} mm"]
+    assert start and all("start of the fit" in k for k in start)
+    axes = [ax for fig in drawn for ax in fig.axes]
+    legends = [t.get_text() for ax in axes if ax.get_legend() for t in ax.get_legend().get_texts()]
+    assert f"before calibration (RMS {d.calibration_before.rms * 1e3:.3f} mm)" in legends
+    labels = [ax.get_xlabel() for ax in axes if "pose" in ax.get_xlabel()]
+    assert {"calibration pose", "validation pose"} <= set(labels)
+    assert not any("input line" in x for x in labels)
+    ticks = [[t.get_text() for t in ax.get_xticklabels()] for ax in axes
+             if ax.get_xlabel() == "validation pose"]
+    assert ticks and all(t[0] == str(campaign[2].lines[0]) for t in ticks)  # the poses' own names
+    rejected = rows_of(section(page, "rejected").find("table"))
+    assert rejected[0][0] == str(d.rejected[0].line)  # named by its pose number, no "file line"
+    assert "file line" not in "".join(section(page, "rejected").itertext())
+
+    # a file's poses keep their input lines; a saved campaign result reads back as poses
+    drawn.clear()
+    render_html(build(campaign))
+    assert {"calibration pose (input line)", "validation pose (input line)"} <= {
+        ax.get_xlabel() for f in drawn for ax in f.axes}
+    doc = mes_result(d)
+    assert doc["per_pose"]["calibration"]["line_kind"] == "pose"
+    assert doc["per_pose"]["validation"]["lines"] == campaign[2].lines.tolist()
+    del doc["per_pose"]["calibration"]["line_kind"]  # older results: a campaign's all the same
+    assert report_data_from_result(doc).line_kind == "pose"
+
+
+def test_result_states_its_units(data):
+    doc = mes_result(data)
+    assert doc["units"]["length"] == "m" and doc["units"]["angle"] == "rad" and doc["units"]["time"] == "s"
+
+
+def test_report_of_an_unfinished_campaign_says_so(tmp_path, capsys):
+    result = tmp_path / "result.json"
+    write_json(result, {"format": "hil-result/1", "campaign": "20261122-133724-c0ce", "passed": False,
+                        "station": "s", "robot": "ur5e", "status": "aborted", "exit_code": 4,
+                        "error": "Aborted: operator abort", "tracker": {}, "robot_info": {}})
+    assert main(["report", "--result", str(result), "--out", str(tmp_path / "r.html")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+    assert str(result) in err and "did not finish" in err and "'aborted'" in err
+    assert "no calibrated model" in err and "missing field" not in err
+    assert not (tmp_path / "r.html").exists()

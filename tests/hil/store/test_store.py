@@ -467,6 +467,116 @@ def test_kill_9_from_outside_mid_write_loses_nothing_acknowledged(tmp_path):
     _check_after_kill(db, cid, seen)
 
 
+# --- runs whose process died ----------------------------------------------------------------------
+RUNNER = r"""
+import sys, time
+from hil.campaign.events import RunStarted
+from hil.store import Store
+store = Store.open(sys.argv[1])
+store.record_event(RunStarted(campaign=sys.argv[2], robot="ur5e", station="cell-1", poses=6))
+print("started", flush=True)
+time.sleep(60)
+"""
+
+
+def test_a_run_whose_process_was_killed_reads_as_interrupted(store, db):
+    """A campaign stays ``running`` in the file after kill -9; readers see its process is gone."""
+    cid = store.create_campaign(cfg(), ROBOT)
+    store.save_plan(cid, plan(4, 2))
+    proc = subprocess.Popen([sys.executable, "-c", RUNNER, str(db), cid], cwd=ROOT, stdout=subprocess.PIPE,
+                            text=True, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    try:
+        assert proc.stdout.readline() == "started\n"
+        assert store.campaigns()[0].status == "running"  # alive: really running
+        assert store.campaign(cid).summary.status == "running"
+    finally:
+        proc.kill()
+        proc.wait(timeout=10)
+        proc.stdout.close()
+    (summary,) = store.campaigns()
+    assert summary.status == "interrupted" and not summary.finished
+    record = store.campaign(cid)
+    assert record.summary.status == "interrupted" and "process ended" in record.detail
+    assert store.find_resumable(cfg(), ROBOT.serial) == cid  # and resumable, as it was
+    # a reader never writes: the file still says what the dead run left
+    assert store._conn().execute("SELECT status FROM campaigns").fetchone()[0] == "running"
+    # the next run (this process) owns it: running again
+    store.record_event(RunStarted(campaign=cid, robot="ur5e", station="cell-1", poses=6, resumed=True))
+    assert store.campaigns()[0].status == "running"
+
+
+class _InterruptedAfter:
+    """A connection that raises KeyboardInterrupt just after running `sql`: Ctrl-C landing there."""
+
+    def __init__(self, conn: sqlite3.Connection, sql: str) -> None:
+        self.conn, self.sql = conn, sql
+
+    def execute(self, sql: str, *args: object) -> sqlite3.Cursor:
+        cursor = self.conn.execute(sql, *args)
+        if sql == self.sql:
+            self.sql = ""
+            raise KeyboardInterrupt
+        return cursor
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self.conn, name)
+
+
+@pytest.mark.parametrize("sql", ["BEGIN IMMEDIATE", "BEGIN"])
+def test_ctrl_c_just_after_begin_leaves_no_transaction_open(store, monkeypatch, sql):
+    """The interrupted run records how it ended on the same connection right after."""
+    cid = store.create_campaign(cfg(), ROBOT)
+    conn = store._conn()
+    interrupting = _InterruptedAfter(conn, sql)  # once
+    monkeypatch.setattr(store, "_conn", lambda: interrupting)
+    with pytest.raises(KeyboardInterrupt):
+        if sql == "BEGIN":
+            store.campaign(cid)
+        else:
+            store.set_status(cid, "running")
+    assert not conn.in_transaction
+    store.record_event(RunFinished(campaign=cid, status="interrupted"))
+    assert store.campaign(cid).summary.status == "interrupted"
+
+
+def test_run_owner_liveness():
+    from hil.store import owner
+
+    me = owner.this_process()
+    assert not owner.is_gone(me)
+    assert not owner.is_gone(None) and not owner.is_gone({})  # an older hil's run: cannot tell
+    assert not owner.is_gone({**me, "host": "another-machine"})  # cannot tell either
+    assert not owner.is_gone({**me, "pid": 0})  # never a process group
+    done = subprocess.Popen(["true"])
+    done.wait()
+    assert owner.is_gone({**me, "pid": done.pid})
+    if me["started"] is not None:  # Linux: a reused pid, and a zombie nobody reaped yet
+        assert owner.is_gone({**me, "started": me["started"] - 1})
+        zombie = subprocess.Popen(["true"])
+        try:
+            for _ in range(500):
+                if owner._stat(zombie.pid)[0] == "Z":
+                    break
+                threading.Event().wait(0.01)
+            assert owner.is_gone({**me, "pid": zombie.pid, "started": owner._stat(zombie.pid)[1]})
+        finally:
+            zombie.wait()
+    if me["boot"]:  # the machine rebooted since (a power cut)
+        assert owner.is_gone({**me, "boot": "another-boot"})
+
+
+def test_run_started_by_an_older_hil_stays_running(store):
+    """No owner in its RunStarted (recorded before owners were): nothing says it is dead."""
+    cid = store.create_campaign(cfg(), ROBOT)
+    store.record_event(RunStarted(campaign=cid, robot="ur5e", station="cell-1", poses=6))
+    conn = store._conn()
+    (data,) = conn.execute("SELECT data FROM events WHERE type = 'RunStarted'").fetchone()
+    assert json.loads(data)["owner"]["pid"] == os.getpid()
+    conn.execute("UPDATE events SET data = ? WHERE type = 'RunStarted'",
+                 (json.dumps({k: v for k, v in json.loads(data).items() if k != "owner"}),))
+    assert store.campaigns()[0].status == "running"
+
+
 # --- threads --------------------------------------------------------------------------------------
 def test_reader_runs_while_the_engine_writes(db):
     total = 150

@@ -44,3 +44,19 @@ async def wait_for(pilot, condition: Callable[[], object], timeout: float, what:
         await pilot.pause(0.05)
         await asyncio.sleep(0)
 
+
+
+async def press_to_close(pilot, key: str, timeout: float = 15.0) -> None:
+    """Press a key that closes the app and wait until it has closed.
+
+    The app closes asynchronously (its "stopping..." screen first, the station closed off the UI
+    thread); `Pilot.press` would wait for screen messages that an exiting app never processes.
+    """
+    app = pilot.app
+    await pilot.pause()  # the screen that takes the key is ready for it
+    app.simulate_key(key)
+    deadline = time.monotonic() + timeout
+    while app.is_running:  # not pilot.pause: it too waits for the screen's messages
+        if time.monotonic() > deadline:
+            raise AssertionError(f"the app did not close within {timeout} s of {key}\n{screen_text(app)}")
+        await asyncio.sleep(0.05)

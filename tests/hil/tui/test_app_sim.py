@@ -14,7 +14,7 @@ from hil.store import Store
 from hil.tui.app import create_app
 from hil.tui.screens.dialogs import Confirm
 from hil.tui.screens.results import ResultsScreen
-from tests.hil.tui.conftest import screen_text, wait_for
+from tests.hil.tui.conftest import press_to_close, screen_text, wait_for
 
 SIZE = (80, 24)
 SMALL = {"campaign.calibration_poses": 12, "campaign.validation_poses": 4, "campaign.candidates": 3000}
@@ -99,7 +99,7 @@ def test_connect_measure_plan_run_with_a_protective_stop_then_results_export_his
             assert history.rows[0].id == run.campaign and history.rows[0].status == "accepted"
             await pilot.press("enter")
             await wait_for(pilot, lambda: app.screen is results, 20, "Results from History")
-            await pilot.press("q")
+            await press_to_close(pilot, "q")
         assert app.return_value == 0
         with Store.open(tmp_path / "hil.db") as store:
             assert store.campaign(run.campaign).summary.status == "accepted"
@@ -126,10 +126,9 @@ def test_pause_then_quit_mid_run_asks_and_leaves_the_campaign_resumable(tmp_path
             assert app.session.run_active
             await pilot.press("q")
             await wait_for(pilot, lambda: isinstance(app.screen, Confirm), 5, "the question")
-            await pilot.press("y")
-            await wait_for(pilot, lambda: not app.is_running, 60, "the app to quit")
+            await press_to_close(pilot, "y", 30)
         campaign = run.campaign
-        assert run.finished is not None and run.finished.status == "aborted", run.finished
+        assert run.finished is not None and run.finished.status == "interrupted", run.finished
         with Store.open(tmp_path / "hil.db") as store:
             record = store.campaign(campaign)
             assert record.summary.status == "interrupted"
@@ -164,7 +163,7 @@ def test_the_same_job_through_an_emscon_tracker_with_a_blocked_beam(tmp_path):
             inject_later(app, "block_beam", on=False)
             await wait_for(pilot, lambda: run.finished is not None, 120, "the end of the campaign")
             assert run.finished.status == "accepted", run.finished.detail
-            await pilot.press("q")
+            await press_to_close(pilot, "q")
         with Store.open(tmp_path / "hil.db") as store:
             assert store.campaign(run.campaign).summary.status == "accepted"
 

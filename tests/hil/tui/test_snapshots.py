@@ -93,7 +93,8 @@ def run_events() -> list:
            StateChanged(campaign=CID, t=T0 + 63, state="suspended", previous="running"),
            Suspended(campaign=CID, t=T0 + 63, kind="protective_stop",
                      message="protective stop: clear its cause and unlock it on the teach pendant; the run "
-                             "resumes by itself (protective stop)")]
+                             "resumes by itself", detail="ProtectiveStop: protective stop", timeout=600.0,
+                     on_timeout="fail")]
     return ev
 
 
@@ -125,7 +126,7 @@ def test_plan_screen_snapshot():
                                       rng.uniform(0.1, 1.0, 12)])
             report = {"index": "O1", "value": 3.683e-4, "percent_of_bound": 93.7, "method": "tabu",
                       "seconds": 0.56, "travel_time": {"ordered": 9.2}, "candidates": {"found": 3000},
-                      "count": 12, "poses": []}
+                      "count": 12, "parameters": 25, "poses": []}
             app.post_message(SelectionDone(report, points, (2.5, 0.0, 0.5), True))
             await pilot.pause()
             check_snapshot(app, "plan")

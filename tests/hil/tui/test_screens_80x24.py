@@ -1,0 +1,311 @@
+"""The Run and Plan screens at 80x24, from canned state: what the operator can read without scrolling,
+what the Plan screen refuses before a run starts, the plots' scales, and one pose count everywhere."""
+
+from __future__ import annotations
+
+import asyncio
+import io
+
+import numpy as np
+import pytest
+from textual.app import App, ComposeResult
+
+from hil.campaign.events import EventBus, PlanReady, PointMeasured, RunFinished, RunStarted
+from hil.campaign.runner import plan_saver
+from hil.cli.progress import Progress
+from hil.station.config import default_config
+from hil.store import Store
+from hil.tui.app import create_app
+from hil.tui.messages import EngineEvent, SelectionDone
+from hil.tui.screens.run import row_cells
+from hil.tui.state import PoseRow
+from hil.tui.widgets.plot import PlotView, Series
+from tests.hil.tui.conftest import screen_text
+from tests.hil.tui.test_snapshots import SIZE, T0, offline_app, run_events
+
+REPORT = {"index": "O1", "value": 3.7e-4, "percent_of_bound": 93.7, "method": "tabu", "seconds": 0.5,
+          "travel_time": {"ordered": 9.0}, "candidates": {"found": 3000}, "count": 12, "parameters": 25,
+          "poses": []}
+POINTS = np.column_stack([np.linspace(-0.6, 0.6, 12), np.linspace(-0.5, 0.5, 12), np.linspace(0.2, 0.9, 12)])
+
+
+def _selection(text: str) -> str:
+    """The Plan screen's Selection panel, its wrapped lines joined."""
+    parts = [line.split("││", 1)[1].rstrip().rstrip("│") for line in text.splitlines() if "││" in line]
+    return " ".join(" ".join(parts).split())
+
+
+def _table_lines(text: str) -> list[str]:
+    lines = text.splitlines()
+    start = next(k for k, line in enumerate(lines) if line.lstrip().startswith("#  role"))
+    return lines[start:start + 9]
+
+
+# --- item 1: the Run table ------------------------------------------------------------------------
+def test_run_table_shows_every_deviation_and_status_at_80_columns():
+    async def scenario():
+        app = offline_app()
+        async with app.run_test(size=SIZE) as pilot:
+            for event in run_events():
+                app.post_message(EngineEvent(event))
+            await pilot.pause()
+            await pilot.press("3")
+            await pilot.pause()
+            rows = _table_lines(screen_text(app))
+            assert "dev [mm]" in rows[0] and "status" in rows[0]
+            for index, dev in ((3, "2.000"), (4, "2.333"), (5, "2.667")):
+                assert any(r.split()[:1] == [str(index)] and dev in r and "measured" in r for r in rows)
+            assert any(r.split()[:3] == ["6", "cal", "skipped"] for r in rows)
+            assert any(r.split()[:3] == ["7", "cal", "moving"] for r in rows)
+
+    asyncio.run(scenario())
+
+
+def test_deviation_colours_follow_the_acceptance_threshold():
+    def style(deviation: float, outlier: float | None = None) -> str:
+        row = PoseRow(3, "calibration", [0.0] * 6, "measured", [0.0] * 6, [1.0, 0.0, 0.0], deviation)
+        cells = row_cells(row, 0.1e-3, outlier)
+        (dev,) = [c for c in cells if c.plain == f"{1e3 * deviation:.3f}"]
+        return str(dev.style)
+
+    assert style(0.05e-3) == "green"
+    assert style(0.5e-3) == "yellow"
+    assert style(0.5e-3, outlier=3 * 0.2e-3) == "yellow"
+    assert "red" in style(2.0e-3, outlier=3 * 0.2e-3)
+
+
+# --- item 2: counts the selector and the fit refuse ---------------------------------------------------
+def test_plan_refuses_too_few_calibration_poses_before_selecting_or_saving():
+    async def scenario():
+        app = offline_app()
+        asked = []
+        app.start_selection = asked.append
+        async with app.run_test(size=SIZE) as pilot:
+            await pilot.press("2")
+            app.screen.query_one("#in-poses").value = "5"
+            await pilot.press("s")
+            await pilot.pause()
+            assert asked == []
+            text = screen_text(app)
+            assert "calibration poses: at least 10" in _selection(text)
+            assert "27 parameters" in _selection(text)
+            assert "--count" not in text
+            await pilot.press("u")
+            assert app.session.plan_overrides == {}
+            app.screen.query_one("#in-poses").value = "10"
+            await pilot.press("s")
+            assert len(asked) == 1 and asked[0]["campaign.calibration_poses"] == 10
+
+    asyncio.run(scenario())
+
+
+def test_run_refuses_to_start_a_campaign_whose_counts_cannot_calibrate():
+    async def scenario():
+        app = offline_app()
+        app.session.config = default_config().with_overrides(campaign__calibration_poses=6)
+        started = []
+        app.action_start_run = lambda: started.append(True)
+        async with app.run_test(size=SIZE) as pilot:
+            await pilot.press("3")
+            await pilot.press("g")
+            await pilot.pause()
+            assert started == []
+            app.session.config = default_config()
+            await pilot.press("g")
+            await pilot.pause()
+            assert started == [True]
+
+    asyncio.run(scenario())
+
+
+# --- item 3: is the preview what the run measures? -------------------------------------------------
+@pytest.mark.parametrize("position, expected", [
+    (None, "the run locates the tracker, then selects again"),
+    ((3.0, 0.0, 0.5), "the poses the next run measures"),
+])
+def test_plan_says_whether_the_run_measures_the_previewed_poses(position, expected):
+    async def scenario():
+        app = offline_app()
+        app.session.config = app.session.config.with_overrides(tracker__position=position)
+        app.start_selection = lambda values: None
+        async with app.run_test(size=SIZE) as pilot:
+            await pilot.press("2")
+            await pilot.press("s")
+            where = position or (2.5, 0.0, 0.5)
+            app.post_message(SelectionDone(REPORT, POINTS, where, position is None))
+            await pilot.pause()
+            assert expected in _selection(screen_text(app))
+            if position is not None:  # other settings for the next run: the preview is not its plan
+                app.screen.query_one("#in-seed").value = "7"
+                await pilot.press("u")
+                await pilot.pause()
+                assert "the next run has other settings" in _selection(screen_text(app))
+
+    asyncio.run(scenario())
+
+
+# --- item 4: plots with scales and legends, fields that look like fields -------------------------------
+class _PlotApp(App[None]):
+    def __init__(self, **kwargs) -> None:
+        super().__init__()
+        self.kwargs = kwargs
+
+    def compose(self) -> ComposeResult:
+        yield PlotView(id="p", **self.kwargs)
+
+
+def _plot(series, size, **kwargs) -> str:
+    async def scenario():
+        app = _PlotApp(**kwargs)
+        async with app.run_test(size=size) as pilot:
+            app.query_one(PlotView).plot(series)
+            await pilot.pause()
+            return screen_text(app)
+
+    return asyncio.run(scenario())
+
+
+def _top_view(tracker):
+    return [Series(POINTS[:, 0], POINTS[:, 1], marker="•", label="pose"),
+            Series(np.zeros(1), np.zeros(1), marker="R", label="base"),
+            Series(np.array([tracker[0]]), np.array([tracker[1]]), marker="T", label="tracker",
+                   optional=True)]
+
+
+def test_pose_plot_has_a_scale_and_a_legend_and_shows_the_tracker():
+    text = _plot(_top_view((1.5, 0.0)), (38, 12), title="top view [m]", equal=True, x_label="x→",
+                 y_label="y↑")
+    lines = text.splitlines()
+    assert "• pose" in lines[0] and "R base" in lines[0] and "T tracker" in lines[0]
+    assert "0.0┤" in text and "y↑└" in lines[-1] and lines[-1].rstrip().endswith("x→")
+    assert any(ch.isdigit() for ch in lines[-1])  # x tick labels
+    assert "T" in "".join(lines[1:-1]) and "off plot" not in text
+
+
+def test_a_tracker_far_off_the_poses_is_marked_off_the_plot_not_pinned_to_its_border():
+    text = _plot(_top_view((6.0, 0.2)), (38, 12), title="top view [m]", equal=True, x_label="x→")
+    assert "off plot T→" in text
+    # the poses keep the scale: the x ticks stay within their metre or so
+    assert "6" not in text.splitlines()[-1]
+
+
+def test_deviation_plot_has_an_x_axis_of_points_and_a_y_scale():
+    d = np.array([2.0, 2.3, 2.6, 2.1, 1.7, 2.9, 3.1])
+    text = _plot([Series(np.arange(1, 8.0), d, line=True, label="deviation")], (78, 6),
+                 title="deviation from nominal [mm]", y_floor=0.0, x_label="point", integer_x=True)
+    lines = text.splitlines()
+    assert "0┤" in text and "─ deviation" in lines[0]
+    axis = lines[-1]
+    assert axis.rstrip().endswith("point") and all(str(k) in axis for k in range(1, 8))
+
+
+def test_a_focused_field_keeps_the_footer_keys_and_s_still_selects():
+    async def scenario():
+        app = offline_app()
+        asked = []
+        app.start_selection = asked.append
+        async with app.run_test(size=SIZE) as pilot:
+            await pilot.press("2")
+            await pilot.press("tab")
+            field = app.screen.query_one("#in-poses")
+            assert app.screen.focused is field
+            await pilot.press("1", "4")
+            await pilot.pause()
+            assert field.value == "14"  # digits go into the field (selected on focus: replaced)
+            footer = screen_text(app).splitlines()[-1]
+            assert "s Select poses" in footer and "u Use for next run" in footer and "esc" in footer
+            await pilot.press("s")
+            assert len(asked) == 1 and asked[0]["campaign.calibration_poses"] == 14
+
+    asyncio.run(scenario())
+
+
+# --- item 5: one pose count everywhere ----------------------------------------------------------------
+def test_one_pose_count_everywhere_after_a_resume(tmp_path):
+    """3 bootstrap points, 4 planned poses (3 calibration, 1 validation), 2 measured before a kill: the
+    store's history, the CLI's progress bar and the Run screen all count 4 poses, bootstrap apart."""
+    plan = [{"index": 3 + k, "role": "calibration" if k < 3 else "validation", "q": [0.1 * k] * 6}
+            for k in range(4)]
+
+    def point(index: int, role: str, t: float) -> PointMeasured:
+        return PointMeasured(campaign=cid, t=t, index=index, role=role, q=[0.1 * index] * 6, p=[1.0, 0, 0],
+                             p_spread=[0.0] * 3, samples=5, deviation=None, target=[0.1 * index] * 6)
+
+    with Store.open(tmp_path / "hil.db") as store:
+        cid = store.create_campaign(default_config().as_dict(), {"type": "ur5e", "serial": "1"})
+        bus = EventBus()
+        bus.subscribe(store.as_subscriber(), critical=True)
+        bus.subscribe(plan_saver(store, cid), critical=True)
+        first = [RunStarted(campaign=cid, t=T0, robot="ur5e", station="s", poses=4),
+                 *(point(k, "bootstrap", T0 + k) for k in range(3)),
+                 PlanReady(campaign=cid, t=T0 + 4, poses=plan),
+                 point(3, "calibration", T0 + 5), point(4, "calibration", T0 + 6)]
+        for event in first:
+            bus.emit(event)
+        # the resumed run (what hil.campaign.runner emits: the plan's poses, measured ones among them)
+        second = [RunStarted(campaign=cid, t=T0 + 100, robot="ur5e", station="s", poses=4, resumed=True,
+                             measured=2),
+                  PlanReady(campaign=cid, t=T0 + 101, poses=plan),
+                  point(5, "calibration", T0 + 102), point(6, "validation", T0 + 103),
+                  RunFinished(campaign=cid, t=T0 + 110, status="accepted", detail="")]
+        stream = io.StringIO()
+        progress = Progress(stream, bar=True)
+        for event in second:
+            bus.emit(event)
+            progress(event)
+        summary = store.campaign(cid).summary
+    assert (summary.measured, summary.planned) == (4, 4)  # hil history's POSES column
+    assert (progress.done, progress.total) == (4, 4)
+    assert "4 poses planned" in stream.getvalue() and "4/4 poses" in stream.getvalue()
+
+    async def scenario():
+        app = offline_app()
+        async with app.run_test(size=SIZE) as pilot:
+            for event in second:  # the app sees the resumed run
+                app.post_message(EngineEvent(event))
+            await pilot.pause()
+            await pilot.press("3")
+            await pilot.pause()
+            status = next(line for line in screen_text(app).splitlines() if cid in line)
+            assert "4/4 poses" in status
+
+    asyncio.run(scenario())
+
+
+def test_run_status_shows_bootstrap_points_apart_from_the_poses():
+    async def scenario():
+        app = offline_app()
+        async with app.run_test(size=SIZE) as pilot:
+            cid = "c1"
+            app.post_message(EngineEvent(RunStarted(campaign=cid, t=T0, robot="ur5e", station="s", poses=16)))
+            for k in range(3):
+                app.post_message(EngineEvent(PointMeasured(
+                    campaign=cid, t=T0 + k, index=k, role="bootstrap", q=[0.0] * 6, p=[1.0, 0, 0],
+                    p_spread=[0.0] * 3, samples=5, deviation=None, target=[0.0] * 6)))
+            await pilot.pause()
+            await pilot.press("3")
+            await pilot.pause()
+            status = next(line for line in screen_text(app).splitlines() if cid in line)
+            assert "0/16 poses (+3 bootstrap)" in status
+
+    asyncio.run(scenario())
+
+
+# --- item 6: a terminal below 80x24 -------------------------------------------------------------------
+def test_a_terminal_below_80x24_says_so_instead_of_a_cut_screen():
+    async def scenario():
+        app = create_app(start_station=False, sim=True, now=lambda: T0)
+        async with app.run_test(size=(70, 20)) as pilot:
+            await pilot.pause()
+            text = " ".join(screen_text(app).split())
+            assert "This terminal is 70×20; hil needs at least 80×24" in text
+            assert "1 Station" not in text
+            await pilot.press("2")
+            await pilot.pause()
+            assert "hil needs at least 80×24" in " ".join(screen_text(app).split())
+            await pilot.resize_terminal(80, 24)
+            await pilot.pause()
+            text = screen_text(app)
+            assert "hil needs" not in text and "1 Station" in text
+
+    asyncio.run(scenario())
