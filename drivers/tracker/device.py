@@ -9,6 +9,7 @@ errors of `drivers.tracker.errors`, and bound every wait with a timeout.
 from __future__ import annotations
 
 import enum
+import logging
 import threading
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -17,6 +18,10 @@ from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
+
+from drivers.tracker.errors import LinkError, TargetLost
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -117,3 +122,27 @@ class Tracker(Protocol):
                sleep: Callable[[float], None] = ...) -> Iterator[StreamSample]:
         """Time-stamped samples of the SMR at about `rate_hz` until duration, count or `stop`."""
         ...
+
+
+def measure_with_retries(measure_once: Callable[[], TrackerPoint], relock: Callable[[], object],
+                         max_relocks: int, link_retries: int) -> TrackerPoint:
+    """One point, the way every driver takes it: a lost target is re-locked (`relock`) up to
+    `max_relocks` times and the point taken again; a transient link fault is retried `link_retries`
+    times; everything else propagates. The point carries how many re-locks it needed."""
+    relocks = link_failures = 0
+    while True:
+        try:
+            point = measure_once()
+            return TrackerPoint(point.position, point.spread, point.samples, point.status, relocks)
+        except TargetLost as exc:
+            if relocks >= max_relocks:
+                raise TargetLost(f"target lost after {relocks} re-lock attempts: {exc}", exc.rc,
+                                 exc.rpc) from exc
+            relocks += 1
+            log.info("target lost (%s); re-lock attempt %d", exc, relocks)
+            relock()
+        except LinkError as exc:
+            if link_failures >= link_retries:
+                raise
+            link_failures += 1
+            log.warning("link fault (%s); retrying the point", exc)

@@ -25,8 +25,15 @@ from drivers.tracker.commands import (
     PolarReading,
     TrackerCommands,
 )
-from drivers.tracker.device import Atmosphere, Identity, PointStatus, StreamSample, TrackerPoint
-from drivers.tracker.errors import GeoComError, LinkError, TargetLost, TrackerError, UnstablePoint
+from drivers.tracker.device import (
+    Atmosphere,
+    Identity,
+    PointStatus,
+    StreamSample,
+    TrackerPoint,
+    measure_with_retries,
+)
+from drivers.tracker.errors import GeoComError, TargetLost, TrackerError, UnstablePoint
 from drivers.tracker.geometry import polar_to_cartesian
 from drivers.tracker.protocol import GeoComClient
 from drivers.tracker.transport import SerialConfig, SerialTransport
@@ -180,25 +187,13 @@ class GeoComTracker:
         """
         if samples < 1:
             raise ValueError("samples must be >= 1")
-        relocks = link_failures = 0
-        while True:
-            try:
-                point = self._measure_once(samples)
-                return TrackerPoint(point.position, point.spread, point.samples, point.status, relocks)
-            except TargetLost as exc:
-                if relocks >= self.config.max_relocks:
-                    raise TargetLost(
-                        f"target lost after {relocks} re-lock attempts: {exc}", exc.rc, exc.rpc
-                    ) from exc
-                relocks += 1
-                log.info("target lost (%s); re-lock attempt %d", exc, relocks)
-                self._tracking = False
-                self.relock()
-            except LinkError as exc:
-                if link_failures >= self.config.link_retries:
-                    raise
-                link_failures += 1
-                log.warning("link fault (%s); retrying the point", exc)
+
+        def relock() -> bool:
+            self._tracking = False
+            return self.relock()
+
+        return measure_with_retries(lambda: self._measure_once(samples), relock,
+                                    self.config.max_relocks, self.config.link_retries)
 
     # --- paths
     def stream(

@@ -42,7 +42,14 @@ from types import TracebackType
 
 import numpy as np
 
-from drivers.tracker.device import Atmosphere, Identity, PointStatus, StreamSample, TrackerPoint
+from drivers.tracker.device import (
+    Atmosphere,
+    Identity,
+    PointStatus,
+    StreamSample,
+    TrackerPoint,
+    measure_with_retries,
+)
 from drivers.tracker.emscon.client import EmsconClient
 from drivers.tracker.emscon.packets import (
     AngleUnit,
@@ -65,7 +72,6 @@ from drivers.tracker.emscon.transport import TcpConfig, TcpTransport
 from drivers.tracker.errors import (
     ConnectionLost,
     EmsconError,
-    LinkError,
     NotReady,
     TargetLost,
     TrackerError,
@@ -292,23 +298,8 @@ class EmsconTracker:
         """Mean of ``samples`` stationary measurements (see the module docstring for the errors)."""
         if samples < 1:
             raise ValueError("samples must be >= 1")
-        relocks = link_failures = 0
-        while True:
-            try:
-                point = self._measure_once(samples)
-                return TrackerPoint(point.position, point.spread, point.samples, point.status, relocks)
-            except TargetLost as exc:
-                if relocks >= self.config.max_relocks:
-                    raise TargetLost(f"target lost after {relocks} re-lock attempts: {exc}", exc.rc,
-                                     exc.rpc) from exc
-                relocks += 1
-                log.info("target lost (%s); re-lock attempt %d", exc, relocks)
-                self.relock()
-            except LinkError as exc:
-                if link_failures >= self.config.link_retries:
-                    raise
-                link_failures += 1
-                log.warning("link fault (%s); retrying the point", exc)
+        return measure_with_retries(lambda: self._measure_once(samples), self.relock,
+                                    self.config.max_relocks, self.config.link_retries)
 
     def _measure_once(self, samples: int) -> TrackerPoint:
         self._ensure()
