@@ -151,7 +151,11 @@ def test_protective_stop_mid_move_fails_the_move_and_unlocks_after_5s(sim: SimPr
     r = rtde_receive.RTDEReceiveInterface(sim.address)
     c = rtde_control.RTDEControlInterface(sim.address)
     try:
-        timer = threading.Timer(0.15, lambda: sim.inject("protective_stop"))
+        def stop_once_moving() -> None:  # not after a fixed delay: a loaded machine may finish first
+            wait_for(lambda: bool(sim.state()["moving"]), timeout=10.0)
+            sim.inject("protective_stop")
+
+        timer = threading.Thread(target=stop_once_moving, daemon=True)
         timer.start()
         assert c.moveJ(Q_B, 0.3, 1.0) is False  # the blocking move returns False
         timer.join()
