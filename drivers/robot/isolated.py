@@ -11,14 +11,21 @@ Servo streaming (MOVEB) runs in the child too: `follow(Q)` sends the whole traje
 once, the 500 Hz loop runs next to ur_rtde (`URRobot.follow`), and the samples' send times come back
 on the system-wide monotonic clock. A call that outlives its timeout stops the arm and ends the child
 (its late reply must never be read as the answer to a later call); `reconnect()` starts a new one.
+
+The child never outlives this process: if it dies (even by ``kill -9``), the child notices within
+`_PARENT_POLL` seconds, stops the arm and exits within `_STOP_GRACE` more (`_watch_parent`) instead of
+finishing the move unsupervised.
 """
 
 from __future__ import annotations
 
 import contextlib
 import multiprocessing as mp
+import os
 import signal
 import threading
+import time
+from collections.abc import Callable
 from multiprocessing.connection import Connection
 from typing import Any
 
@@ -33,6 +40,8 @@ _MARGIN = 10.0  # seconds added to the driver's own timeouts before the proxy gi
 _FK_BUDGET = 0.05  # seconds allowed per keep-in FK check of a trajectory (about 4 ms measured)
 _SLOWER = 1.5  # a servo loop may run this much slower than the controller rate before time-out
 _TERMINAL_SIGNALS = {signal.SIGINT, signal.SIGHUP}  # what a terminal sends its whole process group
+_PARENT_POLL = 0.2  # seconds between the child's checks that the process that started it is there
+_STOP_GRACE = 2.0  # seconds the child gives stopping the arm after its parent died, before exiting
 
 
 @contextlib.contextmanager
@@ -48,8 +57,40 @@ def _terminal_signals_blocked() -> Any:
         signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
-def _serve(commands: Connection, stops: Connection, config: RobotConfig) -> None:
-    """Child process: run calls on a URRobot until the pipe closes.
+def _watch_parent(parent: int, on_gone: Callable[[], None]) -> threading.Event:
+    """Child side: once the process `parent` is gone, set the returned event, call `on_gone` (at
+    most `_STOP_GRACE` s) and end this process.
+
+    The closed command pipe alone is not enough: the child notices it only between calls, so one in
+    progress (a two-minute move_to, a follow, ur_rtde blocked on a dead link) would keep the child —
+    and the arm — going long after a ``kill -9`` of its parent. PR_SET_PDEATHSIG is no answer: it
+    fires when the *thread* that started the child ends, not the process. The parent's pid, passed
+    in rather than read here (it may already be gone), is compared with `os.getppid`, which changes
+    as soon as an orphan is re-parented.
+    """
+    gone = threading.Event()
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(_PARENT_POLL)
+        gone.set()
+
+        def quietly() -> None:
+            with contextlib.suppress(Exception):  # nobody is left to tell
+                on_gone()
+
+        stopper = threading.Thread(target=quietly, daemon=True)
+        stopper.start()
+        stopper.join(_STOP_GRACE)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
+    return gone
+
+
+def _serve(commands: Connection, stops: Connection, config: RobotConfig,
+           parent: int | None = None) -> None:
+    """Child process: run calls on a URRobot until the pipe closes or the parent (pid) dies.
 
     Ctrl-C and a closed terminal signal the whole foreground process group, this child included; it
     ignores them (it started with them blocked, see `_terminal_signals_blocked`): the parent decides
@@ -62,6 +103,12 @@ def _serve(commands: Connection, stops: Connection, config: RobotConfig) -> None
     from drivers.robot.ur import URRobot
 
     robot = URRobot(config)
+
+    def stop_and_close() -> None:  # the arm first; then the control script, as a close leaves it
+        robot.stop()
+        robot.close()
+
+    gone = _watch_parent(parent, stop_and_close) if parent is not None else threading.Event()
 
     def stopper() -> None:
         while True:
@@ -88,6 +135,10 @@ def _serve(commands: Connection, stops: Connection, config: RobotConfig) -> None
             break
         except Exception:  # an unpicklable error: send its text
             commands.send(("err", RobotError(f"{type(reply[1]).__name__}: {reply[1]}")))
+    if gone.is_set():
+        # the watcher is stopping the arm (the call it aborted is what ended this loop) and ends the
+        # process: closing now would stop the control script under its stopJ
+        time.sleep(_STOP_GRACE + 1.0)
     with contextlib.suppress(Exception):
         robot.close()
 
@@ -130,7 +181,8 @@ class IsolatedURRobot:
         ctx = mp.get_context("spawn")
         cmd_parent, cmd_child = ctx.Pipe()
         stop_parent, stop_child = ctx.Pipe()
-        proc = ctx.Process(target=_serve, args=(cmd_child, stop_child, self.config), daemon=True,
+        proc = ctx.Process(target=_serve, args=(cmd_child, stop_child, self.config, os.getpid()),
+                           daemon=True,
                            name=f"ur-client-{self.config.host}")
         with _real_stderr(), _terminal_signals_blocked():
             proc.start()

@@ -20,6 +20,7 @@ Steps:
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -45,6 +46,10 @@ from hil.errors import HilError, InputError
 
 #: Smallest spread (rad) of a joint's values for it to count as having moved.
 MIN_JOINT_SPREAD = 1e-3
+#: Smallest RMS spread (m) of the measured points along a principal axis for it to count: arms whose
+#: joints all move carry the SMR over tens of centimetres in every direction but at most one, so points
+#: that vary along fewer than two axes by more than this were not measured on a moving arm.
+MIN_POINT_SPREAD = 1e-3
 
 
 class IdentificationError(HilError):
@@ -134,6 +139,13 @@ def check_design(meas: Measurements, robot: str) -> None:
         lost = [PARAMETER_NAMES[idx[piv[k]]] for k in range(n) if d[k] <= 1e-7 * d[0]]
         raise InputError(f"{src}: degenerate pose set: the poses cannot identify {', '.join(lost)} "
                          "(use more distinct poses that move every joint)")
+    extent = np.linalg.svd(meas.p - meas.p.mean(axis=0), compute_uv=False) / np.sqrt(m)
+    rank = int(np.sum(extent > MIN_POINT_SPREAD))
+    if rank < 2:
+        shape = "are all the same point" if rank == 0 else "all lie on one line"
+        raise InputError(f"{src}: the measured points x,y,z {shape} (rank {rank} of 3, spread above "
+                         f"{MIN_POINT_SPREAD * 1e3:g} mm) although the joints move: the data cannot "
+                         "identify the arm; check the x,y,z columns")
 
 
 def align_tracker(geometry: Geometry, meas: Measurements) -> Geometry:
@@ -174,7 +186,9 @@ def _levenberg_marquardt(state: _State, q: np.ndarray, p_meas: np.ndarray, idx: 
         D = np.maximum(np.diag(A), 1e-30)
         improved = False
         while lam < 1e12:
-            step = scipy.linalg.solve(A + lam * np.diag(D), g, assume_a="pos")
+            with warnings.catch_warnings():  # degenerate data: the rank check after the fit says so
+                warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
+                step = scipy.linalg.solve(A + lam * np.diag(D), g, assume_a="pos")
             full = np.zeros(N_PARAMETERS)
             full[idx] = step
             cand = _State.at(apply_update(state.geometry, full), q)
@@ -274,6 +288,11 @@ def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
         row = int(np.flatnonzero(used)[k])
         used[row] = False
         rejected.append(RejectedPose(row, int(meas.lines[row]), float(np.linalg.norm(res[row])), pval))
+    rank = numerical_rank(Jp.reshape(-1, n))
+    if rank < n:  # the data fitted only by a collapsed arm: an answer, but not an identification
+        raise InputError(f"{meas.source}: the data cannot identify the {n} parameters: at the fitted "
+                         f"model the Jacobian has numerical rank {rank} of {n} (condition number "
+                         f"{cond:.3g}); the measured points do not follow the joint motion")
     if not converged:
         raise IdentificationError(f"{meas.source}: the fit did not converge in {max_iter} iterations")
     cov = sigma2 * inv

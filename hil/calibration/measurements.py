@@ -8,9 +8,7 @@ people and the first thing a user needs is where to look.
 
 from __future__ import annotations
 
-import csv
 import hashlib
-import io
 import math
 import os
 from collections.abc import Sequence
@@ -18,12 +16,37 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hil.arm.catalog import ROBOT_NAMES, get_robot
 from hil.errors import InputError
-from hil.files.inputs import decode_input_text, read_input_bytes
+from hil.files.inputs import csv_rows, decode_input_text, read_input_bytes
 from hil.files.outputs import atomic_write_text, format_csv
 
 JOINT_COLUMNS: tuple[str, ...] = ("q1", "q2", "q3", "q4", "q5", "q6")
 POINT_COLUMNS: tuple[str, ...] = ("x", "y", "z")
+
+#: Farthest a laser tracker measures (m): the Leica AT960's range is 80 m in radius, the longest of
+#: the trackers hil drives. A coordinate beyond it is a unit mistake or a corrupted file.
+TRACKER_RANGE = 80.0
+#: How far (rad) a joint reading may lie beyond the joint limits before it is refused: readings at a
+#: limit overshoot it by encoder noise at most, so anything past this was not read from a UR arm.
+JOINT_LIMIT_MARGIN = 0.1
+
+
+def _column_ranges() -> dict[str, tuple[float, float, str]]:
+    """The plausible range of every column hil knows, and its unit.
+
+    A file does not say which arm it came from, so a joint column accepts what any catalog arm's
+    limits allow (plus `JOINT_LIMIT_MARGIN`); the points must lie within a tracker's range.
+    """
+    specs = [get_robot(n) for n in ROBOT_NAMES]
+    out = {c: (float(min(s.lower[j] for s in specs)) - JOINT_LIMIT_MARGIN,
+               float(max(s.upper[j] for s in specs)) + JOINT_LIMIT_MARGIN, "rad")
+           for j, c in enumerate(JOINT_COLUMNS)}
+    out.update({c: (-TRACKER_RANGE, TRACKER_RANGE, "m") for c in POINT_COLUMNS})
+    return out
+
+
+COLUMN_RANGES = _column_ranges()
 
 
 @dataclass(frozen=True)
@@ -83,7 +106,7 @@ def read_table(path: str | os.PathLike[str], required: Sequence[str]) -> Table:
     name = str(path)
     raw = read_input_bytes(path, "a CSV file")
     text = decode_input_text(raw, name)
-    rows = [(n, row) for n, row in enumerate(csv.reader(io.StringIO(text)), start=1)
+    rows = [(n, row) for n, row in csv_rows(text, name)
             if row and any(c.strip() for c in row) and not row[0].lstrip().startswith("#")]
     if not rows:
         raise InputError(f"{name}: empty file, expected a header with {','.join(required)}")
@@ -110,12 +133,21 @@ def read_table(path: str | os.PathLike[str], required: Sequence[str]) -> Table:
                 raise InputError(f"{name}: line {line}, column {col}: {cell!r} is not a number") from None
             if not math.isfinite(value):
                 raise InputError(f"{name}: line {line}, column {col}: {cell!r} is not a finite number")
+            if col in COLUMN_RANGES and not COLUMN_RANGES[col][0] <= value <= COLUMN_RANGES[col][1]:
+                raise InputError(f"{name}: line {line}, column {col}: {_out_of_range(col, value)}")
             data[k, j] = value
         lines[k] = line
     if len(lines) == 0:
         raise InputError(f"{name}: no data rows after the header")
     columns = {c: data[:, j] for j, c in enumerate(required)}
     return Table(name, columns, lines, hashlib.sha256(raw).hexdigest())
+
+
+def _out_of_range(col: str, value: float) -> str:
+    low, high, unit = COLUMN_RANGES[col]
+    what = ("beyond the joint limits of every UR arm" if unit == "rad"
+            else "beyond a laser tracker's range")
+    return f"{value:g} {unit} is {what} ({low:.4g} to {high:.4g} {unit})"
 
 
 def read_joints(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:

@@ -18,16 +18,31 @@ import numpy as np
 import pinocchio as pin
 
 from hil import __version__
+from hil.arm.catalog import get_robot
 from hil.arm.geometry import Geometry
 from hil.calibration.identification import FitResult
 from hil.calibration.synthetic import Noise
 from hil.errors import InputError
-from hil.files.inputs import read_input_text
+from hil.files.inputs import json_number, parse_json, read_input_text
 from hil.files.outputs import atomic_write_text
 
 MODEL_FORMAT = "hil-model/1"
 RESULT_FORMAT = "hil-result/1"  # a campaign result; it embeds the model
 TRUTH_FORMAT = "hil-truth/1"
+
+#: Plausible magnitudes of the numbers in a geometry block, checked before anything uses them. A UR's
+#: longest link is under 0.9 m (UR20), so a joint origin or flange offset beyond a few metres is a
+#: unit mistake or a corrupted file; a tracker measures to 80 m at most (Leica AT960), so it cannot
+#: stand farther from the base; an SMR sits on a tool of at most about a metre; and URDF angles are
+#: written within a turn (hil writes them in [-π, π]).
+MAX_LINK_OFFSET = 5.0  # m
+MAX_SMR_OFFSET = 1.0  # m
+MAX_TRACKER_DISTANCE = 80.0  # m
+MAX_ANGLE = 2 * np.pi  # rad
+#: Largest simulated noise a truth may ask for: 1 cm per tracker axis, 10 mrad per joint reading,
+#: hundreds of times what real instruments show; beyond that nothing a calibration does means anything.
+MAX_TRACKER_SIGMA = 0.01  # m
+MAX_ENCODER_SIGMA = 0.01  # rad
 
 
 def software_versions() -> dict[str, str]:
@@ -129,11 +144,7 @@ def write_json(path: str | os.PathLike[str], doc: dict[str, Any]) -> None:
 def read_json(path: str | os.PathLike[str]) -> dict[str, Any]:
     """Parse a JSON file; InputError naming the file and line when it is not valid JSON."""
     name = str(path)
-    text = read_input_text(path, "a JSON file")
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{name}: line {exc.lineno}: not valid JSON ({exc.msg})") from None
+    doc = parse_json(read_input_text(path, "a JSON file"), name)
     if not isinstance(doc, dict):
         raise InputError(f"{name}: expected a JSON object")
     return doc
@@ -153,9 +164,46 @@ def load_geometry(path: str | os.PathLike[str],
         if not isinstance(model, dict):
             raise InputError(f"{path}: the campaign result holds no model (status {doc.get('status')!r})")
         doc, fmt = model, model.get("format")
+        prefix = "model."
+    else:
+        prefix = ""
     if fmt not in formats:
         raise InputError(f"{path}: field 'format' is {fmt!r}, expected {' or '.join(formats)}")
+    check_geometry_block(doc, str(path), prefix)
     return Geometry.from_dict(doc, source=str(path)), doc
+
+
+def check_geometry_block(doc: dict[str, Any], source: str, prefix: str = "") -> None:
+    """Refuse a geometry block whose numbers are not real, finite, physically plausible numbers.
+
+    `Geometry.from_dict` takes anything float() takes, so `true`, "1" and 1e308 would become a model
+    that drives the arm or the planner; this names the first bad field by its path in the document
+    (``model.json: joints[2].xyz[0]: expected a number, got true``). Missing keys and wrong shapes are
+    left to `Geometry.from_dict`, which already names them.
+    """
+    def numbers(value: Any, field: str, limit: float, unit: str) -> None:
+        if isinstance(value, list):
+            for i, v in enumerate(value):
+                json_number(v, f"{source}: {prefix}{field}[{i}]", -limit, limit, unit)
+
+    def placement(value: Any, field: str, limit: float) -> None:
+        if isinstance(value, dict):
+            numbers(value.get("xyz"), f"{field}.xyz", limit, "m")
+            numbers(value.get("rpy"), f"{field}.rpy", MAX_ANGLE, "rad")
+
+    robot = doc.get("robot")
+    if isinstance(robot, str):
+        try:
+            get_robot(robot)
+        except InputError as exc:  # the catalog's message does not know which file it came from
+            raise InputError(f"{source}: {prefix}robot: {exc}") from None
+    joints = doc.get("joints")
+    if isinstance(joints, list):
+        for i, joint in enumerate(joints):
+            placement(joint, f"joints[{i}]", MAX_LINK_OFFSET)
+    placement(doc.get("flange"), "flange", MAX_LINK_OFFSET)
+    numbers(doc.get("smr"), "smr", MAX_SMR_OFFSET, "m")
+    placement(doc.get("tracker"), "tracker", MAX_TRACKER_DISTANCE)
 
 
 def load_truth(path: str | os.PathLike[str]) -> tuple[Geometry, Noise]:
@@ -165,9 +213,9 @@ def load_truth(path: str | os.PathLike[str]) -> tuple[Geometry, Noise]:
     if not isinstance(block, dict):
         raise InputError(f"{path}: missing field 'noise'")
     values = {}
-    for key in ("tracker_sigma", "encoder_sigma"):
-        v = block.get(key)
-        if not isinstance(v, int | float) or not np.isfinite(v) or v < 0:
-            raise InputError(f"{path}: field 'noise.{key}' must be a non-negative number")
-        values[key] = float(v)
+    for key, high, unit in (("tracker_sigma", MAX_TRACKER_SIGMA, "m"),
+                            ("encoder_sigma", MAX_ENCODER_SIGMA, "rad")):
+        if key not in block:
+            raise InputError(f"{path}: missing field 'noise.{key}'")
+        values[key] = json_number(block[key], f"{path}: noise.{key}", 0.0, high, unit)
     return geometry, Noise(**values)

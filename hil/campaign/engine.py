@@ -54,6 +54,7 @@ from hil.campaign.steps import (
     PoseRecord,
     ReadJoints,
     Settle,
+    Skipped,
     Step,
 )
 from hil.errors import HilError
@@ -291,6 +292,15 @@ class Engine:
         except Exception:  # stopping is best effort; the original error matters more
             log.exception("stopping the arm failed")
 
+    def _end_states(self, *states: str) -> None:
+        """Enter the final states of a run that is ending on an exception, which stays the error:
+        a subscriber failing to record them (the store, on a full disk) is logged, not raised."""
+        for state in states:
+            try:
+                self._set_state(state)
+            except Exception as exc:  # debug: no handler prints it (the run's own error will be)
+                log.debug("recording the run's state %r failed: %s", state, exc)
+
     def _between_steps(self) -> None:
         """Honour pause and abort requests (only ever between steps)."""
         if self._abort.is_set():
@@ -325,21 +335,20 @@ class Engine:
             self._set_state(DONE)
             return stop.value
         except RunAborted:
-            self._set_state(STOPPING)
             self._stop_arm()
-            self._set_state(ABORTED)
+            self._end_states(STOPPING, ABORTED)
             plan.close()
             raise
         except KeyboardInterrupt:
             self._stop_arm()  # first: nothing (not even an event) before the arm is stopped
-            self._set_state(STOPPING)
-            self._set_state(INTERRUPTED)
+            self._end_states(STOPPING, INTERRUPTED)
             plan.close()
             raise
         except BaseException:
-            self._set_state(STOPPING)
+            # the arm first: the failure may be the store's (a full disk), and then recording the
+            # state changes below fails too
             self._stop_arm()
-            self._set_state(FAILED)
+            self._end_states(STOPPING, FAILED)
             plan.close()
             raise
         finally:
@@ -413,8 +422,11 @@ class Engine:
                               f"{np.round(q, 3).tolist()} inside the keep-in box (direct, via home, via "
                               "the upright posture)")
 
-    def _acquire(self, group: Acquire) -> PoseRecord | None:
-        """Run one pose visit; after a suspension, run it again from its first step."""
+    def _acquire(self, group: Acquire) -> PoseRecord | Skipped:
+        """Run one pose visit; after a suspension, run it again from its first step.
+
+        A visit given up is answered with `Skipped` (saying whether the beam was lost), so the plan
+        can tell a tracker that sees nothing from a pose with no safe path."""
         self.current = group
         self.emit(PoseStarted(campaign=self.campaign, index=group.index, role=group.role,
                               target=list(group.target)))
@@ -425,7 +437,7 @@ class Engine:
             self.emit(PoseSkipped(campaign=self.campaign, index=group.index, role=group.role,
                                   reason=str(exc)))
             self.current = None
-            return None
+            return Skipped(group.index, group.role, str(exc), lost=isinstance(exc, PoseSkippedError))
         reading = next(r for s, r in zip(group.steps, results, strict=True) if isinstance(s, ReadJoints))
         point = next(r for s, r in zip(group.steps, results, strict=True) if isinstance(s, Measure))
         xyz = np.asarray(point.xyz if hasattr(point, "xyz") else point.position, dtype=float)

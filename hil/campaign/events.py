@@ -93,6 +93,16 @@ class PlanReady(Event):
 
 
 @dataclass(frozen=True, kw_only=True)
+class BootstrapPlanned(Event):
+    """The bootstrap poses (around the arm's pose at the start), saved before the first is visited so
+    that a run interrupted during the bootstrap resumes it at the same targets, not around wherever
+    the arm stopped. Not the campaign's plan (`PlanReady`): these only locate the tracker."""
+
+    poses: list[dict[str, Any]]  # {"index": i, "role": "bootstrap", "q": [6 floats]}
+    start: list[float] = field(default_factory=list)  # the joints the targets are centred on
+
+
+@dataclass(frozen=True, kw_only=True)
 class PoseStarted(Event):
     index: int
     role: str  # bootstrap, calibration, validation

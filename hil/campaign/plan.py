@@ -4,7 +4,9 @@
 a robot and a tracker, and the same plan runs headless (CLI) and under the TUI. The plan does no I/O:
 pose selection and identification are computations on what the engine sends back.
 
-* **Bootstrap** (only when the tracker's position is not configured): the operator has locked the
+* **Bootstrap** (only when the tracker's position is not configured; its targets are stored, by
+  `BootstrapPlanned`, before the first is visited, so a resumed run visits the same ones and measures
+  only those still missing): the operator has locked the
   beam on the SMR at the arm's current pose; the plan measures a few small moves around it that keep
   the SMR facing the same way, plus turns of the last joint (which turn the SMR about its own opening
   axis, so it keeps facing the tracker while its offset from that axis shows), and fits the tracker
@@ -21,7 +23,9 @@ pose selection and identification are computations on what the engine sends back
   reason, rather than driven to and waited on. Each pose is one `Acquire` (move, settle, read joints,
   measure); the engine's
   `PointMeasured` event reaches the store before the next move. Poses already measured (a resumed
-  run) are skipped.
+  run) are skipped. After `campaign.max_consecutive_lost` poses in a row lost the beam the run stops
+  (`TrackerLooksWrong`): the tracker is not where the plan has it, and waiting out the re-lock time
+  at every remaining pose would only cost time.
 * **Identify** on the calibration (and bootstrap) points; **validate** on the others: before (the
   nominal arm with only the tracker pose and SMR fitted) and after, plus ISO 9283 pose accuracy (AP)
   and repeatability (RP) when validation poses are visited more than once.
@@ -48,9 +52,9 @@ from hil.calibration.identification import (
 )
 from hil.calibration.measurements import Measurements
 from hil.calibration.model_file import model_document
-from hil.campaign.events import ModelIdentified, PlanReady, PoseSkipped, ValidationDone
-from hil.campaign.steps import Emit, Phase, Plan, PoseRecord, ReadJoints, acquire
-from hil.errors import InputError
+from hil.campaign.events import BootstrapPlanned, ModelIdentified, PlanReady, PoseSkipped, ValidationDone
+from hil.campaign.steps import Emit, Phase, Plan, PoseRecord, ReadJoints, Skipped, acquire
+from hil.errors import HilError, InputError
 from hil.station.config import StationConfig
 
 BOOTSTRAP, CALIBRATION, VALIDATION = "bootstrap", "calibration", "validation"
@@ -101,6 +105,8 @@ class ResumeState:
 
     poses: list[tuple[int, str, np.ndarray]] | None = None
     tracker: pin.SE3 | None = None
+    # the stored bootstrap plan, (index, target) in visiting order; None: none was stored
+    bootstrap: list[tuple[int, np.ndarray]] | None = None
     records: dict[tuple[str, int], PoseRecord] = field(default_factory=dict)
     selection: dict[str, Any] = field(default_factory=dict)
 
@@ -166,6 +172,55 @@ class _SightCheck:
         return self.check(self.robot, self.smr, self.tracker, q, self.acceptance_angle)
 
 
+class TrackerLooksWrong(HilError):
+    """Several poses in a row lost the beam: the tracker is not where the plan has it.
+
+    Not bad input (the configuration parsed) but a station fault: the run fails (resumable, exit 3)
+    after `campaign.max_consecutive_lost` such poses instead of waiting out the re-lock time at every
+    remaining pose, and says where the measured points put the tracker."""
+
+
+#: Largest RMS (m) of the nominal arm registered on the points measured so far for the tracker
+#: position it implies to be quoted; the nominal arm alone is off by millimetres.
+_QUOTE_RMS = 5e-3
+
+
+def _tracker_looks_wrong(config: StationConfig, lost: list[Any], tracker: pin.SE3,
+                         measured: list[PoseRecord], smr_guess: np.ndarray) -> str:
+    """The operator's message: which poses lost the beam, where the plan has the tracker (the
+    configuration's ``tracker.position`` or the bootstrap's estimate) and, when at least 4 points were
+    measured and the nominal arm fits them, where those points put it."""
+    poses = ", ".join(str(s.index) for s in lost)
+    wait = config.timeouts["relock"]
+    head = (f"{len(lost)} poses in a row lost the beam (poses {poses}, each after up to {wait:g} s "
+            "waiting to re-lock)")
+    here = [round(float(v), 3) for v in tracker.translation]
+    if config.tracker["position"] is not None:
+        given = [round(float(v), 3) for v in config.tracker["position"]]
+        where_set = "" if config.source.startswith("<") else f"{config.source}: "
+        text = f"{head}: {where_set}tracker.position {given} looks wrong"
+        fix = "correct tracker.position (or remove it to have the run locate the tracker)"
+    else:
+        text = (f"{head}: the tracker position the bootstrap found ({here} m) looks wrong, or "
+                "something blocks the line of sight")
+        fix = "check the line of sight, or set tracker.position"
+    where = None
+    if len(measured) >= 4:
+        try:
+            located = register(measurements_of(measured, "measured so far"), config.robot["type"],
+                               smr_guess)
+            q, p = np.array([r.q for r in measured]), np.array([r.p for r in measured])
+            rms = float(np.sqrt(np.mean(np.sum((Kinematics(located).points(q) - p) ** 2, axis=1))))
+            if rms < _QUOTE_RMS:
+                where = [round(float(v), 2) for v in located.tracker.translation]
+        except (HilError, ValueError, np.linalg.LinAlgError):  # too few or degenerate points
+            where = None
+    if where is not None:
+        text += (f"; the {len(measured)} points measured put the tracker at about {where} m "
+                 "(robot base frame)")
+    return f"{text}: {fix}, then run again"
+
+
 def _locate(boot: list[PoseRecord], robot: str, smr_guess: np.ndarray) -> tuple[pin.SE3, np.ndarray]:
     """(tracker pose, SMR offset) fitted to the bootstrap points with the nominal arm."""
     located = register(measurements_of(boot, "bootstrap"), robot, smr_guess)
@@ -224,16 +279,35 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     if tracker is None and config.tracker["position"] is not None:
         tracker = look_at_tracker(config.tracker["position"])
     boot = [r for (role, _), r in sorted(records.items()) if role == BOOTSTRAP]
-    if tracker is None and len(boot) >= len(bootstrap_targets(np.zeros(6), camp["bootstrap_poses"])):
-        # a run interrupted after its bootstrap (while selecting): locate from those, not again
+    boot_plan = resume.bootstrap
+    if tracker is None and boot_plan is None and \
+            len(boot) >= len(bootstrap_targets(np.zeros(6), camp["bootstrap_poses"])):
+        # a run of an older hil (no stored bootstrap plan) interrupted after its bootstrap: locate
+        # from those points, not again
         tracker, smr_guess = _locate(boot, robot, smr_guess)
     if tracker is None:
-        yield Phase("bootstrap", "locating the tracker from small moves around the start pose")
-        start = np.asarray((yield ReadJoints(config.robot["joint_samples"])).q, float)
-        for k, q in enumerate(bootstrap_targets(start, camp["bootstrap_poses"])):
-            record = yield acquire(k, BOOTSTRAP, q, **visit)
-            if record is not None:  # None: the visit was skipped (the engine said why)
-                records[(BOOTSTRAP, k)] = record
+        if boot_plan is None:
+            yield Phase("bootstrap", "locating the tracker from small moves around the start pose")
+            start = np.asarray((yield ReadJoints(config.robot["joint_samples"])).q, float)
+            # after any index an older run used, so no stored pose is given another target
+            first = 1 + max((i for _, i in records), default=-1)
+            boot_plan = [(first + k, q) for k, q in enumerate(
+                bootstrap_targets(start, camp["bootstrap_poses"]))]
+            # stored before the first move: a resumed run visits these targets, not new ones
+            # centred on wherever the arm stopped
+            yield Emit(BootstrapPlanned(
+                campaign=campaign, start=[float(v) for v in start],
+                poses=[{"index": i, "role": BOOTSTRAP, "q": [float(v) for v in q]} for i, q in boot_plan]))
+        else:
+            left = sum(1 for i, _ in boot_plan if (BOOTSTRAP, i) not in records)
+            yield Phase("bootstrap", f"locating the tracker: {left} of {len(boot_plan)} bootstrap poses "
+                                     "left to measure")
+        for i, q in boot_plan:
+            if (BOOTSTRAP, i) in records:  # measured before the run was interrupted
+                continue
+            record = yield acquire(i, BOOTSTRAP, q, **visit)
+            if isinstance(record, PoseRecord):  # else skipped (the engine said why)
+                records[(BOOTSTRAP, i)] = record
         boot = [r for (role, _), r in sorted(records.items()) if role == BOOTSTRAP]
         if len(boot) < 3:  # three points fix a frame; fewer is a station problem, not a fit failure
             raise IdentificationError(
@@ -254,7 +328,8 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
                                       exclude=np.zeros((0, 6)), **base))
         val = choose(SelectionRequest(VALIDATION, camp["validation_poses"], seed=camp["seed"] + 1,
                                       exclude=cal.poses, start=cal.poses[-1], **base))
-        first = 1 + max((i for _, i in records), default=-1)  # one numbering across roles
+        # one numbering across roles, after the bootstrap's (skipped ones included)
+        first = 1 + max([i for _, i in records] + [i for i, _ in boot_plan or ()], default=-1)
         planned = [(first + i, CALIBRATION, q) for i, q in enumerate(cal.poses)]
         n = first + len(planned)
         for cycle in range(validation_cycles):
@@ -271,6 +346,7 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     yield Phase("measure", f"{len(todo)} of {len(planned)} poses to measure")
     sight = _SightCheck(robot, smr_guess, tracker.translation, config.smr["acceptance_angle"],
                         getattr(choose, "hidden", None))
+    lost: list[Skipped] = []  # beam lost at each of these poses, one after another
     for i, role, q in todo:
         sight.refine(list(records.values()))
         reason = sight.hidden(q)
@@ -279,8 +355,14 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
                                    reason=f"predicted out of the tracker's sight: {reason}"))
             continue
         record = yield acquire(i, role, q, **visit)
-        if record is not None:
+        if isinstance(record, PoseRecord):
             records[(role, i)] = record
+            lost = []
+        elif isinstance(record, Skipped) and record.lost:
+            lost.append(record)
+            if len(lost) >= camp["max_consecutive_lost"]:
+                raise TrackerLooksWrong(_tracker_looks_wrong(
+                    config, lost, tracker, list(records.values()), smr_guess))
 
     # --- identify and validate -----------------------------------------------------------------
     yield Phase("identify")

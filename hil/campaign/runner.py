@@ -11,9 +11,11 @@ keeps resumable, so re-running the same command continues the campaign as after 
 from __future__ import annotations
 
 import datetime as _dt
+import logging
 import secrets
 import signal
-from collections.abc import Callable
+import sqlite3
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -26,13 +28,24 @@ from hil.arm.kinematics import Kinematics
 from hil.calibration.identification import register
 from hil.calibration.measurements import Measurements
 from hil.campaign.engine import Clock, Engine, RealClock, RunAborted, RunInterrupted
-from hil.campaign.events import EventBus, PlanReady, RunFinished, RunStarted
+from hil.campaign.events import (
+    BootstrapPlanned,
+    Event,
+    EventBus,
+    PlanReady,
+    PointMeasured,
+    RunFinished,
+    RunStarted,
+)
 from hil.campaign.plan import BOOTSTRAP, CampaignResult, ChoosePoses, ResumeState, calibration_plan
 from hil.campaign.steps import PoseRecord
 from hil.campaign.suspenders import suspenders
-from hil.errors import InputError
+from hil.errors import HilError, InputError
 from hil.station.config import StationConfig
 from hil.station.devices import HARDWARE_ERRORS, Devices, open_devices
+from hil.station.robot_type import check_controller
+
+log = logging.getLogger(__name__)
 
 
 def new_campaign_id() -> str:
@@ -51,6 +64,8 @@ class RunOutcome:
     robot_info: dict[str, Any] = field(default_factory=dict)
     tracker_info: dict[str, Any] = field(default_factory=dict)
     timing: dict[str, float] = field(default_factory=dict)
+    # the store could not record how the run ended (RunFinished): the caller must say so itself
+    unrecorded: BaseException | None = None
 
     @property
     def exit_code(self) -> int:
@@ -93,11 +108,13 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
                  campaign: str | None = None, resume: ResumeState | None = None,
                  clock: Clock | None = None, devices: Devices | None = None,
                  engine_ready: Callable[[Engine], None] | None = None,
-                 validation_cycles: int = 1) -> RunOutcome:
+                 validation_cycles: int = 1, lease: Any = None) -> RunOutcome:
     """Run one calibration campaign on the configured (or given) devices; never raises for hardware.
 
     Bad input (config, unsafe targets found before motion) still raises InputError. `engine_ready`
     receives the engine before it starts, so a UI can pause or abort it from another thread.
+    `lease` is the campaign's (`claim_run`): should its heartbeat find it taken over, the arm stops
+    and the run ends as interrupted, as another process now owns the campaign.
     """
     bus = bus or EventBus()
     campaign = campaign or new_campaign_id()
@@ -118,6 +135,8 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
                             if ident is not None else {})
     engine: Engine | None = None
     try:  # from here on the devices are closed and RunFinished emitted, even on Ctrl-C
+        # the controller's word on the robot type, before the plan uses the configured kinematics
+        check_controller(config, info)
         try:
             home = np.asarray(devices.robot.read_joints(1).q, dtype=float)  # where the operator left it
         except Exception:  # no reading: the first move's path is then not checked from here
@@ -129,6 +148,8 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
             keep_in=(np.array(config.keep_in["min"]), np.array(config.keep_in["max"])),
             check_model=Geometry.nominal(spec, config.smr["offset"]),
             deviation=_nominal_deviation(config))
+        if lease is not None:
+            lease.on_lost = engine.request_interrupt
         if engine_ready is not None:
             engine_ready(engine)
         # One count everywhere (Run screen, progress bar, history): calibration + validation poses, the
@@ -159,9 +180,47 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
         if engine is not None:
             outcome.timing = engine.stats.as_dict()
         devices.close()
-    bus.emit(RunFinished(campaign=campaign, status=outcome.status, detail=detail,
-                         result={"software": __version__}))
+    try:
+        bus.emit(RunFinished(campaign=campaign, status=outcome.status, detail=detail,
+                             result={"software": __version__}))
+    except Exception as exc:  # the store could not record the end (a full disk): a fault, said so
+        log.debug("could not record the end of campaign %s: %s", campaign, exc)
+        if outcome.status != "failed":  # else the first failure (often the same disk) is the news
+            outcome.status, outcome.error = "failed", exc
+        outcome.unrecorded = exc
     return outcome
+
+
+def claim_run(store: Any, identity: Mapping[str, Any], robot: Mapping[str, str], *,
+              campaign: str | None = None, find: bool = False) -> tuple[Any, ResumeState | None]:
+    """Own the campaign to run before anything moves; returns (its lease, its resume state or None).
+
+    `campaign`: continue that one (the operator chose it); else with `find` the newest resumable
+    campaign of `identity` and the robot, or a new one; else a new one. The store's lease (see
+    `hil.store.leases`) is taken for the campaign and the robot's serial at once, so a second process
+    finding the same campaign — or driving the same arm for another campaign — is refused (the
+    store's LeaseRefused, bad input: the message names the process that has it) and nothing is
+    written. The resume state is read only once the lease is held: what is resumed is what the
+    previous owner left, not a snapshot taken while it still measured. Release the lease (``with``)
+    when the run has ended and its result is stored.
+    """
+    serial = robot.get("serial") or ""
+    for _ in range(3):
+        cid = campaign or (store.find_resumable(identity, robot_serial=serial) if find else None)
+        if cid is None:
+            return store.claim_new(identity, robot), None
+        try:
+            lease = store.claim(cid, serial)
+        except InputError:
+            if campaign is None and store.find_resumable(identity, robot_serial=serial) != cid:
+                continue  # it finished between finding and claiming: look again
+            raise
+        try:
+            return lease, resume_state(store, cid)
+        except BaseException:
+            lease.release()
+            raise
+    raise InputError("the campaigns of this station keep finishing and starting; try again")
 
 
 def plan_saver(store: Any, campaign: str) -> Callable[[Any], None]:
@@ -169,10 +228,46 @@ def plan_saver(store: Any, campaign: str) -> Callable[[Any], None]:
 
     def save(event: Any) -> None:
         if isinstance(event, PlanReady) and event.campaign == campaign:
+            summary: dict[str, Any] = {"tracker": event.tracker, "selection": event.selection}
+        elif isinstance(event, BootstrapPlanned) and event.campaign == campaign:
+            # the "bootstrap" key tells `resume_state` these poses are the whole bootstrap plan
+            summary = {"tracker": None, "selection": {}, "bootstrap": {"start": event.start}}
+        else:
+            return
+        try:
             store.save_plan(campaign, [(p["index"], p["role"], p["q"]) for p in event.poses],
-                            plan={"tracker": event.tracker, "selection": event.selection})
+                            plan=summary)
+        except Exception as exc:
+            raise _record_failed(store, f"the plan of campaign {campaign}", exc) from exc
 
     return save
+
+
+class RecordFailed(HilError):
+    """The store could not record an event of the run (a full disk, a failing drive): the run stops
+    as a fault, the arm stopped; what was committed before stays, so the campaign can resume."""
+
+
+def store_recorder(store: Any) -> Callable[[Event], None]:
+    """The store's critical subscriber, its failures named for the operator: which write failed,
+    in which database, and why ("could not record the measurement of pose 12 in k.db: database or
+    disk is full") rather than the store's own wording of the event type."""
+
+    def record(event: Event) -> None:
+        try:
+            store.record_event(event)
+        except Exception as exc:
+            what = (f"the measurement of pose {event.index}" if isinstance(event, PointMeasured)
+                    else f"{event.name} of campaign {event.campaign}")
+            raise _record_failed(store, what, exc) from exc
+
+    return record
+
+
+def _record_failed(store: Any, what: str, exc: BaseException) -> RecordFailed:
+    """"could not record WHAT in DB: why", the database's own words (SQLite's, the OS's) for why."""
+    cause = exc.__cause__ if isinstance(exc.__cause__, sqlite3.Error | OSError) else exc
+    return RecordFailed(f"could not record {what} in {getattr(store, 'path', store)}: {cause}")
 
 
 def resume_state(store: Any, campaign: str) -> ResumeState:
@@ -185,6 +280,10 @@ def resume_state(store: Any, campaign: str) -> ResumeState:
                                       "tracker": plan["tracker"]}, source=f"campaign {campaign}").tracker
     targets = {p.index: p for p in record.poses}
     planned = [(p.index, p.role, np.array(p.target)) for p in record.poses if p.role != "bootstrap"]
+    # a stored bootstrap plan (`plan_saver`): resumed at its own targets; without one (a run of an
+    # older hil) the poses in the table are only those it had started, not the whole bootstrap
+    bootstrap = ([(p.index, np.array(p.target)) for p in record.poses if p.role == BOOTSTRAP]
+                 if "bootstrap" in plan else None)
     records = {}
     for index, m in store.measured_poses(campaign).items():
         pose = targets.get(index)
@@ -194,4 +293,4 @@ def resume_state(store: Any, campaign: str) -> ResumeState:
             q_spread=np.array(m.q_spread if m.q_spread is not None else np.zeros(6)), p=np.array(m.p),
             p_spread=np.array(m.p_spread if m.p_spread is not None else np.zeros(3)), samples=m.samples)
     return ResumeState(poses=planned if tracker is not None and planned else None, tracker=tracker,
-                       records=records, selection=plan.get("selection") or {})
+                       records=records, selection=plan.get("selection") or {}, bootstrap=bootstrap)

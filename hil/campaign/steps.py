@@ -110,6 +110,22 @@ class PoseRecord:
     extra: dict[str, Any] = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class Skipped:
+    """What the engine sends back for an `Acquire` it gave up (the `PoseSkipped` event says why).
+
+    `lost` is True when the tracker never saw the SMR there (the beam did not come back within the
+    re-lock wait, or the operator skipped the wait): a run of those in a row means the tracker is
+    not where the plan thinks, which the plan stops on rather than wait out pose after pose. False
+    for a pose with no safe path to it, which says nothing about the tracker.
+    """
+
+    index: int
+    role: str
+    reason: str
+    lost: bool
+
+
 def acquire(index: int, role: str, q: Iterable[float], *, settle: float, joint_samples: int,
             samples: int, speed: float | None = None, acceleration: float | None = None) -> Acquire:
     """The standard pose visit: move, settle, read averaged joints, measure."""

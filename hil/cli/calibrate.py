@@ -6,7 +6,11 @@ and GeoCOM tracker, driven through the real ur_rtde and serial clients) and cali
 
 Re-running the same command continues the last unfinished campaign of the same station, robot (by
 serial number) and configuration — after ``kill -9`` included — measuring only what is missing;
-``--new`` starts afresh, ``--resume`` insists on continuing.
+``--new`` starts afresh, ``--resume`` insists on continuing. A campaign is continued when only how the
+station is reached changed (a tracker URL, the robot's address, a timeout: see
+`hil.store.schema.MEASUREMENT_IGNORED`). A campaign another live process is running, or an arm another
+campaign is driving, is refused (exit 2, naming that process) before anything moves; a campaign whose
+process died (kill -9, a power cut) is taken over and continued (`hil.store.leases`).
 
 Progress goes to stderr (a bar with ETA on a terminal, plain lines otherwise); ``--json`` prints one
 event per line on stdout; ``--out`` writes the final result (``hil-result/1``, the calibrated model
@@ -24,18 +28,26 @@ above the acceptance threshold, 2 bad input, 3 hardware fault, 4 aborted, 130 in
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 import time
-from pathlib import Path
 
 from hil.arm.catalog import ROBOT_NAMES
 from hil.campaign.events import Event, EventBus
-from hil.cli._common import RMS_THRESHOLD_HELP, rms_threshold
+from hil.cli._common import (
+    CANDIDATES,
+    CYCLES,
+    POSE_COUNT,
+    RMS_THRESHOLD_HELP,
+    SEED,
+    SIM_SPEED,
+    rms_threshold,
+)
 from hil.cli.progress import JsonLines, Progress
 from hil.cli.station_args import add_tracker_protocol, station_from_args
 from hil.errors import InputError
-from hil.files.outputs import atomic_write_text
+from hil.files.outputs import atomic_write_text, check_output
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -46,15 +58,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     src.add_argument("--config", metavar="station.toml", help="station configuration")
     src.add_argument("--sim", action="store_true", help="use the simulated station")
     p.add_argument("--truth", metavar="truth.json", help="--sim: the hidden truth (default: random)")
-    p.add_argument("--speed", type=float, default=1.0, metavar="F", help="--sim: fast-time factor")
-    p.add_argument("--seed", type=int, default=1, help="--sim: seed of the random truth and noise")
-    p.add_argument("--robot", default="ur5e", help=f"--sim: robot type ({', '.join(ROBOT_NAMES)})")
-    p.add_argument("--poses", type=int, help="calibration poses (overrides the config)")
-    p.add_argument("--validation", type=int, help="validation poses (overrides the config)")
-    p.add_argument("--candidates", type=int, help="selector candidates (overrides the config)")
+    p.add_argument("--speed", type=SIM_SPEED, default=1.0, metavar="F", help="--sim: fast-time factor")
+    p.add_argument("--seed", type=SEED, default=1, help="--sim: seed of the random truth and noise")
+    p.add_argument("--robot", default=None,
+                   help=f"--sim: robot type ({', '.join(ROBOT_NAMES)}; default: --truth's, else ur5e); "
+                        "with --config it must match robot.type")
+    p.add_argument("--poses", type=POSE_COUNT, help="calibration poses (overrides the config)")
+    p.add_argument("--validation", type=POSE_COUNT, help="validation poses (overrides the config)")
+    p.add_argument("--candidates", type=CANDIDATES, help="selector candidates (overrides the config)")
     p.add_argument("--accept", type=rms_threshold, metavar="METRES",
                    help=f"validation RMS threshold, {RMS_THRESHOLD_HELP}; overrides the config")
-    p.add_argument("--cycles", type=int, default=1,
+    p.add_argument("--cycles", type=CYCLES, default=1,
                    help="visits of each validation pose (>1 adds ISO 9283 AP/RP)")
     p.add_argument("--db", metavar="PATH", help="campaign database (default: config, $HIL_DB, data dir)")
     again = p.add_mutually_exclusive_group()
@@ -70,24 +84,57 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from hil.cli.interrupts import interruptible
 
-    for path in (args.out, args.report):
-        if path and Path(path).is_dir():
-            raise InputError(f"{path}: is a directory")
+    _check_poses(args)
+    _check_outputs(args)
     with interruptible():  # Ctrl-C, SIGTERM, SIGHUP: the arm stops, the campaign stays resumable
         return _run(args)
+
+
+def _check_poses(args: argparse.Namespace) -> None:
+    """Refuse a --poses the fit cannot identify from, before the station starts or the arm moves:
+    found later, it would fail only after the bootstrap (tracker location) had moved the arm. The
+    configuration's own count is checked when it is read (`hil.station.config`)."""
+    if args.poses is None or args.poses <= 0:  # not given, or refused as not positive
+        return
+    from hil.station.config import load_config, minimum_calibration_poses
+
+    robot = args.robot or (load_config(args.config).robot["type"] if args.config else "ur5e")
+    need, n = minimum_calibration_poses(robot)
+    if args.poses < need:
+        raise InputError(f"--poses {args.poses}: too few calibration poses: identifying the {n} parameters "
+                         f"of a {robot} from 3 coordinates per pose needs at least {need}")
+
+
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Refuse --out/--report paths that are the store, an input, a directory or each other, before
+    the station starts: the result is written by a rename, which would replace that file."""
+    if not (args.out or args.report):
+        return
+    from hil.cli.output_paths import campaign_store
+
+    db, where = campaign_store(args.db, args.config)
+    inputs = {"--config": args.config, "--truth": args.truth}
+    if args.out:
+        check_output(args.out, field="--out", inputs=inputs, store=db, store_field=where)
+    if args.report:
+        check_output(args.report, field="--report", inputs=inputs, store=db, store_field=where,
+                     outputs={"--out": args.out})
 
 
 def _run(args: argparse.Namespace) -> int:
     from hil.campaign.chooser import campaign_chooser
     from hil.campaign.engine import RealClock
-    from hil.campaign.runner import plan_saver, resume_state, run_campaign
+    from hil.campaign.runner import claim_run, plan_saver, run_campaign, store_recorder
     from hil.report.result import report_data, result_document
     from hil.station.devices import HARDWARE_ERRORS, open_devices
-    from hil.store import FINISHED, Store
+    from hil.store import FINISHED, Store, StoreError, address_lock
 
     with station_from_args(args) as (config, identity, truth):
         store = Store.open(args.db, config=config)
+        guards = contextlib.ExitStack()  # the arm's address lock, then the campaign's lease
         try:
+            # no second process of this host connects to the arm (see hil.store.leases)
+            guards.enter_context(address_lock(config.robot["address"], what="hil calibrate"))
             try:
                 devices = open_devices(config)
             except HARDWARE_ERRORS as exc:
@@ -97,16 +144,19 @@ def _run(args: argparse.Namespace) -> int:
             info = devices.robot.info
             robot = {"type": config.robot["type"], "serial": info.serial if info else "",
                      "model": info.model if info else "", "software": info.software_version if info else ""}
-            campaign = None if args.new else store.find_resumable(identity, robot_serial=robot["serial"])
-            if args.resume and campaign is None:
+            try:
+                if args.resume and store.find_resumable(identity, robot_serial=robot["serial"]) is None:
+                    raise InputError("--resume: no unfinished campaign of this station, robot and "
+                                     "configuration")
+                # this process owns the campaign and the arm before the first motion, or exits 2
+                lease, resume = claim_run(store, identity, robot, find=not args.new)
+            except BaseException:
                 devices.close()
-                raise InputError("--resume: no unfinished campaign of this station, robot and configuration")
-            resume = resume_state(store, campaign) if campaign else None
-            if campaign is None:
-                campaign = store.create_campaign(identity, robot)
+                raise
+            campaign = guards.enter_context(lease).campaign
             events: list[Event] = []
             bus = EventBus()
-            bus.subscribe(store.as_subscriber(), critical=True)
+            bus.subscribe(store_recorder(store), critical=True)  # a failed write names itself
             bus.subscribe(plan_saver(store, campaign), critical=True)
             bus.subscribe(events.append)
             bus.subscribe(Progress())
@@ -115,10 +165,23 @@ def _run(args: argparse.Namespace) -> int:
             started = time.time()
             outcome = run_campaign(config, campaign_chooser(config), bus=bus, campaign=campaign,
                                    resume=resume, devices=devices, clock=RealClock(args.speed),
-                                   validation_cycles=args.cycles)
+                                   validation_cycles=args.cycles, lease=lease)
             result = result_document(outcome, config, events, started, truth)
-            store.set_status(campaign, outcome.status, result=result)
+            if outcome.unrecorded is not None:  # the store refused RunFinished: no progress line said why
+                print(f"hil: fault: campaign {campaign} {outcome.status}: {outcome.error}; what was "
+                      "recorded before stays: re-run the same command to continue it", file=sys.stderr)
+            try:
+                store.set_status(campaign, outcome.status, result=result)
+            except StoreError as exc:  # a full disk: a fault (exit 3), not "not accepted" (exit 1)
+                if outcome.unrecorded is None:
+                    print(f"hil: fault: campaign {campaign} ended {outcome.status}, but could not record "
+                          f"its result in {store.path}: {exc.__cause__ or exc}", file=sys.stderr)
+                return 3
         finally:
+            try:
+                guards.close()
+            except StoreError as exc:  # a full disk: the lease lapses with this process; the run's
+                print(f"hil: warning: {exc}", file=sys.stderr)  # own outcome stays the news
             store.close()
     if outcome.status not in FINISHED:  # interrupted or failed: resumable, so no result (yet)
         if outcome.status == "interrupted":

@@ -23,8 +23,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from hil.calibration.exports import export
     from hil.calibration.model_file import MODEL_FORMAT, load_geometry
-    from hil.files.outputs import atomic_write_text
+    from hil.cli.output_paths import campaign_store
+    from hil.files.outputs import atomic_write_text, check_output
 
+    db, where = campaign_store()
+    check_output(args.out, field="--out", inputs={"--model": args.model}, store=db, store_field=where)
     geometry, doc = load_geometry(args.model, (MODEL_FORMAT,))
     atomic_write_text(args.out, export(doc, geometry, args.format, source=args.model))
     wrote(args.out, args.format)

@@ -27,8 +27,12 @@ def run(args: argparse.Namespace) -> int:
     from hil.arm.kinematics import Kinematics
     from hil.calibration.measurements import read_joints
     from hil.calibration.model_file import load_geometry
-    from hil.files.outputs import atomic_write_text, format_csv
+    from hil.cli.output_paths import campaign_store
+    from hil.files.outputs import atomic_write_text, check_output, format_csv
 
+    db, where = campaign_store()
+    check_output(args.out, field="--out", inputs={"--model": args.model, "--joints": args.joints},
+                 store=db, store_field=where)
     geometry, _ = load_geometry(args.model)
     q, _ = read_joints(args.joints)
     points = Kinematics(geometry).points(q, frame=args.frame, point=args.point)

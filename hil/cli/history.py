@@ -16,9 +16,9 @@ from pathlib import Path
 from typing import Any
 
 from hil.calibration.exports import FORMATS, export
-from hil.cli._common import mm, print_json
+from hil.cli._common import bounded_int, mm, print_json
 from hil.errors import InputError
-from hil.files.outputs import atomic_write_text
+from hil.files.outputs import atomic_write_text, check_output
 from hil.station.config import load_config
 from hil.store import INTERRUPTED, ROLES, CampaignRecord, CampaignSummary, Store, resolve_path
 
@@ -38,7 +38,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("history", help="list calibration campaigns",
                        description="List the campaigns in the store, newest first.")
     _add_db_options(p)
-    p.add_argument("--limit", type=int, default=20, metavar="N", help="at most N campaigns (default 20)")
+    p.add_argument("--limit", type=bounded_int(1, 1_000_000), default=20, metavar="N",
+                   help="at most N campaigns (default 20)")  # beyond SQLite's integers: exit 70 before
     p.add_argument("--station", metavar="NAME", help="only this station's campaigns")
     p.set_defaults(func=run_history)
 
@@ -60,7 +61,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _open(args: argparse.Namespace) -> Store:
     config = load_config(args.config) if args.config else None
-    return Store.open(resolve_path(args.db, config), create=False)
+    return Store.open(resolve_path(args.db, config), readonly=True)  # read-only media too
 
 
 def _when(t: float | None, fmt: str = "%Y-%m-%d %H:%M") -> str:
@@ -190,9 +191,26 @@ def _show_text(rec: CampaignRecord) -> list[str]:
     return lines
 
 
+def _check_exports(args: argparse.Namespace) -> None:
+    """Refuse export paths that are the store, the config, a directory or each other, before the store
+    is opened: a rename onto the database would replace it with the export."""
+    if not (args.export_model or args.export_measurements):
+        return
+    from hil.cli.output_paths import campaign_store
+
+    db, where = campaign_store(args.db, args.config)
+    inputs = {"--config": args.config}
+    if args.export_model:
+        check_output(args.export_model, field="--export-model", inputs=inputs, store=db, store_field=where)
+    if args.export_measurements:
+        check_output(args.export_measurements, field="--export-measurements", inputs=inputs, store=db,
+                     store_field=where, outputs={"--export-model": args.export_model})
+
+
 def run_show(args: argparse.Namespace) -> int:
     if args.format and not args.export_model:
         raise InputError("--format: only with --export-model")
+    _check_exports(args)
     with _open(args) as store:
         rec = store.campaign(store.resolve_id(args.id))
         written = _export(args, store, rec)

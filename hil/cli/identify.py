@@ -42,9 +42,15 @@ def run(args: argparse.Namespace) -> int:
     from hil.calibration.identification import identify, validate
     from hil.calibration.measurements import read_measurements
     from hil.calibration.model_file import model_document, write_json
+    from hil.cli.output_paths import campaign_store
+    from hil.files.outputs import check_output
+    from hil.station.config import MAX_SMR_OFFSET
 
+    db, where = campaign_store()
+    check_output(args.out, field="--out", store=db, store_field=where,
+                 inputs={"--measurements": args.measurements, "--validation": args.validation})
     robot = get_robot(args.robot).name
-    smr = triplet_or_none(args.smr, "--smr")
+    smr = triplet_or_none(args.smr, "--smr", max_length=MAX_SMR_OFFSET, where="of the flange")
     meas = read_measurements(args.measurements)
     held_out = read_measurements(args.validation) if args.validation else None
     fit = identify(meas, robot, smr, reject_outliers=not args.no_reject)

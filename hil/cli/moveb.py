@@ -18,9 +18,10 @@ from pathlib import Path
 from typing import Any
 
 from hil.arm.catalog import ROBOT_NAMES
-from hil.cli._common import print_json, wants_json, wrote
+from hil.cli._common import SEED, SIM_SPEED, finite_float, print_json, wants_json, wrote
 from hil.cli.station_args import add_tracker_protocol, station_from_args
 from hil.errors import InputError
+from hil.files.outputs import check_output
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -32,9 +33,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     plan.add_argument("--continuity", choices=("G2", "G3"), default="G2", help=_CONTINUITY)
     plan.add_argument("--out", required=True, metavar="samples.csv",
                       help="CSV of dense samples to write (s,x,y,z,i,j,k,u,v,w,curvature)")
-    plan.add_argument("--step", type=float, default=0.5, metavar="MM",
+    plan.add_argument("--step", type=STEP_MM, default=0.5, metavar="MM",
                       help="sample spacing on straight parts (every bridge gets 64 samples too)")
-    plan.add_argument("--rate", type=float, default=500.0, metavar="HZ",
+    plan.add_argument("--rate", type=CONTROLLER_RATE, default=500.0, metavar="HZ",
                       help="controller rate for the cycle time in the summary (500 e-series, 125 CB3)")
     _limit_options(plan)
     _json_option(plan)
@@ -60,21 +61,27 @@ def register(sub: argparse._SubParsersAction) -> None:
                           "(needs --sim or --model, which know where the tracker stands). Default: 'tracker' "
                           "with --sim (its tracker stands at a random place), else 'base'")
     _limit_options(run)
-    run.add_argument("--joint-speed", type=float, default=1.0, metavar="F",
+    run.add_argument("--joint-speed", type=finite_float(0, 1, lo_open=True), default=1.0, metavar="F",
                      help="allowed fraction of the datasheet joint speeds (0 < F <= 1); the feed slows "
                           "down where the path would need more")
-    run.add_argument("--joint-acceleration", type=float, default=None, metavar="RAD/S2",
+    # ur_rtde's limit on a joint acceleration (UR_JOINT_ACCELERATION_MAX), as for robot.acceleration
+    run.add_argument("--joint-acceleration", type=finite_float(0, 40, "rad/s²", lo_open=True), default=None,
+                     metavar="RAD/S2",
                      help="largest joint acceleration at the controller samples (every joint; UR "
                           "publishes none, so none by default: the peak is reported either way)")
-    run.add_argument("--tracker-rate", type=float, default=100.0, metavar="HZ",
+    # Leica's trackers stream at most 1000 points a second (AT960 real-time feature pack)
+    run.add_argument("--tracker-rate", type=finite_float(0, 1000, "Hz", lo_open=True), default=100.0,
+                     metavar="HZ",
                      help="rate at which the tracker is sampled during the motion")
-    run.add_argument("--min-coverage", type=float, default=0.9, metavar="F",
+    run.add_argument("--min-coverage", type=finite_float(0, 1, lo_open=True), default=0.9, metavar="F",
                      help="share of the path the tracker must measure; below it the run is reported "
                           "'incomplete' (exit code 1)")
     run.add_argument("--truth", metavar="truth.json", help="--sim: the hidden truth (default: random)")
-    run.add_argument("--speed", type=float, default=1.0, metavar="F", help="--sim: fast-time factor")
-    run.add_argument("--seed", type=int, default=1, help="--sim: seed of the random truth and noise")
-    run.add_argument("--robot", default="ur5e", help=f"--sim: robot type ({', '.join(ROBOT_NAMES)})")
+    run.add_argument("--speed", type=SIM_SPEED, default=1.0, metavar="F", help="--sim: fast-time factor")
+    run.add_argument("--seed", type=SEED, default=1, help="--sim: seed of the random truth and noise")
+    run.add_argument("--robot", default=None,
+                     help=f"--sim: robot type ({', '.join(ROBOT_NAMES)}; default: --truth's, "
+                          "--model's, else ur5e); with --config it must match robot.type")
     run.add_argument("--out", metavar="result.json", help="write the path-accuracy result")
     run.add_argument("--plot", metavar="run.png",
                      help="write a figure: commanded and measured path, deviation along the path")
@@ -84,19 +91,33 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 FRAMES = ("base", "current", "tracker")
+
+#: Sample spacing of ``moveb plan`` (mm): finer than 10 µm is below any UR arm's repeatability (UR5e:
+#: ±0.03 mm, ISO 9283) and a metre of path would need 10^5+ samples; 1e-9 asked numpy for 2.9 TiB.
+STEP_MM = finite_float(0.01, 1000, "mm")
+
+#: Controller rate for the cycle time of ``moveb plan`` (Hz): UR controllers run at 125 Hz (CB3) or
+#: 500 Hz (e-Series); the timing law makes one sample per cycle, so 1e308 Hz could not be allocated.
+CONTROLLER_RATE = finite_float(1, 1000, "Hz")
 _CONTINUITY = ("smoothness at the corners: G2 (continuous curvature) or G3 (continuous change of "
                "curvature too: smoother, slightly longer bridges)")
 
 
 def _limit_options(p: argparse.ArgumentParser) -> None:
     """The Cartesian limits of the feed profile (tool point)."""
-    p.add_argument("--velocity", type=float, default=100.0, metavar="MM/S",
+    # Ranges: ur_rtde's moveL takes at most 3 m/s and 150 m/s² at the tool (UR_TOOL_VELOCITY_MAX,
+    # UR_TOOL_ACCELERATION_MAX); UR publishes no jerk limit, so 1e8 mm/s³ (full tool acceleration in
+    # 1.5 ms, three e-Series cycles). The lower ends keep the samples the timing law makes at the
+    # controller rate in memory: 1 mm/s walks a metre in 17 minutes (500 Hz: half a million samples),
+    # and 1e-30 asked for more samples than numpy can index.
+    p.add_argument("--velocity", type=finite_float(1, 3000, "mm/s"), default=100.0, metavar="MM/S",
                    help="largest tool speed along the path")
-    p.add_argument("--acceleration", type=float, default=1000.0, metavar="MM/S2",
+    p.add_argument("--acceleration", type=finite_float(1, 150_000, "mm/s²"), default=1000.0, metavar="MM/S2",
                    help="largest tool acceleration along the path")
-    p.add_argument("--jerk", type=float, default=10000.0, metavar="MM/S3",
+    p.add_argument("--jerk", type=finite_float(1, 1e8, "mm/s³"), default=10000.0, metavar="MM/S3",
                    help="largest jerk along the path")
-    p.add_argument("--normal-acceleration", type=float, default=1000.0, metavar="MM/S2",
+    p.add_argument("--normal-acceleration", type=finite_float(1, 150_000, "mm/s²"), default=1000.0,
+                   metavar="MM/S2",
                    help="largest acceleration across the path (v²·curvature): slows the feed at corners")
 
 
@@ -111,8 +132,10 @@ def run_plan(args: argparse.Namespace) -> int:
 
     if not args.step > 0:
         raise InputError(f"--step must be positive, got {args.step}")
-    if Path(args.out).is_dir():
-        raise InputError(f"{args.out}: is a directory")
+    from hil.cli.output_paths import campaign_store
+
+    db, where = campaign_store()
+    check_output(args.out, field="--out", inputs={"PROGRAM": args.program}, store=db, store_field=where)
     from hil.moveb.timing import Limits
 
     if not args.rate > 0:
@@ -120,9 +143,9 @@ def run_plan(args: argparse.Namespace) -> int:
     limits = Limits(args.velocity, args.acceleration, args.jerk, args.normal_acceleration)
     plan = plan_program(load_program(args.program), args.continuity)
     dense = plan.dense(args.step)
+    law, _samples = plan.timed(limits, args.rate)  # before writing: a failure leaves no samples file
     write_samples(args.out, dense)
     wrote(args.out, f"{len(dense.s)} samples")
-    law, _samples = plan.timed(limits, args.rate)
     # the Cartesian limits only: joint speeds depend on where the arm runs it (`hil moveb run`)
     doc = dict(summary(plan), cycle_time_s=law.cycle_time, rate_hz=args.rate,
                limits={"velocity": limits.velocity, "acceleration": limits.acceleration,
@@ -174,11 +197,19 @@ def _run_text(doc: dict[str, Any]) -> str:
 
 
 def run_run(args: argparse.Namespace) -> int:
-    for path in (args.out, args.plot):
-        if path and Path(path).is_dir():
-            raise InputError(f"{path}: is a directory")
+    from hil.cli.output_paths import campaign_store
+
+    inputs = {"PROGRAM": args.program, "--model": args.model, "--truth": args.truth, "--config": args.config}
+    db, where = campaign_store(None, args.config) if args.out or args.plot else (None, "")
+    if args.out:
+        check_output(args.out, field="--out", inputs=inputs, store=db, store_field=where)
+    if args.plot:
+        check_output(args.plot, field="--plot", inputs=inputs, store=db, store_field=where,
+                     outputs={"--out": args.out})
 
     doc = run_from_cli(args)
+    if doc.get("exit_code") == 3:  # stdout may be a pipe nobody reads: the fault goes to stderr too
+        print(f"hil: hardware fault: {doc.get('error')}", file=sys.stderr)
     if args.out:
         from hil.files.outputs import atomic_write_text
 
@@ -206,6 +237,7 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
     from hil.moveb.run import NothingMeasured, execute, facing_frame, program_in_frame
     from hil.moveb.timing import Limits
     from hil.station.devices import HARDWARE_ERRORS, open_devices
+    from hil.station.robot_type import Claim, agreed_robot, check_controller, config_claim, option_claim
 
     program = load_program(args.program)
     limits = Limits(args.velocity, args.acceleration, args.jerk, args.normal_acceleration)
@@ -224,7 +256,20 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
     place = args.frame or ("tracker" if args.sim else "base")
     if place == "tracker" and not (args.sim or model is not None):
         raise InputError("--frame tracker: needs --model (its tracker pose) or --sim")
+    # every source naming the arm must agree (--robot, the model, the truth; then the configuration and
+    # the controller): IK on another robot's kinematics would drive the arm somewhere unplanned
+    said = option_claim(args.robot)
+    if model is not None:
+        said.append(Claim(model.robot, f"the model {args.model} is for {model.robot}"))
+    if args.sim:
+        if args.truth:
+            from hil.calibration.model_file import load_truth
+
+            truth_robot = load_truth(args.truth)[0].robot
+            said.append(Claim(truth_robot, f"the truth {args.truth} is for {truth_robot}"))
+        args.robot = agreed_robot(said, default="ur5e")  # the arm the simulator is to simulate
     with station_from_args(args) as (config, _identity, truth):
+        agreed_robot([config_claim(config), *said])  # --config: its robot.type, before connecting
         geometry = model or Geometry.nominal(config.robot["type"], smr=config.smr["offset"])
         if model is not None and args.ik == "nominal":
             # the uncalibrated arm, measured in the model's base frame (its tracker pose and SMR):
@@ -239,6 +284,7 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
         except HARDWARE_ERRORS as exc:
             return {"status": "hardware fault", "error": f"{type(exc).__name__}: {exc}", "exit_code": 3}
         try:
+            check_controller(config, devices.robot.info, *said)  # before any motion
             if place == "current":
                 q = np.asarray(devices.robot.read_joints(1).q, dtype=float)
                 F = Kinematics(geometry).flange_poses(q)[0]

@@ -11,6 +11,7 @@ import argparse
 
 from hil.calibration.model_file import read_json
 from hil.cli._common import wrote
+from hil.files.outputs import check_output
 from hil.report import report_data_from_result, write_report
 
 
@@ -26,6 +27,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from hil.cli.output_paths import campaign_store
+
+    db, where = campaign_store()
+    check_output(args.out, field="--out", inputs={"--result": args.result}, store=db, store_field=where)
     data = report_data_from_result(read_json(args.result), source=args.result)
     write_report(data, args.out)
     wrote(args.out, "PASS" if data.passed else "FAIL")

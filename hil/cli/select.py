@@ -19,13 +19,18 @@ import math
 import sys
 from typing import Any
 
-from hil.cli._common import wrote
+from hil.cli._common import CANDIDATES, POSE_COUNT, SEED, finite_float, wrote
 from hil.errors import InputError
+from hil.station.config import MAX_KEEP_IN, MAX_SMR_OFFSET, MAX_TRACKER_DISTANCE
 from selector.candidates import CONSTRAINT_NAMES
 from selector.indices import INDEX_NAMES, SCALINGS
 from selector.search import METHODS
 
 DEFAULT_SMR = "0,0,0.045"
+
+#: Farthest tracker range (m) a --range may give: Leica's AT403 measures to 80 m (160 m diameter), the
+#: longest of the laser trackers hil drives.
+MAX_TRACKER_RANGE = 80.0
 
 
 def register(sub: Any) -> None:
@@ -33,26 +38,34 @@ def register(sub: Any) -> None:
     p = sub.add_parser("select", help="choose optimal measurement poses (JSON out)",
                        description=__doc__.split("\n\n")[0])
     p.add_argument("--robot", required=True, help="robot type, e.g. ur5e")
-    p.add_argument("--count", required=True, type=int, help="number of poses to choose")
-    p.add_argument("--candidates", type=int, default=20_000,
+    p.add_argument("--count", required=True, type=POSE_COUNT, help="number of poses to choose")
+    p.add_argument("--candidates", type=CANDIDATES, default=20_000,
                    help="random feasible configurations to choose from")
     p.add_argument("--index", default="O1",
                    help=f"what to maximise: observability index {', '.join(INDEX_NAMES)}")
     p.add_argument("--method", default="tabu",
                    help=f"search method: {', '.join(METHODS)} (the last two are baselines to compare with)")
-    p.add_argument("--seed", type=int, default=0, help="random seed; equal seeds give equal output")
+    p.add_argument("--seed", type=SEED, default=0, help="random seed; equal seeds give equal output")
     p.add_argument("--tracker", help="tracker position X,Y,Z in the robot base frame (m); without it the "
                                      "range, acceptance and line-of-sight constraints are off")
     p.add_argument("--smr", default=DEFAULT_SMR,
                    help="SMR centre in the flange frame X,Y,Z (m)")
     p.add_argument("--scaling", default="expected", help=f"column scaling for O2–O5: {', '.join(SCALINGS)}")
     p.add_argument("--keep-in", help="SMR keep-in box XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (m, base frame)")
-    p.add_argument("--floor", type=float, default=0.0, help="height of the mounting surface (m)")
-    p.add_argument("--range", dest="tracker_range", help="tracker distance MIN,MAX (m) (default: 0.8,20)")
-    p.add_argument("--half-angle", type=float, default=30.0, help="SMR acceptance half-angle (deg)")
-    p.add_argument("--wrist-margin", type=float, default=10.0, help="min |q5| from 0/π (deg)")
-    p.add_argument("--elbow-margin", type=float, default=10.0, help="min |q3| from 0/π (deg)")
-    p.add_argument("--shoulder-margin", type=float, default=0.05,
+    # lengths in the base frame within the keep-in box's ±5 m (hil.station.config.MAX_KEEP_IN); angles as
+    # the selector's constraints take them: an SMR is seen within a half-angle below 90°, a margin from a
+    # singularity is below 90°; the shoulder margin is well inside the arm's reach (at most 1.75 m)
+    p.add_argument("--floor", type=finite_float(-MAX_KEEP_IN, MAX_KEEP_IN, "m"), default=0.0,
+                   help="height of the mounting surface (m)")
+    p.add_argument("--range", dest="tracker_range",
+                   help=f"tracker distance MIN,MAX (m), within 0-{MAX_TRACKER_RANGE:g} (default: 0.8,20)")
+    p.add_argument("--half-angle", type=finite_float(0, 90, "degrees", lo_open=True, hi_open=True),
+                   default=30.0, help="SMR acceptance half-angle (deg)")
+    p.add_argument("--wrist-margin", type=finite_float(0, 90, "degrees", hi_open=True), default=10.0,
+                   help="min |q5| from 0/π (deg)")
+    p.add_argument("--elbow-margin", type=finite_float(0, 90, "degrees", hi_open=True), default=10.0,
+                   help="min |q3| from 0/π (deg)")
+    p.add_argument("--shoulder-margin", type=finite_float(0, 1, "m"), default=0.05,
                    help="min distance of the wrist point from the shoulder singularity (m)")
     p.add_argument("--disable", action="append", default=[],
                    help=f"switch constraints off (comma list; repeatable): {', '.join(CONSTRAINT_NAMES)}")
@@ -92,13 +105,24 @@ def run(args: argparse.Namespace) -> int:
 
     from hil.arm.geometry import parse_triplet  # pinocchio: not for `hil select --help`
     from hil.calibration.selection import parse_constraints, select_poses
-    from hil.files.outputs import atomic_write_text
+    from hil.files.outputs import atomic_write_text, check_output
     from selector.tabu import TabuSettings
 
+    if args.out is not None:
+        from hil.cli.output_paths import campaign_store
+
+        db, where = campaign_store()
+        check_output(args.out, field="--out", store=db, store_field=where)
     if args.candidates < 1:
         raise InputError(f"--candidates must be at least 1, got {args.candidates}")
     tracker = None if args.tracker is None else tuple(parse_triplet(args.tracker, "--tracker"))
+    if tracker is not None and math.hypot(*tracker) > MAX_TRACKER_DISTANCE:  # 1e308 never found a pose
+        raise InputError(f"--tracker: must be within {MAX_TRACKER_DISTANCE:g} m of the robot base (the "
+                         f"tracker's range plus the arm's reach), got {math.hypot(*tracker):g} m away")
     smr = parse_triplet(args.smr, "--smr")
+    if math.hypot(*smr) > MAX_SMR_OFFSET:  # 10 m "from the flange" is a value in millimetres
+        raise InputError(f"--smr: must be within {MAX_SMR_OFFSET:g} m of the flange, "
+                         f"got {math.hypot(*smr):g} m away")
     disabled = [s.strip() for item in args.disable for s in item.split(",") if s.strip()]
     settings: dict[str, Any] = {
         "floor": _finite(args.floor, "--floor"),
@@ -109,11 +133,27 @@ def run(args: argparse.Namespace) -> int:
     }
     box = _numbers(args.keep_in, 6, "--keep-in")
     if box is not None:
+        if any(abs(v) > MAX_KEEP_IN for v in box):
+            raise InputError(f"--keep-in: every coordinate must be in [-{MAX_KEEP_IN:g}, {MAX_KEEP_IN:g}] m, "
+                             f"got {args.keep_in}")
+        if any(a >= b for a, b in zip(box[:3], box[3:], strict=True)):
+            raise InputError(f"--keep-in: XMIN,YMIN,ZMIN must be below XMAX,YMAX,ZMAX, got {args.keep_in}")
         settings["keep_in_lower"], settings["keep_in_upper"] = box[:3], box[3:]
     rng = _numbers(args.tracker_range, 2, "--range")
     if rng is not None:
+        if not 0 <= rng[0] < rng[1] <= MAX_TRACKER_RANGE:
+            raise InputError(f"--range: needs 0 <= MIN < MAX <= {MAX_TRACKER_RANGE:g} m, "
+                             f"got {args.tracker_range}")
         settings["tracker_range"] = rng
     start = _numbers(args.start, 6, "--start")
+    if start is not None:  # outside the joint limits the route search never ended (1e300, 20 rad)
+        from hil.arm.catalog import get_robot
+
+        spec = get_robot(args.robot)
+        outside = [f"q{j + 1} = {v:g} is outside [{spec.lower[j]:.4g}, {spec.upper[j]:.4g}]"
+                   for j, v in enumerate(start) if not spec.lower[j] <= v <= spec.upper[j]]
+        if outside:
+            raise InputError(f"--start: {'; '.join(outside)} rad, the {spec.title}'s joint limits")
     constraints = parse_constraints(tracker=tracker, disabled=disabled, **settings)
     status = StatusLine(None if args.quiet else sys.stderr)
     try:

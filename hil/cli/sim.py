@@ -13,7 +13,7 @@ import json
 import sys
 from typing import Any
 
-from hil.cli._common import wants_json
+from hil.cli._common import SEED, SIM_SPEED, bounded_int, finite_float, wants_json
 from hil.errors import InputError
 
 
@@ -26,12 +26,45 @@ def register(sub: argparse._SubParsersAction) -> None:
     for action in p._actions:  # the robot simulator's options that come without a word of help
         if not action.help and action.dest in _MISSING_HELP:
             action.help = _MISSING_HELP[action.dest]
-    p.add_argument("--baud", type=int, default=None, help="pace the tracker link at this baud rate")
-    p.add_argument("--acceptance-angle", type=float, default=30.0,
+        if action.dest == "robot":  # unset unless given: the truth's robot then, not a silent UR5e
+            action.default = None
+            action.help = "robot model (default: the --truth's, else ur5e; with --truth both must agree)"
+        if action.dest in _RANGES:  # checked by argparse: one line and exit 2, before anything serves
+            action.type = _RANGES[action.dest]
+    # RS-232 rates, as tracker.baudrate in the station configuration
+    p.add_argument("--baud", type=bounded_int(300, 921600, "baud"), default=None,
+                   help="pace the tracker link at this baud rate")
+    p.add_argument("--acceptance-angle", type=finite_float(0, 90, "degrees", lo_open=True, hi_open=True),
+                   default=30.0,
                    help="SMR acceptance half-angle (degrees): beyond it the tracker loses the beam")
     p.add_argument("--json", action="store_true",
                    help="print the ready line as JSON even on a terminal (it always is when piped)")
     p.set_defaults(func=run)
+
+
+def _loopback(text: str) -> str:
+    """argparse ``type`` of ``--address``: an IPv4 loopback address (127.0.0.256 failed only at bind)."""
+    import ipaddress
+
+    try:
+        ok = ipaddress.IPv4Address(text).is_loopback
+    except ValueError:
+        ok = False
+    if not ok:
+        raise argparse.ArgumentTypeError(f"must be a loopback address 127.x.y.z, got {text!r}")
+    return text
+
+
+# The robot simulator's numeric options (mocks.ur.cli_entry declares them as bare int/float).
+_RANGES = {
+    "address": _loopback,
+    "speed": SIM_SPEED,
+    "control_port": bounded_int(0, 65535),  # a TCP port; 0 lets the system choose (99999 was exit 70)
+    "speed_slider": finite_float(0, 1),  # the pendant's speed slider, a fraction
+    # std of actual_q: UR's encoders resolve ~1e-5 rad; a milliradian is already a worn joint
+    "encoder_noise": finite_float(0, 1e-3, "rad"),
+    "seed": SEED,
+}
 
 
 _MISSING_HELP = {
@@ -52,14 +85,19 @@ def _summary(out: dict[str, Any]) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from hil.station.robot_type import Claim, agreed_robot, option_claim
     from mocks.station import station_spec
     from mocks.ur.cli_entry import config_from_args
     from mocks.ur.process import serve
 
+    claims = option_claim(args.robot)
     if args.truth:
         from hil.calibration.model_file import load_truth
 
-        load_truth(args.truth)  # bad truth files fail here, with the key named, before serving
+        geometry, _ = load_truth(args.truth)  # bad truth files fail here, with the key named, before serving
+        claims.append(Claim(geometry.robot, f"the truth {args.truth} is for {geometry.robot}"))
+    # the controller simulates (and reports) the arm the truth describes: a disagreement is refused
+    args.robot = agreed_robot(claims, default="ur5e")
     try:
         config = config_from_args(args)
     except ValueError as exc:

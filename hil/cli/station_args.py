@@ -12,7 +12,8 @@ from collections.abc import Iterator
 from typing import Any
 
 from hil.errors import InputError
-from hil.station.config import StationConfig, load_config
+from hil.station.config import StationConfig, check_runnable, load_config
+from hil.station.robot_type import agreed_robot, config_claim, option_claim
 
 
 def add_tracker_protocol(parser: argparse.ArgumentParser) -> None:
@@ -41,14 +42,20 @@ def config_overrides(args: argparse.Namespace) -> dict[str, Any]:
 @contextlib.contextmanager
 def station_from_args(
         args: argparse.Namespace) -> Iterator[tuple[StationConfig, dict[str, Any], dict | None]]:
-    """(config to run, config that identifies the run in the store, hidden truth or None)."""
+    """(config to run, config that identifies the run in the store, hidden truth or None).
+
+    ``--robot`` (None when not given) must agree with the configuration's ``robot.type`` or the truth's
+    ``robot``: a disagreement is bad input, never settled silently in favour of one of them.
+    """
     protocol = getattr(args, "tracker_protocol", None)
+    said = option_claim(getattr(args, "robot", None))  # an unknown --robot is refused first, named
     if args.config:
         if args.truth or args.speed != 1.0 or protocol:
             raise InputError("--truth, --speed and --tracker-protocol go with --sim, not --config "
                              "(the configuration's tracker.protocol says which tracker it has)")
-        config = load_config(args.config)
+        config = check_runnable(load_config(args.config))  # before a store is opened or created
         config = config.with_overrides(**config_overrides(args)) if config_overrides(args) else config
+        agreed_robot([config_claim(config), *said])  # said twice: both must name the same arm
         yield config, config.as_dict(), None
         return
     if not args.speed > 0:

@@ -7,11 +7,11 @@ from pathlib import Path
 
 import numpy as np
 
-from hil.arm.catalog import ROBOT_NAMES, get_robot
+from hil.arm.catalog import ROBOT_NAMES
 from hil.calibration.measurements import write_measurements
 from hil.calibration.model_file import load_truth, truth_document, write_json
 from hil.calibration.synthetic import Noise, measure, random_configurations, random_truth
-from hil.cli._common import wrote
+from hil.cli._common import SEED, bounded_int, finite_float, wrote
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -19,30 +19,45 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description="Make a random realistic arm (or load --truth), measure it at random "
                                    "poses with tracker noise and write truth.json, measurements.csv "
                                    "and validation.csv into --out-dir.")
-    p.add_argument("--robot", default="ur5e", help=f"robot type ({', '.join(ROBOT_NAMES)})")
+    p.add_argument("--robot", help=f"robot type ({', '.join(ROBOT_NAMES)}; default ur5e, or the truth's)")
     p.add_argument("--truth", metavar="truth.json", help="use this hil-truth/1 instead of a random one")
-    p.add_argument("--poses", type=int, default=30, help="calibration poses (measurements.csv)")
-    p.add_argument("--validation", type=int, default=100, help="validation poses (validation.csv)")
-    p.add_argument("--noise", type=float, default=None, metavar="METRES",
+    # rows of a CSV: 100 000 are ~10 MB; 1e9 asked numpy for 45 GiB (exit 70)
+    p.add_argument("--poses", type=bounded_int(1, 100_000), default=30,
+                   help="calibration poses (measurements.csv)")
+    p.add_argument("--validation", type=bounded_int(0, 100_000), default=100,
+                   help="validation poses (validation.csv)")
+    # a laser tracker's noise is micrometres (AT960: 15 µm + 6 µm/m MPE): 1 mm is already a poor
+    # instrument, and 1 (m) is a value in millimetres
+    p.add_argument("--noise", type=finite_float(0, 1e-3, "m"), default=None, metavar="METRES",
                    help="tracker noise per axis (default 20e-6, or the truth's)")
-    p.add_argument("--seed", type=int, default=1,
+    p.add_argument("--seed", type=SEED, default=1,
                    help="random seed of the truth, the poses and the noise; equal seeds give equal files")
     p.add_argument("--out-dir", required=True, metavar="DIR", help="directory to write the three files to")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    from hil.cli.output_paths import campaign_store
     from hil.errors import InputError
+    from hil.files.outputs import check_output_dir
 
+    db, where = campaign_store()
+    check_output_dir(args.out_dir, field="--out-dir", inputs={"--truth": args.truth}, store=db,
+                     store_field=where, names=("truth.json", "measurements.csv", "validation.csv"))
     if args.poses < 1 or args.validation < 0:
         raise InputError("--poses must be at least 1 and --validation at least 0")
     if args.noise is not None and not (np.isfinite(args.noise) and args.noise >= 0):
         raise InputError("--noise must be a non-negative number of metres")
     rng = np.random.default_rng(args.seed)
+    from hil.station.robot_type import Claim, agreed_robot, option_claim
+
+    claims = option_claim(args.robot)
     if args.truth:
         truth, noise = load_truth(args.truth)
+        # --robot beside --truth must name the truth's arm: silently using either hides a mistake
+        agreed_robot([*claims, Claim(truth.robot, f"the truth {args.truth} is for {truth.robot}")])
     else:
-        truth, noise = random_truth(get_robot(args.robot).name, rng), Noise()
+        truth, noise = random_truth(agreed_robot(claims, default="ur5e"), rng), Noise()
     if args.noise is not None:
         noise = Noise(args.noise, noise.encoder_sigma)
     out = Path(args.out_dir)

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import argparse
 
-from hil.arm.catalog import ROBOT_NAMES, get_robot
-from hil.cli._common import RMS_THRESHOLD_HELP, rms_threshold
+from hil.arm.catalog import ROBOT_NAMES
+from hil.cli._common import CANDIDATES, POSE_COUNT, RMS_THRESHOLD_HELP, SEED, SIM_SPEED, rms_threshold
 from hil.cli.station_args import add_tracker_protocol
 from hil.errors import InputError
 
@@ -22,13 +22,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--config", metavar="station.toml", help="station configuration")
     src.add_argument("--sim", action="store_true", help="use the simulated station")
-    p.add_argument("--speed", type=float, default=1.0, metavar="F", help="--sim: fast-time factor")
-    p.add_argument("--seed", type=int, default=1, help="--sim: seed of the random truth and noise")
-    p.add_argument("--robot", default="ur5e", help=f"--sim: robot type ({', '.join(ROBOT_NAMES)})")
+    p.add_argument("--speed", type=SIM_SPEED, default=1.0, metavar="F", help="--sim: fast-time factor")
+    p.add_argument("--seed", type=SEED, default=1, help="--sim: seed of the random truth and noise")
+    p.add_argument("--robot", default=None,
+                   help=f"--sim: robot type ({', '.join(ROBOT_NAMES)}; default: --truth's, else ur5e); "
+                        "with --config it must match robot.type")
     p.add_argument("--truth", metavar="truth.json", help="--sim: the hidden truth (default: random)")
-    p.add_argument("--poses", type=int, help="calibration poses (overrides the config)")
-    p.add_argument("--validation", type=int, help="validation poses (overrides the config)")
-    p.add_argument("--candidates", type=int, help="selector candidates (overrides the config)")
+    p.add_argument("--poses", type=POSE_COUNT, help="calibration poses (overrides the config)")
+    p.add_argument("--validation", type=POSE_COUNT, help="validation poses (overrides the config)")
+    p.add_argument("--candidates", type=CANDIDATES, help="selector candidates (overrides the config)")
     p.add_argument("--accept", type=rms_threshold, metavar="METRES",
                    help=f"validation RMS threshold, {RMS_THRESHOLD_HELP}; overrides the config")
     p.add_argument("--db", metavar="PATH", help="campaign database (default: config, $HIL_DB, data dir)")
@@ -40,23 +42,33 @@ def register(sub: argparse._SubParsersAction) -> None:
 def options_from(args: argparse.Namespace) -> object:
     """`TuiOptions` from the command line; bad input raises InputError before the app starts."""
     from hil.cli.station_args import config_overrides
-    from hil.station.config import load_config
+    from hil.files.outputs import check_output_dir
+    from hil.station.config import check_runnable, load_config
+    from hil.station.robot_type import Claim, agreed_robot, config_claim, option_claim
     from hil.tui.session import TuiOptions
 
+    check_output_dir(args.out_dir, field="--out-dir")  # a file, or a missing parent: refused up front
     overrides = config_overrides(args)
+    from hil.cli.calibrate import _check_poses
+
+    _check_poses(args)  # as `hil calibrate`: too few --poses is refused before the app starts, not later
     if args.config:
         if args.truth or args.speed != 1.0 or args.tracker_protocol:
             raise InputError("--truth, --speed and --tracker-protocol go with --sim, not --config "
                              "(the configuration's tracker.protocol says which tracker it has)")
-        return TuiOptions(config=load_config(args.config), db=args.db, out_dir=args.out_dir,
-                          overrides=overrides)
+        config = check_runnable(load_config(args.config))  # before the app opens (or creates) a store
+        agreed_robot([config_claim(config), *option_claim(args.robot)])  # both must name the same arm
+        return TuiOptions(config=config, db=args.db, out_dir=args.out_dir, overrides=overrides)
     if not args.speed > 0:
         raise InputError(f"--speed must be positive, got {args.speed}")
+    claims = option_claim(args.robot)
     if args.truth:
         from hil.calibration.model_file import load_truth
 
-        load_truth(args.truth)  # a bad truth fails here, naming the key
-    return TuiOptions(sim=True, speed=args.speed, seed=args.seed, robot=get_robot(args.robot).name,
+        geometry, _ = load_truth(args.truth)  # a bad truth fails here, naming the key
+        claims.append(Claim(geometry.robot, f"the truth {args.truth} is for {geometry.robot}"))
+    robot = agreed_robot(claims, default="ur5e")  # --robot and the truth must agree, before the app starts
+    return TuiOptions(sim=True, speed=args.speed, seed=args.seed, robot=robot,
                       truth=args.truth, tracker_protocol=args.tracker_protocol or "geocom", db=args.db,
                       out_dir=args.out_dir, overrides=overrides)
 

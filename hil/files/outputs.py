@@ -2,6 +2,12 @@
 
 Every file hil writes for a user (models, results, reports, samples, figures, exports) goes through
 `atomic_write_text` / `atomic_write_bytes`: a temporary file beside the target, then a rename.
+
+Before a command computes, moves or writes anything it checks each output path with `check_output`
+(`check_output_dir` for a directory of outputs): a rename onto a path that is one of the command's
+inputs or the campaign database would silently replace it (``hil show last --db s.db
+--export-measurements s.db`` once turned the store into a CSV), so such a path is bad input, as is a
+directory or a path whose folder does not exist.
 """
 
 from __future__ import annotations
@@ -10,12 +16,104 @@ import csv
 import io
 import os
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 
 from hil.errors import InputError
+
+PathArg = str | os.PathLike[str]
+
+#: Files beside an SQLite database that belong to it (write-ahead log, rollback journal, shared memory).
+STORE_SIDECARS: tuple[str, ...] = ("", "-wal", "-journal", "-shm")
+
+
+def _same_file(a: PathArg, b: PathArg) -> bool:
+    """Whether `a` and `b` name one file: the same inode when both exist (hard links, symlinks), else
+    the same path once symlinks and ``..`` are resolved (an output naming a store not created yet)."""
+    try:
+        if os.path.samefile(a, b):
+            return True
+    except (OSError, ValueError):
+        pass
+    try:
+        return os.path.realpath(a) == os.path.realpath(b)
+    except (OSError, ValueError):
+        return False
+
+
+def _is_url(path: PathArg) -> bool:
+    """A store given as a URL (a database server) is no file an output could overwrite."""
+    return "://" in os.fspath(path)
+
+
+def check_output(path: PathArg, *, field: str,
+                 inputs: Mapping[str, PathArg | None] | Iterable[tuple[str, PathArg | None]] = (),
+                 store: PathArg | None = None, store_field: str = "--db",
+                 outputs: Mapping[str, PathArg | None] | Iterable[tuple[str, PathArg | None]] = (),
+                 ) -> Path:
+    """`path` as a Path when it can take an output of option `field`, else a one-line InputError.
+
+    Refused, so a typo never costs a user's data: the path of an input (`inputs`: option -> path,
+    compared by inode, so hard links and symlinks count), the store (`store`, the database of
+    `store_field`, or its -wal/-journal/-shm), another output of the same command (`outputs`), an
+    existing directory, and a path whose parent directory does not exist. Call it before anything is
+    computed, moved or written.
+    """
+    name = os.fspath(path)
+    target = Path(name)
+    if not name:
+        raise InputError(f"{field}: empty path; name a file")
+    if target.is_dir():
+        raise InputError(f"{field}: {name} is a directory; name a file")
+    parent = target.parent
+    if not parent.is_dir():
+        what = "is not a directory" if parent.exists() else "does not exist"
+        raise InputError(f"{field}: cannot write {name}: folder {parent} {what}")
+    for option, other in _pairs(inputs):
+        if _same_file(target, other):
+            raise InputError(f"{field}: {name} is the input {option}; writing it would destroy it, "
+                             "choose another file")
+    if store is not None and not _is_url(store):
+        for suffix in STORE_SIDECARS:
+            if _same_file(target, os.fspath(store) + suffix):
+                what = "the store" if not suffix else f"the store's {suffix[1:]} file"
+                raise InputError(f"{field}: {name} is {what} ({store_field} {os.fspath(store)}); "
+                                 "choose another file")
+    for option, other in _pairs(outputs):
+        if _same_file(target, other):
+            raise InputError(f"{field}: {name} is also the output {option}; give each its own file")
+    return target
+
+
+def check_output_dir(path: PathArg, *, field: str, names: Iterable[str] = (),
+                     inputs: Mapping[str, PathArg | None] | Iterable[tuple[str, PathArg | None]] = (),
+                     store: PathArg | None = None, store_field: str = "--db") -> Path:
+    """`path` as a Path when it can take a command's outputs (created if missing), else InputError.
+
+    Refused: an existing file (not a directory), a missing directory whose parent does not exist, and
+    (for the file `names` the command writes into it) anything `check_output` refuses.
+    """
+    name = os.fspath(path)
+    target = Path(name)
+    if not name:
+        raise InputError(f"{field}: empty path; name a directory")
+    if target.exists() and not target.is_dir():
+        raise InputError(f"{field}: {name} is a file, not a directory; name a directory")
+    if not target.exists() and not target.parent.is_dir():
+        raise InputError(f"{field}: cannot create {name}: folder {target.parent} does not exist")
+    if target.is_dir():  # a directory still to be created holds no input yet
+        for file in names:
+            check_output(target / file, field=field, inputs=inputs, store=store, store_field=store_field)
+    return target
+
+
+def _pairs(items: Mapping[str, PathArg | None] | Iterable[tuple[str, PathArg | None]]
+           ) -> list[tuple[str, PathArg]]:
+    """(option, path) pairs of a mapping or an iterable of pairs, without the options not given."""
+    pairs = items.items() if isinstance(items, Mapping) else items
+    return [(option, p) for option, p in pairs if p is not None and os.fspath(p) != ""]
 
 
 def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:

@@ -11,6 +11,12 @@ Choices the seed leaves open, and why:
   exported with 4–6 decimals must pass, a typo (a swapped sign, a missing digit) must not.
 * Two consecutive points closer than ``MIN_SEGMENT`` (1 µm) are refused: a zero-length segment has
   no direction, so neither the bridge of its corner nor the tool-axis interpolation is defined.
+* Coordinates beyond ``MAX_COORDINATE`` (5 m) of the base are refused: the largest UR reaches 1.75 m,
+  so such a point is a unit mistake (metres for millimetres read the other way) or a corrupted file,
+  and planning toward it would allocate samples for kilometres of path.
+* D and E must lie in [``MIN_TOLERANCE``, ``MAX_TOLERANCE``] (0.1 µm to 100 mm): below the first no
+  arm or tracker resolves the difference, above the second a "tolerance" is larger than the parts a
+  UR handles and the path it allows has nothing to do with the program.
 * A turn of more than ``MAX_TURN_DEG`` (179°) is refused: at a reversal the bridge degenerates to a
   cusp (the two Bezier halves meet head-on) and no error-bounded smooth path exists; the user must
   split the program there.
@@ -30,6 +36,9 @@ from hil.files.inputs import read_input_text
 AXIS_TOLERANCE = 1e-3
 MIN_SEGMENT = 1e-3  # mm
 MAX_TURN_DEG = 179.0
+MAX_COORDINATE = 5000.0  # mm, |X|, |Y|, |Z|
+MIN_TOLERANCE = 1e-4  # mm, D and E
+MAX_TOLERANCE = 100.0  # mm, D and E
 KEYWORD = "MOVEB"
 FIELDS = ("X", "Y", "Z", "I", "J", "K", "U", "V", "W", "D", "E")
 
@@ -116,6 +125,10 @@ def parse_program(text: str, source: str = "<program>") -> Program:
             if not math.isfinite(v):
                 raise _fail(source, number, f"{name} must be finite, got {word!r}")
             values.append(v)
+        for name, v in zip(FIELDS[:3], values[:3], strict=True):
+            if abs(v) > MAX_COORDINATE:
+                raise _fail(source, number, f"{name} = {v:g} mm is outside any robot's workspace "
+                                            f"(at most {MAX_COORDINATE:g} mm from the base)")
         position = np.array(values[0:3])
         z, x = np.array(values[3:6]), np.array(values[6:9])
         d, e = values[9], values[10]
@@ -130,6 +143,10 @@ def parse_program(text: str, source: str = "<program>") -> Program:
             raise _fail(source, number, f"D (chord-height error) must be positive, got {d:g}")
         if not e > 0:
             raise _fail(source, number, f"E (point error) must be positive, got {e:g}")
+        for name, v in (("D (chord-height error)", d), ("E (point error)", e)):
+            if not MIN_TOLERANCE <= v <= MAX_TOLERANCE:
+                raise _fail(source, number, f"{name} = {v:g} mm is outside the plausible range "
+                                            f"[{MIN_TOLERANCE:g}, {MAX_TOLERANCE:g}] mm")
         if points and np.linalg.norm(position - points[-1].position) < MIN_SEGMENT:
             raise _fail(source, number, f"the point repeats the previous one (line {points[-1].line}); "
                                         "a zero-length segment has no direction")

@@ -22,9 +22,10 @@ import numpy as np
 from hil.arm.kinematics import Kinematics
 from hil.calibration.identification import Correlation, ErrorStats, FitResult, RejectedPose
 from hil.calibration.measurements import Measurements
-from hil.calibration.model_file import RESULT_FORMAT
+from hil.calibration.model_file import RESULT_FORMAT, check_geometry_block
 from hil.campaign.events import Event, Message, PoseSkipped, Resumed, Suspended
 from hil.errors import InputError
+from hil.files.inputs import json_number
 from hil.station.config import StationConfig
 
 
@@ -386,7 +387,11 @@ def _from_result(doc: Mapping[str, Any], source: str) -> ReportData:
     pv = per_pose.get("validation") or {}
     pc = per_pose.get("calibration") or {}
     robot_model = str(doc.get("robot") or model.get("robot") or "")
-    accept = _num(need(doc, "accept_rms", ""), f"{source}: accept_rms")
+    accept = json_number(need(doc, "accept_rms", ""), f"{source}: accept_rms", 1e-9, 1.0, "m")
+    passed = need(doc, "passed", "")
+    if not isinstance(passed, bool):  # "yes" would read as a pass: a verdict is true or false, nothing else
+        raise InputError(f"{source}: passed: expected true or false, got {passed!r}")
+    check_geometry_block(model, source, "model.")
     params = tuple(Parameter(str(need(p, "name", "model.parameters[].")),
                              _num(p.get("value"), f"{source}: model.parameters.value"),
                              _num(p.get("std"), f"{source}: model.parameters.std"))
@@ -420,7 +425,7 @@ def _from_result(doc: Mapping[str, Any], source: str) -> ReportData:
         robot=RobotInfo(robot_model, str(doc.get("robot_serial") or ""),
                         str(doc.get("robot_software") or "")),
         accept_rms=accept,
-        passed=bool(need(doc, "passed", "")),
+        passed=passed,
         validation_before=_error_set(need(validation, "before", "validation."), pv.get("before"),
                                      f"{source}: validation.before"),
         validation_after=_error_set(need(validation, "after", "validation."), pv.get("after"),

@@ -1,15 +1,19 @@
 """Station configuration (TOML): what the campaign needs to know about one cell.
 
 Every key is declared once below with its type, default and check, so the error for a wrong value
-names the key (``station.toml: robot.speed: must be > 0, got -1``) and an unknown key is refused
-rather than silently ignored (a typo in ``acceptance`` must not pass a bad robot). A commented
-example lives in ``hil/station/station.example.toml``.
+names the key (``station.toml: robot.speed: must be in (0, 3.14] rad/s, got -1``) and an unknown key is
+refused rather than silently ignored (a typo in ``acceptance`` must not pass a bad robot). Every
+number has a physical range (its unit and where the limit comes from are in a comment by the key), so
+a value typed in the wrong unit or an absurd one is refused when the file is read, before a database
+is created or the arm moves. A commented example lives in ``hil/station/station.example.toml``.
 """
 
 from __future__ import annotations
 
+import ipaddress
 import math
 import os
+import re
 import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -34,16 +38,96 @@ class Key:
     help: str = ""
 
 
-def _positive(v: Any) -> str | None:
-    return None if v > 0 else f"must be > 0, got {v}"
-
-
-def _non_negative(v: Any) -> str | None:
-    return None if v >= 0 else f"must be >= 0, got {v}"
-
-
 def _angle(v: Any) -> str | None:
     return None if 0 < v < 90 else f"must be between 0 and 90 degrees, got {v}"
+
+
+def _within(lo: float, hi: float, unit: str = "", *, lo_open: bool = False,
+            hi_open: bool = False) -> Callable[[Any], str | None]:
+    """A check that a number lies in its physical range; the error shows the range with its unit
+    (``must be in (0, 3.14] rad/s, got 1e9``), so the fix is in the message."""
+    lo_text, hi_text = (str(x) if isinstance(x, int) else f"{x:g}" for x in (lo, hi))  # seeds: no 4.3e+09
+    span = f"{'(' if lo_open else '['}{lo_text}, {hi_text}{')' if hi_open else ']'}"
+    span += f" {unit}" if unit else ""
+
+    def check(v: Any) -> str | None:
+        inside = (lo < v if lo_open else lo <= v) and (v < hi if hi_open else v <= hi)
+        return None if inside else f"must be in {span}, got {v}"
+
+    return check
+
+
+def _length_at_most(limit: float, what: str) -> Callable[[Any], str | None]:
+    """A check that a vector (m) is at most `limit` long: a position `what` (``of the flange``)."""
+
+    def check(v: Any) -> str | None:
+        length = math.hypot(*v)
+        return None if length <= limit else f"must be within {limit:g} m {what}, got {length:g} m away"
+
+    return check
+
+
+def _each_within(limit: float) -> Callable[[Any], str | None]:
+    """A check that every coordinate (m) is within ±`limit`."""
+
+    def check(v: Any) -> str | None:
+        return None if all(abs(x) <= limit for x in v) else (
+            f"every coordinate must be in [-{limit:g}, {limit:g}] m, got {list(v)}")
+
+    return check
+
+
+# Host names as RFC 1123 allows them: dot-separated labels of letters, digits and inner hyphens, at most
+# 63 characters each; the last label is not all digits (RFC 3696 §2), so 127.0.0.256 is not a name.
+_LABEL = re.compile(r"[A-Za-z0-9](?:[A-Za-z0-9-]{0,61}[A-Za-z0-9])?")
+
+
+def _host(v: Any) -> str | None:
+    """An IP address or a host name: "not an address" failed only at connect, as a hardware fault
+    (exit 3) after the store was written; a typo in the address is bad input."""
+    try:
+        ipaddress.ip_address(v)
+        return None
+    except ValueError:
+        pass
+    labels = v[:-1].split(".") if v.endswith(".") else v.split(".")
+    if (0 < len(v) <= 253 and all(_LABEL.fullmatch(label) for label in labels)
+            and not labels[-1].isdigit()):
+        return None
+    return f"must be an IP address or a host name, got {v!r}"
+
+
+def _name(v: Any) -> str | None:
+    """A station name: shown in reports and in ``hil history``'s 80-column table."""
+    ok = 0 < len(v) <= 64 and v.isprintable() and v.strip() == v
+    return None if ok else f"must be 1 to 64 printable characters without surrounding spaces, got {v!r}"
+
+
+#: The largest RMS acceptance threshold (m): a calibrated arm is judged on tenths of a millimetre, so
+#: more is a value typed in millimetres (``acceptance = 0.1`` would pass at 100 mm). The command
+#: line's ``--accept``/``--max-rms`` have the same ceiling (`hil.cli._common.MAX_RMS_THRESHOLD`).
+MAX_ACCEPTANCE = 0.01
+
+#: Most candidate configurations for the selector: ~650 bytes of Jacobian each, so 200 000 are ~130 MB
+#: (1e9 asked numpy for 107 GiB). The same as ``--candidates`` (`hil.cli._common.MAX_CANDIDATES`).
+MAX_CANDIDATES = 200_000
+
+#: Most calibration or validation poses: at ~10 s a pose 1000 are a day of measuring, far beyond any
+#: calibration (``--poses``/``--validation`` have the same ceiling: `hil.cli._common.POSE_COUNT`).
+MAX_POSES = 1000
+
+#: The farthest a tracker may stand from the robot base (m): the selector keeps the SMR within the
+#: tracker's measuring range, 0.8-20 m (`selector.candidates.Constraints.tracker_range`, Leica AT960's
+#: stated range), and the SMR stays within the arm's reach (at most 1.75 m, UR20) of the base.
+MAX_TRACKER_DISTANCE = 20.0 + 1.75
+
+#: The farthest the SMR may sit from the flange (m): a nest or a short tool holds it a few centimetres
+#: out; half a metre is already a tool as long as a UR5e's upper arm, and 10 m is a value in millimetres.
+MAX_SMR_OFFSET = 0.5
+
+#: Keep-in box corners (m, robot base frame): the largest arm (UR20) reaches 1.75 m, so a corner beyond
+#: 5 m keeps nothing in and is a value typed in millimetres.
+MAX_KEEP_IN = 5.0
 
 
 def _robot(v: Any) -> str | None:
@@ -62,67 +146,126 @@ def _protocol(v: Any) -> str | None:
     return None if v in PROTOCOLS else f"must be one of {', '.join(PROTOCOLS)}, got {v!r}"
 
 
+def _lost_limit(v: Any) -> str | None:
+    return None if 1 <= v <= 100 else f"must be between 1 and 100, got {v}"
+
+
+#: Every parameter of the kinematic model (`hil.arm.kinematics.N_PARAMETERS`: a 6-D placement per joint
+#: and of the flange, the SMR offset, the tracker pose), of which a subset is identifiable: this many
+#: poses' worth always suffices, so a config asking for that many needs no kinematics (pinocchio) to
+#: be checked — reading a configuration stays cheap for ``hil history --config``.
+_ALL_PARAMETERS = 6 * 6 + 6 + 3 + 6
+
+
+def minimum_calibration_poses(robot: str) -> tuple[int, int]:
+    """(fewest calibration poses, identifiable parameters) of `robot`: the fit identifies the
+    parameters from 3 coordinates per pose and keeps 3 to spare (`selector.design.minimum_poses`, the
+    rule the selector and the fit apply), so fewer would fail only after the bootstrap moved the arm."""
+    from hil.arm.kinematics import identifiable_parameters
+    from selector.design import minimum_poses
+
+    n = len(identifiable_parameters(robot))
+    return minimum_poses(n), n
+
+
 def _parity(v: Any) -> str | None:
     return None if v in ("N", "E", "O", "M", "S") else f"must be one of N, E, O, M, S, got {v!r}"
 
 
 SCHEMA: dict[str, dict[str, Key]] = {
     "station": {
-        "name": Key("str", "station", help="a name for reports and the history"),
+        "name": Key("str", "station", _name, "a name for reports and the history"),
     },
     "robot": {
         "type": Key("str", "ur5e", _robot),
-        "address": Key("str", "127.0.0.1"),
-        "speed": Key("float", 0.5, _positive, "joint speed of moves (rad/s)"),
-        "acceleration": Key("float", 1.0, _positive, "joint acceleration of moves (rad/s²)"),
-        "settle_time": Key("float", 0.3, _non_negative, "wait after the arm is steady (s)"),
-        "joint_samples": Key("int", 10, _positive, "joint readings averaged per pose"),
+        "address": Key("str", "127.0.0.1", _host, "the controller's IP address or host name"),
+        # ur_rtde's moveJ takes at most 3.14 rad/s and 40 rad/s² (UR_JOINT_VELOCITY_MAX and
+        # UR_JOINT_ACCELERATION_MAX), the driver's own RobotConfig check: more was exit 70 at connect
+        "speed": Key("float", 0.5, _within(0, 3.14, "rad/s", lo_open=True), "joint speed of moves (rad/s)"),
+        "acceleration": Key("float", 1.0, _within(0, 40, "rad/s²", lo_open=True),
+                            "joint acceleration of moves (rad/s²)"),
+        # a UR arm is steady within a fraction of a second of arriving; a minute per pose is a value
+        # typed in milliseconds
+        "settle_time": Key("float", 0.3, _within(0, 60, "s"), "wait after the arm is steady (s)"),
+        # joint readings come at the RTDE rate (500 Hz e-Series, 125 Hz CB3): 1000 are 2-8 s per pose,
+        # already far past what averaging the encoders' noise gains
+        "joint_samples": Key("int", 10, _within(1, 1000), "joint readings averaged per pose"),
     },
     "tracker": {
         "protocol": Key("str", "geocom", _protocol,
                         "geocom (GeoCOM on a serial line) or emscon (Leica emScon TPI over TCP)"),
         "url": Key("str", "", help="geocom: serial device or socket://, rfc2217://, spy:// URL; "
                                    "emscon: tcp://host:700"),
-        "baudrate": Key("int", 115200, _positive),
+        # RS-232 rates: GeoCOM instruments run at 2400-115200 baud, USB adapters up to 921600
+        "baudrate": Key("int", 115200, _within(300, 921600, "baud")),
         "parity": Key("str", "N", _parity),
-        "timeout": Key("float", 3.0, _positive, "reply timeout (s)"),
-        "position": Key("vec3?", None, help="approximate position in the robot base frame (m)"),
-        "temperature": Key("float", 20.0, help="air temperature (°C) for the atmospheric correction"),
-        "pressure": Key("float", 1013.25, _positive, "air pressure (hPa)"),
-        "humidity": Key("float", 50.0, _non_negative, "relative humidity (%)"),
+        # a GeoCOM/emScon reply takes milliseconds, a measurement with a search seconds: beyond five
+        # minutes a dead link would go unnoticed
+        "timeout": Key("float", 3.0, _within(0, 300, "s", lo_open=True), "reply timeout (s)"),
+        "position": Key("vec3?", None, _length_at_most(MAX_TRACKER_DISTANCE, "of the robot base"),
+                        "approximate position in the robot base frame (m)"),
+        # the atmospheric correction of the laser's wavelength is meant for the air the tracker works in:
+        # Leica's trackers operate within -15..+45 °C (AT403, the widest), at most 5500 m above sea level
+        # (about 500 hPa; the sea-level record is 1084 hPa); humidity is relative, 0-100 %
+        "temperature": Key("float", 20.0, _within(-20, 50, "°C"),
+                           "air temperature (°C) for the atmospheric correction"),
+        "pressure": Key("float", 1013.25, _within(500, 1100, "hPa"), "air pressure (hPa)"),
+        "humidity": Key("float", 50.0, _within(0, 100, "%"), "relative humidity (%)"),
         "reflector": Key("str", "", help="emscon: reflector name as the tracker lists it (empty: keep the "
                                          "tracker's current one)"),
-        "measure_time": Key("float", 0.5, _positive, "emscon: stationary measuring time per sample (s)"),
+        # a stationary measurement averages for a fraction of a second to a few seconds
+        "measure_time": Key("float", 0.5, _within(0, 60, "s", lo_open=True),
+                            "emscon: stationary measuring time per sample (s)"),
         "bird_bath": Key("bool", False, help="emscon: after a failed search for the SMR, send the beam to "
                                              "the bird bath for an operator to catch"),
-        "warmup": Key("float", 0.0, _non_negative,
+        # a cold AT9xx laser is ready within minutes; two hours without it is a fault, not a cold start
+        "warmup": Key("float", 0.0, _within(0, 7200, "s"),
                       "emscon: longest wait at connect for the laser to warm up (s); then the run waits"),
     },
     "smr": {
-        "offset": Key("vec3", (0.0, 0.0, 0.045), help="SMR centre guess in the flange frame (m)"),
+        "offset": Key("vec3", (0.0, 0.0, 0.045), _length_at_most(MAX_SMR_OFFSET, "of the flange"),
+                      "SMR centre guess in the flange frame (m)"),
         "acceptance_angle": Key("float", 30.0, _angle, "SMR acceptance half-angle (degrees)"),
     },
     "keep_in": {
-        "min": Key("vec3", (-2.0, -2.0, 0.0), help="keep-in box corner (robot base frame, m)"),
-        "max": Key("vec3", (2.0, 2.0, 2.0)),
+        "min": Key("vec3", (-2.0, -2.0, 0.0), _each_within(MAX_KEEP_IN),
+                   "keep-in box corner (robot base frame, m)"),
+        "max": Key("vec3", (2.0, 2.0, 2.0), _each_within(MAX_KEEP_IN)),
     },
     "campaign": {
-        "calibration_poses": Key("int", 30, _positive),
-        "validation_poses": Key("int", 20, _positive),
-        "bootstrap_poses": Key("int", 6, _positive, "poses measured to locate the tracker"),
-        "samples": Key("int", 5, _positive, "tracker samples per point"),
-        "stability": Key("float", 50e-6, _positive, "largest per-axis spread of a point (m)"),
-        "acceptance": Key("float", 0.1e-3, _positive, "validation RMS threshold (m)"),
+        # the fewest calibration poses depend on the robot (checked below, with robot.type)
+        "calibration_poses": Key("int", 30, _within(1, MAX_POSES)),
+        "validation_poses": Key("int", 20, _within(1, MAX_POSES)),
+        # the bootstrap has 8 arm moves (hil.campaign.plan._BOOTSTRAP_DELTAS) and makes at least 4:
+        # other values were silently clamped
+        "bootstrap_poses": Key("int", 6, _within(4, 8), "poses measured to locate the tracker"),
+        # each sample is a tracker measurement (~0.1-1 s): 100 per point already averages the noise away
+        "samples": Key("int", 5, _within(1, 100), "tracker samples per point"),
+        # a tracker's noise is micrometres (AT960: 15 µm + 6 µm/m MPE): a spread allowed above 1 mm no
+        # longer says the SMR was still, and 10 (m) is a value in micrometres
+        "stability": Key("float", 50e-6, _within(0, 1e-3, "m", lo_open=True),
+                         "largest per-axis spread of a point (m)"),
+        "acceptance": Key("float", 0.1e-3, _within(0, MAX_ACCEPTANCE, "m", lo_open=True),
+                          "validation RMS threshold (m)"),
         "index": Key("str", "O1", _index, "observability index for pose selection"),
-        "candidates": Key("int", 20000, _positive, "candidate poses for the selector"),
-        "seed": Key("int", 1),
+        "candidates": Key("int", 20000, _within(1, MAX_CANDIDATES), "candidate poses for the selector"),
+        # numpy's generators take non-negative seeds (-1 was exit 70 in the simulator); 32 bits suffice
+        "seed": Key("int", 1, _within(0, 2**32 - 1)),
+        "max_consecutive_lost": Key("int", 3, _lost_limit,
+                                    "poses in a row that lose the beam before the run stops, saying the "
+                                    "tracker position looks wrong"),
     },
     "timeouts": {
-        "connect": Key("float", 10.0, _positive),
-        "move": Key("float", 60.0, _positive),
-        "measure": Key("float", 10.0, _positive),
-        "suspend": Key("float", 600.0, _positive, "longest wait for a suspender to clear (s)"),
-        "relock": Key("float", 30.0, _positive, "longest wait for a lost beam before the pose is skipped"),
+        # how long the run waits before calling something lost; the longest move of a UR arm (half a
+        # turn of a joint at the slowest useful speed, 0.01 rad/s) takes about five minutes, an operator
+        # clearing a protective stop or catching the beam may take a shift (8 h); more is a value in ms
+        "connect": Key("float", 10.0, _within(0, 600, "s", lo_open=True)),
+        "move": Key("float", 60.0, _within(0, 3600, "s", lo_open=True)),
+        "measure": Key("float", 10.0, _within(0, 600, "s", lo_open=True)),
+        "suspend": Key("float", 600.0, _within(0, 8 * 3600, "s", lo_open=True),
+                       "longest wait for a suspender to clear (s)"),
+        "relock": Key("float", 30.0, _within(0, 3600, "s", lo_open=True),
+                      "longest wait for a lost beam before the pose is skipped"),
     },
     "store": {
         "path": Key("str", "", help="SQLite database (default: the user's data directory)"),
@@ -219,6 +362,12 @@ def parse_config(data: dict[str, Any], source: str = "<config>") -> StationConfi
     lo, hi = values["keep_in"]["min"], values["keep_in"]["max"]
     if any(a >= b for a, b in zip(lo, hi, strict=True)):
         raise InputError(f"{source}: keep_in.min must be below keep_in.max on every axis")
+    cal, robot = values["campaign"]["calibration_poses"], values["robot"]["type"]
+    if 3 * cal < _ALL_PARAMETERS + 3:  # else enough for any arm, known without importing the kinematics
+        need, n = minimum_calibration_poses(robot)
+        if cal < need:
+            raise InputError(f"{source}: campaign.calibration_poses: {cal} is too few: identifying the {n} "
+                             f"parameters of a {robot} from 3 coordinates per pose needs at least {need}")
     return StationConfig(values, source, data)
 
 
@@ -229,7 +378,20 @@ def load_config(path: str | os.PathLike[str]) -> StationConfig:
         data = tomllib.loads(read_input_text(path, "a TOML file"))
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{name}: not valid TOML: {exc}") from None
+    except RecursionError:  # arrays nested thousands deep: tomllib recurses once per level
+        raise InputError(f"{name}: not a usable TOML file (nested too deeply)") from None
     return parse_config(data, name)
+
+
+def check_runnable(config: StationConfig) -> StationConfig:
+    """`config` if a campaign can run on it: the keys every file may leave out but a station cannot
+    (the tracker's URL). Called on ``--config`` before the store is opened, so an empty file is refused
+    without leaving a new database behind (`load_config` alone also serves ``hil history --config``,
+    which needs only ``store.path``)."""
+    if not config.tracker["url"]:
+        raise InputError(f"{config.source}: tracker.url: the tracker's serial device or URL is required "
+                         "(e.g. /dev/ttyUSB0, socket://host:port, tcp://host:700)")
+    return config
 
 
 def default_config() -> StationConfig:

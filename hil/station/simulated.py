@@ -15,26 +15,32 @@ from typing import Any
 
 from hil.arm.catalog import get_robot
 from hil.station.config import StationConfig, default_config
+from hil.station.robot_type import Claim, agreed_robot
 
 
 @contextlib.contextmanager
-def simulated_station(robot: str = "ur5e", truth: str | None = None, speed: float = 1.0, seed: int = 1,
+def simulated_station(robot: str | None = None, truth: str | None = None, speed: float = 1.0, seed: int = 1,
                       tracker_protocol: str = "geocom",
                       **overrides: Any) -> Iterator[tuple[StationConfig, dict[str, Any], dict, Any]]:
     """(config to run, config identifying the run, hidden truth document, running simulator).
 
     The simulated tracker speaks both protocols at once (GeoCOM on a pty and TCP, emScon TPI on TCP);
     `tracker_protocol` chooses which one the run talks to.
+
+    The robot is `robot`, else the truth's, else a UR5e; a `robot` the truth disagrees with is refused
+    (InputError naming both) rather than silently replaced, so the simulated controller always reports
+    the arm the caller asked for and the truth describes.
     """
-    robot = get_robot(robot).name
     truth_sha = ""
     if truth:
         from hil.calibration.model_file import load_truth
 
         geometry, _ = load_truth(truth)  # a bad truth fails here, naming the key
+        claims = [Claim(robot, f"--robot is {robot}")] if robot is not None else []
+        robot = agreed_robot([*claims, Claim(geometry.robot, f"the truth {truth} is for {geometry.robot}")])
         truth = str(Path(truth).resolve())  # the simulator runs in a process of its own, elsewhere
-        robot = geometry.robot
         truth_sha = hashlib.sha256(Path(truth).read_bytes()).hexdigest()
+    robot = get_robot("ur5e" if robot is None else robot).name
     from mocks.station import start_station
 
     sim = start_station(robot=robot, truth=truth, speed=speed, seed=seed)

@@ -34,6 +34,7 @@ import secrets
 import sqlite3
 import threading
 import time
+import urllib.parse
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -54,6 +55,7 @@ from hil.campaign.events import (
     ValidationDone,
 )
 from hil.errors import HilError, InputError
+from hil.store.leases import LEASE_TTL, Lease, LeaseRefused, describe_holder, holder_gone
 from hil.store.owner import is_gone, this_process
 from hil.store.paths import resolve_path
 from hil.store.records import (
@@ -68,7 +70,7 @@ from hil.store.records import (
     RobotInfo,
     ValidationRecord,
 )
-from hil.store.schema import canonical_json, config_hash, migrate
+from hil.store.schema import SCHEMA_VERSION, canonical_json, config_hash, measurement_hash, migrate
 
 # Engine states that are also campaign statuses (the final status comes from RunFinished).
 _LIVE_STATES = frozenset({"running", "paused", "suspended", "stopping"})
@@ -80,6 +82,101 @@ class StoreError(HilError):
 
 class UnknownCampaignError(InputError):
     """No campaign with that id (or id prefix) in this database."""
+
+
+class CorruptStoreError(StoreError, InputError):
+    """The database file is damaged (garbage written into it, a torn copy): SQLite says "database disk
+    image is malformed" only when a query reaches the damaged page, long after the file opened.
+
+    Bad input naming the file (exit 2, ``k.db is not a readable hil store: ...``), not an internal
+    error; still a `StoreError`, so a run that meets it mid-campaign stops as for any store failure.
+    """
+
+
+# SQLite's primary result codes for a damaged file: SQLITE_CORRUPT (11), SQLITE_NOTADB (26).
+_DAMAGED = frozenset({11, 26})
+
+
+def _damaged(exc: sqlite3.DatabaseError, conn: sqlite3.Connection) -> BaseException:
+    """`exc` as a `CorruptStoreError` naming the file when it says the file is damaged, else itself."""
+    code = getattr(exc, "sqlite_errorcode", None)
+    if code is None or code & 0xFF not in _DAMAGED:
+        return exc
+    where = getattr(conn, "where", "the database")
+    if code & 0xFF == 26:  # SQLITE_NOTADB: not SQLite at all (a text file, an image)
+        return CorruptStoreError(f"{where}: not a hil database ({exc})")
+    return CorruptStoreError(f"{where} is not a readable hil store: {exc}")
+
+
+def _check_intact(conn: sqlite3.Connection) -> None:
+    """CorruptStoreError unless SQLite's quick check finds every page sound. A writer runs it once, at
+    open: a damaged page is otherwise met only by the query that reads it, which for ``hil calibrate``
+    can be after it connected to the arm, or mid-campaign. It reads the file once (milliseconds for
+    the megabytes a station's store holds)."""
+    problems = [row[0] for row in conn.execute("PRAGMA quick_check(1)")]
+    if problems != ["ok"]:
+        where = getattr(conn, "where", "the database")
+        # "*** in database main ***\nPage 16: btreeInitPage() returns error code 11": one line
+        detail = " ".join(" ".join(problems).replace("*** in database main ***", "").split())
+        raise CorruptStoreError(f"{where} is not a readable hil store: database disk image is malformed "
+                                f"({detail[:200]})")
+
+
+class _Cursor(sqlite3.Cursor):
+    """A cursor whose damaged-file errors name the file (`CorruptStoreError`): every query and every
+    fetch, since a row on a damaged page fails only when it is read."""
+
+    def execute(self, *args: Any) -> _Cursor:
+        try:
+            return super().execute(*args)
+        except sqlite3.DatabaseError as exc:
+            raise _damaged(exc, self.connection) from None
+
+    def executemany(self, *args: Any) -> _Cursor:
+        try:
+            return super().executemany(*args)
+        except sqlite3.DatabaseError as exc:
+            raise _damaged(exc, self.connection) from None
+
+    def __next__(self) -> Any:
+        try:
+            return super().__next__()
+        except sqlite3.DatabaseError as exc:
+            raise _damaged(exc, self.connection) from None
+
+    def fetchone(self) -> Any:
+        try:
+            return super().fetchone()
+        except sqlite3.DatabaseError as exc:
+            raise _damaged(exc, self.connection) from None
+
+    def fetchmany(self, *args: Any) -> list[Any]:
+        try:
+            return super().fetchmany(*args)
+        except sqlite3.DatabaseError as exc:
+            raise _damaged(exc, self.connection) from None
+
+    def fetchall(self) -> list[Any]:
+        try:
+            return super().fetchall()
+        except sqlite3.DatabaseError as exc:
+            raise _damaged(exc, self.connection) from None
+
+
+class _Connection(sqlite3.Connection):
+    """The store's connections: their queries go through `_Cursor` (``Connection.execute`` would
+    bypass ``cursor()``); `where` is the file the errors name."""
+
+    where = "the database"
+
+    def cursor(self, factory: Any = _Cursor) -> Any:  # type: ignore[override]
+        return super().cursor(factory)
+
+    def execute(self, *args: Any) -> Any:  # type: ignore[override]
+        return self.cursor().execute(*args)
+
+    def executemany(self, *args: Any) -> Any:  # type: ignore[override]
+        return self.cursor().executemany(*args)
 
 
 def _dumps(value: Any) -> str:
@@ -191,11 +288,12 @@ class Store:
     """
 
     def __init__(self, path: str | os.PathLike[str], *, create: bool = True,
-                 synchronous: str = "FULL", timeout: float = 10.0) -> None:
+                 synchronous: str = "FULL", timeout: float = 10.0, readonly: bool = False) -> None:
         if synchronous.upper() not in ("FULL", "NORMAL", "EXTRA"):
             raise ValueError(f"synchronous must be FULL, NORMAL or EXTRA, got {synchronous!r}")
         self.path = Path(path)
-        self.create = create
+        self.create = create and not readonly
+        self.readonly = readonly
         self.synchronous = synchronous.upper()
         self.timeout = timeout
         self._local = threading.local()
@@ -210,12 +308,18 @@ class Store:
     # --- opening and closing ------------------------------------------------------------------
     @classmethod
     def open(cls, path: str | os.PathLike[str] | None = None, *, config: Any = None,
-             create: bool = True, synchronous: str = "FULL", timeout: float = 10.0) -> Store:
+             create: bool = True, synchronous: str = "FULL", timeout: float = 10.0,
+             readonly: bool = False) -> Store:
         """Open (creating or upgrading as needed) the database at `path`, or where `resolve_path`
         says from `config` and the environment. InputError if it is missing (with
-        ``create=False``), not a database, not a hil store, or newer than this code."""
+        ``create=False`` or ``readonly=True``), empty (``readonly``), not a database, not a hil
+        store, or newer than this code.
+
+        ``readonly=True`` is for the commands that only read (history, show): they must work on a
+        store they cannot write (read-only media, another user's station folder) and must never
+        create or change a file — so no WAL switch, no schema upgrade (`_readonly_uri`)."""
         store = cls(resolve_path(path, config), create=create, synchronous=synchronous,
-                    timeout=timeout)
+                    timeout=timeout, readonly=readonly)
         return store.connect()
 
     def connect(self) -> Store:
@@ -249,15 +353,23 @@ class Store:
                 raise InputError(f"{where}: cannot create: {exc.strerror or exc}") from None
         elif self.path.is_dir():
             raise InputError(f"{where}: is a directory, not a database")
+        elif self.readonly and self.path.stat().st_size == 0:
+            # SQLite takes a 0-byte file for a new database; a reader must not turn it into a store
+            raise InputError(f"{where} is empty: not a hil store")
         try:
             # check_same_thread=False only so close() can close it from another thread; each
             # connection is still used by the one thread that created it.
-            conn = sqlite3.connect(self.path, timeout=self.timeout, isolation_level=None,
-                                   check_same_thread=False)
+            conn = sqlite3.connect(self._readonly_uri() if self.readonly else self.path,
+                                   timeout=self.timeout, isolation_level=None,
+                                   check_same_thread=False, uri=self.readonly, factory=_Connection)
         except sqlite3.Error as exc:
             raise InputError(f"{where}: cannot open: {exc}") from None
+        conn.where = where  # what a damaged page, met later by any query, names (`CorruptStoreError`)
         try:
             conn.execute(f"PRAGMA busy_timeout = {int(self.timeout * 1000)}")
+            if self.readonly:
+                self._check_readable(conn, where)
+                return conn
             mode = conn.execute("PRAGMA journal_mode = WAL").fetchone()[0]
             if str(mode).lower() != "wal":
                 raise InputError(f"{where}: cannot use WAL journal mode (got {mode}); "
@@ -266,6 +378,7 @@ class Store:
             conn.execute("PRAGMA foreign_keys = ON")
             if not self._ready:
                 migrate(conn, where)
+                _check_intact(conn)
         except sqlite3.DatabaseError as exc:
             conn.close()
             text = str(exc)
@@ -278,6 +391,49 @@ class Store:
             conn.close()
             raise
         return conn
+
+    def _readonly_uri(self) -> str:
+        """The ``file:`` URI of a reading connection (never one that creates the file).
+
+        A WAL database needs its ``-wal`` and ``-shm`` files beside it. Where the reader may write
+        them (``mode=rw``, with ``query_only`` set by `_check_readable`), SQLite removes them again
+        at close, leaving the folder as it was; ``mode=ro`` would leave them behind. In a directory
+        we cannot write (read-only media, another user's folder) even ``mode=ro`` fails ("attempt
+        to write a readonly database"): there, unless a ``-wal`` holds commits not yet folded into
+        the file (hil closes cleanly, folding them in), ``immutable=1`` reads the file alone; with
+        such a ``-wal`` it would hide them, so ``mode=ro`` reads through the existing files.
+        """
+        path = self.path.resolve()
+        wal = path.with_name(path.name + "-wal")
+        if os.access(path.parent, os.W_OK):
+            query = "mode=rw" if os.access(path, os.W_OK) else "mode=ro"
+        elif wal.exists() and wal.stat().st_size > 0:
+            query = "mode=ro"
+        else:
+            query = "mode=ro&immutable=1"
+        return f"file:{urllib.parse.quote(str(path))}?{query}"
+
+    def _check_readable(self, conn: sqlite3.Connection, where: str) -> None:
+        """What `migrate` checks, without writing: a hil store of a version this code reads.
+
+        An older store is upgraded once, as any command did before readers opened read-only, when
+        it can be written; on read-only media a reader says so rather than fail on a missing column
+        later."""
+        conn.execute("PRAGMA query_only = ON")
+        found = conn.execute("PRAGMA user_version").fetchone()[0]
+        if found > SCHEMA_VERSION:
+            raise InputError(f"{where}: database schema version {found} is newer than this hil "
+                             f"supports ({SCHEMA_VERSION}); upgrade hil to read it")
+        if found == 0:
+            raise InputError(f"{where}: an SQLite database, but not a hil store")
+        if found < SCHEMA_VERSION and os.access(self.path, os.W_OK) and os.access(
+                self.path.resolve().parent, os.W_OK):
+            Store(self.path, create=False, timeout=self.timeout).connect().close()  # migrates
+            found = conn.execute("PRAGMA user_version").fetchone()[0]
+        if found < SCHEMA_VERSION:
+            raise InputError(f"{where}: database schema version {found} is older than this hil's "
+                             f"({SCHEMA_VERSION}) and the file is read-only: copy it somewhere "
+                             "writable to upgrade it")
 
     def _conn(self) -> sqlite3.Connection:
         conn: sqlite3.Connection | None = getattr(self._local, "conn", None)
@@ -331,36 +487,43 @@ class Store:
         """Start a campaign record (status ``created``) and return its id.
 
         `config` is a StationConfig or its ``as_dict()``; it is stored whole (the campaign must be
-        reproducible from the database alone) with its `config_hash` for `find_resumable`.
+        reproducible from the database alone) with its `config_hash`, and the `measurement_hash`
+        `find_resumable` matches.
         `robot` defaults to the config's robot type with an unknown serial.
         """
+        now = time.time() if now is None else now
+        with self._write("create a campaign") as conn:
+            return self._create(conn, config, robot, plan, now)
+
+    def _create(self, conn: sqlite3.Connection, config: Any,
+                robot: RobotInfo | Mapping[str, Any] | str | None, plan: Mapping[str, Any] | None,
+                now: float) -> str:
         values = config.as_dict() if hasattr(config, "as_dict") else dict(config)
         station = str((values.get("station") or {}).get("name") or "station")
         info = RobotInfo.coerce(robot if robot is not None
                                 else str((values.get("robot") or {}).get("type") or ""))
-        now = time.time() if now is None else now
-        with self._write("create a campaign") as conn:
-            conn.execute("INSERT INTO stations (name, created) VALUES (?, ?) "
-                         "ON CONFLICT (name) DO NOTHING", (station, now))
-            station_id = conn.execute("SELECT id FROM stations WHERE name = ?", (station,)).fetchone()[0]
-            robot_id = None
-            if info.serial:
-                conn.execute(
-                    "INSERT INTO robots (serial, type, model, software, first_seen, last_seen) "
-                    "VALUES (?, ?, ?, ?, ?, ?) ON CONFLICT (serial) DO UPDATE SET type = excluded.type, "
-                    "model = excluded.model, software = excluded.software, last_seen = excluded.last_seen",
-                    (info.serial, info.type, info.model, info.software, now, now))
-                robot_id = conn.execute("SELECT id FROM robots WHERE serial = ?",
-                                        (info.serial,)).fetchone()[0]
-            for _ in range(20):
-                cid = new_campaign_id(now)
-                if conn.execute("SELECT 1 FROM campaigns WHERE id = ?", (cid,)).fetchone() is None:
-                    break
+        conn.execute("INSERT INTO stations (name, created) VALUES (?, ?) "
+                     "ON CONFLICT (name) DO NOTHING", (station, now))
+        station_id = conn.execute("SELECT id FROM stations WHERE name = ?", (station,)).fetchone()[0]
+        robot_id = None
+        if info.serial:
             conn.execute(
-                "INSERT INTO campaigns (id, station, robot, robot_type, config, config_hash, plan, "
-                "status, software, created, updated) VALUES (?, ?, ?, ?, ?, ?, ?, 'created', ?, ?, ?)",
-                (cid, station_id, robot_id, info.type, _dumps(values), config_hash(values),
-                 _dumps_or_null(plan), __version__, now, now))
+                "INSERT INTO robots (serial, type, model, software, first_seen, last_seen) "
+                "VALUES (?, ?, ?, ?, ?, ?) ON CONFLICT (serial) DO UPDATE SET type = excluded.type, "
+                "model = excluded.model, software = excluded.software, last_seen = excluded.last_seen",
+                (info.serial, info.type, info.model, info.software, now, now))
+            robot_id = conn.execute("SELECT id FROM robots WHERE serial = ?",
+                                    (info.serial,)).fetchone()[0]
+        for _ in range(20):
+            cid = new_campaign_id(now)
+            if conn.execute("SELECT 1 FROM campaigns WHERE id = ?", (cid,)).fetchone() is None:
+                break
+        conn.execute(
+            "INSERT INTO campaigns (id, station, robot, robot_type, config, config_hash, "
+            "measure_hash, plan, status, software, created, updated) "
+            "VALUES (?, ?, ?, ?, ?, ?, ?, ?, 'created', ?, ?, ?)",
+            (cid, station_id, robot_id, info.type, _dumps(values), config_hash(values),
+             measurement_hash(values), _dumps_or_null(plan), __version__, now, now))
         return cid
 
     def set_status(self, campaign: str, status: str, detail: str | None = None,
@@ -383,28 +546,140 @@ class Store:
 
     def find_resumable(self, config: Any = None, robot_serial: str | None = None, *,
                        config_sha256: str | None = None) -> str | None:
-        """The newest unfinished campaign run with the same configuration, or None.
+        """The newest unfinished campaign that measures what `config` would, or None.
 
         Unfinished means a status outside `FINISHED` (so a killed run, and one ended by a hardware
-        fault, are resumable; an accepted, rejected or aborted one is not). Give `robot_serial`
-        whenever it is known: an end-of-line cell runs the same config on robot after robot, and
-        resuming another arm's campaign would mix two robots' measurements. With a serial, only a
-        campaign of that serial matches.
+        fault, are resumable; an accepted, rejected or aborted one is not). "Measures what `config`
+        would" is the `measurement_hash`: a changed tracker URL, robot address, timeout or store path
+        resumes the campaign, its poses already measured reused (`hil.store.schema.MEASUREMENT_IGNORED`
+        says which keys and why). Give `robot_serial` whenever it is known: an end-of-line cell runs
+        the same config on robot after robot, and resuming another arm's campaign would mix two
+        robots' measurements. With a serial, only a campaign of that serial matches; without one,
+        the robot address is what tells the arm, so it must match too. `config_sha256` instead of a
+        config matches the exact configuration (`config_hash`).
+
+        A campaign found here may be running in another process: `claim` it before resuming.
         """
-        if config_sha256 is None:
-            if config is None:
-                raise ValueError("find_resumable needs a config or a config hash")
-            config_sha256 = config_hash(config.as_dict() if hasattr(config, "as_dict") else config)
         finished = sorted(FINISHED)
-        sql = ("SELECT c.id FROM campaigns c LEFT JOIN robots r ON r.id = c.robot "
-               f"WHERE c.config_hash = ? AND c.status NOT IN ({', '.join('?' * len(finished))})")
-        params: list[Any] = [config_sha256, *finished]
+        if config_sha256 is not None:
+            column, key, address = "c.config_hash", config_sha256, None
+        elif config is None:
+            raise ValueError("find_resumable needs a config or a config hash")
+        else:
+            values = config.as_dict() if hasattr(config, "as_dict") else config
+            column, key = "c.measure_hash", measurement_hash(values)
+            address = None if robot_serial else (values.get("robot") or {}).get("address")
+        sql = (f"SELECT c.id, c.config FROM campaigns c LEFT JOIN robots r ON r.id = c.robot "
+               f"WHERE {column} = ? AND c.status NOT IN ({', '.join('?' * len(finished))})")
+        params: list[Any] = [key, *finished]
         if robot_serial:
             sql += " AND r.serial = ?"
             params.append(robot_serial)
-        sql += " ORDER BY c.created DESC, c.rowid DESC LIMIT 1"
-        row = self._conn().execute(sql, params).fetchone()
-        return None if row is None else str(row[0])
+        sql += " ORDER BY c.created DESC, c.rowid DESC"
+        for cid, stored in self._conn().execute(sql, params):
+            if address is None or (json.loads(stored).get("robot") or {}).get("address") == address:
+                return str(cid)
+        return None
+
+    # --- leases (hil.store.leases: one process per campaign, one campaign per robot) ----------------
+    def claim(self, campaign: str, robot_serial: str = "", *, ttl: float = LEASE_TTL,
+              heartbeat: bool = True) -> Lease:
+        """Take the leases of `campaign` and of the robot `robot_serial` ("" = unknown: none) for this
+        process, in one transaction, or raise LeaseRefused naming the live process that holds either.
+
+        A lease whose holder is gone (killed, a power cut; `holder_gone`) is taken over: its campaign
+        is resumable. InputError if the campaign is finished (accepted, rejected, aborted: nothing
+        left to run), UnknownCampaignError if there is none. Release the lease when the run ends.
+        """
+        token = secrets.token_hex(16)
+        with self._write(f"claim campaign {campaign}") as conn:
+            row = conn.execute("SELECT status FROM campaigns WHERE id = ?", (campaign,)).fetchone()
+            if row is None:
+                raise UnknownCampaignError(f"{self.path}: no campaign {campaign!r}")
+            if row[0] in FINISHED:
+                raise InputError(f"campaign {campaign} is already {row[0]}: there is nothing left to "
+                                 "run (start a new one)")
+            names = self._take_leases(conn, campaign, robot_serial, token, time.time(), ttl,
+                                      f"campaign {campaign}")
+        return Lease(self, campaign, token, names, ttl=ttl, heartbeat=heartbeat)
+
+    def claim_new(self, config: Any, robot: RobotInfo | Mapping[str, Any] | str | None = None,
+                  plan: Mapping[str, Any] | None = None, *, ttl: float = LEASE_TTL,
+                  heartbeat: bool = True) -> Lease:
+        """`create_campaign` and `claim` in one transaction: a robot driven by another live campaign
+        refuses (LeaseRefused) and leaves no empty campaign behind. ``lease.campaign`` is the new id."""
+        token, now = secrets.token_hex(16), time.time()
+        serial = RobotInfo.coerce(robot).serial if robot is not None else ""
+        with self._write("create a campaign") as conn:
+            campaign = self._create(conn, config, robot, plan, now)
+            names = self._take_leases(conn, campaign, serial, token, now, ttl, "")
+        return Lease(self, campaign, token, names, ttl=ttl, heartbeat=heartbeat)
+
+    def check_claim(self, campaign: str | None, robot_serial: str = "", *,
+                    ttl: float = LEASE_TTL) -> None:
+        """Raise LeaseRefused if `claim` (`claim_new` when `campaign` is None) would be refused now:
+        a UI asks before offering a resume or starting a run. Writes nothing."""
+        now = time.time()
+        names = (([f"campaign:{campaign}"] if campaign else [])
+                 + ([f"robot:{robot_serial}"] if robot_serial else []))
+        for name in names:
+            row = self._conn().execute("SELECT campaign, owner, since, heartbeat FROM leases "
+                                       "WHERE name = ?", (name,)).fetchone()
+            if row is not None and not holder_gone(json.loads(row[1]), row[3], now, ttl):
+                raise LeaseRefused(self._refusal(name, campaign and f"campaign {campaign}", row[0],
+                                                 json.loads(row[1]), row[2]))
+
+    def _take_leases(self, conn: sqlite3.Connection, campaign: str, robot_serial: str, token: str,
+                     now: float, ttl: float, mine: str) -> tuple[str, ...]:
+        """Insert or take over (compare-and-set) each lease row, inside the caller's transaction;
+        LeaseRefused (rolling the whole transaction back) at the first one a live process holds.
+        `mine` names the campaign in that message ("" for a new one: its id is rolled back too)."""
+        owner = _dumps(this_process())
+        names = (f"campaign:{campaign}",) + ((f"robot:{robot_serial}",) if robot_serial else ())
+        for name in names:
+            for _ in range(3):  # PostgreSQL (read committed): a row may vanish between two statements
+                if conn.execute(
+                        "INSERT INTO leases (name, campaign, owner, token, since, heartbeat) "
+                        "VALUES (?, ?, ?, ?, ?, ?) ON CONFLICT (name) DO NOTHING RETURNING name",
+                        (name, campaign, owner, token, now, now)).fetchone() is not None:
+                    break
+                held = conn.execute("SELECT campaign, owner, token, since, heartbeat FROM leases "
+                                    "WHERE name = ?", (name,)).fetchone()
+                if held is None:
+                    continue
+                holder, held_owner, held_token, since, beat = held
+                if not holder_gone(json.loads(held_owner), beat, now, ttl):
+                    raise LeaseRefused(self._refusal(name, mine, holder, json.loads(held_owner), since))
+                if conn.execute(  # the holder is gone: take it over, unless someone just did
+                        "UPDATE leases SET campaign = ?, owner = ?, token = ?, since = ?, heartbeat = ? "
+                        "WHERE name = ? AND token = ?",
+                        (campaign, owner, token, now, now, name, held_token)).rowcount == 1:
+                    break
+            else:
+                raise LeaseRefused(f"{mine or 'a new campaign'}: {name} keeps changing hands; try again")
+        return names
+
+    @staticmethod
+    def _refusal(name: str, mine: str, holder: str, owner: Any, since: float) -> str:
+        """The one line a refused claim says: what is held, by which campaign and process, since when."""
+        who = describe_holder(owner, since)
+        if name.startswith("robot:"):
+            return (f"robot {name[len('robot:'):]} is being driven by campaign {holder} ({who}): "
+                    f"{mine or 'a new campaign'} cannot use it until that run ends")
+        return (f"campaign {holder} is being run by {who}: wait for that run to end, or stop it "
+                "(a campaign whose process has ended is resumed)")
+
+    def renew_lease(self, lease: Lease) -> bool:
+        """The heartbeat: True while every row of `lease` still carries its token."""
+        with self._write("renew a lease") as conn:
+            count = conn.execute("UPDATE leases SET heartbeat = ? WHERE token = ?",
+                                 (time.time(), lease.token)).rowcount
+        return count == len(lease.names)
+
+    def release_lease(self, lease: Lease) -> None:
+        """Give up `lease` (rows taken over meanwhile carry another token and stay)."""
+        with self._write("release a lease") as conn:
+            conn.execute("DELETE FROM leases WHERE token = ?", (lease.token,))
 
     def campaigns(self, limit: int | None = 20, *, station: str | None = None) -> list[CampaignSummary]:
         """Summaries, newest first (``limit=None`` for all)."""

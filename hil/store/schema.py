@@ -44,6 +44,51 @@ def config_hash(config: Mapping[str, Any]) -> str:
     return hashlib.sha256(canonical_json(body).encode()).hexdigest()
 
 
+# What does not change what a campaign measures, so a re-run that differs only there resumes it:
+# how hil reaches the devices and how long it waits for them. ``None`` drops the whole section.
+#   robot.address   — the arm is identified by its serial, which `find_resumable` matches instead
+#                     (and, when the serial is unknown, it compares the address itself);
+#   tracker.url     — a serial port renamed (/dev/ttyUSB0 -> /dev/ttyUSB1), a socket:// or tcp:// address
+#                     changed: the same instrument on another cable or network;
+#   tracker.baudrate, tracker.parity — settings of that cable, not of the measurement;
+#   tracker.timeout, tracker.warmup, timeouts.* — how long to wait for a reply, a warm laser, a
+#                     move, a relock: a longer wait measures the same point (a skipped pose is
+#                     recorded as skipped, not measured differently);
+#   store.*         — where the results are kept.
+# Everything else stays: the robot type and motion settings, the tracker's protocol (GeoCOM and emScon
+# measure differently: a stationary measuring time, a reflector choice), its position guess and the
+# atmospheric correction (which change every distance), the SMR, the keep-in box, the campaign's
+# counts, seed and acceptance. A value starting with ``sim:`` is kept even in a dropped key: the
+# simulated station identifies itself there by what it simulates (seed, truth), not where it listens.
+# Changing this table changes the hashes: it needs a new schema step recomputing ``measure_hash``.
+MEASUREMENT_IGNORED: Mapping[str, tuple[str, ...] | None] = {
+    "robot": ("address",),
+    "tracker": ("url", "baudrate", "parity", "timeout", "warmup"),
+    "timeouts": None,
+    "store": None,
+}
+
+
+def measurement_identity(config: Mapping[str, Any]) -> dict[str, Any]:
+    """The station configuration without what does not change the measurement (`MEASUREMENT_IGNORED`)."""
+    body: dict[str, Any] = {}
+    for section, values in config.items():
+        if section in MEASUREMENT_IGNORED and MEASUREMENT_IGNORED[section] is None:
+            continue
+        dropped = MEASUREMENT_IGNORED.get(section) or ()
+        if isinstance(values, Mapping):
+            values = {k: v for k, v in values.items()
+                      if k not in dropped or (isinstance(v, str) and v.startswith("sim:"))}
+        body[section] = values
+    return body
+
+
+def measurement_hash(config: Mapping[str, Any]) -> str:
+    """sha256 of `measurement_identity`: how a re-run finds the campaign it resumes, so the poses
+    already measured are reused when only a connection address, a timeout or the store changed."""
+    return hashlib.sha256(canonical_json(measurement_identity(config)).encode()).hexdigest()
+
+
 def _script(*statements: str) -> Step:
     """A step made of SQL statements, run one by one inside the caller's transaction.
 
@@ -161,7 +206,31 @@ def _v2(conn: sqlite3.Connection) -> None:
     conn.execute("CREATE INDEX events_type ON events (campaign, type)")
 
 
-STEPS: Sequence[Step] = (_V1, _v2)
+def _v3(conn: sqlite3.Connection) -> None:
+    """v3: leases (`hil.store.leases`: one process per campaign, one campaign per robot) and a
+    measurement hash on campaigns (filled in for existing ones), which resume matches instead of
+    the config hash, so a changed tracker URL or timeout no longer orphans an unfinished campaign.
+
+    Plain SQL that PostgreSQL runs as well: leases are taken with INSERT ... ON CONFLICT DO NOTHING
+    and a conditional UPDATE under the unique ``name``."""
+    conn.execute("""CREATE TABLE leases (
+        name      TEXT PRIMARY KEY,   -- what is held: 'campaign:<id>' or 'robot:<serial>'
+        campaign  TEXT NOT NULL,      -- the campaign its holder runs
+        owner     TEXT NOT NULL,      -- JSON: host, pid, boot, started (hil.store.owner)
+        token     TEXT NOT NULL,      -- random, one per claim: heartbeat and release touch only theirs
+        since     REAL NOT NULL,
+        heartbeat REAL NOT NULL
+    )""")
+    conn.execute("CREATE INDEX leases_token ON leases (token)")
+    conn.execute("ALTER TABLE campaigns ADD COLUMN measure_hash TEXT NOT NULL DEFAULT ''")
+    rows = conn.execute("SELECT id, config FROM campaigns").fetchall()
+    for cid, config in rows:
+        conn.execute("UPDATE campaigns SET measure_hash = ? WHERE id = ?",
+                     (measurement_hash(json.loads(config)), cid))
+    conn.execute("CREATE INDEX campaigns_measure ON campaigns (measure_hash, created)")
+
+
+STEPS: Sequence[Step] = (_V1, _v2, _v3)
 SCHEMA_VERSION = len(STEPS)
 
 

@@ -142,6 +142,7 @@ class Session:
         self._stop = threading.Event()
         self.ready = threading.Event()
         self._host: threading.Thread | None = None
+        self._arm_lock: contextlib.ExitStack | None = None  # the arm's address lock, while we have it
 
     # --- plumbing ----------------------------------------------------------------------------------
     def post(self, message: Message) -> None:
@@ -197,6 +198,22 @@ class Session:
             self._host.join(timeout)
 
     # --- devices -------------------------------------------------------------------------------------
+    def _lock_arm(self, config: StationConfig) -> None:
+        """Hold the host-local lock on the arm's address (`hil.store.leases`, guard 1) before
+        connecting: while this app has the arm connected or runs on it, no other process of this
+        host connects to it (LeaseRefused, naming that process, if one already has)."""
+        if self._arm_lock is None:
+            from hil.store import address_lock
+
+            stack = contextlib.ExitStack()
+            stack.enter_context(address_lock(config.robot["address"], what="hil tui"))
+            self._arm_lock = stack
+
+    def _unlock_arm(self) -> None:
+        stack, self._arm_lock = self._arm_lock, None
+        if stack is not None:
+            stack.close()
+
     def connect(self) -> None:
         """Open the robot and the tracker and read their status."""
         from hil.station.devices import open_devices
@@ -211,8 +228,10 @@ class Session:
             st.phase, st.error = "connecting", ""
             self.changed()
             try:
+                self._lock_arm(self.config)
                 devices = open_devices(self.config)
             except Exception as exc:  # every driver error, and a bad tracker URL, is the operator's to see
+                self._unlock_arm()
                 st.phase, st.error = "disconnected", f"cannot connect: {_error(exc)}"
                 self._safety_fault(exc)
                 self.notice(st.error, "error")
@@ -271,6 +290,7 @@ class Session:
         devices, self.devices = self.devices, None
         if devices is not None:
             devices.close()
+        self._unlock_arm()
 
     def _read_status(self) -> None:
         """Safety status of the robot and lock status of the tracker (device lock held)."""
@@ -370,13 +390,20 @@ class Session:
             self.connect()
             if self.devices is None:
                 return
+        from hil.store import LeaseRefused
+
         serial = self.devices.robot.info.serial if self.devices.robot.info else None
         try:
             campaign = self.store.find_resumable(self.run_identity(), robot_serial=serial)
+            # another process runs that campaign, or drives this arm: say who, offer nothing
+            self.store.check_claim(campaign, serial or "")
             if campaign is not None:
                 summary = self.store.campaign(campaign).summary
                 self.post(ResumeQuestion(campaign, summary.measured, summary.planned))
                 return
+        except LeaseRefused as exc:
+            self.notice(str(exc), "warning")
+            return
         except Exception as exc:
             self.notice(f"store: {_error(exc)}", "error")
             return
@@ -400,7 +427,7 @@ class Session:
     def run(self, resume_campaign: str | None) -> None:
         """One campaign, as ``hil calibrate`` runs it (a new one, or `resume_campaign` continued)."""
         from hil.campaign.chooser import campaign_chooser
-        from hil.campaign.runner import plan_saver, resume_state, run_campaign
+        from hil.campaign.runner import claim_run, plan_saver, run_campaign
         from hil.report.result import result_document
         from hil.station.devices import open_devices
 
@@ -408,8 +435,9 @@ class Session:
             return
         self.run_active, self._abandoned = True, False
         st, store = self.station, self.store
-        campaign = resume_campaign or ""
+        campaign = ""  # none of ours until claimed: a refused claim must not touch the campaign
         self.run_campaign = campaign
+        lease: Any = None
         record = store.as_subscriber()
 
         def to_store(event: Event) -> None:  # critical; silent once the app has given the run up
@@ -426,14 +454,19 @@ class Session:
             with self._device_lock:
                 devices, self.devices = self.devices, None
             if devices is None:
+                self._lock_arm(config)
                 devices = open_devices(config)
             st.phase = "in run"
             self.changed()
             info = devices.robot.info
             robot = {"type": config.robot["type"], "serial": info.serial if info else "",
                      "model": info.model if info else "", "software": info.software_version if info else ""}
-            resume = resume_state(store, resume_campaign) if resume_campaign else None
-            campaign = resume_campaign or store.create_campaign(self.run_identity(), robot)
+            try:  # this process owns the campaign and the arm before the first motion (hil.store.leases)
+                lease, resume = claim_run(store, self.run_identity(), robot, campaign=resume_campaign)
+            except BaseException:
+                devices.close()
+                raise
+            campaign = lease.campaign
             self.run_campaign = campaign
             st.unfinished = None
             events: list[Event] = []
@@ -447,7 +480,7 @@ class Session:
             outcome = run_campaign(config, campaign_chooser(config), bus=bus, campaign=campaign,
                                    resume=resume, devices=devices,
                                    clock=RealClock(self.options.speed if self.options.sim else 1.0),
-                                   engine_ready=self._engine_ready)
+                                   engine_ready=self._engine_ready, lease=lease)
             status, detail, error = self._final(outcome, events)
             result = result_document(outcome, config, events, started, self.truth)
             result["status"] = status
@@ -465,6 +498,9 @@ class Session:
                     if not self._abandoned:
                         store.set_status(campaign, status, detail=detail)
         finally:
+            if lease is not None:
+                lease.release()
+            self._unlock_arm()  # the run closed the devices; connect() takes the lock again
             self.engine = None
             self.run_active = False
             st.phase, st.safety, st.lock = "disconnected", "-", "-"

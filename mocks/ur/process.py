@@ -8,11 +8,13 @@
   has ur_rtde threads, and no ``__main__`` guard needed in the caller) and talks to it through the
   JSON-lines control channel: ``inject``, ``state``, ``stop``.
   Extra services for the child are named as ``"module:function"`` so they cross the process boundary.
+  The child never outlives the process that started it (`_watch_parent`), and its shutdown on a stop,
+  SIGTERM or its parent's death is bounded (`_STOP_GRACE`): a service that hangs in ``stop()`` cannot
+  leave an orphan simulator holding its ports.
 """
 
 from __future__ import annotations
 
-import contextlib
 import importlib
 import json
 import logging
@@ -99,6 +101,31 @@ def serve(
 
 
 READY_PREFIX = "UR-SIM-READY "
+PARENT_ENV = "UR_SIM_PARENT"  # the pid of the process that started the child (see _watch_parent)
+_PARENT_POLL = 0.2  # seconds between the child's checks that its parent is still there
+_STOP_GRACE = 2.0  # seconds an orderly shutdown may take before the child exits regardless
+
+
+def _watch_parent(parent: int, stop: threading.Event) -> None:
+    """Child side: set `stop` once the process `parent` is gone, and end this process `_STOP_GRACE`
+    seconds after `stop` is set (by this, SIGTERM or SIGINT) if the orderly shutdown has not.
+
+    Not PR_SET_PDEATHSIG: it fires when the *thread* that started the child ends (a short-lived worker
+    thread would take the simulator down with it), not the process. The parent's pid comes from the
+    environment rather than `os.getppid` at start-up, when the parent may already be gone; an orphan
+    is re-parented at once, so a changed `os.getppid` means the parent died, ``kill -9`` included.
+    """
+
+    def watch() -> None:
+        while os.getppid() == parent and not stop.wait(_PARENT_POLL):
+            pass
+        stop.set()
+        time.sleep(_STOP_GRACE)
+        log.warning("shutdown took over %.0f s; exiting regardless", _STOP_GRACE)
+        logging.shutdown()
+        os._exit(1)
+
+    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
 
 
 def child_main(argv: Sequence[str] | None = None) -> int:
@@ -117,22 +144,16 @@ def child_main(argv: Sequence[str] | None = None) -> int:
         sys.stdout.write(READY_PREFIX + json.dumps(info) + "\n")
         sys.stdout.flush()
 
+    stop = threading.Event()
+    parent = os.environ.get(PARENT_ENV, "")
+    if parent.isdigit():
+        _watch_parent(int(parent), stop)
     try:
-        serve(config, services=args[1:], ready=ready)
+        serve(config, services=args[1:], ready=ready, stop_event=stop)
     except Exception as exc:
         ready({"error": f"{type(exc).__name__}: {exc}"})
         return 1
     return 0
-
-
-def _die_with_parent() -> None:
-    """Linux: the simulator gets SIGTERM when the process that started it dies (even by kill -9)."""
-    if sys.platform.startswith("linux"):
-        import ctypes
-
-        pr_set_pdeathsig = 1
-        with contextlib.suppress(OSError, AttributeError):
-            ctypes.CDLL("libc.so.6", use_errno=True).prctl(pr_set_pdeathsig, signal.SIGTERM)
 
 
 class SimStartError(RuntimeError):
@@ -167,11 +188,12 @@ class SimProcess:
         root = _project_root()
         env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
         env["UR_SIM_LOG_LEVEL"] = str(self.log_level)
+        env[PARENT_ENV] = str(os.getpid())  # the child ends when this process does (_watch_parent)
         cmd = [sys.executable, "-m", "mocks.ur", json.dumps(self.config.to_dict()), *self.services]
         # Its own process group: a controller does not die of the operator's Ctrl-C (or a closed
         # terminal) — the process that started it stops the arm first, then stops the simulator.
         self._proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
-                                      env=env, cwd=root, preexec_fn=_die_with_parent, process_group=0)
+                                      env=env, cwd=root, process_group=0)
         assert self._proc.stdout is not None
         line = ""
         with selectors.DefaultSelector() as sel:

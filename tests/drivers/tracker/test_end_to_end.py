@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import logging
 import threading
 from collections.abc import Iterator
 
@@ -154,16 +155,43 @@ def simple_mea(tr: GeoComTracker, timeout: float | None = None) -> np.ndarray:
 
 
 def test_late_reply_is_discarded_by_trid_never_returned(
-    sim: tuple[GeoComSimulator, StaticTarget], link: str
+    sim: tuple[GeoComSimulator, StaticTarget], link: str, monkeypatch: pytest.MonkeyPatch,
+    caplog: pytest.LogCaptureFixture,
 ) -> None:
+    """The order of events is forced, not timed: the first reply is held by the simulator until the
+    second request is on the wire, so it always arrives late (the first call always times out) and
+    always during the second call, after that call's resync flush. (A fixed 0.15 s delay against a
+    0.05 s and a 1 s timeout raced the scheduler: on a loaded machine the second call timed out.)"""
     s, target = sim
+    release = threading.Event()
+    held = threading.Event()
+    take = s.faults.take_reply_fault
+
+    def hold_one_reply() -> object:  # the simulator's link thread, the reply already computed
+        if not held.is_set():
+            held.set()
+            assert release.wait(10.0), "the test never released the held reply"
+        return take()
+
     with tracker(url_of(s, link)) as tr:
         tr.commands.do_measure(MeasureProgram.RTRK_DIST)
-        s.faults.delay_next_reply(0.15)
+        monkeypatch.setattr(s.faults, "take_reply_fault", hold_one_reply)
         with pytest.raises(TrackerTimeout):
             simple_mea(tr, timeout=0.05)
-        target.set([0.3, 0.3, 0.3])  # the late reply (old position) arrives during the next call
-        np.testing.assert_allclose(simple_mea(tr, timeout=1.0), [0.3, 0.3, 0.3], atol=1e-9)
+        assert held.is_set()
+        transport = tr.commands.client.transport
+        write = transport.write
+
+        def write_then_release(data: bytes) -> None:
+            write(data)
+            release.set()  # the late reply (old position) leaves now: during the next call
+
+        monkeypatch.setattr(transport, "write", write_then_release)
+        target.set([0.3, 0.3, 0.3])
+        with caplog.at_level(logging.INFO, logger="drivers.tracker.protocol"):
+            point = simple_mea(tr, timeout=10.0)  # returns as soon as its own reply is in
+        np.testing.assert_allclose(point, [0.3, 0.3, 0.3], atol=1e-9)
+        assert "discarding stale reply" in caplog.text
 
 
 def test_stalled_half_line_then_resync(sim: tuple[GeoComSimulator, StaticTarget], link: str) -> None:

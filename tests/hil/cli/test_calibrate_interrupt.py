@@ -69,9 +69,10 @@ class Cell:
         tracker = ", ".join(map(str, self.truth.tracker.translation + 0.05))
         smr = ", ".join(map(str, self.truth.smr + 0.003))
         self.config.write_text(f'[station]\nname = "cell-9"\n[robot]\nsettle_time = 0.0\njoint_samples = 2\n'
-                               f"[tracker]\nposition = [{tracker}]\n[smr]\noffset = [{smr}]\n"
+                               f'[tracker]\nurl = "/dev/ttyFAKE"\nposition = [{tracker}]\n'
+                               f"[smr]\noffset = [{smr}]\n"
                                "[keep_in]\nmin = [-2.0, -2.0, -0.5]\nmax = [2.0, 2.0, 2.0]\n"
-                               "[campaign]\nsamples = 2\nacceptance = 1.0\n")
+                               "[campaign]\nsamples = 2\nacceptance = 0.01\n")
         self.db, self.out, self.report = tmp_path / "hil.db", tmp_path / "result.json", tmp_path / "r.html"
 
         def open_devices(config):

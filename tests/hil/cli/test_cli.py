@@ -58,7 +58,7 @@ def test_identify_fk_export_validate(station, tmp_path, capsys):
     assert not np.allclose(np.loadtxt(base, delimiter=",", skiprows=1), p)
 
     for fmt, marker in (("urdf", "<robot"), ("ros-kinematics", "kinematics:"), ("json", "hil-model/1")):
-        out = tmp_path / f"model.{fmt}"
+        out = tmp_path / f"exported.{fmt}"  # not model.json: that is the input, refused as an output
         assert main(["export", "--model", str(model), "--format", fmt, "--out", str(out)]) == 0
         assert marker in out.read_text()
 
@@ -71,13 +71,13 @@ def test_identify_fk_export_validate(station, tmp_path, capsys):
 
 def test_calibrate_bad_input_fails_before_anything_starts(tmp_path, capsys):
     out = tmp_path / "result.json"
-    assert "--speed must be positive" in run_bad(capsys, ["calibrate", "--sim", "--speed", "0",
+    assert "--speed: must be in (0, 1000]" in run_bad(capsys, ["calibrate", "--sim", "--speed", "0",
                                                           "--out", str(out)], out)
     assert "no such file" in run_bad(capsys, ["calibrate", "--sim", "--truth", str(tmp_path / "t.json"),
                                               "--out", str(out)], out)
     bad = tmp_path / "station.toml"
     bad.write_text("[robot]\nspeed = -2\n")
-    assert "robot.speed: must be > 0" in run_bad(capsys, ["calibrate", "--config", str(bad),
+    assert "robot.speed: must be in (0, 3.14]" in run_bad(capsys, ["calibrate", "--config", str(bad),
                                                           "--out", str(out)], out)
     assert "not allowed with argument" in run_bad(capsys, ["calibrate", "--config", str(bad), "--sim"])
 

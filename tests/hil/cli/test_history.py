@@ -165,6 +165,7 @@ def test_show_text_and_json(db, capsys):
 def test_show_exports(db, tmp_path, capsys):
     new, _ = ids(db)
     model = tmp_path / "out" / "model.json"
+    model.parent.mkdir()  # an output's folder must exist (a missing one is refused: a typo, likely)
     assert main(["show", new, "--db", str(db), "--export-model", str(model)]) == 0
     geometry, doc = load_geometry(model, (MODEL_FORMAT,))
     assert doc == model_doc() and geometry.robot == "ur5e"

@@ -12,7 +12,7 @@ def test_example_is_valid_and_complete():
 
 
 @pytest.mark.parametrize("text,message", [
-    ("[robot]\nspeed = -1\n", "robot.speed: must be > 0, got -1"),
+    ("[robot]\nspeed = -1\n", r"robot.speed: must be in \(0, 3.14\] rad/s, got -1"),
     ("[robot]\nsped = 1\n", "unknown key robot.sped"),
     ("[robots]\ntype = 'ur5e'\n", r"unknown section \[robots\]"),
     ("[robot]\ntype = 'abb'\n", "robot.type: unknown robot 'abb'"),

@@ -120,8 +120,8 @@ def test_upgrade_from_v1(db):
     cid = _v1_database(db)
     with Store.open(db) as s:
         conn = s._conn()
-        assert conn.execute("PRAGMA user_version").fetchone()[0] == SCHEMA_VERSION == 2
-        assert s.find_resumable(cfg("old")) == cid  # the backfilled config hash
+        assert conn.execute("PRAGMA user_version").fetchone()[0] == SCHEMA_VERSION == 3
+        assert s.find_resumable(cfg("old")) == cid  # the backfilled config and measurement hashes
         assert s.campaign(cid).config_hash == config_hash(cfg("old"))
         indexes = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'index'")}
         assert {"campaigns_resume", "events_type"} <= indexes

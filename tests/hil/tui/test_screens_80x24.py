@@ -102,7 +102,8 @@ def test_plan_refuses_too_few_calibration_poses_before_selecting_or_saving():
 def test_run_refuses_to_start_a_campaign_whose_counts_cannot_calibrate():
     async def scenario():
         app = offline_app()
-        app.session.config = default_config().with_overrides(campaign__calibration_poses=6)
+        # (fewer poses than identify is refused with the configuration itself: campaign.calibration_poses)
+        app.session.config = default_config().with_overrides(campaign__candidates=20)
         started = []
         app.action_start_run = lambda: started.append(True)
         async with app.run_test(size=SIZE) as pilot:
