@@ -127,10 +127,15 @@ def _run(args: argparse.Namespace) -> int:
     from hil.campaign.runner import claim_run, plan_saver, run_campaign, store_recorder
     from hil.report.result import report_data, result_document
     from hil.station.devices import HARDWARE_ERRORS, open_devices
-    from hil.store import FINISHED, Store, StoreError, address_lock
+    from hil.station.robot_type import check_controller
+    from hil.store import FINISHED, Store, StoreError, address_lock, resolve_path
 
     with station_from_args(args) as (config, identity, truth):
-        store = Store.open(args.db, config=config)
+        # An existing store is opened (so a damaged or newer one is refused) before the arm is touched;
+        # a new one is created only once the controller has confirmed the configured robot, so a
+        # refused station leaves no file behind.
+        path = resolve_path(args.db, config)
+        store: Store | None = Store.open(path) if path.exists() else None
         guards = contextlib.ExitStack()  # the arm's address lock, then the campaign's lease
         try:
             # no second process of this host connects to the arm (see hil.store.leases)
@@ -142,6 +147,13 @@ def _run(args: argparse.Namespace) -> int:
                       file=sys.stderr)
                 return 3
             info = devices.robot.info
+            try:  # the controller's word on the robot type, before anything is recorded or moved
+                check_controller(config, info)
+                if store is None:
+                    store = Store.open(path)
+            except BaseException:
+                devices.close()
+                raise
             robot = {"type": config.robot["type"], "serial": info.serial if info else "",
                      "model": info.model if info else "", "software": info.software_version if info else ""}
             try:
@@ -182,7 +194,8 @@ def _run(args: argparse.Namespace) -> int:
                 guards.close()
             except StoreError as exc:  # a full disk: the lease lapses with this process; the run's
                 print(f"hil: warning: {exc}", file=sys.stderr)  # own outcome stays the news
-            store.close()
+            if store is not None:
+                store.close()
     if outcome.status not in FINISHED:  # interrupted or failed: resumable, so no result (yet)
         if outcome.status == "interrupted":
             print(f"hil: campaign {campaign} is resumable: re-run the same command to continue it",

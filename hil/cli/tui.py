@@ -73,9 +73,23 @@ def options_from(args: argparse.Namespace) -> object:
                       out_dir=args.out_dir, overrides=overrides)
 
 
+def check_store(db: str | None, config: object | None) -> None:
+    """Refuse, before the app opens, a store the app could not use (a folder, a damaged file, another
+    program's database, a newer hil's): on a full-screen app the error would otherwise appear only
+    after the operator connected the arm. An existing store is opened and closed again; a missing one
+    is left for the app to create."""
+    from hil.store import Store, resolve_path
+
+    path = resolve_path(db, config)
+    if path.exists():
+        Store.open(path).close()
+
+
 def run(args: argparse.Namespace) -> int:
     from hil.tui.app import create_app
 
-    app = create_app(options_from(args))  # type: ignore[arg-type]
+    options = options_from(args)
+    check_store(args.db, getattr(options, "config", None))
+    app = create_app(options)  # type: ignore[arg-type]
     code = app.run()
     return int(code or 0)
