@@ -149,6 +149,16 @@ def _guard_stdout(parser: argparse.ArgumentParser) -> None:
                 _guard_stdout(child)
 
 
+def _simulator_did_not_start(exc: BaseException) -> bool:
+    """Whether `exc` is the simulator's `mocks.ur.process.SimStartError` (``--sim`` runs).
+
+    Looked up, not imported: every hil command (on a real station too) would otherwise load the
+    simulator's controller and servers, and a raised SimStartError means its module is loaded already.
+    """
+    process = sys.modules.get("mocks.ur.process")
+    return process is not None and isinstance(exc, process.SimStartError)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; returns the process exit code."""
     argv = sys.argv[1:] if argv is None else list(argv)
@@ -177,6 +187,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"hil: interrupted{f' ({exc})' if signum else ''}", file=sys.stderr)
         return EXIT_INTERRUPTED if signum is None else 128 + signum
     except Exception as exc:  # the one place that keeps tracebacks away from the user
+        if _simulator_did_not_start(exc):  # a station that does not come up is a fault, not a bug
+            print(f"hil: hardware fault: the simulated station did not start: {exc}", file=sys.stderr)
+            return EXIT_HARDWARE
         if args.debug:
             raise
         print(f"hil: internal error: {type(exc).__name__}: {exc} (rerun with --debug for details)",

@@ -190,10 +190,7 @@ def _run(args: argparse.Namespace) -> int:
                           f"its result in {store.path}: {exc.__cause__ or exc}", file=sys.stderr)
                 return 3
         finally:
-            try:
-                guards.close()
-            except StoreError as exc:  # a full disk: the lease lapses with this process; the run's
-                print(f"hil: warning: {exc}", file=sys.stderr)  # own outcome stays the news
+            guards.close()  # never raises: a lease the store cannot delete lapses (Lease.release)
             if store is not None:
                 store.close()
     if outcome.status not in FINISHED:  # interrupted or failed: resumable, so no result (yet)

@@ -12,6 +12,7 @@ Both print a readable summary on a terminal, and JSON with ``--json`` or when st
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 from pathlib import Path
@@ -223,7 +224,16 @@ def run_run(args: argparse.Namespace) -> int:
 
 
 def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
-    """`hil moveb run`: station from --config/--sim (as `hil calibrate`), plan, execute, report."""
+    """`hil moveb run`: station from --config/--sim (as `hil calibrate`), plan, execute, report.
+
+    The arm is driven only under its host-local address lock (`hil.store.address_lock`, the one
+    `hil calibrate` and the TUI take), taken before connecting and held until the devices are
+    closed: a MOVEB run never drives an arm another hil process of this host drives, and the other
+    way round; a held lock is refused as bad input (exit 2), naming its holder, before connecting.
+    That lock is the only guard: a MOVEB run opens no campaign store, so it takes no robot lease there
+    (a lease in one store is seen only by the campaigns of that store; the lock by every hil process
+    of this host, whatever store it uses).
+    """
     import math
 
     import numpy as np
@@ -238,6 +248,7 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
     from hil.moveb.timing import Limits
     from hil.station.devices import HARDWARE_ERRORS, open_devices
     from hil.station.robot_type import Claim, agreed_robot, check_controller, config_claim, option_claim
+    from hil.store import address_lock
 
     program = load_program(args.program)
     limits = Limits(args.velocity, args.acceleration, args.jerk, args.normal_acceleration)
@@ -268,7 +279,7 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
             truth_robot = load_truth(args.truth)[0].robot
             said.append(Claim(truth_robot, f"the truth {args.truth} is for {truth_robot}"))
         args.robot = agreed_robot(said, default="ur5e")  # the arm the simulator is to simulate
-    with station_from_args(args) as (config, _identity, truth):
+    with station_from_args(args) as (config, _identity, truth), contextlib.ExitStack() as guards:
         agreed_robot([config_claim(config), *said])  # --config: its robot.type, before connecting
         geometry = model or Geometry.nominal(config.robot["type"], smr=config.smr["offset"])
         if model is not None and args.ik == "nominal":
@@ -279,6 +290,8 @@ def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
             where = (model.tracker if model is not None else Geometry.from_dict(truth, source="sim")
                      .tracker).translation
             program = program_in_frame(program, facing_frame(program, where, geometry.spec.reach))
+        # the arm's lock before connecting, held until the devices are closed (see the docstring)
+        guards.enter_context(address_lock(config.robot["address"], what="hil moveb run"))
         try:
             devices = open_devices(config)
         except HARDWARE_ERRORS as exc:

@@ -15,9 +15,9 @@ same campaign as a headless one. Two differences, both for the operator at the t
   the process waits for on exit: a quit never waits for a run stuck in a long computation — after
   `STOP_WAIT` seconds the app marks the campaign interrupted itself (`abandon_run`) and closes.
 
-The simulated station's process is started and stopped by one long-lived thread (`_host_main`): the
-simulator dies with the thread that started it (PR_SET_PDEATHSIG), so a short-lived worker must not
-start it.
+The simulated station's process is started and stopped by one long-lived thread (`_host_main`), which
+keeps it for the app's lifetime; the simulator watches its parent's pid and exits when this process
+is gone, however it ends (`mocks.ur.process`), so it is never left behind.
 """
 
 from __future__ import annotations
@@ -215,8 +215,13 @@ class Session:
             stack.close()
 
     def connect(self) -> None:
-        """Open the robot and the tracker and read their status."""
+        """Open the robot and the tracker and read their status.
+
+        A controller that reports another robot than the configured ``robot.type`` is refused here
+        (`hil.station.robot_type.check_controller`): shown on the Station screen and disconnected, so
+        the operator sees it at connect rather than when a run starts (which would refuse it too)."""
         from hil.station.devices import open_devices
+        from hil.station.robot_type import check_controller
 
         st = self.station
         if self.config is None:
@@ -237,8 +242,17 @@ class Session:
                 self.notice(st.error, "error")
                 self.changed()
                 return
-            self.devices = devices
             info, ident = devices.robot.info, devices.tracker.identity
+            try:  # the controller's word on the robot type, now rather than when a run starts
+                check_controller(self.config, info)
+            except InputError as exc:  # the configured kinematics would drive another arm: let go of it
+                devices.close()
+                self._unlock_arm()
+                st.phase, st.error = "disconnected", f"cannot use this robot: {_error(exc)}"
+                self.notice(st.error, "error")
+                self.changed()
+                return
+            self.devices = devices
             st.robot = ({"model": info.model, "serial": info.serial, "software": info.software_version}
                         if info is not None else {})
             st.tracker = ({"name": ident.name, "serial": str(ident.serial_number),

@@ -28,6 +28,9 @@ log = logging.getLogger(__name__)
 
 PROTECTIVE_STOP_UNLOCK_DELAY = 5.0  # simulated seconds, as on PolyScope 5
 SAFETY_STOP_DECEL = 8.0  # rad/s^2 of the fastest joint in a category-1/2 stop
+# rad/s^2 of the fastest joint when a program stops (dashboard/pendant stop, a script that ends, a program
+# replaced by another): a real controller brings the arm to a controlled stop on its trajectory with the
+# drives powered (UR user manual, "Stop Categories": category 2), it never lets the last motion run on.
 PROGRAM_STOP_DECEL = 4.0
 
 
@@ -197,6 +200,10 @@ class SimArm:
                 log.info("program %s refused: robot mode %s, safety %s", program.name,
                          self.robot_mode.name, self.safety_mode.name)
                 return False
+            replacing = self.program is not None and self.motion is not None
+            if replacing and not isinstance(self.motion, Decelerate):
+                # the running program is stopped before the new one starts: its motion brakes
+                self.motion = Decelerate(self.qd, PROGRAM_STOP_DECEL)
             self.program = program
             self.program_paused = False
             return True
@@ -321,8 +328,8 @@ class SimArm:
                 except MotionError as exc:
                     self.program_error(str(exc))
                     alive = True
-                if not alive:
-                    self.program = None
+                if not alive:  # the script ended (e.g. ur_rtde's stopScript): its motion stops with it
+                    self.stop_program(decel=PROGRAM_STOP_DECEL)
             q_old = self.q
             qd_old = self.qd
             if self.motion is not None and dt > 0:

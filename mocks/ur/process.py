@@ -157,7 +157,11 @@ def child_main(argv: Sequence[str] | None = None) -> int:
 
 
 class SimStartError(RuntimeError):
-    """The simulator process could not start (e.g. its ports are taken)."""
+    """The simulator process could not start (e.g. its ports are taken, or a loaded machine).
+
+    For ``hil`` this is a station fault, as a controller that does not boot would be: its CLI maps it to
+    exit 3 ("hardware fault"), never to an internal error.
+    """
 
 
 def _project_root() -> str:
@@ -204,7 +208,7 @@ class SimProcess:
                 if left <= 0 or not sel.select(left):
                     self.stop()
                     raise SimStartError(f"simulator on {self.address} did not start within "
-                                        f"{self.start_timeout} s")
+                                        f"{self.start_timeout:g} s")
                 line = self._proc.stdout.readline()
                 if not line:
                     self.stop()
