@@ -16,3 +16,8 @@ class InputError(HilError, ValueError):
 
 class UnknownRobotError(InputError):
     """A robot type that is not in the catalog."""
+
+
+class FaultError(HilError):
+    """Something the station needs is not there: a device or a database server that does not answer.
+    Not bad input and not a bug: the CLI exits 3 (a station fault), and what was recorded stays."""

@@ -112,4 +112,7 @@ def start_station(robot: str = "ur5e", truth: str | None = None, speed: float = 
     from mocks.ur.testing import start_sim
 
     spec = station_spec(truth, seed, acceptance_angle, baudrate)
-    return start_sim(SimConfig(robot=robot, speed=speed, seed=seed), services=[spec])
+    # each seed is another arm of a fleet (its own truth), so its own serial number, as a plant's robots
+    # have: seed 1 is 20235500001, the controller's default
+    serial = f"202355{seed % 100_000:05d}"
+    return start_sim(SimConfig(robot=robot, speed=speed, seed=seed, serial=serial), services=[spec])

@@ -267,7 +267,8 @@ def store_recorder(store: Any) -> Callable[[Event], None]:
 def _record_failed(store: Any, what: str, exc: BaseException) -> RecordFailed:
     """"could not record WHAT in DB: why", the database's own words (SQLite's, the OS's) for why."""
     cause = exc.__cause__ if isinstance(exc.__cause__, sqlite3.Error | OSError) else exc
-    return RecordFailed(f"could not record {what} in {getattr(store, 'path', store)}: {cause}")
+    where = getattr(store, "location", None) or getattr(store, "path", store)
+    return RecordFailed(f"could not record {what} in {where}: {cause}")
 
 
 def resume_state(store: Any, campaign: str) -> ResumeState:

@@ -27,7 +27,7 @@ from typing import Any
 
 import hil
 from hil.cli._common import quiet_on_closed_stdout
-from hil.errors import HilError, InputError
+from hil.errors import FaultError, HilError, InputError
 
 # Modules of hil.cli that each add one subcommand (in help order).
 COMMAND_MODULES: tuple[str, ...] = (
@@ -40,7 +40,10 @@ COMMAND_MODULES: tuple[str, ...] = (
     "select",
     "sim",
     "history",
+    "robots",
+    "robot",
     "report",
+    "fleet_report",
     "moveb",
     "tui",
 )
@@ -59,7 +62,10 @@ COMMAND_HELP: dict[str, tuple[tuple[str, str], ...]] = {
     "sim": (("sim", "run the simulated station (robot + tracker)"),),
     "history": (("history", "list calibration campaigns"),
                 ("show", "print one campaign; export its model or measurements")),
+    "robots": (("robots", "list the fleet: each robot's last calibration and current model"),),
+    "robot": (("robot", "one robot's calibration history; mark a calibration bad or good"),),
     "report": (("report", "write the HTML report of a saved calibration result"),),
+    "fleet_report": (("fleet-report", "write the fleet's HTML report (accuracy over time, stations)"),),
     "moveb": (("moveb", "smooth error-controlled trajectories (plan, run)"),),
     "tui": (("tui", "the operator's terminal app (keyboard only, 80x24 and larger)"),),
 }
@@ -179,6 +185,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except InputError as exc:
         print(f"hil: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except FaultError as exc:  # a device or the database server is not there: a station fault
+        print(f"hil: fault: {exc}", file=sys.stderr)
+        return EXIT_HARDWARE
     except HilError as exc:
         print(f"hil: failed: {exc}", file=sys.stderr)
         return EXIT_FAILED

@@ -32,6 +32,7 @@ import contextlib
 import json
 import sys
 import time
+from pathlib import Path
 
 from hil.arm.catalog import ROBOT_NAMES
 from hil.campaign.events import Event, EventBus
@@ -121,6 +122,14 @@ def _check_outputs(args: argparse.Namespace) -> None:
                      outputs={"--out": args.out})
 
 
+def _say_outage(reason: str | None) -> None:
+    """A lost database link: the run waits (the arm stands at its pose) until it is back."""
+    if reason is None:
+        print("hil: database link back; the run continues", file=sys.stderr, flush=True)
+    else:
+        print(f"hil: {reason}; the arm waits at its pose", file=sys.stderr, flush=True)
+
+
 def _run(args: argparse.Namespace) -> int:
     from hil.campaign.chooser import campaign_chooser
     from hil.campaign.engine import RealClock
@@ -128,14 +137,15 @@ def _run(args: argparse.Namespace) -> int:
     from hil.report.result import report_data, result_document
     from hil.station.devices import HARDWARE_ERRORS, open_devices
     from hil.station.robot_type import check_controller
-    from hil.store import FINISHED, Store, StoreError, address_lock, resolve_path
+    from hil.store import FINISHED, Store, StoreError, address_lock, resolve_location
 
     with station_from_args(args) as (config, identity, truth):
         # An existing store is opened (so a damaged or newer one is refused) before the arm is touched;
         # a new one is created only once the controller has confirmed the configured robot, so a
         # refused station leaves no file behind.
-        path = resolve_path(args.db, config)
-        store: Store | None = Store.open(path) if path.exists() else None
+        path = resolve_location(args.db, config)  # a file, or a PostgreSQL server (opened now: reachable?)
+        store: Store | None = (Store.open(path, config=config) if not isinstance(path, Path) or path.exists()
+                               else None)
         guards = contextlib.ExitStack()  # the arm's address lock, then the campaign's lease
         try:
             # no second process of this host connects to the arm (see hil.store.leases)
@@ -150,7 +160,7 @@ def _run(args: argparse.Namespace) -> int:
             try:  # the controller's word on the robot type, before anything is recorded or moved
                 check_controller(config, info)
                 if store is None:
-                    store = Store.open(path)
+                    store = Store.open(path, config=config)
             except BaseException:
                 devices.close()
                 raise
@@ -166,6 +176,7 @@ def _run(args: argparse.Namespace) -> int:
                 devices.close()
                 raise
             campaign = guards.enter_context(lease).campaign
+            store.on_outage = _say_outage
             events: list[Event] = []
             bus = EventBus()
             bus.subscribe(store_recorder(store), critical=True)  # a failed write names itself
@@ -187,7 +198,7 @@ def _run(args: argparse.Namespace) -> int:
             except StoreError as exc:  # a full disk: a fault (exit 3), not "not accepted" (exit 1)
                 if outcome.unrecorded is None:
                     print(f"hil: fault: campaign {campaign} ended {outcome.status}, but could not record "
-                          f"its result in {store.path}: {exc.__cause__ or exc}", file=sys.stderr)
+                          f"its result in {store.location}: {exc.__cause__ or exc}", file=sys.stderr)
                 return 3
         finally:
             guards.close()  # never raises: a lease the store cannot delete lapses (Lease.release)

@@ -20,7 +20,7 @@ from hil.cli._common import bounded_int, mm, print_json
 from hil.errors import InputError
 from hil.files.outputs import atomic_write_text, check_output
 from hil.station.config import load_config
-from hil.store import INTERRUPTED, ROLES, CampaignRecord, CampaignSummary, Store, resolve_path
+from hil.store import INTERRUPTED, ROLES, CampaignRecord, CampaignSummary, Store, resolve_location
 
 # File suffixes that say which export format is meant when --format is not given.
 _SUFFIX_FORMATS = {".urdf": "urdf", ".xml": "urdf", ".yaml": "ros-kinematics", ".yml": "ros-kinematics",
@@ -28,8 +28,9 @@ _SUFFIX_FORMATS = {".urdf": "urdf", ".xml": "urdf", ".yaml": "ros-kinematics", "
 
 
 def _add_db_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--db", metavar="PATH", help="database file (default: $HIL_DB, the config's "
-                                                "store.path, or the user's data directory)")
+    p.add_argument("--db", metavar="LOCATION", help="the store: an SQLite file or a postgresql:// URL "
+                                                    "(default: $HIL_DB, the config's store.url or "
+                                                    "store.path, or the user's data directory)")
     p.add_argument("--config", metavar="station.toml", help="take the database location from it")
     p.add_argument("--json", action="store_true", help="print JSON on stdout")
 
@@ -61,7 +62,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _open(args: argparse.Namespace) -> Store:
     config = load_config(args.config) if args.config else None
-    return Store.open(resolve_path(args.db, config), readonly=True)  # read-only media too
+    return Store.open(resolve_location(args.db, config), readonly=True)  # read-only media too
 
 
 def _when(t: float | None, fmt: str = "%Y-%m-%d %H:%M") -> str:
@@ -97,11 +98,12 @@ def run_history(args: argparse.Namespace) -> int:
         raise InputError(f"--limit: must be at least 1, got {args.limit}")
     with _open(args) as store:
         rows = store.campaigns(args.limit, station=args.station)
-        where = store.path
+        where = store.location
     if args.json:
-        print_json({"database": str(where), "campaigns": [r.as_dict() for r in rows]})
+        print_json({"database": where, "campaigns": [r.as_dict() for r in rows]})
         return 0
-    print(f"database: {os.path.abspath(where)}", file=sys.stderr)  # which store (stdout: the table)
+    shown = os.path.abspath(store.path) if store.path is not None else where
+    print(f"database: {shown}", file=sys.stderr)  # which store (stdout: the table)
     if not rows:
         print(f"no campaigns in {where}")
         return 0
@@ -215,7 +217,7 @@ def run_show(args: argparse.Namespace) -> int:
         rec = store.campaign(store.resolve_id(args.id))
         written = _export(args, store, rec)
     if args.json:
-        print_json(rec.as_dict() | {"database": str(store.path)})
+        print_json(rec.as_dict() | {"database": store.location})
     else:
         for line in _show_text(rec):
             print(line)

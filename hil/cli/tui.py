@@ -78,10 +78,12 @@ def check_store(db: str | None, config: object | None) -> None:
     program's database, a newer hil's): on a full-screen app the error would otherwise appear only
     after the operator connected the arm. An existing store is opened and closed again; a missing one
     is left for the app to create."""
-    from hil.store import Store, resolve_path
+    from pathlib import Path
 
-    path = resolve_path(db, config)
-    if path.exists():
+    from hil.store import Store, resolve_location
+
+    path = resolve_location(db, config)
+    if not isinstance(path, Path) or path.exists():  # a server: reachable, a hil store, not newer
         Store.open(path).close()
 
 

@@ -38,6 +38,21 @@ class Key:
     help: str = ""
 
 
+def _store_url(v: Any) -> str | None:
+    """A store is an SQLite file (a path, or ``sqlite:///path``) or a PostgreSQL database
+    (``postgresql://user@host:port/db``); another database's URL would fail only when the run starts."""
+    if "://" not in v:
+        return None
+    scheme = v.split("://", 1)[0].lower()
+    if scheme in ("postgresql", "postgres", "postgresql+psycopg"):
+        rest = v.split("://", 1)[1]
+        host = rest.split("@")[-1].split("/", 1)[0]
+        return None if host else "a postgresql:// URL needs a host: postgresql://user@host[:port]/database"
+    if scheme == "sqlite":
+        return None if v.startswith("sqlite:///") else "an SQLite URL is sqlite:///path/to/file.db"
+    return f"must be a file path or a postgresql:// URL, got a {scheme}:// URL"
+
+
 def _angle(v: Any) -> str | None:
     return None if 0 < v < 90 else f"must be between 0 and 90 degrees, got {v}"
 
@@ -266,8 +281,14 @@ SCHEMA: dict[str, dict[str, Key]] = {
                        "longest wait for a suspender to clear (s)"),
         "relock": Key("float", 30.0, _within(0, 3600, "s", lo_open=True),
                       "longest wait for a lost beam before the pose is skipped"),
+        # a PostgreSQL server restarted for an update is back within a minute; a network cut may take
+        # longer: the arm stands still meanwhile, and past this the run stops, resumable
+        "database": Key("float", 600.0, _within(0, 8 * 3600, "s", lo_open=True),
+                        "longest wait for a lost database link before the run stops (s)"),
     },
     "store": {
+        "url": Key("str", "", _store_url, help="the store: an SQLite file path or a postgresql:// URL "
+                                                "shared by a plant's stations (default: store.path)"),
         "path": Key("str", "", help="SQLite database (default: the user's data directory)"),
     },
 }

@@ -1,17 +1,22 @@
-"""The durable store: every campaign, pose, measurement, model, validation and event, in SQLite.
+"""The durable store: every campaign, pose, measurement, model, validation and event, in SQLite (one
+station) or PostgreSQL (a plant's fleet), through SQLAlchemy Core with Alembic migrations.
 
 "The store is the truth" (DESIGN.md): each measurement is committed before the next move, a killed
 run resumes from what is here, and ``hil history`` / ``hil show`` read it. See `hil.store.core` for
-the durability and threading rules, `hil.store.schema` for the tables and their upgrade steps, and
-`hil.store.paths` for where the file lives, `hil.store.leases` for who may run a campaign and drive
-an arm.
+the durability, threading and lost-link rules, `hil.store.tables` for the tables,
+`hil.store.migrate` for their upgrades, `hil.store.paths` for where the store lives,
+`hil.store.leases` for who may run a campaign and drive an arm, `hil.store.fleet` for a plant's
+robots and their calibration history.
 
 May import: `hil.campaign.events` (what it records), `hil.errors`. Never the CLI or the TUI.
 """
 
 from hil.store.core import Store, StoreError, UnknownCampaignError, new_campaign_id
+from hil.store.engine import is_postgres
+from hil.store.hashing import config_hash, measurement_hash
 from hil.store.leases import Lease, LeaseRefused, address_lock
-from hil.store.paths import ENV_VAR, default_path, resolve_path
+from hil.store.migrate import SCHEMA_VERSION
+from hil.store.paths import ENV_VAR, default_path, resolve_location, resolve_path
 from hil.store.records import (
     FINISHED,
     INTERRUPTED,
@@ -24,7 +29,6 @@ from hil.store.records import (
     RobotInfo,
     ValidationRecord,
 )
-from hil.store.schema import SCHEMA_VERSION, config_hash, measurement_hash
 
 __all__ = [
     "ENV_VAR",
@@ -47,7 +51,9 @@ __all__ = [
     "address_lock",
     "config_hash",
     "default_path",
+    "is_postgres",
     "measurement_hash",
     "new_campaign_id",
+    "resolve_location",
     "resolve_path",
 ]

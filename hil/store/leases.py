@@ -43,7 +43,7 @@ from pathlib import Path
 from typing import Any
 
 from hil.errors import InputError
-from hil.store.owner import is_gone
+from hil.store.owner import is_gone, this_process
 
 log = logging.getLogger(__name__)
 
@@ -71,9 +71,21 @@ def describe_holder(owner: Any, since: float) -> str:
     return f"{who} since {_when(since)}"
 
 
-def holder_gone(owner: Any, heartbeat: float, now: float, ttl: float) -> bool:
-    """Whether a lease's holder is certainly gone (see the module docstring)."""
+# Tokens of this process's leases not yet released. A row carrying this process as its owner but a
+# token not here was left behind by a release that could not reach the database (a full disk, a lost
+# PostgreSQL link): its run has ended, so the row holds nothing (the TUI runs the campaign again in
+# the same process once the database is back).
+_live_tokens: set[str] = set()
+_tokens_lock = threading.Lock()
+
+
+def holder_gone(owner: Any, heartbeat: float, now: float, ttl: float, token: str | None = None) -> bool:
+    """Whether a lease's holder is certainly gone (see the module docstring); `token`, the row's, tells
+    a lease this very process released (or failed to) from one it still holds."""
     if isinstance(owner, Mapping) and owner.get("host") == socket.gethostname():
+        if token is not None and owner == this_process():
+            with _tokens_lock:
+                return token not in _live_tokens
         return is_gone(owner)
     return now - heartbeat > ttl
 
@@ -89,6 +101,8 @@ class Lease:
     def __init__(self, store: Any, campaign: str, token: str, names: tuple[str, ...], *,
                  ttl: float = LEASE_TTL, heartbeat: bool = True) -> None:
         self.store, self.campaign, self.token, self.names, self.ttl = store, campaign, token, names, ttl
+        with _tokens_lock:
+            _live_tokens.add(token)
         self.lost = threading.Event()
         self.on_lost: Callable[[str], None] | None = None
         self._stop = threading.Event()
@@ -128,6 +142,8 @@ class Lease:
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join()
         self._thread = None
+        with _tokens_lock:
+            _live_tokens.discard(self.token)  # whatever the database says next, this run holds nothing
         if not self.lost.is_set():
             self.lost.set()  # released: a second release does nothing
             try:

@@ -1,10 +1,11 @@
 """Where the database lives when nobody says.
 
-Precedence, most specific first: an explicit path (``--db``), the ``HIL_DB`` environment variable,
-the station config's ``store.path`` (relative paths are taken from the config file's directory, so a
-station folder can carry its own database), then ``$XDG_DATA_HOME/hil/hil.db`` or
-``~/.local/share/hil/hil.db``. The environment beats the config file so a test cell or a CI job can
-redirect every command without editing station files.
+A store is an SQLite file or a PostgreSQL database (``postgresql://user@host/db``). Precedence, most
+specific first: an explicit location (``--db``), the ``HIL_DB`` environment variable, the station
+config's ``store.url`` (or its older spelling ``store.path``; relative file paths are taken from the
+config file's directory, so a station folder can carry its own database), then
+``$XDG_DATA_HOME/hil/hil.db`` or ``~/.local/share/hil/hil.db``. The environment beats the config
+file so a test cell or a CI job can redirect every command without editing station files.
 """
 
 from __future__ import annotations
@@ -13,6 +14,8 @@ import os
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
+
+from hil.store.engine import is_postgres
 
 ENV_VAR = "HIL_DB"
 
@@ -28,29 +31,47 @@ def default_path(env: Mapping[str, str] | None = None) -> Path:
     return root / "hil" / "hil.db"
 
 
-def _config_store_path(config: Any) -> Path | None:
-    """``store.path`` of a StationConfig (or its dict), resolved against the config file's folder."""
+def _plain(text: str) -> str | Path:
+    """A location as given: a PostgreSQL URL stays text, ``sqlite:///f.db`` and a path become a Path."""
+    if is_postgres(text):
+        return text
+    if text.startswith("sqlite:///"):
+        text = text[len("sqlite:///"):]  # sqlite:////abs/path keeps its leading slash
+    return Path(text).expanduser()
+
+
+def _config_store_location(config: Any) -> str | Path | None:
+    """``store.url`` (or ``store.path``) of a StationConfig or its dict; a relative file path is
+    resolved against the config file's folder."""
     if config is None:
         return None
     if hasattr(config, "as_dict"):
         values, source = config.as_dict(), getattr(config, "source", "")
     else:
         values, source = config, ""
-    text = (values.get("store") or {}).get("path") or ""
+    store = values.get("store") or {}
+    text = store.get("url") or store.get("path") or ""
     if not text:
         return None
-    path = Path(text).expanduser()
-    if not path.is_absolute() and source and not source.startswith("<") and os.path.exists(source):
-        path = Path(source).resolve().parent / path
-    return path
+    location = _plain(str(text))
+    if (isinstance(location, Path) and not location.is_absolute() and source
+            and not source.startswith("<") and os.path.exists(source)):
+        location = Path(source).resolve().parent / location
+    return location
+
+
+def resolve_location(path: str | os.PathLike[str] | None = None, config: Any = None,
+                     env: Mapping[str, str] | None = None) -> str | Path:
+    """The store to use: a Path (SQLite file) or a ``postgresql://`` URL (see the module docstring)."""
+    env = os.environ if env is None else env
+    if path is not None and str(path) != "":
+        return _plain(str(path))
+    if env.get(ENV_VAR):
+        return _plain(env[ENV_VAR])
+    return _config_store_location(config) or default_path(env)
 
 
 def resolve_path(path: str | os.PathLike[str] | None = None, config: Any = None,
-                 env: Mapping[str, str] | None = None) -> Path:
-    """The database file to use (see the module docstring for the precedence)."""
-    env = os.environ if env is None else env
-    if path is not None and str(path) != "":
-        return Path(path).expanduser()
-    if env.get(ENV_VAR):
-        return Path(env[ENV_VAR]).expanduser()
-    return _config_store_path(config) or default_path(env)
+                 env: Mapping[str, str] | None = None) -> str | Path:
+    """Alias of `resolve_location` (a Path for an SQLite file, a URL string for PostgreSQL)."""
+    return resolve_location(path, config, env)

@@ -157,6 +157,13 @@ class Session:
     def notice(self, text: str, severity: str = "information") -> None:
         self.post(Notice(text, severity))
 
+    def _store_outage(self, reason: str | None) -> None:
+        """The database link went (the run waits, the arm stands still) or came back."""
+        if reason is None:
+            self.notice("database link back: the run continues")
+        else:
+            self.notice(f"{reason}; the arm waits at its pose", "warning")
+
     # --- the station's lifetime ----------------------------------------------------------------------
     def start(self) -> None:
         """Start the station (simulator and store) on its own long-lived thread."""
@@ -174,6 +181,7 @@ class Session:
 
                 self.config, self.identity, self.truth, self.sim = config, identity, truth, sim
                 self.store = Store.open(self.options.db, config=config)
+                self.store.on_outage = self._store_outage
                 st.name = config.station["name"]
                 st.robot_address, st.tracker_url = config.robot["address"], config.tracker["url"]
                 st.phase = "disconnected"
@@ -645,7 +653,7 @@ class Session:
         if self.store is None:
             return
         try:
-            self.post(HistoryLoaded(self.store.campaigns(limit), str(self.store.path)))
+            self.post(HistoryLoaded(self.store.campaigns(limit), self.store.location))
         except Exception as exc:
             self.notice(f"history: {_error(exc)}", "error")
 

@@ -2,7 +2,8 @@
 installed refuse writes as SQLite does when the disk is full (reads still work).
 
 It wraps whatever connection class the store asks SQLite for (``factory=``), so the store's own
-connection behaviour stays as it is; only ``execute`` is intercepted, which is how the store writes.
+connection behaviour stays as it is; only the statements (on the connection and on its cursors, which
+is how SQLAlchemy runs them) and ``commit`` are intercepted, which is how the store writes.
 """
 
 from __future__ import annotations
@@ -23,10 +24,38 @@ class FullDisk:
         connect = sqlite3.connect
         classes: dict[type, type] = {}
 
+        class Cursor:
+            def __init__(self, cursor: Any) -> None:
+                self._cursor = cursor
+
+            def execute(self, sql: str, *args: Any) -> Any:
+                disk._check(sql)
+                self._cursor.execute(sql, *args)
+                return self
+
+            def executemany(self, sql: str, *args: Any) -> Any:
+                disk._check(sql)
+                self._cursor.executemany(sql, *args)
+                return self
+
+            def __iter__(self) -> Any:
+                return iter(self._cursor)
+
+            def __getattr__(self, name: str) -> Any:
+                return getattr(self._cursor, name)
+
         class Refusing:
             def execute(self, sql: str, *args: Any) -> Any:
                 disk._check(sql)
                 return super().execute(sql, *args)  # type: ignore[misc]
+
+            def cursor(self, *args: Any, **kwargs: Any) -> Any:
+                return Cursor(super().cursor(*args, **kwargs))  # type: ignore[misc]
+
+            def commit(self) -> None:
+                if self.in_transaction:  # type: ignore[attr-defined]
+                    disk._check("COMMIT")
+                super().commit()  # type: ignore[misc]
 
         def connect_here(*args: Any, **kwargs: Any) -> sqlite3.Connection:
             base = kwargs.pop("factory", sqlite3.Connection)

@@ -20,6 +20,7 @@ from hil.errors import InputError
 from hil.station.config import default_config
 from hil.store import LeaseRefused, RobotInfo, Store, address_lock
 from hil.store.owner import this_process
+from tests.hil.store.raw import raw, raw_write
 
 ROOT = Path(__file__).resolve().parents[3]
 ROBOT = RobotInfo(type="ur5e", serial="20235500123", model="UR5e", software="5.15.0")
@@ -31,9 +32,10 @@ def cfg(name: str = "cell-1") -> dict:
     return data
 
 
-@pytest.fixture
-def db(tmp_path) -> Path:
-    return tmp_path / "hil.db"
+@pytest.fixture(params=["sqlite", "postgresql"])
+def db(request, tmp_path) -> Path | str:
+    """Both engines: the leases are plain SQL a PostgreSQL store shared by many stations runs too."""
+    return tmp_path / "hil.db" if request.param == "sqlite" else request.getfixturevalue("pg_url")
 
 
 @pytest.fixture
@@ -45,7 +47,7 @@ def store(db):
 def leases(db: Path) -> dict[str, tuple[str, dict]]:
     with Store.open(db) as s:
         return {name: (campaign, json.loads(owner)) for name, campaign, owner in
-                s._conn().execute("SELECT name, campaign, owner FROM leases")}
+                raw(s).execute("SELECT name, campaign, owner FROM leases")}
 
 
 def test_a_live_owner_keeps_its_campaign_and_a_second_claim_is_refused_in_one_line(store, db):
@@ -125,7 +127,7 @@ def test_the_lease_of_a_process_killed_with_sigkill_is_taken_over(store, db):
 def _owner_elsewhere(db: Path, heartbeat: float) -> None:
     """Make every lease row look held by a process on another host (which is_gone cannot check)."""
     elsewhere = json.dumps({**this_process(), "host": "another-host"})
-    with Store.open(db) as s, s._write("test") as conn:
+    with Store.open(db) as s, raw_write(s) as conn:
         conn.execute("UPDATE leases SET owner = ?, heartbeat = ?", (elsewhere, heartbeat))
 
 
@@ -149,13 +151,13 @@ def test_the_heartbeat_keeps_a_lease_alive_and_notices_a_takeover(store, db):
         deadline = time.monotonic() + 5.0
         while time.monotonic() < deadline:
             with Store.open(db) as s:
-                beats = [b for (b,) in s._conn().execute("SELECT heartbeat FROM leases")]
+                beats = [b for (b,) in raw(s).execute("SELECT heartbeat FROM leases")]
             if min(beats) > time.time() - 5.0:
                 break
             time.sleep(0.05)
         with pytest.raises(LeaseRefused):
             store.claim(cid, ROBOT.serial, ttl=5.0)
-        with Store.open(db) as s, s._write("test") as conn:  # someone took it over
+        with Store.open(db) as s, raw_write(s) as conn:  # someone took it over
             conn.execute("UPDATE leases SET token = 'theirs'")
         assert lease.lost.wait(5.0)
         assert reasons and f"campaign {cid}" in reasons[0] and "taken over" in reasons[0]

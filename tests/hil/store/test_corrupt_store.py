@@ -78,8 +78,8 @@ def test_garbage_in_the_middle_of_the_file(tmp_path: Path, capsys: pytest.Captur
     err = capsys.readouterr().err
     assert 70 not in codes, err
     # the list may not read the damaged page; when it does, it is bad input naming the file
-    for line in err.strip().splitlines():
-        assert line.startswith(f"hil: error: {db}"), err
+    for line in err.strip().splitlines():  # `hil history` names the store it read on stderr
+        assert line.startswith((f"hil: error: {db}", f"database: {db}")), err
 
 
 @pytest.mark.parametrize("table", ["measurements", "campaigns", None], ids=str)

@@ -20,6 +20,7 @@ from pathlib import Path
 from hil.station.config import default_config
 from hil.store import RobotInfo, Store
 from tests.hil.campaign.full_disk import FullDisk
+from tests.hil.store.raw import raw
 
 ROOT = Path(__file__).resolve().parents[3]
 ROBOT = RobotInfo(type="ur5e", serial="20235500777", model="UR5e", software="5.15.0")
@@ -29,7 +30,7 @@ def held(db: Path) -> dict[str, int]:
     """The lease rows: name -> the pid holding it."""
     with Store.open(db) as s:
         return {name: json.loads(owner)["pid"] for name, owner in
-                s._conn().execute("SELECT name, owner FROM leases")}
+                raw(s).execute("SELECT name, owner FROM leases")}
 
 
 def test_release_on_a_full_disk_warns_and_does_not_raise(tmp_path, monkeypatch, caplog):

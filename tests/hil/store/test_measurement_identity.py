@@ -10,7 +10,7 @@ import pytest
 
 from hil.station.config import default_config
 from hil.store import RobotInfo, Store, measurement_hash
-from hil.store.schema import migrate
+from tests.hil.store.legacy_schema import make_legacy
 
 ROBOT = RobotInfo(type="ur5e", serial="20235500123", model="UR5e", software="5.15.0")
 
@@ -77,8 +77,8 @@ def test_a_simulated_station_keeps_what_it_simulates():
 
 def test_a_version_2_store_resumes_after_a_changed_tracker_url(tmp_path):
     db = tmp_path / "hil.db"
+    make_legacy(db, 2)
     conn = sqlite3.connect(db, isolation_level=None)
-    assert migrate(conn, str(db), target=2) == 0
     conn.execute("INSERT INTO stations (id, name, created) VALUES (1, 'cell-1', 0)")
     conn.execute("INSERT INTO campaigns (id, station, robot_type, config, config_hash, status, created, "
                  "updated) VALUES ('20240101-000000-abcd', 1, 'ur5e', ?, 'x', 'running', 1, 1)",
@@ -86,4 +86,4 @@ def test_a_version_2_store_resumes_after_a_changed_tracker_url(tmp_path):
     conn.close()
     with Store.open(db) as store:
         assert store.find_resumable(cfg(tracker__url="/dev/ttyUSB3")) == "20240101-000000-abcd"
-        assert store._conn().execute("SELECT count(*) FROM leases").fetchone()[0] == 0
+        assert store.leases() == []

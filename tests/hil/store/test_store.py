@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from sqlalchemy import event
 
 from hil.campaign.events import (
     EventBus,
@@ -44,8 +45,9 @@ from hil.store import (
     default_path,
     resolve_path,
 )
-from hil.store import schema as schema_mod
-from hil.store.schema import STEPS, migrate
+from hil.store import migrate as migrate_mod
+from tests.hil.store.legacy_schema import make_legacy
+from tests.hil.store.raw import Raw, raw
 
 ROOT = Path(__file__).resolve().parents[3]
 ROBOT = RobotInfo(type="ur5e", serial="20235500123", model="UR5e", software="5.15.0")
@@ -87,13 +89,14 @@ def test_constructor_does_no_io(db):
 
 
 def test_fresh_database_schema_and_pragmas(store, db):
-    conn = store._conn()
-    assert conn.execute("PRAGMA user_version").fetchone()[0] == SCHEMA_VERSION
-    assert conn.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
-    assert conn.execute("PRAGMA foreign_keys").fetchone()[0] == 1
-    assert conn.execute("PRAGMA synchronous").fetchone()[0] == 2  # FULL
-    assert conn.execute("PRAGMA busy_timeout").fetchone()[0] == 10000
-    tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+    with store.reading() as c:  # the store's own connection: pragmas are per connection
+        conn = Raw(c)
+        assert conn.execute("PRAGMA user_version").fetchone()[0] == SCHEMA_VERSION
+        assert conn.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+        assert conn.execute("PRAGMA foreign_keys").fetchone()[0] == 1
+        assert conn.execute("PRAGMA synchronous").fetchone()[0] == 2  # FULL
+        assert conn.execute("PRAGMA busy_timeout").fetchone()[0] == 10000
+        tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
     assert {"stations", "robots", "campaigns", "poses", "measurements", "samples", "models",
             "validations", "events"} <= tables
     # a second, independent opener sees WAL too (it is persistent in the file)
@@ -105,8 +108,8 @@ def test_fresh_database_schema_and_pragmas(store, db):
 def _v1_database(path: Path) -> str:
     """A database as version 1 of the code wrote it, with one unfinished campaign."""
     path.parent.mkdir(parents=True, exist_ok=True)
+    make_legacy(path, 1)
     conn = sqlite3.connect(path, isolation_level=None)
-    assert migrate(conn, str(path), target=1) == 0
     assert conn.execute("PRAGMA user_version").fetchone()[0] == 1
     conn.execute("INSERT INTO stations (id, name, created) VALUES (1, 'old', 0)")
     conn.execute("INSERT INTO campaigns (id, station, robot_type, config, status, created, updated) "
@@ -119,8 +122,9 @@ def _v1_database(path: Path) -> str:
 def test_upgrade_from_v1(db):
     cid = _v1_database(db)
     with Store.open(db) as s:
-        conn = s._conn()
-        assert conn.execute("PRAGMA user_version").fetchone()[0] == SCHEMA_VERSION == 3
+        conn = raw(s)
+        assert conn.execute("PRAGMA user_version").fetchone()[0] == SCHEMA_VERSION == 4
+        assert conn.execute("SELECT version_num FROM alembic_version").fetchone()[0] == "0004"
         assert s.find_resumable(cfg("old")) == cid  # the backfilled config and measurement hashes
         assert s.campaign(cid).config_hash == config_hash(cfg("old"))
         indexes = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'index'")}
@@ -130,11 +134,13 @@ def test_upgrade_from_v1(db):
 def test_failed_upgrade_leaves_the_old_version(db, monkeypatch):
     _v1_database(db)
 
-    def broken(conn):
-        STEPS[1](conn)
-        raise RuntimeError("step failed half-way")
+    real = migrate_mod.command.upgrade
 
-    monkeypatch.setattr(schema_mod, "STEPS", (STEPS[0], broken))
+    def broken(cfg, revision):
+        real(cfg, "0002")  # the next revision ran...
+        raise RuntimeError("upgrade failed half-way")  # ...and then something failed
+
+    monkeypatch.setattr(migrate_mod.command, "upgrade", broken)
     with pytest.raises(RuntimeError):
         Store.open(db)
     conn = sqlite3.connect(db)
@@ -231,7 +237,7 @@ def test_robot_rows_are_shared_by_serial(store):
     b = store.create_campaign(cfg(), RobotInfo("ur5e", ROBOT.serial, "UR5e", "5.16.0"))
     c = store.create_campaign(cfg(), {"type": "ur10e", "extra": "ignored"})
     d = store.create_campaign(cfg())  # robot type from the config, serial unknown
-    conn = store._conn()
+    conn = raw(store)
     assert conn.execute("SELECT count(*) FROM robots").fetchone()[0] == 1
     assert store.campaign(a).robot.software == "5.16.0"  # the robot row follows its controller
     assert store.campaign(b).robot.serial == ROBOT.serial
@@ -430,7 +436,7 @@ def _child(db: Path, stop_after: int) -> subprocess.Popen:
 
 def _check_after_kill(db: Path, cid: str, at_least: int) -> int:
     with Store.open(db, create=False) as s:
-        assert s._conn().execute("PRAGMA integrity_check").fetchone()[0] == "ok"
+        assert raw(s).execute("PRAGMA integrity_check").fetchone()[0] == "ok"
         measured = s.measured_poses(cid)
         n = len(measured)
         assert n >= at_least
@@ -472,6 +478,9 @@ RUNNER = r"""
 import sys, time
 from hil.campaign.events import RunStarted
 from hil.store import Store
+from hil.store import migrate as migrate_mod
+from tests.hil.store.legacy_schema import make_legacy
+from tests.hil.store.raw import Raw, raw, raw_write
 store = Store.open(sys.argv[1])
 store.record_event(RunStarted(campaign=sys.argv[2], robot="ur5e", station="cell-1", poses=6))
 print("started", flush=True)
@@ -499,42 +508,38 @@ def test_a_run_whose_process_was_killed_reads_as_interrupted(store, db):
     assert record.summary.status == "interrupted" and "process ended" in record.detail
     assert store.find_resumable(cfg(), ROBOT.serial) == cid  # and resumable, as it was
     # a reader never writes: the file still says what the dead run left
-    assert store._conn().execute("SELECT status FROM campaigns").fetchone()[0] == "running"
+    assert raw(store).execute("SELECT status FROM campaigns").fetchone()[0] == "running"
     # the next run (this process) owns it: running again
     store.record_event(RunStarted(campaign=cid, robot="ur5e", station="cell-1", poses=6, resumed=True))
     assert store.campaigns()[0].status == "running"
 
 
-class _InterruptedAfter:
-    """A connection that raises KeyboardInterrupt just after running `sql`: Ctrl-C landing there."""
-
-    def __init__(self, conn: sqlite3.Connection, sql: str) -> None:
-        self.conn, self.sql = conn, sql
-
-    def execute(self, sql: str, *args: object) -> sqlite3.Cursor:
-        cursor = self.conn.execute(sql, *args)
-        if sql == self.sql:
-            self.sql = ""
-            raise KeyboardInterrupt
-        return cursor
-
-    def __getattr__(self, name: str) -> object:
-        return getattr(self.conn, name)
-
-
 @pytest.mark.parametrize("sql", ["BEGIN IMMEDIATE", "BEGIN"])
-def test_ctrl_c_just_after_begin_leaves_no_transaction_open(store, monkeypatch, sql):
-    """The interrupted run records how it ended on the same connection right after."""
+def test_ctrl_c_just_after_begin_leaves_no_transaction_open(store, db, monkeypatch, sql):
+    """The interrupted run records how it ended right after: a Ctrl-C landing just after BEGIN must
+    not leave a transaction (and SQLite's lock) held by a pooled connection."""
     cid = store.create_campaign(cfg(), ROBOT)
-    conn = store._conn()
-    interrupting = _InterruptedAfter(conn, sql)  # once
-    monkeypatch.setattr(store, "_conn", lambda: interrupting)
-    with pytest.raises(KeyboardInterrupt):
-        if sql == "BEGIN":
-            store.campaign(cid)
-        else:
-            store.set_status(cid, "running")
-    assert not conn.in_transaction
+    engine = store._get_engine()
+    armed = [True]
+
+    def interrupt(conn, cursor, statement, *args):
+        if armed[0] and statement == sql:
+            armed[0] = False
+            raise KeyboardInterrupt
+
+    event.listen(engine, "after_cursor_execute", interrupt)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            if sql == "BEGIN":
+                store.campaign(cid)
+            else:
+                store.set_status(cid, "running")
+    finally:
+        event.remove(engine, "after_cursor_execute", interrupt)
+    other = sqlite3.connect(db, timeout=0, isolation_level=None)  # no lock left behind
+    other.execute("BEGIN IMMEDIATE")
+    other.execute("ROLLBACK")
+    other.close()
     store.record_event(RunFinished(campaign=cid, status="interrupted"))
     assert store.campaign(cid).summary.status == "interrupted"
 
@@ -569,7 +574,7 @@ def test_run_started_by_an_older_hil_stays_running(store):
     """No owner in its RunStarted (recorded before owners were): nothing says it is dead."""
     cid = store.create_campaign(cfg(), ROBOT)
     store.record_event(RunStarted(campaign=cid, robot="ur5e", station="cell-1", poses=6))
-    conn = store._conn()
+    conn = raw(store)
     (data,) = conn.execute("SELECT data FROM events WHERE type = 'RunStarted'").fetchone()
     assert json.loads(data)["owner"]["pid"] == os.getpid()
     conn.execute("UPDATE events SET data = ? WHERE type = 'RunStarted'",
@@ -607,7 +612,9 @@ def test_reader_runs_while_the_engine_writes(db):
         assert seen == sorted(seen)  # monotonic: every read saw a consistent, growing state
         assert reads >= 1
         assert s.campaign(cid).summary.measured == total == len(other.measured_poses(cid))
-        assert len(s._connections) == 2  # the worker's own connection and ours
+        pool = s._get_engine().pool
+        assert pool.checkedout() == 0  # none held between transactions
+        assert pool.checkedin() <= 2  # the worker's and ours, reused
 
 
 def test_connections_of_ended_threads_are_closed(db):
@@ -617,4 +624,5 @@ def test_connections_of_ended_threads_are_closed(db):
             t.start()
             t.join()
         s.campaigns()
-        assert len(s._connections) <= 2
+        pool = s._get_engine().pool
+        assert pool.checkedout() == 0 and pool.checkedin() <= 2

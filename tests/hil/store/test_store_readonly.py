@@ -23,7 +23,7 @@ from hil.cli import main
 from hil.errors import InputError
 from hil.station.config import default_config
 from hil.store import SCHEMA_VERSION, RobotInfo, Store, StoreError
-from hil.store.schema import migrate
+from tests.hil.store.legacy_schema import make_legacy
 
 ROOT = Path(__file__).resolve().parents[3]
 NOBODY = 65534
@@ -124,7 +124,7 @@ def test_reading_leaves_the_folder_as_it_was_and_refuses_writes(tmp_path):
     assert os.listdir(tmp_path) == ["s.db"]
     with Store.open(db, readonly=True) as s:
         assert [c.id for c in s.campaigns()] == [cid]
-        with pytest.raises(StoreError, match="readonly"):
+        with pytest.raises(StoreError, match="read-only"):
             s.set_status(cid, "aborted")
     assert os.listdir(tmp_path) == ["s.db"]
     with Store.open(db) as s:
@@ -147,9 +147,7 @@ def test_a_plain_sqlite_file_is_not_a_store(tmp_path):
 
 def test_an_older_store_is_upgraded_when_writable(tmp_path):
     db = tmp_path / "old.db"
-    conn = sqlite3.connect(db, isolation_level=None)
-    migrate(conn, str(db), target=1)
-    conn.close()
+    make_legacy(db, 1)
     with Store.open(db, readonly=True) as s:
         assert s.campaigns() == []
     conn = sqlite3.connect(db)

@@ -1,92 +1,20 @@
-"""The store's SQLite schema and its numbered upgrade steps.
+"""hil's store schema before Alembic, frozen: the hand-written steps that made versions 1 to 3.
 
-The schema version lives in ``PRAGMA user_version`` (0 = empty file). `STEPS[i]` turns version ``i``
-into version ``i + 1``; opening a database applies every missing step and the new ``user_version``
-in ONE transaction, so an upgrade interrupted by a crash leaves the old version intact rather than a
-half-migrated file. A step is a function of the connection, so it can rebuild data in Python as well
-as run DDL (SQLite's DDL is transactional). Steps are append-only: once released, a step is never
-edited; a change is a new step. A database newer than `SCHEMA_VERSION` is refused, because code that
-does not know a column cannot keep its invariants.
-
-Why the tables look as they do:
-
-* Measurements are append-only (a pose measured twice keeps both rows; readers take the latest).
-  The store is the record of what the instrument said, and a measurement is the one thing a run
-  cannot cheaply redo.
-* JSON columns (config, plan, q, p, model documents, events) hold what other parts of hil define and
-  version themselves (``hil-model/1``, event dicts); the store only indexes what it queries on.
-* Pose ``idx`` is unique within a campaign across roles: it is the pose's number in the plan.
+Stores written by those versions exist on stations; tests build such files with `make_legacy` to
+prove they upgrade in place (`hil.store.migrate` stamps them and carries on with Alembic). Never edit:
+this is what old files look like.
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
 import sqlite3
-from collections.abc import Callable, Mapping, Sequence
-from typing import Any
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+from hil.store.hashing import config_hash, measurement_hash
 
 Step = Callable[[sqlite3.Connection], None]
-
-
-def canonical_json(value: Any) -> str:
-    """Deterministic compact JSON (sorted keys): equal values give equal text, hence equal hashes."""
-    return json.dumps(value, sort_keys=True, separators=(",", ":"), allow_nan=False)
-
-
-def config_hash(config: Mapping[str, Any]) -> str:
-    """sha256 of a station configuration, which is how a re-run finds the campaign it resumes.
-
-    The ``store`` section is left out: where the results are kept does not change what is being
-    calibrated, and moving the database must not orphan an unfinished campaign.
-    """
-    body = {k: v for k, v in config.items() if k != "store"}
-    return hashlib.sha256(canonical_json(body).encode()).hexdigest()
-
-
-# What does not change what a campaign measures, so a re-run that differs only there resumes it:
-# how hil reaches the devices and how long it waits for them. ``None`` drops the whole section.
-#   robot.address   — the arm is identified by its serial, which `find_resumable` matches instead
-#                     (and, when the serial is unknown, it compares the address itself);
-#   tracker.url     — a serial port renamed (/dev/ttyUSB0 -> /dev/ttyUSB1), a socket:// or tcp:// address
-#                     changed: the same instrument on another cable or network;
-#   tracker.baudrate, tracker.parity — settings of that cable, not of the measurement;
-#   tracker.timeout, tracker.warmup, timeouts.* — how long to wait for a reply, a warm laser, a
-#                     move, a relock: a longer wait measures the same point (a skipped pose is
-#                     recorded as skipped, not measured differently);
-#   store.*         — where the results are kept.
-# Everything else stays: the robot type and motion settings, the tracker's protocol (GeoCOM and emScon
-# measure differently: a stationary measuring time, a reflector choice), its position guess and the
-# atmospheric correction (which change every distance), the SMR, the keep-in box, the campaign's
-# counts, seed and acceptance. A value starting with ``sim:`` is kept even in a dropped key: the
-# simulated station identifies itself there by what it simulates (seed, truth), not where it listens.
-# Changing this table changes the hashes: it needs a new schema step recomputing ``measure_hash``.
-MEASUREMENT_IGNORED: Mapping[str, tuple[str, ...] | None] = {
-    "robot": ("address",),
-    "tracker": ("url", "baudrate", "parity", "timeout", "warmup"),
-    "timeouts": None,
-    "store": None,
-}
-
-
-def measurement_identity(config: Mapping[str, Any]) -> dict[str, Any]:
-    """The station configuration without what does not change the measurement (`MEASUREMENT_IGNORED`)."""
-    body: dict[str, Any] = {}
-    for section, values in config.items():
-        if section in MEASUREMENT_IGNORED and MEASUREMENT_IGNORED[section] is None:
-            continue
-        dropped = MEASUREMENT_IGNORED.get(section) or ()
-        if isinstance(values, Mapping):
-            values = {k: v for k, v in values.items()
-                      if k not in dropped or (isinstance(v, str) and v.startswith("sim:"))}
-        body[section] = values
-    return body
-
-
-def measurement_hash(config: Mapping[str, Any]) -> str:
-    """sha256 of `measurement_identity`: how a re-run finds the campaign it resumes, so the poses
-    already measured are reused when only a connection address, a timeout or the store changed."""
-    return hashlib.sha256(canonical_json(measurement_identity(config)).encode()).hexdigest()
 
 
 def _script(*statements: str) -> Step:
@@ -231,37 +159,18 @@ def _v3(conn: sqlite3.Connection) -> None:
 
 
 STEPS: Sequence[Step] = (_V1, _v2, _v3)
-SCHEMA_VERSION = len(STEPS)
 
 
-def migrate(conn: sqlite3.Connection, where: str, target: int = SCHEMA_VERSION) -> int:
-    """Bring the database to version `target` in one transaction; returns the version found.
-
-    `conn` must be in autocommit mode (``isolation_level=None``); `where` names the file in errors.
-    The version is re-read after taking the write lock, so two processes opening an old database at
-    once upgrade it exactly once.
-    """
-    from hil.errors import InputError
-
-    found = conn.execute("PRAGMA user_version").fetchone()[0]
-    if found > SCHEMA_VERSION:
-        raise InputError(f"{where}: database schema version {found} is newer than this hil supports "
-                         f"({SCHEMA_VERSION}); upgrade hil to read it")
-    if found >= target:
-        return int(found)
-    conn.execute("BEGIN IMMEDIATE")
+def make_legacy(path: Path, version: int) -> Path:
+    """An empty store file at `path` exactly as hil wrote it at schema `version` (1 to 3)."""
+    conn = sqlite3.connect(path, isolation_level=None)
     try:
-        found = conn.execute("PRAGMA user_version").fetchone()[0]
-        if found == 0:
-            tables = conn.execute("SELECT count(*) FROM sqlite_master").fetchone()[0]
-            if tables:
-                raise InputError(f"{where}: an SQLite database, but not a hil store")
-        for step in STEPS[found:target]:
+        conn.execute("PRAGMA journal_mode = WAL")
+        conn.execute("BEGIN IMMEDIATE")
+        for step in STEPS[:version]:
             step(conn)
-        conn.execute(f"PRAGMA user_version = {int(max(found, target))}")
+        conn.execute(f"PRAGMA user_version = {int(version)}")
         conn.execute("COMMIT")
-    except BaseException:
-        if conn.in_transaction:
-            conn.execute("ROLLBACK")
-        raise
-    return int(found)
+    finally:
+        conn.close()
+    return path

@@ -1,0 +1,1 @@
+"""Alembic migrations of the hil store (see `hil.store.migrate`)."""
