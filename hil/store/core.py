@@ -892,7 +892,11 @@ class Store:
         self._write("save the plan", body)
 
     def _require_campaign(self, conn: Connection, campaign: str) -> None:
-        if conn.execute(select(tb.campaigns.c.id).where(tb.campaigns.c.id == campaign)).first() is None:
+        """StoreError unless `campaign` exists; it also locks the campaign's row for the rest of the
+        transaction (PostgreSQL; SQLite's BEGIN IMMEDIATE already serialises writers), so two writers of
+        one campaign — threads of one process — number its events one after the other."""
+        if conn.execute(select(tb.campaigns.c.id).where(tb.campaigns.c.id == campaign)
+                        .with_for_update()).first() is None:
             raise StoreError(f"{self.location}: no campaign {campaign!r}")
 
     def record_measurement(self, campaign: str, index: int, role: str, q: Sequence[float],
