@@ -10,8 +10,10 @@ Typical use at the end of a campaign::
 `report_data_from_result` rebuilds the same `ReportData` from a saved result (``hil report``).
 
 `hil.report.result` builds the ``hil-result/1`` document of a finished campaign (CLI and TUI alike).
+`hil.report.fleet` is the fleet report (``hil fleet-report``), read from the store (`hil.store.fleet`).
 
-May import: `hil.campaign`, `hil.station`, `hil.calibration`, `hil.arm`, `hil.files`, `hil.errors`.
+May import: `hil.store`, `hil.campaign`, `hil.station`, `hil.calibration`, `hil.arm`, `hil.files`,
+`hil.errors`.
 """
 
 from hil.report.data import (

@@ -717,6 +717,76 @@ def _cases() -> list[Case]:
     add("show", "--db:read-only-media", ["show", "last", "--db", f"{d}/ro/store.db"], [], expect=0,
         files={"ro/store.db": lambda d: (d / "store.db").read_bytes()}, read_only=("ro/store.db", "ro"))
 
+    # ---------------------------------------------------------------- robots
+    ro = ["robots", "--db"]
+    add("robots", "--db:missing", [*ro, f"{d}/none.db"], ["none.db"])
+    add("robots", "--db:directory", [*ro, f"{d}/sub"], ["/sub"])
+    add("robots", "--db:empty-file", [*ro, f"{d}/empty.db"], ["empty.db"], files={"empty.db": ""})
+    add("robots", "--db:garbage", [*ro, f"{d}/g.db"], ["g.db"], files={"g.db": "hello\n" * 1000})
+    add("robots", "--db:binary", [*ro, f"{d}/b.db"], ["b.db"], files={"b.db": BINARY})
+    add("robots", "--db:corrupt-mid-file", [*ro, f"{d}/corrupt.db"], ["corrupt.db"],
+        files={"corrupt.db": corrupt_store})
+    add("robots", "--db:newer-schema", [*ro, f"{d}/newer.db"], ["newer.db"], files={"newer.db": newer_store})
+    add("robots", "--db:not-a-hil-store", [*ro, f"{d}/photos.db"], ["photos.db"],
+        files={"photos.db": foreign_sqlite})
+    add("robots", "--station=unknown", [*ro, f"{d}/store.db", "--station", "cell-9"], ["--station", "cell-9"])
+    add("robots", "HIL_DB=missing", ["robots"], ["none.db"], env={"HIL_DB": f"{d}/none.db"})
+    add("robots", "default-store-missing", ["robots"], ["hil.db"])
+    add("robots", "--config:garbage", ["robots", "--config", f"{d}/g.toml"], ["g.toml"],
+        files={"g.toml": "[[[ nope"})
+    add("robots", "--config:missing", ["robots", "--config", f"{d}/none.toml"], ["none.toml"])
+    add("robots", "--db:read-only-media", [*ro, f"{d}/ro/store.db"], [], expect=0,
+        files={"ro/store.db": lambda d: (d / "store.db").read_bytes()}, read_only=("ro/store.db", "ro"))
+
+    # ---------------------------------------------------------------- robot
+    rb = ["robot", "20235500001", "--db", f"{d}/store.db"]
+    add("robot", "SERIAL=unknown", ["robot", "999", "--db", f"{d}/store.db"], ["999"])
+    add("robot", "SERIAL=unknown-while-marking",
+        ["robot", "999", "--db", f"{d}/store.db", "--mark-bad", "last", "--reason", "r"], ["999"])
+    add("robot", "--mark-bad-without-reason", [*rb, "--mark-bad", "last"], ["--reason"])
+    add("robot", "--mark-good-without-reason", [*rb, "--mark-good", "last"], ["--reason"])
+    add("robot", "--reason=blank", [*rb, "--mark-bad", "last", "--reason", "  "], ["--reason"])
+    add("robot", "--reason-without-mark", [*rb, "--reason", "why"], ["--reason"])
+    add("robot", "--mark-bad=unknown", [*rb, "--mark-bad", "nope", "--reason", "r"], ["nope"])
+    add("robot", "--mark-bad=empty", [*rb, "--mark-bad", "", "--reason", "r"], ["--mark-bad", "empty"])
+    add("robot", "--mark-bad-and-good", [*rb, "--mark-bad", "last", "--mark-good", "last", "--reason", "r"],
+        ["--mark-good|--mark-bad"])
+    add("robot", "--format-without-export", [*rb, "--format", "urdf"], ["--format"])
+    add("robot", "--export-model=the-store", [*rb, "--export-model", f"{d}/store.db"], ["store.db"])
+    add("robot", "--export-model=directory", [*rb, "--export-model", f"{d}/sub"], ["/sub"])
+    add("robot", "--export-model=missing-folder", [*rb, "--export-model", f"{d}/none/m.json"], ["none"])
+    numbers("robot", rb, "--sigmas", BAD_FLOATS)
+    add("robot", "--db:missing", ["robot", "20235500001", "--db", f"{d}/none.db"], ["none.db"])
+    add("robot", "--db:missing-while-marking", ["robot", "20235500001", "--db", f"{d}/none.db", "--mark-bad",
+                                                "last", "--reason", "r"], ["none.db"])
+    add("robot", "--db:read-only-media", ["robot", "20235500001", "--db", f"{d}/ro/store.db"], [], expect=0,
+        files={"ro/store.db": lambda d: (d / "store.db").read_bytes()}, read_only=("ro/store.db", "ro"))
+
+    # ---------------------------------------------------------------- fleet-report
+    fr = ["fleet-report", "--db", f"{d}/store.db", "--out", f"{d}/fleet.html"]
+    add("fleet-report", "--out-missing", ["fleet-report", "--db", f"{d}/store.db"], ["--out"])
+    add("fleet-report", "--out=the-store",
+        ["fleet-report", "--db", f"{d}/store.db", "--out", f"{d}/store.db"], ["store.db"])
+    add("fleet-report", "--out=the-store-via-HIL_DB", ["fleet-report", "--out", f"{d}/store.db"],
+        ["store.db"], env={"HIL_DB": f"{d}/store.db"})
+    add("fleet-report", "--out=the-config", ["fleet-report", "--config", f"{d}/st.toml", "--out",
+                                             f"{d}/st.toml"], ["st.toml"],
+        files={"st.toml": config_with("store.path", "store.db")})
+    add("fleet-report", "--out=directory", ["fleet-report", "--db", f"{d}/store.db", "--out", f"{d}/sub"],
+        ["/sub"])
+    add("fleet-report", "--out=missing-folder", ["fleet-report", "--db", f"{d}/store.db", "--out",
+                                                 f"{d}/none/fleet.html"], ["none"])
+    for v in ("2024-13-01", "yesterday", "", "2024-02-30"):
+        add("fleet-report", f"--since={v or 'empty'}", [*fr, "--since", v], ["--since"])
+    numbers("fleet-report", fr, "--sigmas", ("0", "-1", "nan", "inf", "abc"))
+    add("fleet-report", "--db:missing", ["fleet-report", "--db", f"{d}/none.db", "--out", f"{d}/fleet.html"],
+        ["none.db"])
+    add("fleet-report", "--db:garbage", ["fleet-report", "--db", f"{d}/g.db", "--out", f"{d}/fleet.html"],
+        ["g.db"], files={"g.db": "hello\n" * 1000})
+    add("fleet-report", "--db:corrupt-mid-file", ["fleet-report", "--db", f"{d}/corrupt.db", "--out",
+                                                  f"{d}/fleet.html"], ["corrupt.db"],
+        files={"corrupt.db": corrupt_store})
+
     # ---------------------------------------------------------------- report
     rep = ["report", "--result", f"{d}/result.json"]
     bad_json("report", lambda p: ["report", "--result", p, "--out", f"{d}/r.html"], "--result", "result.json")
