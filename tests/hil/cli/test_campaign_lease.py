@@ -18,6 +18,8 @@ import sys
 from collections import Counter
 from pathlib import Path
 
+import pytest
+
 from hil.cli import main
 from hil.store import Store
 from tests.hil.cli.test_calibrate_interrupt import Cell
@@ -50,14 +52,23 @@ def second_command_during(cell: Cell, after_points: int, *extra: str, lock_dir: 
     return seen
 
 
+@pytest.fixture(params=["sqlite", "postgresql"])
+def cell(request, tmp_path, monkeypatch) -> Cell:
+    """The fake station on each engine: the store a file, or a PostgreSQL database (the leases must hold
+    for a plant's shared store too)."""
+    cell = Cell(tmp_path, monkeypatch)
+    if request.param == "postgresql":
+        cell.db = request.getfixturevalue("pg_url")
+    return cell
+
+
 def refusal(err: str) -> str:
     (line,) = [ln for ln in err.splitlines() if ln.startswith("hil: error:")]
     return line
 
 
 def test_the_same_command_while_the_first_measures_is_refused_and_the_first_finishes(
-        tmp_path, monkeypatch, capsys):
-    cell = Cell(tmp_path, monkeypatch)
+        cell, tmp_path, capsys):
     second = second_command_during(cell, 5, lock_dir=tmp_path / "other-locks")
     assert cell.calibrate() in (0, 1)
     assert second["code"] == 2 and second["moves"] == 0 and second["points"] == 0
@@ -84,8 +95,7 @@ def test_the_hosts_address_lock_refuses_before_connecting(tmp_path, monkeypatch,
                            f"(pid {os.getpid()} ")
 
 
-def test_a_new_campaign_on_a_driven_arm_is_refused_and_leaves_no_campaign(tmp_path, monkeypatch, capsys):
-    cell = Cell(tmp_path, monkeypatch)
+def test_a_new_campaign_on_a_driven_arm_is_refused_and_leaves_no_campaign(cell, tmp_path, capsys):
     second = second_command_during(cell, 5, "--new", lock_dir=tmp_path / "other-locks")
     assert cell.calibrate() in (0, 1)
     assert second == {"code": 2, "moves": 0, "points": 0}
