@@ -503,11 +503,16 @@ class Store:
 
     @contextmanager
     def reading(self) -> Iterator[Connection]:
-        """A read transaction: the queries inside see one consistent snapshot."""
+        """A read transaction: the queries inside see one consistent snapshot. It ends by a rollback: a
+        reader has nothing to commit (and a COMMIT on a full disk may fail where a rollback does not)."""
         engine = self._get_engine()
         try:
-            with engine.connect() as conn, conn.begin():
-                yield conn
+            with engine.connect() as conn:
+                transaction = conn.begin()
+                try:
+                    yield conn
+                finally:
+                    transaction.rollback()
         except DBAPIError as exc:
             raise StoreError(f"{self.location}: cannot read: {_first_line(exc.orig)}") from exc.orig
 

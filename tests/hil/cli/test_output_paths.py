@@ -105,7 +105,17 @@ def _cases() -> list[tuple[str, str, str, Case, str]]:
     mrun = lambda d: ["moveb", "run", w(d, "square.moveb"), *SIM, "--truth", w(d, "truth.json"),  # noqa: E731
                       "--model", w(d, "model.json")]
     tui = lambda d: ["tui", "--sim", "--db", w(d, "s.db"), "--out-dir"]  # noqa: E731
+    robot = lambda d: ["robot", "2023550002", "--db", w(d, "s.db"), "--export-model"]  # noqa: E731
+    fleet = lambda d: ["fleet-report", "--db", w(d, "s.db"), "--out"]  # noqa: E731
     return [
+        ("robot", "--export-model", "store", lambda d: [*robot(d), w(d, "s.db")], "is the store (--db"),
+        ("robot", "--export-model", "store", lambda d: [*robot(d), w(d, "s.db-wal")], "store's wal file"),
+        ("robot", "--export-model", "directory", lambda d: [*robot(d), w(d, "folder")], "is a directory"),
+        ("robot", "--export-model", "missing parent", lambda d: [*robot(d), w(d, missing)],
+         "does not exist"),
+        ("fleet-report", "--out", "store", lambda d: [*fleet(d), w(d, "s.db")], "is the store (--db"),
+        ("fleet-report", "--out", "directory", lambda d: [*fleet(d), w(d, "folder")], "is a directory"),
+        ("fleet-report", "--out", "missing parent", lambda d: [*fleet(d), w(d, missing)], "does not exist"),
         ("identify", "--out", "input", lambda d: [*ident(d), w(d, "measurements.csv")],
          "input --measurements"),
         ("identify", "--out", "input", lambda d: [*ident(d), w(d, "validation.csv")], "input --validation"),
