@@ -3,15 +3,15 @@
 Each station is a real `hil calibrate --sim` process (its own simulated UR arm with its own serial and
 hidden errors, its own simulated tracker, driven through ur_rtde and GeoCOM), all writing to one
 PostgreSQL 15 server on loopback (durable settings, started here by initdb in a temporary folder,
-tests/pg_server.py). Optionally the server is restarted while they run (``--restart-after S``): every
-station must wait and continue.
+tests/pg_server.py). Optionally the server is stopped for a few seconds once every station is
+measuring (``--restart``): every station must wait and continue. Stations start 5 s apart, as cells do.
 
 Afterwards, per campaign: finished (accepted or rejected), every planned pose measured or skipped with a
 reason, no pose measured twice, the event log numbered 1..n without a gap, and the lease released; and
 `hil robots` lists the N robots. The table prints wall time per station and these checks.
 
 Run: python bench/fleet_stations.py [--stations 4] [--speed 50] [--poses 10] [--validation 4]
-     [--restart-after 20]
+     [--restart] [--down 5]
 """
 
 from __future__ import annotations
@@ -38,8 +38,9 @@ def main() -> None:
     ap.add_argument("--speed", type=float, default=50.0)
     ap.add_argument("--poses", type=int, default=10)
     ap.add_argument("--validation", type=int, default=4)
-    ap.add_argument("--restart-after", type=float, default=None, metavar="S",
-                    help="stop the database S seconds after the start and start it again 3 s later")
+    ap.add_argument("--restart", action="store_true",
+                    help="stop the database once every station has measured 2 points, start it again later")
+    ap.add_argument("--down", type=float, default=5.0, metavar="S", help="seconds the database is down")
     args = ap.parse_args()
     from tests.pg_server import PostgresServer
 
@@ -47,28 +48,36 @@ def main() -> None:
     with PostgresServer(fast=False) as pg:
         url = pg.create_database("fleet")
         started = time.perf_counter()
-        procs = []
+        procs, lines = [], []
         for k in range(args.stations):
             cmd = [sys.executable, "-m", "hil", "calibrate", "--sim", "--seed", str(k + 1), "--speed",
                    str(args.speed), "--poses", str(args.poses), "--validation", str(args.validation),
                    "--db", url]
-            procs.append(subprocess.Popen(cmd, cwd=ROOT, env=env, stdin=subprocess.DEVNULL,
-                                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True))
-        restart = None
-        if args.restart_after is not None:
-            def bounce() -> None:
-                pg.stop()
-                time.sleep(3.0)
-                pg.start()
-
-            restart = threading.Timer(args.restart_after, bounce)
-            restart.start()
+            proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdin=subprocess.DEVNULL,
+                                    stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+            out: list[str] = []
+            threading.Thread(target=lambda p=proc, o=out: o.extend(iter(p.stderr.readline, "")),
+                             daemon=True).start()
+            procs.append(proc)
+            lines.append(out)
+            time.sleep(5.0)
+        bounced_at = None
+        if args.restart:
+            deadline = time.monotonic() + 900
+            while time.monotonic() < deadline and not all(
+                    sum("measured pose" in ln for ln in out) >= 2 for out in lines):
+                if all(p.poll() is not None for p in procs):
+                    break
+                time.sleep(0.2)
+            bounced_at = time.perf_counter() - started
+            pg.stop()
+            time.sleep(args.down)
+            pg.start()
         results = []
-        for p in procs:
-            _, err = p.communicate(timeout=1800)
-            results.append((p.returncode, time.perf_counter() - started, err))
-        if restart is not None:
-            restart.join()
+        for p, out in zip(procs, lines, strict=True):
+            p.wait(timeout=1800)
+            time.sleep(0.2)  # the reader thread takes the last lines
+            results.append((p.returncode, time.perf_counter() - started, "".join(out)))
         with Store.open(url, readonly=True) as store:
             campaigns = store.campaigns(limit=None)
             rows = []
@@ -83,7 +92,8 @@ def main() -> None:
                                 env=env, capture_output=True, text=True, timeout=120)
     waited = sum("database link lost" in err for _, _, err in results)
     print(f"{args.stations} simulated stations, one PostgreSQL database"
-          + (f", restarted at {args.restart_after:g} s" if args.restart_after is not None else ""))
+          + (f", down {args.down:g} s from {bounced_at:.1f} s (all stations measuring)"
+             if bounced_at is not None else ""))
     print(f"{'robot':<12} {'status':<9} {'planned':>7} {'measured':>8} {'skipped':>7} {'once':>5} "
           f"{'gapless':>7} {'reasons':>7}")
     for c, once, gapless, reasons in rows:

@@ -112,7 +112,7 @@ def main() -> None:
     base = rows[0][5]
     print(f"measurement commit ({args.points} points per station; durable settings on both engines)")
     print(f"{'engine':<11} {'stations':>8} {'median ms':>10} {'p95 ms':>8} {'max ms':>8} "
-          f"{'commits/s':>10} {'vs SQLite×1':>12} {'all rows':>9}")
+          f"{'points/s':>10} {'vs SQLite×1':>12} {'all rows':>9}")
     for engine, writers, med, p95, worst, rate, ok in rows:
         print(f"{engine:<11} {writers:>8} {med:>10.2f} {p95:>8.2f} {worst:>8.2f} {rate:>10.0f} "
               f"{rate / base:>11.2f}x {ok:>9}")

@@ -626,3 +626,21 @@ def test_connections_of_ended_threads_are_closed(db):
         s.campaigns()
         pool = s._get_engine().pool
         assert pool.checkedout() == 0 and pool.checkedin() <= 2
+
+
+def test_store_url_in_the_config_names_a_file_or_a_server(tmp_path):
+    from hil.store import resolve_location
+
+    station = tmp_path / "station.toml"
+    station.write_text('[store]\nurl = "postgresql://hil@db.plant.example:5432/hil"\n')
+    assert resolve_location(None, load_config(station), {}) == "postgresql://hil@db.plant.example:5432/hil"
+    assert resolve_location(None, load_config(station), {"HIL_DB": "/env.db"}) == Path("/env.db")
+    station.write_text('[store]\nurl = "sqlite:///results/cell.db"\npath = "ignored.db"\n')
+    assert resolve_location(None, load_config(station), {}) == tmp_path / "results" / "cell.db"
+    assert resolve_location("postgresql://u@h/d", None, {}) == "postgresql://u@h/d"
+    for bad, words in (("mysql://u@h/d", "postgresql:// URL"), ("postgresql:///d", "needs a host"),
+                       ("sqlite://rel.db", "sqlite:///")):
+        station.write_text(f'[store]\nurl = "{bad}"\n')
+        with pytest.raises(InputError, match="store.url") as refused:
+            load_config(station)
+        assert words in str(refused.value)
