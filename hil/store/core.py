@@ -346,6 +346,13 @@ class Store:
                         upgrade(conn, self.location)
         except DBAPIError as exc:
             engine.dispose()
+            # no such database (3D000), no such role or a refused password (28000, 28P01): what was
+            # typed is wrong (exit 2); a server that does not answer is a station fault (exit 3)
+            text = str(exc.orig)
+            if getattr(exc.orig, "sqlstate", None) in ("3D000", "28000", "28P01") or (
+                    "does not exist" in text and ('database "' in text or 'role "' in text)) or (
+                    "password authentication failed" in text):
+                raise InputError(f"{self.location}: {_first_line(exc.orig)}") from None
             raise StoreUnavailable(f"{self.location}: cannot open: {_first_line(exc.orig)}") from exc
         except BaseException:
             engine.dispose()

@@ -940,3 +940,18 @@ def test_an_sqlite_store_from_before_alembic_upgrades_in_place(tmp_path, version
         assert s.find_resumable(old["config"], ROBOT.serial) == LEGACY_ID
         assert sorted(s.measured_poses(LEGACY_ID)) == [0, 1, 3]
     assert upgrades == ["0004"] and stamps == []
+
+
+def test_a_database_that_does_not_exist_is_bad_input_and_a_server_that_does_not_answer_a_fault(pg_url):
+    """A typo in the URL's database name is the user's to fix (exit 2); a server down is the station's
+    (exit 3). Neither creates anything."""
+    from hil.errors import FaultError
+    from hil.store.sqlite_errors import StoreUnavailable
+
+    missing = pg_url.rsplit("/", 1)[0] + "/no_such_database"
+    with pytest.raises(InputError, match="no_such_database"):
+        Store.open(missing)
+    nobody = "postgresql://hil@127.0.0.1:9/hil"  # the discard port: nothing listens
+    with pytest.raises(StoreUnavailable) as down:
+        Store(nobody, timeout=2.0).connect()
+    assert isinstance(down.value, FaultError) and "cannot open" in str(down.value)
