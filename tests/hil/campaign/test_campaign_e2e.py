@@ -95,7 +95,9 @@ def test_full_campaign_from_the_cli_matches_the_hidden_truth(tmp_path, truth_fil
 
 
 def test_kill_9_mid_campaign_then_rerun_resumes_without_losing_anything(tmp_path, truth_file):
-    proc = subprocess.Popen(cli(tmp_path, "--json"), cwd=ROOT, stdout=subprocess.PIPE,
+    # fewer poses (the count is not asserted; 12 calibration poses is past the 9th reported one)
+    cmd = cli(tmp_path, "--json", "--poses", "12", "--validation", "4")
+    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE,
                             stderr=subprocess.DEVNULL, text=True, start_new_session=True)
     measured = 0
     try:
@@ -114,7 +116,7 @@ def test_kill_9_mid_campaign_then_rerun_resumes_without_losing_anything(tmp_path
         kept = store.measured_poses(summary.id)
         planned = store.poses(summary.id)
     assert len(kept) >= 9 + 4  # bootstrap poses and the calibration poses that were reported
-    again = subprocess.run(cli(tmp_path, "--json"), cwd=ROOT, capture_output=True, text=True, timeout=240)
+    again = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=240)
     assert again.returncode == 0, again.stderr[-2000:]
     events = [json.loads(line) for line in again.stdout.splitlines()]
     assert events[0]["event"] == "RunStarted" and events[0]["resumed"]

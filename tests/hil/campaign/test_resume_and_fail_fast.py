@@ -231,7 +231,7 @@ def test_a_store_that_cannot_write_stops_the_arm_and_the_run_fails_naming_the_wr
 def test_a_wrong_tracker_position_on_the_simulated_station_stops_after_three_lost_poses(tmp_path):
     from mocks.station import start_station
 
-    sim = start_station(speed=40.0, seed=5)
+    sim = start_station(speed=100.0, seed=5)
     try:
         svc = sim.info["services"][0]
         config = default_config().with_overrides(
@@ -247,7 +247,7 @@ def test_a_wrong_tracker_position_on_the_simulated_station_stops_after_three_los
         events: list = []
         bus = EventBus()
         bus.subscribe(events.append)
-        outcome = run_campaign(config, choose, bus=bus, clock=RealClock(40.0))
+        outcome = run_campaign(config, choose, bus=bus, clock=RealClock(100.0))
     finally:
         sim.stop()
     assert outcome.status == "failed" and outcome.exit_code == 3, outcome.error
