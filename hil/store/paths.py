@@ -31,10 +31,16 @@ def default_path(env: Mapping[str, str] | None = None) -> Path:
     return root / "hil" / "hil.db"
 
 
-def _plain(text: str) -> str | Path:
-    """A location as given: a PostgreSQL URL stays text, ``sqlite:///f.db`` and a path become a Path."""
+def _plain(text: str, field: str = "--db") -> str | Path:
+    """A location as given: a PostgreSQL URL stays text, ``sqlite:///f.db`` and a path become a Path.
+    Another database's URL is bad input naming `field` (taken for a path, it would become folders)."""
     if is_postgres(text):
         return text
+    if "://" in text and not text.startswith("sqlite:///"):
+        from hil.errors import InputError
+
+        raise InputError(f"{field}: {text.split('://', 1)[0]}:// is not a store; give a file path or a "
+                         "postgresql:// URL")
     if text.startswith("sqlite:///"):
         text = text[len("sqlite:///"):]  # sqlite:////abs/path keeps its leading slash
     return Path(text).expanduser()
@@ -67,7 +73,7 @@ def resolve_location(path: str | os.PathLike[str] | None = None, config: Any = N
     if path is not None and str(path) != "":
         return _plain(str(path))
     if env.get(ENV_VAR):
-        return _plain(env[ENV_VAR])
+        return _plain(env[ENV_VAR], f"${ENV_VAR}")
     return _config_store_location(config) or default_path(env)
 
 

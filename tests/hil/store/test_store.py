@@ -644,3 +644,18 @@ def test_store_url_in_the_config_names_a_file_or_a_server(tmp_path):
         with pytest.raises(InputError, match="store.url") as refused:
             load_config(station)
         assert words in str(refused.value)
+
+
+def test_another_databases_url_is_bad_input_and_creates_nothing(tmp_path, monkeypatch, capsys):
+    from hil.cli import main
+    from hil.store import resolve_location
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(InputError, match=r"^--db: mysql:// is not a store"):
+        resolve_location("mysql://u@h/d", None, {})
+    with pytest.raises(InputError, match=r"^\$HIL_DB: mysql://"):
+        resolve_location(None, None, {"HIL_DB": "mysql://u@h/d"})
+    assert main(["history", "--db", "mysql://u@h/d"]) == 2
+    assert capsys.readouterr().err.strip() == ("hil: error: --db: mysql:// is not a store; give a file "
+                                               "path or a postgresql:// URL")
+    assert list(tmp_path.iterdir()) == []
