@@ -7,6 +7,10 @@ realistic one by seed), puts the arm at a start pose facing the tracker and serv
 and on TCP, and emScon TPI on TCP (`mocks.emscon`, on the controller's clock), at the controller's
 loopback address. Both tracker simulators measure the same world.
 
+The controller gets its own factory calibration: the truth file's ``controller`` block if it has one,
+else one fitted to this truth by seed (`mocks.ur.factory_calibration`), and the truth document the
+service reports carries it, so tests and benches know the model the controller moves with.
+
 Faults it adds to the controller (``inject(name, **args)`` / the control channel): ``block_beam``
 (``on``, ``reason``), ``tracker_unplug``, ``tracker_garble`` (GeoCOM), ``emscon_drop`` (close the
 emScon client now), ``emscon_stall`` (``seconds``: wall seconds without reading or sending),
@@ -20,12 +24,13 @@ from typing import Any
 
 import numpy as np
 
-from hil.calibration.model_file import load_truth, truth_document
+from hil.calibration.model_file import load_truth, read_json, truth_controller, truth_document
 from hil.calibration.synthetic import Noise, random_truth
 from mocks.emscon.instrument import EmsconConfig
 from mocks.emscon.server import EmsconSimulator, ServerConfig
 from mocks.geocom.instrument import InstrumentConfig
 from mocks.geocom.server import GeoComSimulator, LinkConfig, SimulatorConfig
+from mocks.ur.factory_calibration import factory_calibration
 from mocks.world import World
 
 
@@ -68,8 +73,13 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
     rng = np.random.default_rng(seed)
     if truth:
         geometry, noise = load_truth(truth)
+        calibration = truth_controller(read_json(truth), str(truth))
     else:
         geometry, noise = random_truth(controller.config.robot, rng), Noise()
+        calibration = None
+    if calibration is None:
+        calibration = factory_calibration(geometry, seed)
+    controller.set_calibration(calibration)
     world = World(geometry, controller.true_joints, acceptance_angle)
     home = world.home_pose(rng)
     controller.inject("set_joints", q=home.tolist())
@@ -89,7 +99,7 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
         "emscon_garbage": lambda: emscon.garbage(),
         "emscon_laser_cold": lambda seconds: emscon.laser_cold(float(seconds)),
     })
-    return StationService(simulator, world, truth_document(geometry, noise), home, emscon)
+    return StationService(simulator, world, truth_document(geometry, noise, calibration), home, emscon)
 
 
 def station_spec(truth: str | None = None, seed: int = 0, acceptance_angle: float = 30.0,

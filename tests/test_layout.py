@@ -18,7 +18,8 @@ TOP = ("hil", "selector", "drivers", "mocks")
 
 #: hil's packages from the bottom up; a package may import only those before it (and itself).
 HIL_LAYERS: tuple[str, ...] = (
-    "errors", "files", "arm", "calibration", "station", "campaign", "store", "report", "moveb", "tui", "cli",
+    "errors", "files", "arm", "calibration", "compensation", "station", "campaign", "store", "verify",
+    "report", "moveb", "tui", "cli",
 )
 
 

@@ -5,6 +5,7 @@ from drivers.robot.errors import (
     EmergencyStop,
     JointLimitViolation,
     KeepInZoneViolation,
+    KinematicsInfoUnavailable,
     MotionAborted,
     MotionTimeout,
     NotInRemoteControl,
@@ -20,6 +21,7 @@ from drivers.robot.errors import (
     TargetRejected,
     UnsupportedVersion,
 )
+from drivers.robot.kinematics_info import KinematicsInfo, read_kinematics_info
 from drivers.robot.model import FollowResult, JointReading, KeepInZone, Robot, RobotConfig, RobotInfo
 from drivers.robot.ur import ServoStream, URRobot
 
@@ -31,6 +33,8 @@ __all__ = [
     "JointReading",
     "KeepInZone",
     "KeepInZoneViolation",
+    "KinematicsInfo",
+    "KinematicsInfoUnavailable",
     "MotionAborted",
     "MotionTimeout",
     "NotInRemoteControl",
@@ -50,4 +54,5 @@ __all__ = [
     "TargetRejected",
     "URRobot",
     "UnsupportedVersion",
+    "read_kinematics_info",
 ]

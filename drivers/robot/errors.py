@@ -24,6 +24,10 @@ class ConnectionLost(RobotConnectionError):
     """The link dropped while connected (the arm state is unknown; it may still be moving)."""
 
 
+class KinematicsInfoUnavailable(RobotConnectionError):
+    """The primary interface gave no KinematicsInfo (refused, timed out, closed, or not a UR stream)."""
+
+
 class UnsupportedVersion(RobotError):
     """The controller software is a version this driver does not support."""
 

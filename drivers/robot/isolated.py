@@ -235,7 +235,8 @@ class IsolatedURRobot:
         if self._proc is None:
             self._start()
         try:
-            self.info = self._call("open", timeout=_START_TIMEOUT + self.config.connect_timeout)
+            # connect_timeout twice: the RTDE connect, then the primary interface (RobotInfo.kinematics)
+            self.info = self._call("open", timeout=_START_TIMEOUT + 2 * self.config.connect_timeout)
         except BaseException:
             self._kill()
             raise
@@ -251,7 +252,7 @@ class IsolatedURRobot:
         """Recover the link; a dead (or unresponsive) client process is replaced by a new one."""
         if self._proc is not None and self._proc.is_alive():
             try:
-                self.info = self._call("reconnect", timeout=2 * self.config.connect_timeout + _MARGIN)
+                self.info = self._call("reconnect", timeout=3 * self.config.connect_timeout + _MARGIN)
                 return self.info
             except ConnectionLost:
                 self._kill()

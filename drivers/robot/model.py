@@ -13,6 +13,8 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from drivers.robot.kinematics_info import KinematicsInfo
+
 TWO_PI = 2 * math.pi
 
 
@@ -26,6 +28,8 @@ class RobotInfo:
     version: tuple[int, int, int, int]
     series: str  # "e" or "cb3"
     rate_hz: float
+    # the controller's own kinematic model (primary interface); None when that port did not answer
+    kinematics: KinematicsInfo | None = None
 
 
 @dataclass(frozen=True)
@@ -86,6 +90,7 @@ class RobotConfig:
     # rad/s per joint: no streamed sample may ask more of a joint than this (None: not checked)
     max_joint_speed: tuple[float, ...] | None = None
     connect_timeout: float = 5.0
+    primary_port: int = 30001  # the controller's primary client interface (its KinematicsInfo)
     move_timeout: float = 120.0  # real seconds for one move_to, settling included
     settle_timeout: float = 5.0  # real seconds to become steady after the profile ends
     settle_tolerance: float = 1e-4  # rad: |actual - target| to call the arm arrived

@@ -5,7 +5,9 @@ Design choices, and why:
 * No I/O in the constructor; `open()` connects. Before the ur_rtde constructors (which hold the GIL and
   have no timeout) it runs bounded pre-flight checks (`drivers.robot.probe`) and turns every refusal
   into a typed error: unreachable, unsupported version, local control, protective/emergency stop,
-  not running.
+  not running. Once connected it reads the controller's own kinematic model (KinematicsInfo, primary
+  interface, `drivers.robot.kinematics_info`) into `RobotInfo.kinematics`; a primary port that does
+  not answer leaves it None with a warning, as nothing in a campaign's motion depends on it.
 * Targets are validated before any motion and refused — never clamped — outside the joint limits or
   when the TCP would leave the keep-in zone (checked at points along the joint-space path with the
   controller's own FK).
@@ -37,6 +39,7 @@ from drivers.robot.errors import (
     EmergencyStop,
     JointLimitViolation,
     KeepInZoneViolation,
+    KinematicsInfoUnavailable,
     MotionAborted,
     MotionTimeout,
     NotInRemoteControl,
@@ -49,6 +52,7 @@ from drivers.robot.errors import (
     StartPositionMismatch,
     UnsupportedVersion,
 )
+from drivers.robot.kinematics_info import KinematicsInfo, read_kinematics_info
 from drivers.robot.model import FollowResult, JointReading, RobotConfig, RobotInfo
 from drivers.robot.probe import DashboardLine, rtde_version
 from drivers.robot.trajectory import check_trajectory, keep_in_checkpoints
@@ -114,10 +118,23 @@ class URRobot:
         rate = 500.0 if series == "e" else 125.0
         self.info = RobotInfo(model=model, serial=status.serial,
                               software_version=status.polyscope_version or ".".join(map(str, version)),
-                              version=version, series=series, rate_hz=rate)
+                              version=version, series=series, rate_hz=rate, kinematics=self._kinematics())
         log.info("connected to %s %s (serial %s, software %s)", cfg.host, model, status.serial,
                  self.info.software_version)
         return self.info
+
+    def _kinematics(self) -> KinematicsInfo | None:
+        """The controller's own model from its primary interface; None (logged) when it gives none.
+
+        The campaign can run without it (only comparisons with the controller's model need it), so a
+        silent primary port is a warning, not a failure.
+        """
+        cfg = self.config
+        try:
+            return read_kinematics_info(cfg.host, cfg.primary_port, cfg.connect_timeout)
+        except KinematicsInfoUnavailable as exc:
+            log.warning("the controller's kinematic model is unknown: %s", exc)
+            return None
 
     def _wait_playing(self) -> None:
         """Wait (bounded) until the control script plays: it starts asynchronously after an upload."""
@@ -399,7 +416,7 @@ class URRobot:
                             timestamp=float(last_ts or 0.0))
 
     def tcp_pose(self) -> np.ndarray:
-        """The controller's actual TCP pose [x, y, z, rx, ry, rz] (nominal kinematics)."""
+        """The controller's actual TCP pose [x, y, z, rx, ry, rz] (its own calibrated kinematics)."""
         _, r = self._require()
         return np.asarray(r.getActualTCPPose(), dtype=float)
 

@@ -30,11 +30,18 @@ from hil.errors import InputError
 
 #: The four DH quantities of a UR calibration, in the order of the contract and of KinematicsInfo.
 DELTA_KEYS: tuple[str, ...] = ("delta_theta", "delta_a", "delta_d", "delta_alpha")
-#: Plausible size of a factory delta: UR's calibration.conf shows θ/α deltas of milliradians and, on
-#: the parallel joints 2–4, cancelling d deltas of up to a few hundred millimetres (DESIGN.md). A value
-#: beyond these is a unit mistake or a corrupted file.
-MAX_DELTA_LENGTH = 1.0  # m
-MAX_DELTA_ANGLE = 0.5  # rad
+#: Plausible size of a factory delta. Real calibrations are not all small: on the parallel joints 2–4
+#: UR's calibration moves the DH frames along nearly parallel axes, so d deltas of hundreds of *metres*
+#: occur there, and they cancel (a UR5's calibration.conf in ur_modern_driver issue #108 has delta_d of
+#: +232.67, −229.36 and −3.31 m on joints 2–4, summing to 0.00 m, and a delta_theta of −0.77 rad;
+#: ur_calibration's documentation shows d2 ≈ 439 m). Every other length delta is a physical offset of
+#: millimetres. So: a and the d of joints 1, 5, 6 within `MAX_DELTA_LENGTH`; each d of joints 2–4 within
+#: `MAX_PARALLEL_D` and their sum within `MAX_DELTA_LENGTH`. Beyond, a value is a unit mistake (millimetres
+#: for metres) or a corrupted file.
+MAX_DELTA_LENGTH = 0.1  # m
+MAX_PARALLEL_D = 10_000.0  # m
+PARALLEL_JOINTS = (1, 2, 3)  # 0-based: joints 2, 3 and 4
+MAX_DELTA_ANGLE = float(np.pi)  # rad
 
 
 @dataclass(frozen=True)
@@ -113,16 +120,23 @@ class ControllerCalibration:
             raw = data[key]
             if not isinstance(raw, list) or len(raw) != 6:
                 raise InputError(f"{source}: field '{key}' must be a list of 6 numbers")
-            limit = MAX_DELTA_ANGLE if key in ("delta_theta", "delta_alpha") else MAX_DELTA_LENGTH
+            angle = key in ("delta_theta", "delta_alpha")
             out = np.empty(6)
             for i, v in enumerate(raw):
                 if isinstance(v, bool) or not isinstance(v, int | float) or not np.isfinite(v):
                     raise InputError(f"{source}: {key}[{i}]: expected a finite number, got {v!r}")
+                limit = (MAX_DELTA_ANGLE if angle else
+                         MAX_PARALLEL_D if key == "delta_d" and i in PARALLEL_JOINTS else MAX_DELTA_LENGTH)
                 if abs(v) > limit:
-                    raise InputError(f"{source}: {key}[{i}] = {v} is beyond ±{limit} "
-                                     f"{'rad' if limit == MAX_DELTA_ANGLE else 'm'}: a unit mistake?")
+                    raise InputError(f"{source}: {key}[{i}] = {v} is beyond ±{limit:g} "
+                                     f"{'rad' if angle else 'm'}: a unit mistake?")
                 out[i] = float(v)
             values[key] = out
+        net = float(sum(values["delta_d"][i] for i in PARALLEL_JOINTS))
+        if abs(net) > MAX_DELTA_LENGTH:
+            raise InputError(f"{source}: delta_d[1] + delta_d[2] + delta_d[3] = {net:.6g} m: the parallel "
+                             "joints' d deltas cancel on a real calibration "
+                             f"(beyond ±{MAX_DELTA_LENGTH:g} m)")
         return cls(**values)
 
 

@@ -4,6 +4,7 @@
 * `identification` — tracker alignment, Levenberg–Marquardt on SE(3), outlier rejection, validation;
 * `model_file` — the ``hil-model/1`` and ``hil-truth/1`` JSON documents;
 * `exports` — URDF, ROS kinematics YAML and JSON exports of a model;
+* `controller_export` — the controller's own model as the ROS kinematics YAML UR's ur_calibration writes;
 * `synthetic` — random realistic truths and simulated measurements (``hil synth``, the simulators);
 * `selection` — the glue to the `selector` package: hil's model as its `PoseModel`, ``hil select``.
 

@@ -240,13 +240,17 @@ _REGISTRATION = np.r_[np.arange(N_PARAMETERS)[TRACKER_SLICE], np.arange(N_PARAME
 
 
 def register(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None,
-             max_iter: int = 50) -> Geometry:
+             max_iter: int = 50, *, arm: Geometry | None = None) -> Geometry:
     """The nominal arm with only the tracker pose and the SMR offset fitted to `meas`.
 
     This is "before calibration": what the arm's own kinematics achieve once the tracker is
     registered. Works from 3 non-collinear poses (the SMR offset is then poorly determined).
+    `arm` replaces the nominal joints and flange by another model's (the controller's own), so that
+    model is judged the same way.
     """
     nominal = Geometry.nominal(robot, smr=(0.0, 0.0, 0.0) if smr_guess is None else smr_guess)
+    if arm is not None:
+        nominal = Geometry(nominal.robot, list(arm.joints), arm.flange, nominal.smr, nominal.tracker)
     state = _State.at(align_tracker(nominal, meas), meas.q)
     state, _, _ = _levenberg_marquardt(state, meas.q, meas.p, _REGISTRATION, max_iter)
     return state.geometry

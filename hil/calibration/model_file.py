@@ -12,6 +12,7 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import os
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -19,6 +20,7 @@ import pinocchio as pin
 
 from hil import __version__
 from hil.arm.catalog import get_robot
+from hil.arm.controller_model import DELTA_KEYS, ControllerCalibration
 from hil.arm.geometry import Geometry
 from hil.calibration.identification import FitResult
 from hil.calibration.synthetic import Noise
@@ -29,6 +31,8 @@ from hil.files.outputs import atomic_write_text
 MODEL_FORMAT = "hil-model/1"
 RESULT_FORMAT = "hil-result/1"  # a campaign result; it embeds the model
 TRUTH_FORMAT = "hil-truth/1"
+#: A model's ``controller`` block: the controller's deltas (DESIGN.md) and how it names its calibration.
+CONTROLLER_KEYS: tuple[str, ...] = (*DELTA_KEYS, "checksum", "calibration_status")
 
 #: Plausible magnitudes of the numbers in a geometry block, checked before anything uses them. A UR's
 #: longest link is under 0.9 m (UR20), so a joint origin or flange offset beyond a few metres is a
@@ -99,8 +103,15 @@ def tracker_pose(tracker: pin.SE3, names: list[str] | tuple[str, ...] = (),
     return out
 
 
-def model_document(fit: FitResult, validation: dict[str, Any] | None = None) -> dict[str, Any]:
-    """The ``hil-model/1`` JSON document of an identification result."""
+def model_document(fit: FitResult, validation: dict[str, Any] | None = None,
+                   controller: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """The ``hil-model/1`` JSON document of an identification result.
+
+    `controller`: the controller's own model the campaign ran with (its KinematicsInfo record, see
+    `hil.campaign.controller`), kept as the ``controller`` block — the deltas of DESIGN.md plus the
+    controller's per-joint ``checksum`` and ``calibration_status`` — so the model can be compared
+    with, and exported beside, the one the arm moves with (`model_controller` reads it back).
+    """
     doc: dict[str, Any] = {"format": MODEL_FORMAT, **fit.geometry.to_dict()}
     doc["parameters"] = [
         {"name": name, "value": float(v), "std": float(s)}
@@ -125,15 +136,44 @@ def model_document(fit: FitResult, validation: dict[str, Any] | None = None) -> 
     }
     if validation is not None:
         doc["validation"] = validation
+    if controller is not None:
+        doc["controller"] = {key: controller.get(key) for key in CONTROLLER_KEYS}
     doc["input"] = {"file": os.path.basename(fit.source), "sha256": fit.sha256}
     doc["software"] = software_versions()
     doc["created"] = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
     return doc
 
 
-def truth_document(truth: Geometry, noise: Noise) -> dict[str, Any]:
-    """The ``hil-truth/1`` JSON document of a simulated arm."""
-    return {"format": TRUTH_FORMAT, **truth.to_dict(), "noise": noise.as_dict()}
+def model_controller(doc: Mapping[str, Any], source: str = "model") -> ControllerCalibration | None:
+    """The controller's own model a model file keeps (its ``controller`` block), or None without one.
+
+    A malformed block is an InputError naming the file and the field (`ControllerCalibration.from_dict`).
+    """
+    block = doc.get("controller")
+    if block is None:
+        return None
+    return ControllerCalibration.from_dict(block, f"{source}: controller")
+
+
+def truth_document(truth: Geometry, noise: Noise,
+                   controller: ControllerCalibration | None = None) -> dict[str, Any]:
+    """The ``hil-truth/1`` JSON document of a simulated arm (with its controller's deltas if given)."""
+    doc = {"format": TRUTH_FORMAT, **truth.to_dict(), "noise": noise.as_dict()}
+    if controller is not None:
+        doc["controller"] = controller.to_dict()
+    return doc
+
+
+def truth_controller(doc: Mapping[str, Any], source: str = "truth") -> ControllerCalibration | None:
+    """The simulated controller's own calibration a truth document names, or None when it names none.
+
+    None lets the simulator draw one for the arm (DESIGN.md, "The controller's own calibration"); a
+    malformed block is an InputError naming the file and the field.
+    """
+    block = doc.get("controller")
+    if block is None:
+        return None
+    return ControllerCalibration.from_dict(block, f"{source}: controller")
 
 
 def write_json(path: str | os.PathLike[str], doc: dict[str, Any]) -> None:

@@ -3,6 +3,7 @@
 * `steps` — the plain steps a plan yields (move, settle, read joints, measure, checkpoint), dry runs
   and the motion check of a whole plan;
 * `plan` — the calibration plan: bootstrap, select, measure, identify, validate;
+* `controller` — the controller's own kinematic model: the record kept, its error on the validation poses;
 * `chooser` — the plan's pose chooser on a station (tabu calibration poses, random validation poses);
 * `engine` — the state machine that executes a plan: pause, resume, abort, checkpoints, suspenders;
 * `suspenders` — the station's faults mapped to pauses that clear by themselves or by the operator;

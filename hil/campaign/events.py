@@ -72,6 +72,17 @@ class RunStarted(Event):
 
 
 @dataclass(frozen=True, kw_only=True)
+class ControllerModel(Event):
+    """The controller's own kinematic model, as it reported it at connect (its KinematicsInfo: full
+    DH table, per-joint checksums, calibration status, and the deltas to the nominal DH derived from
+    it; `hil.campaign.controller.controller_record`). Emitted right after `RunStarted` when the
+    controller said; the store keeps it with the campaign (the model the arm moved with) and as the
+    robot's latest."""
+
+    model: dict[str, Any]
+
+
+@dataclass(frozen=True, kw_only=True)
 class StateChanged(Event):
     state: str  # idle, running, paused, suspended, stopping, aborted, done
     previous: str
@@ -175,6 +186,8 @@ class ValidationDone(Event):
     before: dict[str, Any]
     after: dict[str, Any]
     passed: bool
+    # the controller's own model on the same poses ({count, mean, rms, max}), when it was reported
+    controller: dict[str, Any] | None = None
 
 
 @dataclass(frozen=True, kw_only=True)

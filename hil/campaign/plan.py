@@ -28,12 +28,13 @@ pose selection and identification are computations on what the engine sends back
   at every remaining pose would only cost time.
 * **Identify** on the calibration (and bootstrap) points; **validate** on the others: before (the
   nominal arm with only the tracker pose and SMR fitted) and after, plus ISO 9283 pose accuracy (AP)
-  and repeatability (RP) when validation poses are visited more than once.
+  and repeatability (RP) when validation poses are visited more than once, plus — when the controller
+  reported its own kinematic model — that model judged like "before" (`hil.campaign.controller`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -52,7 +53,15 @@ from hil.calibration.identification import (
 )
 from hil.calibration.measurements import Measurements
 from hil.calibration.model_file import model_document
-from hil.campaign.events import BootstrapPlanned, ModelIdentified, PlanReady, PoseSkipped, ValidationDone
+from hil.campaign.controller import controller_calibration, controller_validation
+from hil.campaign.events import (
+    BootstrapPlanned,
+    Message,
+    ModelIdentified,
+    PlanReady,
+    PoseSkipped,
+    ValidationDone,
+)
 from hil.campaign.steps import Emit, Phase, Plan, PoseRecord, ReadJoints, Skipped, acquire
 from hil.errors import HilError, InputError
 from hil.station.config import StationConfig
@@ -124,6 +133,8 @@ class CampaignResult:
     selection: dict[str, Any]
     iso9283: dict[str, Any] | None
     model: dict[str, Any]
+    # the controller's own model on the validation poses (`controller_validation`); None: not reported
+    controller: ErrorStats | None = None
 
 
 def bootstrap_targets(start: np.ndarray, count: int) -> np.ndarray:
@@ -262,8 +273,13 @@ def iso9283(records: list[PoseRecord], geometry: Geometry) -> dict[str, Any] | N
 
 
 def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
-                     resume: ResumeState | None = None, validation_cycles: int = 1) -> Plan:
-    """The whole campaign as a generator of steps; returns a `CampaignResult`."""
+                     resume: ResumeState | None = None, validation_cycles: int = 1,
+                     controller: Mapping[str, Any] | None = None) -> Plan:
+    """The whole campaign as a generator of steps; returns a `CampaignResult`.
+
+    `controller`: the controller's own model (`controller_record`), when it reported one: kept in
+    the model document and validated on the same held-out poses as hil's.
+    """
     resume = resume or ResumeState()
     robot = config.robot["type"]
     camp = config.campaign
@@ -367,13 +383,14 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     # --- identify and validate -----------------------------------------------------------------
     yield Phase("identify")
     fit_records = [r for (role, _), r in sorted(records.items()) if role in (BOOTSTRAP, CALIBRATION)]
+    fitted = measurements_of(fit_records, f"campaign {campaign}")
     try:
-        fit = identify(measurements_of(fit_records, f"campaign {campaign}"), robot, smr_guess)
+        fit = identify(fitted, robot, smr_guess)
     except InputError as exc:  # too many poses skipped: the run failed, the input was fine
         raise IdentificationError(f"cannot identify from the measured poses: {exc}") from None
     yield Emit(ModelIdentified(campaign=campaign, rms=fit.rms, max=fit.max_error,
                                iterations=fit.iterations, rejected=[r.line for r in fit.rejected],
-                               model=model_document(fit)))
+                               model=model_document(fit, controller=controller)))
     yield Phase("validate")
     val_records = [r for (role, _), r in sorted(records.items()) if role == VALIDATION]
     held_out = measurements_of(val_records, f"campaign {campaign} validation")
@@ -381,8 +398,16 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     after = validate(fit.geometry, held_out)
     passed = after.rms <= camp["acceptance"]
     iso = iso9283(val_records, fit.geometry)
+    theirs = None
+    if controller is not None:  # a comparison that cannot be made is said, never fails the campaign
+        try:
+            theirs = controller_validation(controller_calibration(controller), robot, fitted, held_out,
+                                           smr_guess)
+        except (HilError, ValueError, KeyError, np.linalg.LinAlgError) as exc:
+            yield Emit(Message(campaign=campaign, level="warning",
+                               text=f"the controller's own model could not be compared: {exc}"))
     yield Emit(ValidationDone(campaign=campaign, before=before.as_dict(), after=after.as_dict(),
-                              passed=passed))
-    doc = model_document(fit, after.as_dict())
+                              passed=passed, controller=None if theirs is None else theirs.as_dict()))
+    doc = model_document(fit, after.as_dict(), controller=controller)
     return CampaignResult(fit, before, after, passed, list(records.values()), tracker, selection,
-                          iso, doc)
+                          iso, doc, theirs)

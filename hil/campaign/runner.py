@@ -27,9 +27,11 @@ from hil.arm.geometry import Geometry
 from hil.arm.kinematics import Kinematics
 from hil.calibration.identification import register
 from hil.calibration.measurements import Measurements
+from hil.campaign.controller import controller_record
 from hil.campaign.engine import Clock, Engine, RealClock, RunAborted, RunInterrupted
 from hil.campaign.events import (
     BootstrapPlanned,
+    ControllerModel,
     Event,
     EventBus,
     PlanReady,
@@ -59,7 +61,7 @@ class RunOutcome:
 
     status: str  # accepted, rejected, aborted, interrupted, failed
     campaign: str
-    result: CampaignResult | None = None
+    result: Any = None  # the plan's return value: a CampaignResult, a verification's result
     error: BaseException | None = None
     robot_info: dict[str, Any] = field(default_factory=dict)
     tracker_info: dict[str, Any] = field(default_factory=dict)
@@ -108,13 +110,58 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
                  campaign: str | None = None, resume: ResumeState | None = None,
                  clock: Clock | None = None, devices: Devices | None = None,
                  engine_ready: Callable[[Engine], None] | None = None,
-                 validation_cycles: int = 1, lease: Any = None) -> RunOutcome:
+                 validation_cycles: int = 1, lease: Any = None, close_devices: bool = True) -> RunOutcome:
     """Run one calibration campaign on the configured (or given) devices; never raises for hardware.
 
     Bad input (config, unsafe targets found before motion) still raises InputError. `engine_ready`
     receives the engine before it starts, so a UI can pause or abort it from another thread.
     `lease` is the campaign's (`claim_run`): should its heartbeat find it taken over, the arm stops
-    and the run ends as interrupted, as another process now owns the campaign.
+    and the run ends as interrupted, as another process now owns the campaign. `close_devices`
+    False leaves the given devices open for a run that follows on the same arm (``--verify``).
+    """
+    # One count everywhere (Run screen, progress bar, history): calibration + validation poses, the
+    # plan's; the bootstrap's points locate the tracker and are not among them.
+    camp = config.campaign
+    planned = (len(resume.poses) if resume is not None and resume.poses else
+               camp["calibration_poses"] + camp["validation_poses"] * validation_cycles)
+    measured = sum(1 for role, _ in resume.records if role != BOOTSTRAP) if resume else 0
+
+    def judge(result: CampaignResult) -> tuple[str, str]:
+        return ("accepted" if result.passed else "rejected",
+                f"validation RMS {result.after.rms * 1e3:.4f} mm "
+                f"{'<=' if result.passed else '>'} {camp['acceptance'] * 1e3:.4f} mm")
+
+    return run_plan(
+        config, lambda run: calibration_plan(config, choose, run.campaign, resume, validation_cycles,
+                                             run.controller),
+        judge=judge, poses=planned, measured=measured, resumed=resume is not None, bus=bus,
+        campaign=campaign, clock=clock, devices=devices, engine_ready=engine_ready, lease=lease,
+        deviation=_nominal_deviation(config), close_devices=close_devices)
+
+
+@dataclass(frozen=True)
+class RunContext:
+    """What a plan is built from once the devices are open: the campaign, the controller's word."""
+
+    campaign: str
+    # the controller's own kinematic model (`controller_record` of its KinematicsInfo), None: unknown
+    controller: dict[str, Any] | None
+    home: np.ndarray | None  # the joints the arm stood at when the run started (None: no reading)
+
+
+def run_plan(config: StationConfig, plan: Callable[[RunContext], Any], *,
+             judge: Callable[[Any], tuple[str, str]], poses: int, measured: int = 0, resumed: bool = False,
+             bus: EventBus | None = None, campaign: str | None = None, clock: Clock | None = None,
+             devices: Devices | None = None, engine_ready: Callable[[Engine], None] | None = None,
+             lease: Any = None, deviation: Callable[[PoseRecord], float | None] | None = None,
+             close_devices: bool = True) -> RunOutcome:
+    """Run one plan of steps on the station's devices: the calibration campaign's and the ISO 9283
+    verification's (`hil.verify`) one way — devices opened (or given), the controller checked, the
+    engine with the station's suspenders and keep-in box, `RunStarted` … `RunFinished` always emitted,
+    the devices closed (unless `close_devices` is False) whatever happened; never raises for hardware.
+
+    `plan(context)` builds the plan's generator; `judge(result)` turns the plan's return value into
+    the final status and detail; `poses`/`measured`/`resumed` go into `RunStarted`.
     """
     bus = bus or EventBus()
     campaign = campaign or new_campaign_id()
@@ -129,6 +176,10 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
     info = getattr(devices.robot, "info", None)
     outcome.robot_info = ({"model": info.model, "serial": info.serial, "software": info.software_version}
                           if info is not None else {})
+    # the controller's own kinematic model (its KinematicsInfo), kept and compared with hil's
+    controller = controller_record(spec.name, getattr(info, "kinematics", None))
+    if controller is not None:
+        outcome.robot_info["controller"] = controller
     ident = getattr(devices.tracker, "identity", None)
     outcome.tracker_info = ({"name": ident.name, "serial": ident.serial_number,
                              "firmware": ".".join(map(str, ident.firmware)), "interface": ident.interface}
@@ -146,26 +197,18 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
             suspenders=suspenders(devices, relock_timeout=config.timeouts["relock"]),
             clock=clock or RealClock(), suspend_timeout=config.timeouts["suspend"],
             keep_in=(np.array(config.keep_in["min"]), np.array(config.keep_in["max"])),
-            check_model=Geometry.nominal(spec, config.smr["offset"]),
-            deviation=_nominal_deviation(config))
+            check_model=Geometry.nominal(spec, config.smr["offset"]), deviation=deviation)
         if lease is not None:
             lease.on_lost = engine.request_interrupt
         if engine_ready is not None:
             engine_ready(engine)
-        # One count everywhere (Run screen, progress bar, history): calibration + validation poses, the
-        # plan's; the bootstrap's points locate the tracker and are not among them.
-        camp = config.campaign
-        planned = (len(resume.poses) if resume is not None and resume.poses else
-                   camp["calibration_poses"] + camp["validation_poses"] * validation_cycles)
-        measured = sum(1 for role, _ in resume.records if role != BOOTSTRAP) if resume else 0
         bus.emit(RunStarted(campaign=campaign, robot=spec.name, station=config.station["name"],
-                            poses=planned, resumed=resume is not None, measured=measured))
-        result: CampaignResult = engine.run(
-            calibration_plan(config, choose, campaign, resume, validation_cycles))
+                            poses=poses, resumed=resumed, measured=measured))
+        if controller is not None:
+            bus.emit(ControllerModel(campaign=campaign, model=controller))
+        result = engine.run(plan(RunContext(campaign, controller, home)))
         outcome.result = result
-        outcome.status = "accepted" if result.passed else "rejected"
-        detail = (f"validation RMS {result.after.rms * 1e3:.4f} mm "
-                  f"{'<=' if result.passed else '>'} {config.campaign['acceptance'] * 1e3:.4f} mm")
+        outcome.status, detail = judge(result)
     except RunAborted as exc:
         outcome.status, outcome.error, detail = "aborted", exc, str(exc) or "aborted"
     except KeyboardInterrupt as exc:
@@ -179,7 +222,8 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
     finally:
         if engine is not None:
             outcome.timing = engine.stats.as_dict()
-        devices.close()
+        if close_devices:
+            devices.close()
     try:
         bus.emit(RunFinished(campaign=campaign, status=outcome.status, detail=detail,
                              result={"software": __version__}))

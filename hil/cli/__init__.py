@@ -32,10 +32,12 @@ from hil.errors import FaultError, HilError, InputError
 # Modules of hil.cli that each add one subcommand (in help order).
 COMMAND_MODULES: tuple[str, ...] = (
     "calibrate",
+    "verify",
     "identify",
     "validate",
     "fk",
     "export",
+    "compensate",
     "synth",
     "select",
     "sim",
@@ -53,10 +55,12 @@ COMMAND_MODULES: tuple[str, ...] = (
 # tests/hil/cli/test_help.py checks this table against what the modules register.
 COMMAND_HELP: dict[str, tuple[tuple[str, str], ...]] = {
     "calibrate": (("calibrate", "run a whole calibration campaign"),),
+    "verify": (("verify", "ISO 9283 pose test, uncompensated and compensated"),),
     "identify": (("identify", "identify a calibrated model from measurements"),),
     "validate": (("validate", "check a model against held-out measurements"),),
     "fk": (("fk", "forward kinematics of a model"),),
     "export": (("export", "export a model (URDF, ROS kinematics YAML, JSON)"),),
+    "compensate": (("compensate", "rewrite target poses (CSV or URScript) for the controller's own model"),),
     "synth": (("synth", "write a synthetic truth and simulated measurements"),),
     "select": (("select", "choose optimal measurement poses (JSON out)"),),
     "sim": (("sim", "run the simulated station (robot + tracker)"),),

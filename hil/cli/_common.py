@@ -125,6 +125,10 @@ POSE_COUNT = bounded_int(1, 1000)
 #: a hundred is more than any acceptance test asks, and a million was a week of motion.
 CYCLES = bounded_int(1, 100)
 
+#: Cycles of the ISO 9283 pose test (``hil verify --cycles``, ``hil calibrate --verify-cycles``):
+#: repeatability's S_l divides by n − 1, so two at least; the standard's 30 is the default.
+VERIFY_CYCLES = bounded_int(2, 100)
+
 #: Candidate configurations for the selector (``--candidates``): each keeps a 3 x n Jacobian (~650
 #: bytes), so 200 000 are ~130 MB and a few minutes of drawing; 1e9 asked numpy for 107 GiB (exit 70).
 #: Same ceiling as the configuration's ``campaign.candidates`` (`hil.station.config.MAX_CANDIDATES`).

@@ -33,6 +33,7 @@ import json
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 from hil.arm.catalog import ROBOT_NAMES
 from hil.campaign.events import Event, EventBus
@@ -43,6 +44,7 @@ from hil.cli._common import (
     RMS_THRESHOLD_HELP,
     SEED,
     SIM_SPEED,
+    VERIFY_CYCLES,
     rms_threshold,
 )
 from hil.cli.progress import JsonLines, Progress
@@ -79,6 +81,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_tracker_protocol(p)
     p.add_argument("--out", metavar="result.json", help="write the result (embeds the model)")
     p.add_argument("--report", metavar="report.html", help="write the HTML report")
+    p.add_argument("--verify", action="store_true",
+                   help="after an accepted calibration, run the ISO 9283 pose test (hil verify) with the new "
+                        "model on the same devices; its result goes into the result under 'verification'")
+    p.add_argument("--verify-cycles", type=VERIFY_CYCLES, default=None, metavar="N",
+                   help="--verify: cycles of the pose test (default: verify.cycles, 30)")
     p.set_defaults(func=run)
 
 
@@ -87,6 +94,8 @@ def run(args: argparse.Namespace) -> int:
 
     _check_poses(args)
     _check_outputs(args)
+    if args.verify_cycles is not None and not args.verify:
+        raise InputError("--verify-cycles goes with --verify")
     with interruptible():  # Ctrl-C, SIGTERM, SIGHUP: the arm stops, the campaign stays resumable
         return _run(args)
 
@@ -140,6 +149,7 @@ def _run(args: argparse.Namespace) -> int:
     from hil.store import FINISHED, Store, StoreError, address_lock, resolve_location
 
     with station_from_args(args) as (config, identity, truth):
+        cube = _verify_cube(args, config)  # --verify: the [verify] cube, refused before anything connects
         # An existing store is opened (so a damaged or newer one is refused) before the arm is touched;
         # a new one is created only once the controller has confirmed the configured robot, so a
         # refused station leaves no file behind.
@@ -147,6 +157,7 @@ def _run(args: argparse.Namespace) -> int:
         store: Store | None = (Store.open(path, config=config) if not isinstance(path, Path) or path.exists()
                                else None)
         guards = contextlib.ExitStack()  # the arm's address lock, then the campaign's lease
+        devices, verified = None, 0  # verified: the exit code the verification asks for (0: done)
         try:
             # no second process of this host connects to the arm (see hil.store.leases)
             guards.enter_context(address_lock(config.robot["address"], what="hil calibrate"))
@@ -188,7 +199,8 @@ def _run(args: argparse.Namespace) -> int:
             started = time.time()
             outcome = run_campaign(config, campaign_chooser(config), bus=bus, campaign=campaign,
                                    resume=resume, devices=devices, clock=RealClock(args.speed),
-                                   validation_cycles=args.cycles, lease=lease)
+                                   validation_cycles=args.cycles, lease=lease,
+                                   close_devices=not args.verify)  # --verify: the same devices go on
             result = result_document(outcome, config, events, started, truth)
             if outcome.unrecorded is not None:  # the store refused RunFinished: no progress line said why
                 print(f"hil: fault: campaign {campaign} {outcome.status}: {outcome.error}; what was "
@@ -200,7 +212,18 @@ def _run(args: argparse.Namespace) -> int:
                     print(f"hil: fault: campaign {campaign} ended {outcome.status}, but could not record "
                           f"its result in {store.location}: {exc.__cause__ or exc}", file=sys.stderr)
                 return 3
+            if args.verify:
+                result["verification"], verified = _verify_after(args, outcome, store, devices, config,
+                                                                 identity, robot, truth, cube, lease)
+                try:
+                    store.set_status(campaign, outcome.status, result=result)
+                except StoreError as exc:
+                    print(f"hil: fault: could not record the verification with campaign {campaign} in "
+                          f"{store.location}: {exc.__cause__ or exc}", file=sys.stderr)
+                    return 3
         finally:
+            if args.verify and devices is not None:  # run_campaign left them open for the verification
+                devices.close()
             guards.close()  # never raises: a lease the store cannot delete lapses (Lease.release)
             if store is not None:
                 store.close()
@@ -219,4 +242,57 @@ def _run(args: argparse.Namespace) -> int:
 
         write_report(report_data(outcome, config, events, started), args.report)
         wrote(args.report, "HTML report")
-    return outcome.exit_code
+    return verified if outcome.exit_code == 0 and verified else outcome.exit_code
+
+
+def _verify_cube(args: argparse.Namespace, config: Any) -> Any:
+    """--verify: the ``[verify]`` cube (None: the simulated station's default), checked against the
+    arm's reach and the keep-in box before anything connects."""
+    if not args.verify:
+        return None
+    from hil.verify.design import check_cube
+    from hil.verify.session import cube_where, requested_cube
+
+    cube = requested_cube(config, sim=args.sim)
+    if cube is not None:
+        check_cube(config.robot["type"], cube, config.smr["offset"],
+                   (config.keep_in["min"], config.keep_in["max"]), cube_where(config))
+    return cube
+
+
+def _verify_after(args: argparse.Namespace, outcome: Any, store: Any, devices: Any, config: Any,
+                  identity: Any, robot: Any, truth: Any, cube: Any, lease: Any) -> tuple[dict[str, Any], int]:
+    """--verify: the ISO 9283 pose test with the model just accepted, on the same devices (`hil.verify`).
+
+    Returns the result's ``verification`` block and the exit code it asks for (0: done; the test's own
+    code when it did not finish: 3 fault, 130 interrupted — resumable by ``hil verify --model`` with the
+    calibration's result; 2 when no configuration serves the cube). Nothing runs unless the calibration
+    was accepted. The calibration's lease is given up first: the verification is a campaign of its own
+    and takes the arm's lease itself. The calibration's result is already stored, so whatever happens
+    here it stays.
+    """
+    if outcome.status != "accepted" or outcome.result is None or outcome.unrecorded is not None:
+        return {"status": "not run", "reason": f"the calibration ended {outcome.status}"}, 0
+    from hil.arm.geometry import Geometry
+    from hil.campaign.engine import RealClock
+    from hil.verify.session import ModelInput, verify
+
+    lease.release()
+    doc = outcome.result.model
+    model = ModelInput.of(doc, Geometry.from_dict(doc, source="the calibrated model"),
+                          f"campaign {outcome.campaign}")
+    subscribers: list[Any] = [Progress()]
+    if args.json:
+        subscribers.append(JsonLines())
+    print("hil: verifying the calibrated model (ISO 9283 pose test)", file=sys.stderr)
+    try:
+        done = verify(store, devices, config, identity, robot, model=model, cube=cube,
+                      cycles=args.verify_cycles or config.verify["cycles"], clock=RealClock(args.speed),
+                      subscribers=subscribers, truth=truth)
+    except InputError as exc:  # no configuration serves the cube: the calibration stands, said so
+        print(f"hil: error: --verify: {exc}", file=sys.stderr)
+        return {"status": "not run", "reason": str(exc)}, 2
+    if done.outcome.status == "interrupted":
+        print(f"hil: verification {done.campaign} is resumable: run hil verify on this station with "
+              f"--model {args.out or 'the calibration result'} to continue it", file=sys.stderr)
+    return done.document, done.exit_code

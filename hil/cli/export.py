@@ -1,4 +1,9 @@
-"""`hil export`: a model as URDF, ROS kinematics YAML or JSON."""
+"""`hil export`: a model as URDF, ROS kinematics YAML or JSON.
+
+``--which controller`` exports instead the controller's own model that the campaign ran with (the
+model's ``controller`` block: its factory calibration, read from the controller at connect) as the
+ROS kinematics YAML UR's ur_calibration would write for it, so both models can be loaded side by side.
+"""
 
 from __future__ import annotations
 
@@ -6,6 +11,10 @@ import argparse
 
 from hil.calibration.exports import FORMATS
 from hil.cli._common import wrote
+from hil.errors import InputError
+
+#: Whose model to export: hil's calibrated one, or the controller's own (its factory calibration).
+WHICH: tuple[str, ...] = ("hil", "controller")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -16,6 +25,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--format", required=True, choices=FORMATS,
                    help="urdf: a URDF of the calibrated arm; ros-kinematics: ur_description's "
                         "kinematics_params YAML; json: the model itself")
+    p.add_argument("--which", choices=WHICH, default="hil",
+                   help="hil: the calibrated model (default); controller: the controller's own model "
+                        "the campaign ran with (its factory calibration), --format ros-kinematics only")
     p.add_argument("--out", required=True, metavar="FILE", help="file to write")
     p.set_defaults(func=run)
 
@@ -29,6 +41,34 @@ def run(args: argparse.Namespace) -> int:
     db, where = campaign_store()
     check_output(args.out, field="--out", inputs={"--model": args.model}, store=db, store_field=where)
     geometry, doc = load_geometry(args.model, (MODEL_FORMAT,))
-    atomic_write_text(args.out, export(doc, geometry, args.format, source=args.model))
-    wrote(args.out, args.format)
+    if args.which == "controller":
+        text = _controller_yaml(args, doc)
+    else:
+        text = export(doc, geometry, args.format, source=args.model)
+    atomic_write_text(args.out, text)
+    wrote(args.out, args.format if args.which == "hil" else f"{args.format} of the controller's model")
     return 0
+
+
+def _controller_yaml(args: argparse.Namespace, doc: dict) -> str:
+    """The controller's model of `doc` as ur_calibration's YAML; what it cannot hold said on stderr too."""
+    import sys
+
+    from hil.calibration.controller_export import controller_ros_kinematics, flange_not_held
+    from hil.calibration.model_file import model_controller
+
+    if args.format != "ros-kinematics":
+        raise InputError(f"--which controller: only --format ros-kinematics, not {args.format!r} (the "
+                         "controller's model is exported as UR's ur_calibration writes it)")
+    calibration = model_controller(doc, args.model)
+    if calibration is None:
+        raise InputError(f"{args.model}: no field 'controller': the campaign did not read the "
+                         "controller's own model (a hil model from a campaign on a controller that "
+                         "reports its KinematicsInfo has one)")
+    missing = flange_not_held(calibration)
+    if missing is not None:
+        print(f"hil: warning: {missing}", file=sys.stderr)
+    digest = (doc.get("input") or {}).get("sha256") if isinstance(doc.get("input"), dict) else None
+    return controller_ros_kinematics(calibration, str(doc["robot"]),
+                                     f"exported by hil from {args.model} (model of data sha256 "
+                                     f"{digest or 'unknown'})")

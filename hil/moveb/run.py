@@ -3,8 +3,11 @@
 * The TCP is the SMR centre (the model's ``smr`` in the flange frame, rotation of the flange): what
   the tracker measures is then exactly the programmed point, and the program's tool Z axis is the
   flange Z axis, the SMR's opening (keep it facing the tracker).
-* Joint targets come from `hil.arm.ik` on the *calibrated* model when one is given (``--model``), so the
-  calibration's effect shows in the measured path; without one, the nominal model.
+* Joint targets come from the *calibrated* model when one is given (``--model``), so the
+  calibration's effect shows in the measured path; without one, the nominal model. They are solved by
+  `hil.compensation` (`Compensator`: the branch the controller's own model — the one it reports, else
+  its nominal one — would take, then the accurate solution), the code that compensates programs, so a
+  path and a program choose branches and refuse unreachable targets alike.
 * The trajectory is solved for every controller sample before anything moves (an unreachable sample
   is an error naming its arc length), then the arm moves to the start and the whole trajectory is
   handed to the driver's `follow`, whose servo loop runs in the isolated robot client's process (a
@@ -31,10 +34,11 @@ import numpy as np
 import pinocchio as pin
 from scipy.spatial import cKDTree
 
+from hil.arm.controller_model import ControllerCalibration
 from hil.arm.geometry import Geometry
-from hil.arm.ik import solve_path
-from hil.arm.kinematics import Kinematics
 from hil.arm.safety import check_target
+from hil.compensation.paths import solve_joint_path
+from hil.compensation.solve import Compensator
 from hil.errors import HilError, InputError
 from hil.moveb.accuracy import Coverage, coverage, path_accuracy
 from hil.moveb.joints import JointSpeedError, JointSpeeds, joint_speed_ceiling, retime
@@ -156,7 +160,8 @@ class Trajectory:
 
 def solve_trajectory(plan: Plan, geometry: Geometry, limits: Limits, rate_hz: float, q_start: np.ndarray,
                      *, joint_speed_fraction: float = 1.0, joint_acceleration: float | None = None,
-                     keep_in: Box | None = None, grid_step: float = 1.0) -> Trajectory:
+                     keep_in: Box | None = None, grid_step: float = 1.0,
+                     controller: Geometry | None = None) -> Trajectory:
     """Time the plan under the Cartesian limits *and* the joint speed maxima, and solve its IK.
 
     1. Every controller sample must lie in the keep-in box (checked on the dense path first, so a
@@ -167,12 +172,15 @@ def solve_trajectory(plan: Plan, geometry: Geometry, limits: Limits, rate_hz: fl
        the joint speeds checked against ``joint_speed_fraction`` × the datasheet maxima, retimed
        locally where the finite grid let a sample exceed them; likewise ``joint_acceleration``
        (rad/s², every joint) when given.
+
+    `controller`: the controller's own model (its reported calibration), which picks the branch;
+    its nominal model when None.
     """
     if not 0.0 < joint_speed_fraction <= 1.0:
         raise InputError(f"joint speed fraction must be in (0, 1], got {joint_speed_fraction}")
     if joint_acceleration is not None and not (joint_acceleration > 0 and np.isfinite(joint_acceleration)):
         raise InputError(f"joint acceleration must be positive, got {joint_acceleration} rad/s²")
-    kin = Kinematics(geometry)
+    compensator = Compensator(geometry, controller or ControllerCalibration().geometry(geometry.spec))
     source = plan.program.source
     if keep_in is not None:
         lo, hi = (np.asarray(v, float) * 1e3 for v in keep_in)
@@ -183,8 +191,8 @@ def solve_trajectory(plan: Plan, geometry: Geometry, limits: Limits, rate_hz: fl
             raise InputError(f"{source}: s = {dense.s[out[0]]:.1f} mm: the path leaves the keep-in box at "
                              f"({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f}) mm")
     geo = plan.at(plan.sample_grid(grid_step, per_bridge=16))
-    Q_geo = solve_path(kin, tool_targets(geo.position, geo.z_axis, geo.x_axis, geometry.smr), q_start,
-                       max_step=0.1, where=[f"{source}: s = {v:.1f} mm" for v in geo.s])
+    Q_geo = solve_joint_path(compensator, tool_targets(geo.position, geo.z_axis, geo.x_axis, geometry.smr),
+                             q_start, max_step=0.1, where=[f"{source}: s = {v:.1f} mm" for v in geo.s])
     allowed = joint_speed_fraction * geometry.spec.max_joint_speed
     ceiling = joint_speed_ceiling(geo.s, Q_geo, allowed)
     timed: dict[str, Samples] = {}
@@ -192,8 +200,9 @@ def solve_trajectory(plan: Plan, geometry: Geometry, limits: Limits, rate_hz: fl
     def time_path(c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         _law, samples = plan.timed(limits, rate_hz, ceiling=(geo.s, c))
         timed["samples"] = samples
-        Q = solve_path(kin, tool_targets(samples.position, samples.z_axis, samples.x_axis, geometry.smr),
-                       Q_geo[0], where=[f"{source}: s = {v:.1f} mm" for v in samples.s])
+        Q = solve_joint_path(compensator, tool_targets(samples.position, samples.z_axis, samples.x_axis,
+                                                       geometry.smr),
+                             Q_geo[0], where=[f"{source}: s = {v:.1f} mm" for v in samples.s])
         return samples.s, Q
 
     acc = None if joint_acceleration is None else np.full(6, float(joint_acceleration))
@@ -204,6 +213,15 @@ def solve_trajectory(plan: Plan, geometry: Geometry, limits: Limits, rate_hz: fl
     return Trajectory(timed["samples"], Q, rate_hz, speeds)
 
 
+def reported_controller(info: Any, robot: str) -> Geometry | None:
+    """The controller's own model from what its driver reported on connecting (its KinematicsInfo,
+    ``info.kinematics``), or None when it reported none."""
+    kinematics = getattr(info, "kinematics", None)
+    if kinematics is None:
+        return None
+    return ControllerCalibration.from_dh(robot, *kinematics.dh()).geometry(robot)
+
+
 def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, registered: bool,
             tracker_rate: float = 100.0, settle: float = 0.3, joint_speed_fraction: float = 1.0,
             joint_acceleration: float | None = None, keep_in: Box | None = None) -> RunResult:
@@ -211,7 +229,8 @@ def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, reg
     rate = devices.robot.info.rate_hz if devices.robot.info else geometry.spec.rate_hz
     q_now = np.asarray(devices.robot.read_joints(1).q, dtype=float)
     traj = solve_trajectory(plan, geometry, limits, rate, q_now, joint_speed_fraction=joint_speed_fraction,
-                            joint_acceleration=joint_acceleration, keep_in=keep_in)
+                            joint_acceleration=joint_acceleration, keep_in=keep_in,
+                            controller=reported_controller(devices.robot.info, geometry.robot))
     samples, Q = traj.samples, traj.Q
     # the approach is a joint move: its path must stay in the keep-in box too (never clamped)
     check_target(Q[0], geometry.spec, keep_in, geometry, start=q_now)

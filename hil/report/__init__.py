@@ -11,9 +11,10 @@ Typical use at the end of a campaign::
 
 `hil.report.result` builds the ``hil-result/1`` document of a finished campaign (CLI and TUI alike).
 `hil.report.fleet` is the fleet report (``hil fleet-report``), read from the store (`hil.store.fleet`).
+`hil.report.verification` is the report of an ISO 9283 pose test (``hil verify --report``).
 
-May import: `hil.store`, `hil.campaign`, `hil.station`, `hil.calibration`, `hil.arm`, `hil.files`,
-`hil.errors`.
+May import: `hil.verify`, `hil.store`, `hil.campaign`, `hil.station`, `hil.calibration`, `hil.arm`,
+`hil.files`, `hil.errors`.
 """
 
 from hil.report.data import (

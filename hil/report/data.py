@@ -180,6 +180,15 @@ class ReportData:
     finished: str | None = None
     model: Mapping[str, Any] | None = None  # the hil-model/1 document, for the MES result
     tracker_pose: Mapping[str, Any] | None = None  # plain tracker pose (model_file.tracker_pose)
+    # the controller's own model on the validation poses (tracker pose and SMR fitted for it, as for
+    # "before"); None when the controller did not report its model. Its DH deltas: model["controller"]
+    validation_controller: ErrorSet | None = None
+
+    @property
+    def controller(self) -> Mapping[str, Any] | None:
+        """The model's ``controller`` block (the controller's deltas, checksums, status), if any."""
+        block = self.model.get("controller") if self.model is not None else None
+        return block if isinstance(block, Mapping) else None
 
 
 def _iso(t: float | str | _dt.datetime | None) -> str | None:
@@ -231,6 +240,7 @@ def report_data_from(
     hashes: Mapping[str, str] | None = None,
     model: Mapping[str, Any] | None = None,
     line_kind: str = "input line",
+    validation_controller: ErrorStats | None = None,
 ) -> ReportData:
     """Assemble a `ReportData` from what the campaign engine has at the end of a run.
 
@@ -245,7 +255,9 @@ def report_data_from(
     * ``hashes`` is merged over the fit's own input digest (and the validation data's);
     * ``model`` defaults to ``model_document(fit, validation_after.as_dict())``;
     * ``line_kind`` says what the calibration measurements' ``lines`` are: ``"input line"`` (rows of a
-      CSV file) or ``"pose"`` (a campaign's pose numbers).
+      CSV file) or ``"pose"`` (a campaign's pose numbers);
+    * ``validation_controller``: the controller's own model on the validation poses
+      (`hil.campaign.controller.controller_validation`), shown beside before and after.
     """
     from hil.calibration.model_file import model_document, software_versions, tracker_pose
 
@@ -321,6 +333,8 @@ def report_data_from(
         finished=_iso(finished),
         model=model,
         tracker_pose=tracker_pose(fit.geometry.tracker, fit.names, fit.covariance),
+        validation_controller=(None if validation_controller is None
+                               else ErrorSet.of_stats(validation_controller)),
     )
 
 
@@ -456,6 +470,8 @@ def _from_result(doc: Mapping[str, Any], source: str) -> ReportData:
         finished=doc.get("finished"),
         model=model,
         tracker_pose=_tracker_pose(model, source),
+        validation_controller=(None if validation.get("controller") is None else _error_set(
+            validation["controller"], pv.get("controller"), f"{source}: validation.controller")),
     )
 
 

@@ -59,7 +59,9 @@ def mes_result(data: ReportData) -> dict[str, Any]:
     * ``started``, ``finished``: ISO 8601 or null
     * ``validation``: ``{"before": S, "after": S, "iso9283": {"AP": m, "RP": m, ...} | null}``
       where S is ``{"count", "mean", "rms", "max"}``; *before* is the nominal arm (only the tracker
-      pose and SMR fitted), *after* the calibrated model, both on held-out poses
+      pose and SMR fitted), *after* the calibrated model, both on held-out poses; plus
+      ``"controller": S`` when the controller reported its own kinematic model (that model, the
+      tracker pose and SMR fitted for it, on the same poses; its deltas are ``model.controller``)
     * ``fit``: ``{"rms", "max", "sigma", "initial_rms", "iterations", "condition", "poses", "used",
       "rejected_lines"}`` (a summary; the full block is in ``model.fit``)
     * ``observability``: ``{"index", "value", "bound", "percent", "method"}`` or null
@@ -73,15 +75,16 @@ def mes_result(data: ReportData) -> dict[str, Any]:
       its ``tracker.tx … tracker.rz`` parameters are se(3) log coordinates, not a position
     * ``tracker_pose``: the tracker frame in the robot base frame in plain terms, ``{"xyz": m,
       "rpy": rad (URDF roll, pitch, yaw), "xyz_std", "rpy_std"}``
-    * ``per_pose``: ``{"validation": {"before", "after", "lines"}, "calibration": {"before", "after",
-      "used", "lines", "line_kind"}}`` — per-pose errors as ``[x, y, z]`` lists (or distances), so
-      the HTML report can be rebuilt from this file (``hil report``); entries may be null. ``lines``
+    * ``per_pose``: ``{"validation": {"before", "after", "lines"[, "controller"]}, "calibration":
+      {"before", "after", "used", "lines", "line_kind"}}`` — per-pose errors as ``[x, y, z]`` lists
+      (or distances; the controller's are distances), so the HTML report can be rebuilt from this
+      file (``hil report``); entries may be null. ``lines``
       name the poses: campaign pose numbers (``line_kind`` ``"pose"``) or input file lines
       (``"input line"``)
     * ``units``: what the numbers above are in (`UNITS`: metres, radians, seconds)
     """
     obs = data.observability
-    return _plain({
+    doc = _plain({
         "format": RESULT_FORMAT,
         "campaign": data.campaign,
         "station": data.station,
@@ -132,3 +135,8 @@ def mes_result(data: ReportData) -> dict[str, Any]:
             },
         },
     })
+    theirs = data.validation_controller
+    if theirs is not None:  # added only when known: readers of older results see the same keys
+        doc["validation"]["controller"] = _plain(theirs.as_dict())
+        doc["per_pose"]["validation"]["controller"] = _per_pose(theirs)
+    return doc

@@ -29,6 +29,8 @@ from hil.report.plots import data_uri, errors_per_pose, histograms, per_axis
 _ANGLE_SUFFIXES = (".rx", ".ry", ".rz")
 #: What "before calibration" is, wherever the report shows it (tables, plots, summary).
 BEFORE_MEANS = "nominal arm, only the tracker pose and SMR fitted"
+#: What the controller's row is: the model the arm moves with, judged as "before" is.
+CONTROLLER_MEANS = "the controller's own model (its factory calibration), tracker pose and SMR fitted for it"
 
 
 def esc(value: Any) -> str:
@@ -115,6 +117,12 @@ def _summary(d: ReportData) -> str:
     tiles = [
         ("Validation RMS", f"{fmt_mm(b.rms)} → <b>{fmt_mm(a.rms)}</b>", _improvement(b, a)),
         ("Validation max", f"{fmt_mm(b.max)} → <b>{fmt_mm(a.max)}</b>", f"{a.count} held-out poses"),
+    ]
+    c = d.validation_controller
+    if c is not None:
+        tiles.append(("Controller's own model", f"<b>{fmt_mm(c.rms)}</b> RMS",
+                      f"max {fmt_mm(c.max)}: factory calibration, same poses"))
+    tiles += [
         ("Fit RMS", f"<b>{fmt_mm(f.rms)}</b>", f"max {fmt_mm(f.max)}, noise σ {fmt_mm(f.sigma, 4)}"),
         ("Poses", f"<b>{f.used}</b> used / {f.poses - f.used} rejected", f"{f.poses} calibration poses"),
         ("Iterations", f"<b>{f.iterations}</b>", f"{f.seconds:.2f} s compute" if _finite(f.seconds) else ""),
@@ -135,8 +143,10 @@ def _summary(d: ReportData) -> str:
 
 def _validation(d: ReportData) -> str:
     b, a = d.validation_before, d.validation_after
-    rows = [(label, str(s.count), fmt_mm(s.mean), fmt_mm(s.rms), fmt_mm(s.max))
-            for label, s in ((f"before calibration ({BEFORE_MEANS})", b), ("after calibration", a))]
+    models = [(f"before calibration ({BEFORE_MEANS})", b), ("after calibration", a)]
+    if d.validation_controller is not None:
+        models.append((CONTROLLER_MEANS, d.validation_controller))
+    rows = [(label, str(s.count), fmt_mm(s.mean), fmt_mm(s.rms), fmt_mm(s.max)) for label, s in models]
     parts = [_table(["model", "poses", "mean", "RMS", "max"], [[esc(c) for c in r] for r in rows])]
     if d.iso9283:
         parts.append("<h3>ISO 9283</h3>" + _kv((esc(k), esc(fmt_mm(v))) for k, v in d.iso9283.items()))
@@ -350,6 +360,45 @@ def _config(config: Mapping[str, Any]) -> str:
     return _kv(rows)
 
 
+def _controller(block: Mapping[str, Any], robot: str) -> str:
+    """The controller's own DH table (nominal + delta, as its KinematicsInfo has it), with the
+    per-joint checksums and the calibration status it reported."""
+    from hil.arm.catalog import get_robot
+    from hil.errors import InputError
+
+    try:
+        dh = get_robot(robot).dh
+        nominal = {"theta": [0.0] * 6, "a": list(dh.a), "d": list(dh.d), "alpha": list(dh.alpha)}
+    except InputError:
+        nominal = {key: [math.nan] * 6 for key in ("theta", "a", "d", "alpha")}
+
+    def delta(key: str, j: int) -> float | None:
+        values = block.get(f"delta_{key}")
+        value = values[j] if isinstance(values, list) and len(values) == 6 else None
+        return float(value) if isinstance(value, int | float) and not isinstance(value, bool) else None
+
+    checksum = block.get("checksum")
+    checksum = checksum if isinstance(checksum, list) and len(checksum) == 6 else [None] * 6
+    rows = []
+    for j in range(6):
+        cells = [esc(f"joint {j + 1}")]
+        for key, scale, unit in (("theta", 180 / math.pi, "°"), ("a", 1e3, ""), ("d", 1e3, ""),
+                                 ("alpha", 180 / math.pi, "°")):
+            base, value = nominal[key][j], delta(key, j)  # metres and radians; deltas in mm and mrad
+            cells += [esc(fmt_num(base * scale, ".4f") + (unit if _finite(base) else "")),
+                      esc(fmt_num(None if value is None else value * 1e3, ".4f"))]
+        cells.append(esc("—" if checksum[j] is None else checksum[j]))
+        rows.append(cells)
+    status = block.get("calibration_status")
+    return ('<p class="muted">The model the controller moves with, reports <code>actual_TCP_pose</code> in '
+            "and solves inverse kinematics with: the nominal DH table plus the deltas of its factory "
+            "calibration, as its KinematicsInfo reported them at connect (θ and α nominal in degrees, "
+            "a and d nominal in mm; deltas δθ, δα in mrad and δa, δd in mm). Its error on the held-out "
+            "poses is in the validation table above.</p>"
+            + _table(["joint", "θ", "δθ", "a", "δa", "d", "δd", "α", "δα", "checksum"], rows, "num")
+            + _kv([("calibration status", esc("—" if status is None else status))]))
+
+
 def _provenance(d: ReportData) -> str:
     robot = [("model", esc(d.robot.model or "—")), ("serial number", esc(d.robot.serial or "—")),
              ("controller software", esc(d.robot.software or "—"))]
@@ -426,6 +475,9 @@ def render_html(data: ReportData, *, generated: str | None = None) -> str:
         _section("correlated", "Correlated parameters", _correlated(data)),
         _section("rejected", "Rejected poses", _rejected(data)),
         _section("observability", "Observability of the pose set", _observability(data)),
+        *([_section("controller", "The controller's own kinematic model",
+                    _controller(data.controller, str((data.model or {}).get("robot") or data.robot.model)))]
+          if data.controller is not None else []),
         _section("campaign", "Campaign", _campaign(data)),
         _section("config", "Station configuration", _config(data.config)),
         _section("provenance", "Robot, software and data", _provenance(data)),

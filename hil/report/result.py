@@ -41,7 +41,8 @@ def report_data(outcome: Any, config: StationConfig, events: list[Event], starte
                         outcome.robot_info.get("software", "")),
         started=started, finished=time.time(), calibration=cal, validation=val, iso9283=iso,
         observability=obs, times=outcome.timing, events=events,
-        hashes={"measurements": digest}, model=r.model, line_kind="pose")
+        hashes={"measurements": digest}, model=r.model, line_kind="pose",
+        validation_controller=r.controller)
 
 
 def result_document(outcome: Any, config: StationConfig, events: list[Event], started: float,

@@ -286,6 +286,18 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "database": Key("float", 600.0, _within(0, 8 * 3600, "s", lo_open=True),
                         "longest wait for a lost database link before the run stops (s)"),
     },
+    "verify": {
+        # the ISO 9283 test cube (`hil verify`, `hil calibrate --verify`), in the robot base frame: every
+        # UR's reach is within 1.75 m (UR20), so a centre beyond 2 m is a value in millimetres
+        "centre": Key("vec3?", None, _length_at_most(2.0, "of the robot base"),
+                      "ISO 9283 test cube centre (robot base frame, m); required on a station"),
+        # ISO 9283's cube is as large as the used working space allows; under 5 cm it tests nothing a
+        # tracker's noise would not hide, over 2 m no UR reaches its corners
+        "edge": Key("float?", None, _within(0.05, 2.0, "m"),
+                    "test cube edge (m); default a quarter of the arm's reach"),
+        # ISO 9283 §7.2: 30 cycles; repeatability's S_l needs 2, 100 is more than any acceptance asks
+        "cycles": Key("int", 30, _within(2, 100), "cycles of the pose test (ISO 9283: 30)"),
+    },
     "store": {
         "url": Key("str", "", _store_url, help="the store: an SQLite file path or a postgresql:// URL "
                                                 "shared by a plant's stations (default: store.path)"),

@@ -60,6 +60,7 @@ from sqlalchemy.exc import DBAPIError
 import hil.store.tables as tb
 from hil import __version__
 from hil.campaign.events import (
+    ControllerModel,
     Event,
     ModelIdentified,
     PointMeasured,
@@ -615,6 +616,17 @@ class Store:
 
         self._write("record the controller's calibration", body)
 
+    @staticmethod
+    def _keep_controller(conn: Connection, campaign: str, model: Mapping[str, Any]) -> None:
+        """The controller's model a campaign runs with, kept with the campaign and, when the robot
+        is known by its serial, as that robot's latest (what `set_controller` keeps)."""
+        c, r = tb.campaigns, tb.robots
+        text = _dumps(model)
+        conn.execute(c.update().where(c.c.id == campaign).values(controller=text))
+        robot = conn.execute(select(c.c.robot).where(c.c.id == campaign)).scalar()
+        if robot is not None:
+            conn.execute(r.update().where(r.c.id == robot).values(controller=text))
+
     def find_resumable(self, config: Any = None, robot_serial: str | None = None, *,
                        config_sha256: str | None = None) -> str | None:
         """The newest unfinished campaign that measures what `config` would, or None.
@@ -832,9 +844,9 @@ class Store:
                 raise UnknownCampaignError(f"{self.location}: no campaign {campaign!r}")
             summary = _summary(row)
             (config, chash, plan, detail, result, software, rtype, serial, model,
-             rsoft) = conn.execute(
+             rsoft, controller) = conn.execute(
                 select(c.c.config, c.c.config_hash, c.c.plan, c.c.detail, c.c.result, c.c.software,
-                       c.c.robot_type, r.c.serial, r.c.model, r.c.software)
+                       c.c.robot_type, r.c.serial, r.c.model, r.c.software, c.c.controller)
                 .select_from(c.outerjoin(r, r.c.id == c.c.robot)).where(c.c.id == campaign)).one()
             poses = self._poses(conn, campaign)
             measurements = [_measurement(m) for m in conn.execute(
@@ -857,7 +869,7 @@ class Store:
             robot=RobotInfo(type=rtype, serial=serial or "", model=model or "", software=rsoft or ""),
             config=json.loads(config), config_hash=chash, plan=_loads(plan), detail=detail,
             result=_loads(result), software=software, poses=poses, measurements=measurements,
-            models=models, validations=validations, event_counts=counts)
+            models=models, validations=validations, event_counts=counts, controller=_loads(controller))
 
     # --- poses and measurements ---------------------------------------------------------------
     def save_plan(self, campaign: str,
@@ -1144,7 +1156,10 @@ class Store:
         elif isinstance(ev, ModelIdentified) and ev.model:
             self._insert_model(conn, cid, ev.model, t)
         elif isinstance(ev, ValidationDone):
-            self._insert_validation(conn, cid, ev.before, ev.after, ev.passed, None, None, t)
+            details = {"controller": ev.controller} if ev.controller else None
+            self._insert_validation(conn, cid, ev.before, ev.after, ev.passed, None, details, t)
+        elif isinstance(ev, ControllerModel):
+            self._keep_controller(conn, cid, ev.model)
         elif isinstance(ev, RunFinished):
             self._set_status(conn, cid, ev.status, ev.detail, ev.result or None, t)
 

@@ -39,7 +39,11 @@ def config_hash(config: Mapping[str, Any]) -> str:
 #   tracker.timeout, tracker.warmup, timeouts.* — how long to wait for a reply, a warm laser, a
 #                     move, a relock: a longer wait measures the same point (a skipped pose is
 #                     recorded as skipped, not measured differently);
-#   store.*         — where the results are kept.
+#   store.*         — where the results are kept;
+#   verify.*        — the ISO 9283 test's cube and cycles, which a calibration never uses (a
+#                     verification carries them in an identity block of its own, `hil.verify.session`);
+#                     stored configurations from before the section existed have none, so no stored
+#                     hash changes.
 # Everything else stays: the robot type and motion settings, the tracker's protocol (GeoCOM and emScon
 # measure differently: a stationary measuring time, a reflector choice), its position guess and the
 # atmospheric correction (which change every distance), the SMR, the keep-in box, the campaign's
@@ -51,6 +55,7 @@ MEASUREMENT_IGNORED: Mapping[str, tuple[str, ...] | None] = {
     "tracker": ("url", "baudrate", "parity", "timeout", "warmup"),
     "timeouts": None,
     "store": None,
+    "verify": None,
 }
 
 

@@ -143,6 +143,8 @@ class CampaignRecord(_AsDict):
     models: list[ModelRecord] = field(default_factory=list)
     validations: list[ValidationRecord] = field(default_factory=list)
     event_counts: dict[str, int] = field(default_factory=dict)
+    # the controller's own kinematic model the campaign ran with (`ControllerModel`), None if unknown
+    controller: dict[str, Any] | None = None
 
     @property
     def id(self) -> str:

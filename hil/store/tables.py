@@ -75,6 +75,8 @@ campaigns = Table(
     Column("updated", Float, nullable=False),
     Column("config_hash", Text, nullable=False, server_default=""),
     Column("measure_hash", Text, nullable=False, server_default=""),
+    # JSON: the controller's own kinematic model this campaign ran with (v5; NULL: not reported)
+    Column("controller", Text),
     Index("campaigns_created", "created"),
     Index("campaigns_resume", "config_hash", "created"),
     Index("campaigns_measure", "measure_hash", "created"),

@@ -7,7 +7,8 @@ one re-entrant lock, so it is safe to read ``true_joints()`` from another servic
 (the tracker simulator looks at the *true* joints: what the encoders read, minus their noise).
 
 Encoder noise is added to ``actual_q`` only; ``actual_TCP_pose`` is computed from ``actual_q`` with the
-*nominal* kinematics, as a real controller does not know the arm's hidden errors.
+controller's *own* model (nominal DH plus its factory deltas, `mocks.ur.hil_model.controller_fk`), as a
+real controller does not know the arm's hidden errors. `set_fk` swaps that model (a new calibration).
 """
 
 from __future__ import annotations
@@ -105,6 +106,20 @@ class SimArm:
     def fk_tcp(self, q: np.ndarray, tcp: np.ndarray | None = None) -> np.ndarray:
         off = self.tcp if tcp is None else np.asarray(tcp, dtype=float)
         return self._fk(np.asarray(q, dtype=float)) @ pose_to_matrix(off)
+
+    def set_fk(self, fk: FkFn) -> None:
+        """Move with another kinematic model from the next cycle on (thread-safe).
+
+        The TCP poses of the current snapshot are recomputed at once (same joints, no new encoder
+        noise drawn), so a reader never sees the new model's joints with the old model's pose.
+        """
+        with self.lock:
+            self._fk = fk
+            snap = dict(self.snapshot)
+            held = self.q_target if self.motion is not None else self.q
+            snap["actual_TCP_pose"] = matrix_to_pose(self.fk_tcp(self.actual_q)).tolist()
+            snap["target_TCP_pose"] = matrix_to_pose(self.fk_tcp(held)).tolist()
+            self.snapshot = snap
 
     # ----------------------------------------------------------------- readers
     def true_joints(self) -> np.ndarray:

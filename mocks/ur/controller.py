@@ -9,9 +9,11 @@ JSON-lines control channel:
 ``protective_stop``        safety protective stop (also mid-move); program stops, arm brakes
 ``emergency_stop``         robot e-stop (``system=True`` for a system e-stop)
 ``release_emergency_stop`` twist the button out: safety normal, arm powered off
-``drop_connection``        close every client link; ``refuse_s`` seconds of refused reconnects;
-                           ``stop_program`` (default True) as an RTDE watchdog would
-``stall``                  ``on=True``: stop sending RTDE data (clients time out after 2.5 s)
+``drop_connection``        close every client link (RTDE, dashboard, script, primary, secondary);
+                           ``refuse_s`` seconds of refused reconnects; ``stop_program`` (default
+                           True) as an RTDE watchdog would
+``stall``                  ``on=True``: stop sending RTDE data (clients time out after 2.5 s) and
+                           primary/secondary robot state
 ``remote_control``         ``on=False``: local control (dashboard refuses, programs refused)
 ``stop_program``           the program stops (someone pressed stop on the pendant)
 ``speed_slider``           ``fraction`` in [0, 1]
@@ -19,6 +21,12 @@ JSON-lines control channel:
 ``set_joints``             ``q``: teleport the arm (test setup)
 ``clear``                  everything back to normal, arm running, program stopped
 =========================  ===============================================================
+
+The controller's own kinematic model — nominal DH plus its factory calibration deltas — drives
+everything it computes (``actual_TCP_pose``, moveL/servoL targets, FK/IK) and is what its primary and
+secondary interfaces publish as KinematicsInfo. It comes from ``SimConfig.controller`` (the JSON
+block of DESIGN.md) or is drawn per robot from the seed (`mocks.ur.factory_calibration`);
+`SimController.set_calibration` swaps it (the simulated station fits one to its truth).
 """
 
 from __future__ import annotations
@@ -33,10 +41,15 @@ from typing import Any
 
 import numpy as np
 
+from hil.arm.controller_model import ControllerCalibration
 from mocks.ur.arm import ArmConfig, SimArm
 from mocks.ur.clock import SimClock
 from mocks.ur.dashboard import DashboardServer
-from mocks.ur.kin import FkFn, dh_fk_factory
+from mocks.ur.factory_calibration import random_factory_calibration
+from mocks.ur.hil_model import controller_fk
+from mocks.ur.kin import FkFn
+from mocks.ur.primary_server import PrimaryServer
+from mocks.ur.robot_state import kinematics_info
 from mocks.ur.rtde_server import RtdeServer
 from mocks.ur.script_server import ScriptServer
 from mocks.ur.status import RobotMode, SafetyMode
@@ -59,6 +72,8 @@ class SimConfig:
     rtde_port: int = 30004
     dashboard_port: int = 29999
     script_port: int = 30003
+    primary_port: int = 30001  # primary client interface (robot state at 10 Hz); 0 = any free port
+    secondary_port: int = 30002  # secondary client interface; 0 = any free port
     control_port: int | None = 0  # JSON-lines fault channel; 0 = any free port, None = off
     rate_hz: float | None = None  # default 500 (e-series) / 125 (CB3)
     encoder_noise: float = 2e-6
@@ -69,21 +84,31 @@ class SimConfig:
     max_speed: list[float] | None = None
     remote_control: bool = True
     speed_slider: float = 1.0
-    fk_factory: str | None = "mocks.ur.hil_model:nominal_fk"  # "module:function"(robot) -> FK callable;
-    # None: the standard-DH fallback of mocks.ur.kin
+    # the controller's factory calibration, the JSON block of DESIGN.md ({"delta_theta": [6], ...});
+    # None: drawn for this robot from `seed` (mocks.ur.factory_calibration.random_factory_calibration)
+    controller: dict[str, Any] | None = None
+    fk_factory: str | None = None  # "module:function"(robot) -> FK callable replacing the controller's
+    # own model (tests only: the KinematicsInfo served then does not describe it); None: its own model
     faults: list[dict[str, Any]] = field(default_factory=list)  # injected right after start
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
 
 
-def resolve_fk(config: SimConfig) -> FkFn:
-    """The nominal FK for the config: its factory if given, else the standard-DH fallback."""
+def resolve_calibration(config: SimConfig) -> ControllerCalibration:
+    """The controller's factory calibration: the config's block, or one drawn for the robot by seed."""
+    if config.controller is not None:
+        return ControllerCalibration.from_dict(config.controller, "SimConfig.controller")
+    return random_factory_calibration(config.robot.lower(), config.seed)
+
+
+def resolve_fk(config: SimConfig, calibration: ControllerCalibration | None = None) -> FkFn:
+    """The controller's FK: the config's factory if given, else its own calibrated model."""
     if config.fk_factory:
         mod, _, fn = config.fk_factory.partition(":")
         factory = getattr(importlib.import_module(mod), fn)
         return factory(config.robot)
-    return dh_fk_factory(config.robot)
+    return controller_fk(config.robot.lower(), calibration or resolve_calibration(config))
 
 
 class SimController:
@@ -111,7 +136,9 @@ class SimController:
             arm_cfg.upper = np.array(config.upper, dtype=float)
         if config.max_speed is not None:
             arm_cfg.max_speed = np.array(config.max_speed, dtype=float)
-        self.arm = SimArm(arm_cfg, fk if fk is not None else resolve_fk(config), self.clock)
+        self.calibration = resolve_calibration(config)
+        self._kinematics_info = self._kinematics_package(self.calibration)
+        self.arm = SimArm(arm_cfg, fk if fk is not None else resolve_fk(config, self.calibration), self.clock)
         self.arm.remote_control = config.remote_control
         self.arm.speed_slider = config.speed_slider
         model = config.model or robot.upper().rstrip("E")
@@ -122,17 +149,44 @@ class SimController:
         self.dashboard = DashboardServer(self.arm, host, config.dashboard_port, model=model,
                                          serial=config.serial, version=version)  # type: ignore[arg-type]
         self.script = ScriptServer(self.arm, host, config.script_port)
+        self.primary = PrimaryServer(self.arm, host, config.primary_port, name="primary", version=version,
+                                     kinematics=lambda: self._kinematics_info)
+        self.secondary = PrimaryServer(self.arm, host, config.secondary_port, name="secondary",
+                                       version=version, kinematics=lambda: self._kinematics_info)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.tick_count = 0
         self.late_ticks = 0
+
+    @property
+    def servers(self) -> tuple[Any, ...]:
+        """Every protocol server of the controller (each a `mocks.ur.net.TcpService`)."""
+        return (self.rtde, self.dashboard, self.script, self.primary, self.secondary)
+
+    # ----------------------------------------------------------------- its own kinematic model
+    def _kinematics_package(self, calibration: ControllerCalibration) -> bytes:
+        theta, a, d, alpha = calibration.dh(self.config.robot.lower())
+        return kinematics_info(calibration.checksums(), theta, a, d, alpha)
+
+    def set_calibration(self, calibration: ControllerCalibration) -> None:
+        """Move, report and solve FK/IK with `calibration` from now on, and publish it (thread-safe).
+
+        The arm's model and the KinematicsInfo served are swapped together under the arm's lock;
+        a custom ``fk_factory`` is replaced too (the controller's model is now this calibration).
+        """
+        fk = controller_fk(self.config.robot.lower(), calibration)
+        package = self._kinematics_package(calibration)
+        with self.arm.lock:
+            self.arm.set_fk(fk)
+            self.calibration = calibration
+            self._kinematics_info = package
 
     # ----------------------------------------------------------------- lifecycle
     def start(self) -> SimController:
         """Bind every port (raises OSError on a clash, before anything runs) and start ticking."""
         started = []
         try:
-            for srv in (self.rtde, self.dashboard, self.script):
+            for srv in self.servers:
                 srv.start()
                 started.append(srv)
         except OSError:
@@ -150,7 +204,7 @@ class SimController:
         self._stop.set()
         if self._thread is not None:
             self._thread.join(timeout=2.0)
-        for srv in (self.rtde, self.dashboard, self.script):
+        for srv in self.servers:
             srv.stop()
 
     def __enter__(self) -> SimController:
@@ -199,7 +253,10 @@ class SimController:
                 "last_error": a.last_error,
                 "programs_received": self.script.programs_received,
                 "rtde_connections": self.rtde.connection_count(),
+                "primary_connections": self.primary.connection_count(),
+                "secondary_connections": self.secondary.connection_count(),
                 "late_ticks": self.late_ticks,
+                "controller": self.calibration.to_dict(),
             }
 
     # ----------------------------------------------------------------- faults
@@ -215,12 +272,13 @@ class SimController:
         elif name == "drop_connection":
             # the link goes first; the controller's watchdog then stops the program (as on a real arm)
             refuse = float(args.get("refuse_s", 0.0))
-            for srv in (self.rtde, self.dashboard, self.script):
+            for srv in self.servers:
                 srv.drop(refuse)
             if args.get("stop_program", True):
                 a.stop_program(decel=8.0)
         elif name == "stall":
-            self.rtde.stalled = bool(args.get("on", True))
+            on = bool(args.get("on", True))
+            self.rtde.stalled = self.primary.stalled = self.secondary.stalled = on
         elif name == "remote_control":
             a.set_remote_control(bool(args.get("on", True)))
         elif name == "stop_program":
@@ -247,7 +305,7 @@ class SimController:
                 a.robot_mode = RobotMode.RUNNING
                 a.remote_control = True
                 a.speed_slider = 1.0
-                self.rtde.stalled = False
+                self.rtde.stalled = self.primary.stalled = self.secondary.stalled = False
                 self.dashboard.unresponsive = False
         elif name in self.extra_faults:
             self.extra_faults[name](**args)

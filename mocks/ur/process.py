@@ -72,7 +72,8 @@ def serve(
     running: list[Any] = [controller]
     info: dict[str, Any] = {"address": config.address, "rtde_port": controller.rtde.port,
                             "dashboard_port": controller.dashboard.port,
-                            "script_port": controller.script.port, "control_port": None, "services": []}
+                            "script_port": controller.script.port, "primary_port": controller.primary.port,
+                            "secondary_port": controller.secondary.port, "control_port": None, "services": []}
     try:
         if config.control_port is not None:
             ctl = ControlServer(controller, config.address, config.control_port)
@@ -88,6 +89,8 @@ def serve(
         if threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGTERM, signal.SIGINT):
                 signal.signal(sig, lambda *_: stop.set())
+        # the controller's own model as it stands once the services are up (a station fits one)
+        info["controller"] = controller.calibration.to_dict()
         if ready is not None:
             ready(info)
         while not stop.wait(0.2):

@@ -23,6 +23,7 @@ from drivers.robot import (
     ProgramStopped,
     ProtectiveStop,
     RobotConfig,
+    RobotInfo,
     RobotUnreachable,
     SpeedSliderReduced,
     UnsupportedVersion,
@@ -75,6 +76,33 @@ def test_open_reads_identity(robot: URRobot) -> None:
     assert robot.info is not None
     assert robot.info.model == "UR5e" and robot.info.serial == "20235500001"
     assert robot.info.software_version.startswith("5.15.0") and robot.info.rate_hz == 500.0
+
+
+def same_model(info: RobotInfo, block: dict[str, list[float]]) -> bool:
+    """`info.kinematics` (full DH values) describes the controller block (deltas) `block`."""
+    from hil.arm.controller_model import DELTA_KEYS, ControllerCalibration
+
+    assert info.kinematics is not None
+    cal = ControllerCalibration.from_dh("ur5e", *info.kinematics.dh())
+    return all(np.allclose(getattr(cal, k), block[k], rtol=0, atol=1e-12) for k in DELTA_KEYS)
+
+
+def test_open_reads_the_controllers_own_kinematic_model(robot: URRobot, sim: SimProcess) -> None:
+    assert robot.info is not None and same_model(robot.info, sim.info["controller"])
+
+
+def test_a_silent_primary_port_leaves_the_model_unknown(caplog: pytest.LogCaptureFixture) -> None:
+    s = start_sim(SimConfig(primary_port=0))  # served elsewhere: nothing answers on 30001
+    robot = URRobot(RobotConfig(host=s.address, connect_timeout=2.0))
+    try:
+        with caplog.at_level("WARNING", logger="drivers.robot.ur"):
+            info = robot.open()
+        assert info.kinematics is None and info.model == "UR5e"
+        assert "kinematic model is unknown" in caplog.text
+        robot.move_to(Q_A)  # the campaign runs on without it
+    finally:
+        robot.close()
+        s.stop()
 
 
 def test_a_cb3_controller_runs_at_125_hz_and_follows_a_trajectory() -> None:
@@ -167,6 +195,7 @@ def test_isolated_client_survives_the_death_of_its_process(sim: SimProcess) -> N
     robot.open()
     try:
         assert robot.info is not None and robot.info.model == "UR5e"
+        assert same_model(robot.info, sim.info["controller"])  # carried across the process boundary
         first = robot._proc
         first.kill()  # what a segfault of ur_rtde looks like from outside
         first.join(5)

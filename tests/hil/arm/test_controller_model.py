@@ -40,6 +40,17 @@ def test_geometry_matches_the_dh_chain(robot: str) -> None:
         np.testing.assert_allclose(kin.flange_poses(q)[0], _dh_fk(theta, a, d, alpha, q), atol=1e-12)
 
 
+def test_real_calibrations_with_cancelling_d_of_hundreds_of_metres_are_accepted_and_exact() -> None:
+    # the shape of a real UR5 calibration.conf (ur_modern_driver issue #108): d2/d3 cancel
+    cal = ControllerCalibration.from_dict({
+        "delta_theta": [0.0, -0.77, 0.78, -0.01, 0.0, 0.0], "delta_a": [0.0, 0.0003, 0.002, 0.0, 0.0, 0.0],
+        "delta_d": [0.0, 232.67, -229.36, -3.31, 0.0, 0.0], "delta_alpha": [0.0, 0.001, 0.0, 0.0, 0.0, 0.0]})
+    kin = Kinematics(cal.geometry("ur5"))
+    theta, a, d, alpha = cal.dh("ur5")
+    for q in np.random.default_rng(6).uniform(-np.pi, np.pi, (10, 6)):
+        np.testing.assert_allclose(kin.flange_poses(q)[0], _dh_fk(theta, a, d, alpha, q), atol=1e-11)
+
+
 def test_zero_deltas_are_the_nominal_geometry() -> None:
     q = np.random.default_rng(1).uniform(-3, 3, (10, 6))
     a = Kinematics(ControllerCalibration().geometry("ur5e")).flange_poses(q)
@@ -75,8 +86,12 @@ def test_json_block_round_trip_and_checksums_follow_the_deltas() -> None:
      "'delta_theta' must be a list of 6"),
     ({"delta_theta": [0] * 6, "delta_a": [0, 0, True, 0, 0, 0], "delta_d": [0] * 6, "delta_alpha": [0] * 6},
      "delta_a[2]: expected a finite number"),
-    ({"delta_theta": [0] * 6, "delta_a": [0] * 6, "delta_d": [0, 0, 0, 425.0, 0, 0], "delta_alpha": [0] * 6},
-     "delta_d[3] = 425.0 is beyond"),
+    ({"delta_theta": [0] * 6, "delta_a": [0] * 6, "delta_d": [0, 0, 0, 4.25e5, 0, 0], "delta_alpha": [0] * 6},
+     "delta_d[3] = 425000.0 is beyond"),
+    ({"delta_theta": [0] * 6, "delta_a": [0] * 6, "delta_d": [0.425, 0, 0, 0, 0, 0], "delta_alpha": [0] * 6},
+     "delta_d[0] = 0.425 is beyond ±0.1 m"),
+    ({"delta_theta": [0] * 6, "delta_a": [0] * 6, "delta_d": [0, 232.67, -229.36, 0, 0, 0],
+      "delta_alpha": [0] * 6}, "delta_d[1] + delta_d[2] + delta_d[3] = 3.31 m"),
 ])
 def test_bad_blocks_name_the_field(block: object, message: str) -> None:
     with pytest.raises(InputError, match="truth.json: controller") as info:

@@ -515,6 +515,10 @@ def _cases() -> list[Case]:
                                            f"{d}/newer.db"], ["newer.db"], files={"newer.db": newer_store})
     add("calibrate", "--config-with---speed", ["calibrate", "--config", f"{d}/station.toml", "--speed", "5",
                                                "--db", f"{d}/cal.db"], ["--speed"])
+    numbers("calibrate", [*cal, "--verify"], "--verify-cycles", ("0", "1", "abc", "101"))
+    add("calibrate", "--verify-cycles-without---verify", [*cal, "--verify-cycles", "3"], ["--verify-cycles"])
+    add("calibrate", "--verify:no-verify-centre",
+        ["calibrate", "--config", f"{d}/station.toml", "--db", f"{d}/cal.db", "--verify"], ["verify.centre"])
     bad_configs("calibrate", lambda p: ["calibrate", "--config", p, "--db", f"{d}/cal.db"])
     add("calibrate", "config:store.path=number", ["calibrate", "--config", f"{d}/bad.toml"], ["store.path"],
         files={"bad.toml": config_with("store.path", 5)})
@@ -529,6 +533,36 @@ def _cases() -> list[Case]:
             ["calibrate", "--config", f"{d}/sim.toml", "--db", f"{d}/cal.db", "--poses", "12",
              "--validation", "4", "--candidates", "500"],
             [robot, "ur5e"], files={"sim.toml": _sim_config(robot)}, station=True, timeout=60)
+
+    # ---------------------------------------------------------------- verify
+    ver = ["verify", "--sim", "--db", f"{d}/ver.db", "--out", f"{d}/verify-out.json"]
+    numbers("verify", ver, "--speed", BAD_FLOATS)
+    numbers("verify", ver, "--seed", ("-1", "abc", "1.5"))
+    numbers("verify", ver, "--cycles", ("0", "1", "-1", "abc", "101"))
+    add("verify", "--robot=ur99", [*ver, "--robot", "ur99"], ["ur99"])
+    add("verify", "--robot=ur10e-vs-ur5e-model", [*ver, "--robot", "ur10e", "--model", f"{d}/model.json"],
+        ["ur10e", "ur5e"])
+    bad_json("verify", lambda p: [*ver, "--model", p], "--model", "model.json")
+    add("verify", "--model=truth", [*ver, "--model", f"{d}/truth.json"], ["truth.json"])
+    add("verify", "--out=--model", [*ver[:-2], "--model", f"{d}/model.json", "--out", f"{d}/model.json"],
+        ["model.json"])
+    add("verify", "--out=directory", [*ver[:-2], "--out", f"{d}/sub"], ["/sub"])
+    add("verify", "--report=--out", [*ver, "--report", f"{d}/verify-out.json"], ["verify-out.json"])
+    add("verify", "--config-with---speed", ["verify", "--config", f"{d}/station.toml", "--speed", "5",
+                                            "--db", f"{d}/ver.db"], ["--speed"])
+    add("verify", "config:no-verify-centre",
+        ["verify", "--config", f"{d}/station.toml", "--db", f"{d}/ver.db"], ["verify.centre"])
+    verify_base = {**BASE_CONFIG, "verify": {"centre": [0.5, 0.0, 0.3], "edge": 0.2, "cycles": 30}}
+    for dotted, value, names in (("verify.centre", [1.6, 0.0, 0.3], ["verify.centre", "reach"]),
+                                 ("verify.centre", [0.5, 0.0, -0.2], ["verify.centre", "keep-in"]),
+                                 ("verify.centre", [500.0, 0.0, 300.0], ["verify.centre"]),
+                                 ("verify.edge", 200.0, ["verify.edge"]),
+                                 ("verify.edge", 0.0, ["verify.edge"]),
+                                 ("verify.cycles", 1, ["verify.cycles"]),
+                                 ("verify.cycles", 1000, ["verify.cycles"])):
+        add("verify", f"config:{dotted}={_toml_value(value)}", ["verify", "--config", f"{d}/bad.toml", "--db",
+                                                                  f"{d}/ver.db"], names,
+            files={"bad.toml": config_with(dotted, value, base=verify_base)})
 
     # ---------------------------------------------------------------- identify
     ident = ["identify", "--robot", "ur5e", "--measurements", f"{d}/measurements.csv"]
@@ -592,6 +626,52 @@ def _cases() -> list[Case]:
     add("export", "--out=--model", [*ex[:-2], "--format", "json", "--out", f"{d}/model.json"], ["model.json"])
     add("export", "--out=--model-relative", [*ex, "--out", "./model.json"], ["model.json"])
     add("export", "--out=directory", [*ex, "--out", f"{d}/sub"], ["/sub"])
+
+    # ---------------------------------------------------------------- compensate
+    block = {k: [0.0] * 6 for k in ("delta_theta", "delta_a", "delta_d", "delta_alpha")}
+    ctl = {"k.json": json.dumps({"robot": "ur5e", "controller": block}),
+           "poses.csv": "x,y,z,rx,ry,rz\n-0.4,-0.13,0.45,3.1,0.1,0\n"}
+    co = ["compensate", "--model", f"{d}/model.json", "--controller", f"{d}/k.json"]
+    bad_json("compensate", lambda p: ["compensate", "--model", p, "--controller", f"{d}/k.json",
+                                      f"{d}/joints.csv", "--out", f"{d}/o.csv"], "--model", "model.json")
+    add("compensate", "--controller:no-block", [*co[:-1], f"{d}/truth.json", f"{d}/poses.csv", "--out",
+                                                f"{d}/o.csv"], ["truth.json", "controller"], files=ctl)
+    add("compensate", "--controller:ur10e", [*co, f"{d}/poses.csv", "--out", f"{d}/o.csv"], ["ur10e"],
+        files={**ctl, "k.json": json.dumps({"robot": "ur10e", "controller": block})})
+    add("compensate", "--controller:delta-in-mm", [*co, f"{d}/poses.csv", "--out", f"{d}/o.csv"],
+        ["k.json", "delta_d"], files={**ctl, "k.json": json.dumps({"controller": {**block,
+                                                                                   "delta_d": [5.0] * 6}})})
+    add("compensate", "--controller:delta-string", [*co, f"{d}/poses.csv", "--out", f"{d}/o.csv"],
+        ["k.json", "delta_a"], files={**ctl, "k.json": json.dumps({"controller": {**block,
+                                                                                   "delta_a": ["0"] * 6}})})
+    add("compensate", "INPUT:unbalanced", [*co, f"{d}/p.script", "--out", f"{d}/o.script"], ["p.script:2"],
+        files={**ctl, "p.script": "def f():\n  movel(p[.4, 0, .3, 3.1, 0, 0)\nend\n"})
+    add("compensate", "INPUT:pose-of-5", [*co, f"{d}/p.script", "--out", f"{d}/o.script"],
+        ["p.script:2", "5"],
+        files={**ctl, "p.script": "def f():\n  movel(p[.4, 0, .3, 3.1, 0], a=1.2)\nend\n"})
+    add("compensate", "INPUT:unreachable", [*co, f"{d}/p.script", "--out", f"{d}/o.script"], ["p.script:3"],
+        files={**ctl, "p.script": "def f():\n  # far away\n  movel(p[4, 0, .3, 0, 3.14, 0])\nend\n"})
+    add("compensate", "INPUT:text-in-csv", [*co, f"{d}/t.csv", "--out", f"{d}/o.csv"], ["t.csv", "line 2"],
+        files={**ctl, "t.csv": "x,y,z,rx,ry,rz\n0.4,abc,0.3,3.1,0,0\n"})
+    add("compensate", "INPUT:millimetres", [*co, f"{d}/t.csv", "--out", f"{d}/o.csv"], ["t.csv", "metres"],
+        files={**ctl, "t.csv": "x,y,z,rx,ry,rz\n400,-130,450,3.1,0.1,0\n"})
+    add("compensate", "INPUT:missing", [*co, f"{d}/nothing.csv", "--out", f"{d}/o.csv"], ["nothing.csv"],
+        files=ctl)
+    add("compensate", "INPUT:urp", [*co, f"{d}/p.urp", "--out", f"{d}/o.script"], ["p.urp"],
+        files={**ctl, "p.urp": BINARY})
+    for v in ("0,0,9,0,0,0", "1,2,3", "nan,0,0,0,0,0"):
+        add("compensate", f"--near={v}", [*co, f"{d}/poses.csv", f"--near={v}", "--out", f"{d}/o.csv"],
+            ["--near"], files=ctl)
+    add("compensate", "--tcp=in-mm", [*co, f"{d}/poses.csv", "--tcp=0,0,150,0,0,0", "--out", f"{d}/o.csv"],
+        ["--tcp"], files=ctl)
+    add("compensate", "--out=--model", [*co, f"{d}/poses.csv", "--out", f"{d}/model.json"], ["model.json"],
+        files=ctl)
+    add("compensate", "--out=INPUT", [*co, f"{d}/poses.csv", "--out", f"{d}/poses.csv"], ["poses.csv"],
+        files=ctl)
+    add("compensate", "--out=directory", [*co, f"{d}/poses.csv", "--out", f"{d}/sub"], ["/sub"], files=ctl)
+    add("compensate", "--config:other-robot", ["compensate", "--model", f"{d}/model.json", "--config",
+                                                f"{d}/station.toml", f"{d}/poses.csv", "--out", f"{d}/o.csv"],
+        ["ur10e"], files={**ctl, "station.toml": config_with("robot.type", "ur10e")})
 
     # ---------------------------------------------------------------- synth
     sy = ["synth", "--poses", "12", "--validation", "3", "--out-dir", f"{d}/synth-out"]

@@ -51,7 +51,8 @@ def test_hil_help_imports_no_numerical_library() -> None:
     assert _loaded_by(["--help"]) == (0, [])
 
 
-@pytest.mark.parametrize("command", ["history", "show", "select", "identify", "fk", "export", "moveb"])
+@pytest.mark.parametrize("command", ["history", "show", "select", "identify", "fk", "export", "compensate",
+                                     "moveb"])
 def test_a_subcommands_help_imports_none_of_the_heavy_libraries(command: str) -> None:
     rc, loaded = _loaded_by([command, "--help"])
     assert rc == 0

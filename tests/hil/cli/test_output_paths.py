@@ -95,12 +95,16 @@ def _cases() -> list[tuple[str, str, str, Case, str]]:
                        "--validation", w(d, "validation.csv"), "--out"]
     fk = lambda d: ["fk", "--model", w(d, "model.json"), "--joints", w(d, "validation.csv"), "--out"]  # noqa: E731
     export = lambda d: ["export", "--model", w(d, "model.json"), "--format", "json", "--out"]  # noqa: E731
+    comp = lambda d: ["compensate", "--model", w(d, "model.json"), "--controller", w(d, "truth.json"),  # noqa: E731
+                      w(d, "validation.csv"), "--out"]
     report = lambda d: ["report", "--result", w(d, "result.json"), "--out"]  # noqa: E731
     select = lambda d: ["select", "--robot", "ur5e", "--count", "12", "--candidates", "1000",  # noqa: E731
                         "--no-bound", "--quiet", "--out"]
     synth = lambda d: ["synth", "--truth", w(d, "truth.json"), "--poses", "5", "--out-dir"]  # noqa: E731
     show = lambda d, opt: ["show", "last", "--db", w(d, "s.db"), opt]  # noqa: E731
     cal = lambda d: ["calibrate", *SIM, "--truth", w(d, "truth.json"), "--db", w(d, "s.db")]  # noqa: E731
+    ver = lambda d: ["verify", *SIM, "--truth", w(d, "truth.json"), "--model", w(d, "model.json"),  # noqa: E731
+                     "--db", w(d, "s.db")]
     plan = lambda d: ["moveb", "plan", w(d, "square.moveb"), "--out"]  # noqa: E731
     mrun = lambda d: ["moveb", "run", w(d, "square.moveb"), *SIM, "--truth", w(d, "truth.json"),  # noqa: E731
                       "--model", w(d, "model.json")]
@@ -128,6 +132,11 @@ def _cases() -> list[tuple[str, str, str, Case, str]]:
         ("export", "--out", "input", lambda d: [*export(d), w(d, "model.json")], "input --model"),
         ("export", "--out", "directory", lambda d: [*export(d), w(d, "folder")], "is a directory"),
         ("export", "--out", "missing parent", lambda d: [*export(d), w(d, missing)], "does not exist"),
+        ("compensate", "--out", "input", lambda d: [*comp(d), w(d, "model.json")], "input --model"),
+        ("compensate", "--out", "input", lambda d: [*comp(d), w(d, "truth.json")], "input --controller"),
+        ("compensate", "--out", "input", lambda d: [*comp(d), w(d, "validation.csv")], "input INPUT"),
+        ("compensate", "--out", "directory", lambda d: [*comp(d), w(d, "folder")], "is a directory"),
+        ("compensate", "--out", "missing parent", lambda d: [*comp(d), w(d, missing)], "does not exist"),
         ("report", "--out", "input", lambda d: [*report(d), w(d, "result.json")], "input --result"),
         ("report", "--out", "directory", lambda d: [*report(d), w(d, "folder")], "is a directory"),
         ("report", "--out", "missing parent", lambda d: [*report(d), w(d, missing)], "does not exist"),
@@ -171,6 +180,20 @@ def _cases() -> list[tuple[str, str, str, Case, str]]:
          "does not exist"),
         ("calibrate", "--report", "other output",
          lambda d: [*cal(d), "--out", w(d, "r.json"), "--report", w(d, "r.json")], "also the output --out"),
+        ("verify", "--out", "store", lambda d: [*ver(d), "--out", w(d, "s.db")], "is the store (--db"),
+        ("verify", "--out", "input", lambda d: [*ver(d), "--out", w(d, "model.json")], "input --model"),
+        ("verify", "--out", "input", lambda d: [*ver(d), "--out", w(d, "truth.json")], "input --truth"),
+        ("verify", "--out", "directory", lambda d: [*ver(d), "--out", w(d, "folder")], "is a directory"),
+        ("verify", "--out", "missing parent", lambda d: [*ver(d), "--out", w(d, missing)], "does not exist"),
+        ("verify", "--report", "store", lambda d: [*ver(d), "--report", w(d, "s.db-wal")],
+         "store's wal file"),
+        ("verify", "--report", "input", lambda d: [*ver(d), "--report", w(d, "model.json")], "input --model"),
+        ("verify", "--report", "directory", lambda d: [*ver(d), "--report", w(d, "folder")],
+         "is a directory"),
+        ("verify", "--report", "missing parent", lambda d: [*ver(d), "--report", w(d, missing)],
+         "does not exist"),
+        ("verify", "--report", "other output",
+         lambda d: [*ver(d), "--out", w(d, "r.json"), "--report", w(d, "r.json")], "also the output --out"),
         ("moveb plan", "--out", "input", lambda d: [*plan(d), w(d, "square.moveb")], "input PROGRAM"),
         ("moveb plan", "--out", "directory", lambda d: [*plan(d), w(d, "folder")], "is a directory"),
         ("moveb plan", "--out", "missing parent", lambda d: [*plan(d), w(d, missing)], "does not exist"),

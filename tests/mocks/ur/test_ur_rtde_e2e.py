@@ -12,11 +12,12 @@ import pytest
 import rtde_control
 import rtde_receive
 
-from mocks.ur.kin import dh_fk_factory, matrix_to_pose, pose_to_matrix
+from hil.arm.controller_model import ControllerCalibration
+from mocks.ur.hil_model import controller_fk
+from mocks.ur.kin import FkFn, matrix_to_pose, pose_to_matrix
 from mocks.ur.process import SimProcess
 from mocks.ur.testing import start_sim
 
-FK = dh_fk_factory("ur5e")
 Q_A = [0.2, -1.3, 1.3, -1.5, -1.5, 0.3]
 Q_B = [-0.4, -1.7, 1.6, -1.2, -1.6, -0.2]
 
@@ -31,6 +32,11 @@ def clients(shared_sim: SimProcess) -> Iterator[tuple[object, object, SimProcess
         c.stopScript()
         c.disconnect()
         r.disconnect()
+
+
+def model_of(sim: SimProcess) -> FkFn:
+    """The FK the simulated controller moves and reports with: nominal DH plus its own deltas."""
+    return controller_fk("ur5e", ControllerCalibration.from_dict(sim.info["controller"]))
 
 
 def wait_for(pred, timeout: float = 5.0) -> bool:  # type: ignore[no-untyped-def]
@@ -50,12 +56,13 @@ def test_connect_reports_version_and_streams_state(clients) -> None:  # type: ig
     assert r.getTimestamp() > t0  # streaming
     assert r.getRobotMode() == 7 and r.getSafetyMode() == 1 and r.getRuntimeState() == 2
     q = np.array(r.getActualQ())
-    assert np.allclose(r.getActualTCPPose()[:3], FK(q)[:3, 3], atol=1e-6)
+    assert np.allclose(r.getActualTCPPose()[:3], model_of(sim)(q)[:3, 3], atol=1e-6)
     assert sim.state()["program"] == "rtde_control"
 
 
-def test_movej_reaches_the_target_and_reports_nominal_tcp(clients) -> None:  # type: ignore[no-untyped-def]
-    c, r, _ = clients
+def test_movej_reaches_the_target_and_reports_the_controllers_tcp(clients) -> None:  # type: ignore[no-untyped-def]
+    c, r, sim = clients
+    FK = model_of(sim)
     assert c.moveJ(Q_A, 1.0, 2.0)
     # the receive thread may still hold a frame from before the end of the move
     assert wait_for(lambda: np.allclose(r.getActualQ(), Q_A, atol=2e-5))

@@ -1,0 +1,144 @@
+"""`hil compensate`: targets for the controller, so the tool lands where the calibrated model says.
+
+A UR controller moves by its own model (nominal DH + factory deltas); it cannot load hil's. This
+rewrites a CSV of tool poses or a URScript program so each target, solved with the calibrated model
+and sent in the controller's terms, puts the tool at the pose that was wanted (`hil.compensation`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+from hil.cli._common import print_json, wrote
+
+#: File name endings read as a URScript program, and as a CSV of poses; anything else is decided by its
+#: first line (a CSV header names x,y,z,rx,ry,rz).
+PROGRAM_SUFFIXES = (".script", ".urscript", ".txt")
+CSV_SUFFIXES = (".csv",)
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "compensate", help="rewrite target poses (CSV or URScript) for the controller's own model",
+        description="Compensate target poses: each is solved with the calibrated model and written as "
+                    "the pose the controller's own model (nominal DH + its factory calibration) maps "
+                    "those joints to, so the tool lands where the model says. INPUT is a CSV of tool "
+                    "poses (header x,y,z,rx,ry,rz: base frame, metres, UR rotation vector; optional "
+                    "q1..q6 columns choose each row's configuration; other columns pass through) or a "
+                    "URScript program (every p[...] target of movel/movej/movep/movec/get_inverse_kin, "
+                    "and every pose variable those moves go to, is rewritten; set_tcp, offsets in "
+                    "pose_trans and everything else stay byte for byte). Moves whose target is computed "
+                    "at run time are listed as not compensated. A summary of how far the targets moved "
+                    "goes to stderr (or JSON to stdout with --json).")
+    p.add_argument("input", metavar="INPUT",
+                   help="targets: a CSV (.csv) or a URScript program (.script, .urscript, .txt); another "
+                        "name is read as a CSV when its first line names x,y,z,rx,ry,rz, else as a program")
+    p.add_argument("--model", required=True, metavar="model.json",
+                   help="the calibrated model (hil-model/1, a campaign result that embeds one, or a "
+                        "simulator truth)")
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--controller", metavar="K.json",
+                     help="a JSON file with the controller's 'controller' block (delta_theta, delta_a, "
+                          "delta_d, delta_alpha): a truth, a model that carries one, or "
+                          '{"robot": ..., "controller": {...}}')
+    src.add_argument("--config", metavar="station.toml",
+                     help="read the controller's calibration from the arm at robot.address (primary "
+                          "interface, port 30001, within timeouts.connect)")
+    p.add_argument("--out", required=True, metavar="OUTPUT",
+                   help="file to write: the same CSV or program with the compensated targets")
+    p.add_argument("--joints", action="store_true",
+                   help="write joint targets instead of poses: a CSV gets q1..q6 columns in place of "
+                        "x..rz; in a program, pose literals given to movel/movej/movep/movec become "
+                        "joint lists [q1,...] (pose variables stay poses, compensated)")
+    p.add_argument("--near", metavar="Q1,..,Q6",
+                   help="joints (radians) the first target's configuration is chosen near, when the "
+                        "input does not say (CSV q1..q6 columns; a program's Waypoint_n_q or preceding "
+                        "movej([...])). Default: 0,-pi/2,pi/2,-pi/2,-pi/2,0 (elbow up, tool down)")
+    p.add_argument("--tcp", metavar="X,Y,Z,RX,RY,RZ",
+                   help="the TCP in the flange frame (metres, rotation vector in radians) the targets are "
+                        "poses of; a program's own set_tcp(p[...]) takes over from its line on. "
+                        "Default: the flange (tool0)")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON on stdout")
+    p.set_defaults(func=run)
+
+
+def _is_program(path: str, text: str) -> bool:
+    from hil.compensation.targets_csv import looks_like_csv
+
+    suffix = os.path.splitext(path)[1].lower()
+    if suffix in PROGRAM_SUFFIXES:
+        return True
+    if suffix in CSV_SUFFIXES:
+        return False
+    return not looks_like_csv(text)
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from hil.arm.controller_model import ControllerCalibration
+    from hil.calibration.model_file import load_geometry
+    from hil.cli.output_paths import campaign_store
+    from hil.compensation.controller_source import PRIMARY_PORT, controller_from_arm, controller_from_file
+    from hil.compensation.poses import parse_near, parse_tcp, to_vector
+    from hil.compensation.solve import Compensator
+    from hil.compensation.targets_csv import compensate_csv
+    from hil.compensation.urscript import compensate_program
+    from hil.errors import InputError
+    from hil.files.inputs import decode_input_text, read_input_bytes
+    from hil.files.outputs import atomic_write_text, check_output
+
+    db, where = campaign_store(None, args.config)
+    check_output(args.out, field="--out", store=db, store_field=where,
+                 inputs={"INPUT": args.input, "--model": args.model, "--controller": args.controller,
+                         "--config": args.config})
+    if os.path.splitext(args.input)[1].lower() == ".urp":
+        raise InputError(f"{args.input}: a Polyscope .urp file is not a script: give the .script Polyscope "
+                         "saves beside it")
+    geometry, _ = load_geometry(args.model)
+    robot = geometry.robot
+    spec = geometry.spec
+    near = parse_near(args.near, spec.lower, spec.upper)
+    tcp = parse_tcp(args.tcp)
+    raw = read_input_bytes(args.input, "a CSV of poses or a URScript program")
+    try:
+        text = raw.decode("utf-8")  # a byte-order mark stays: the program is copied byte for byte
+    except UnicodeDecodeError:
+        text = decode_input_text(raw, args.input)  # raises, naming the file and the byte
+    program = _is_program(args.input, text)
+
+    if args.controller is not None:
+        controller: ControllerCalibration = controller_from_file(args.controller, robot)
+        source = args.controller
+    else:
+        from hil.station.config import load_config
+
+        config = load_config(args.config)
+        if config.robot["type"] != robot:
+            raise InputError(f"{args.config}: robot.type is {config.robot['type']!r}, but the model "
+                             f"{args.model} is of a {robot!r}")
+        address = config.robot["address"]
+        controller = controller_from_arm(address, robot, config.timeouts["connect"])
+        source = f"{address}:{PRIMARY_PORT}"
+
+    compensator = Compensator(geometry, controller.geometry(robot), tcp)
+    if program:
+        out_text, summary = compensate_program(text, args.input, compensator, near, joints=args.joints)
+    else:
+        out_text, summary = compensate_csv(text.lstrip("\ufeff"), args.input, compensator, near,
+                                           joints=args.joints)
+    atomic_write_text(args.out, out_text)
+    what = "URScript program" if program else "CSV"
+    wrote(args.out, f"{what}, {len(summary.moved)} targets compensated"
+          + (f", {len(summary.not_compensated)} NOT compensated" if summary.not_compensated else ""))
+    if args.json:
+        doc = {"format": "hil-compensation/1", "output": args.out, "model": args.model, "robot": robot,
+               "controller": source, "controller_calibration": controller.to_dict(),
+               "tcp": [float(v) for v in to_vector(tcp)], "near": [float(v) for v in np.asarray(near)],
+               **summary.as_dict()}
+        print_json(doc)
+    else:
+        sys.stderr.write(summary.text())
+    return 0

@@ -1,0 +1,192 @@
+"""`hil verify`: the ISO 9283 pose test, uncompensated and compensated in one session.
+
+``hil verify --config station.toml [--model M]`` drives the arm through the test cube's five poses
+(``[verify]``: centre and edge in the base frame) for ``--cycles`` cycles (ISO 9283: 30) and measures
+each with the tracker; ``--sim`` does it on the simulated station (the cube then in front of the arm,
+towards the tracker). With a calibrated model (a ``hil-model/1`` file, or a ``hil calibrate --out``
+result) every pose is driven twice a cycle: uncompensated — the controller's own IK of the pose — and
+compensated — the joints hil's model solves it to; the commanded positions reach the tracker's frame
+by the model's tracker pose. Without one, the uncompensated test only, in a frame fitted to the
+measured points with the controller's own model (the result says so). The result gives, per pose
+and mode, ISO 9283's position accuracy AP (and AP_x/y/z) and repeatability RP; one SMR measures no
+orientation.
+
+The test is stored like a campaign (``hil history`` lists it): re-running the same command after
+Ctrl-C or ``kill -9`` continues it, measuring only what is missing; ``--new`` starts afresh,
+``--resume`` insists on continuing. ``--out`` writes the result (``hil-verification/1``), ``--report``
+an HTML report, both only when the test finishes. Exit codes: 0 done, 2 bad input, 3 hardware fault,
+4 aborted, 130 interrupted (128 + the signal number).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import sys
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+from hil.arm.catalog import ROBOT_NAMES
+from hil.cli._common import SEED, SIM_SPEED, VERIFY_CYCLES
+from hil.errors import InputError
+from hil.files.outputs import atomic_write_text, check_output
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    from hil.cli.station_args import add_tracker_protocol
+
+    p = sub.add_parser("verify", help="ISO 9283 pose test, uncompensated and compensated",
+                       description=__doc__.split("\n\n")[0],
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--config", metavar="station.toml", help="station configuration (its [verify] cube)")
+    src.add_argument("--sim", action="store_true", help="use the simulated station")
+    p.add_argument("--truth", metavar="truth.json", help="--sim: the hidden truth (default: random)")
+    p.add_argument("--speed", type=SIM_SPEED, default=1.0, metavar="F", help="--sim: fast-time factor")
+    p.add_argument("--seed", type=SEED, default=1, help="--sim: seed of the random truth and noise")
+    p.add_argument("--robot", default=None,
+                   help=f"--sim: robot type ({', '.join(ROBOT_NAMES)}; default: the model's or --truth's, "
+                        "else ur5e); with --config it must match robot.type")
+    p.add_argument("--model", metavar="M",
+                   help="hil's calibrated model (model JSON or a calibrate result): adds the compensated "
+                        "test; without it, the uncompensated test only")
+    p.add_argument("--cycles", type=VERIFY_CYCLES, default=None,
+                   help="cycles of P1, P5, P4, P3, P2 (default: verify.cycles, 30)")
+    p.add_argument("--db", metavar="PATH", help="campaign database (default: config, $HIL_DB, data dir)")
+    again = p.add_mutually_exclusive_group()
+    again.add_argument("--resume", action="store_true", help="continue the last unfinished verification")
+    again.add_argument("--new", action="store_true",
+                       help="start a new verification even if one is unfinished")
+    p.add_argument("--json", action="store_true", help="one JSON event per line on stdout")
+    add_tracker_protocol(p)
+    p.add_argument("--out", metavar="result.json", help="write the result (hil-verification/1)")
+    p.add_argument("--report", metavar="report.html", help="write the HTML report")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from hil.cli.interrupts import interruptible
+    from hil.verify.session import load_model
+
+    model = load_model(args.model) if args.model else None  # a missing or bad file: exit 2, nothing started
+    _check_outputs(args)
+    with interruptible():  # Ctrl-C, SIGTERM, SIGHUP: the arm stops, the verification stays resumable
+        return _run(args, model)
+
+
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Refuse --out/--report paths that are the store, an input, a directory or each other, before the
+    station starts (as ``hil calibrate`` does)."""
+    if not (args.out or args.report):
+        return
+    from hil.cli.output_paths import campaign_store
+
+    db, where = campaign_store(args.db, args.config)
+    inputs = {"--config": args.config, "--truth": args.truth, "--model": args.model}
+    if args.out:
+        check_output(args.out, field="--out", inputs=inputs, store=db, store_field=where)
+    if args.report:
+        check_output(args.report, field="--report", inputs=inputs, store=db, store_field=where,
+                     outputs={"--out": args.out})
+
+
+def station_args(args: argparse.Namespace, model: Any) -> SimpleNamespace:
+    """The options `station_from_args` reads: a calibration's counts are not a verification's."""
+    robot = args.robot
+    if model is not None and robot is not None and robot.lower() != model.geometry.robot:
+        raise InputError(f"--robot is {robot}, the model {model.source} is of a {model.geometry.robot}")
+    if robot is None and args.sim and model is not None and not args.truth:
+        robot = model.geometry.robot  # the simulated arm is the one the model calibrated
+    return SimpleNamespace(config=args.config, sim=args.sim, truth=args.truth, speed=args.speed,
+                           seed=args.seed, robot=robot, tracker_protocol=args.tracker_protocol,
+                           poses=None, validation=None, candidates=None, accept=None, cycles=1)
+
+
+def check_model_robot(model: Any, config: Any) -> None:
+    """A model of another arm type than the station's is bad input, naming both."""
+    if model is not None and model.geometry.robot != config.robot["type"]:
+        raise InputError(f"--model {model.source} is a model of a {model.geometry.robot}, the station's "
+                         f"robot.type is {config.robot['type']}")
+
+
+def _run(args: argparse.Namespace, model: Any) -> int:
+    from hil.campaign.engine import RealClock
+    from hil.cli.calibrate import _say_outage
+    from hil.cli.progress import JsonLines, Progress
+    from hil.cli.station_args import station_from_args
+    from hil.station.devices import HARDWARE_ERRORS, open_devices
+    from hil.station.robot_type import check_controller
+    from hil.store import FINISHED, Store, StoreError, address_lock, resolve_location
+    from hil.verify.design import check_cube
+    from hil.verify.session import requested_cube, verify
+
+    with station_from_args(station_args(args, model)) as (config, identity, truth):
+        check_model_robot(model, config)
+        cube = requested_cube(config, sim=args.sim)
+        if cube is not None:  # before anything connects: a cube beyond reach is bad input
+            from hil.verify.session import cube_where
+
+            tool = model.geometry.smr if model else config.smr["offset"]
+            check_cube(config.robot["type"], cube, tool, (config.keep_in["min"], config.keep_in["max"]),
+                       cube_where(config))
+        cycles = args.cycles or config.verify["cycles"]
+        path = resolve_location(args.db, config)
+        store: Store | None = (Store.open(path, config=config) if not isinstance(path, Path) or path.exists()
+                               else None)
+        guards = contextlib.ExitStack()
+        devices = None
+        try:
+            guards.enter_context(address_lock(config.robot["address"], what="hil verify"))
+            try:
+                devices = open_devices(config)
+            except HARDWARE_ERRORS as exc:
+                print(f"hil: hardware fault: cannot connect: {type(exc).__name__}: {exc}", file=sys.stderr)
+                return 3
+            info = devices.robot.info
+            check_controller(config, info)  # the controller's word on the robot type, before anything
+            if store is None:
+                store = Store.open(path, config=config)
+            robot = {"type": config.robot["type"], "serial": info.serial if info else "",
+                     "model": info.model if info else "", "software": info.software_version if info else ""}
+            store.on_outage = _say_outage
+            subscribers: list[Any] = [Progress()]
+            if args.json:
+                subscribers.append(JsonLines())
+
+            def say(campaign: str, resumed: bool) -> None:
+                print(f"hil: {'resuming' if resumed else 'starting'} verification {campaign}"
+                      f"{'' if model else ' (no --model: uncompensated only)'}", file=sys.stderr)
+
+            try:
+                done = verify(store, devices, config, identity, robot, model=model, cube=cube, cycles=cycles,
+                              clock=RealClock(args.speed), subscribers=subscribers, new=args.new,
+                              resume_only=args.resume, truth=truth, on_campaign=say)
+            except StoreError as exc:  # the result could not be recorded (a full disk): a fault
+                print(f"hil: fault: could not record the verification: {exc.__cause__ or exc}",
+                      file=sys.stderr)
+                return 3
+        finally:
+            if devices is not None:
+                devices.close()  # run_plan closed them already; a refusal before it did not
+            guards.close()
+            if store is not None:
+                store.close()
+    outcome = done.outcome
+    if outcome.status not in FINISHED:
+        if outcome.status == "interrupted":
+            print(f"hil: verification {done.campaign} is resumable: re-run the same command to continue it",
+                  file=sys.stderr)
+        return outcome.exit_code
+    from hil.cli._common import wrote
+
+    if args.out:
+        atomic_write_text(args.out, json.dumps(done.document, indent=2, allow_nan=False) + "\n")
+        wrote(args.out, "hil-verification/1")
+    if args.report and "results" in done.document:
+        from hil.report.verification import write_verification_report
+
+        write_verification_report(done.document, args.report)
+        wrote(args.report, "HTML report")
+    return outcome.exit_code
