@@ -89,8 +89,10 @@ def _status(c: CampaignSummary) -> str:
 
 def _history_line(c: CampaignSummary) -> str:
     rms = "-" if c.validation_rms is None else f"{c.validation_rms * 1e3:.3f}"
+    # a finished verification (ISO 9283 test, no model) reads "verified", not "accepted"
+    status = "verified" if c.kind == "verification" and c.status == "accepted" else c.status
     return _ROW.format(c.id, _when(c.updated, "%m-%d %H:%M"), c.station[:10], c.robot[:5],
-                       c.status[:11], f"{c.measured}/{c.planned}", rms)
+                       status[:11], f"{c.measured}/{c.planned}", rms)
 
 
 def run_history(args: argparse.Namespace) -> int:

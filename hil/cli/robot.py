@@ -190,6 +190,14 @@ def _text(history: RobotHistory) -> list[str]:
             assert m is not None
             lines.append(f"  {c.id} {'bad' if m.bad else 'good'} {when(m.t, '%Y-%m-%d %H:%M')} by {m.who}: "
                          + " ".join(m.reason.split()))
+    if history.verifications:
+        lines += ["", "verifications (ISO 9283 pose test, worst pose of P1-P5, mm):",
+                  f"  {'CAMPAIGN':<22}{'DATE':<18}{'STATUS':<12}{'AP UNCOMP':>10}{'AP COMP':>9}{'RP':>7}"]
+        for v in history.verifications:
+            rp = max(v.rp_max.values()) if v.rp_max else None
+            lines.append(f"  {v.id:<22}{when(v.created):<18}{clip(v.status, 11):<12}"
+                         f"{mm(v.ap_max.get('uncompensated')):>10}{mm(v.ap_max.get('compensated')):>9}"
+                         f"{mm(rp):>7}")
     k = history.comparisons[0].k if history.comparisons else None
     lines += ["", "geometry between good calibrations"
               + (f" (moved: |Δ| > {k:g}·sqrt(σa² + σb²)):" if k is not None else ":")]

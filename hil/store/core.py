@@ -79,6 +79,7 @@ from hil.store.migrate import SCHEMA_VERSION, found_version, upgrade
 from hil.store.owner import is_gone, this_process
 from hil.store.paths import resolve_location
 from hil.store.records import (
+    CALIBRATION,
     FINISHED,
     INTERRUPTED,
     ROLES,
@@ -211,6 +212,7 @@ def _summary_query() -> Any:
     return (select(c.c.id, c.c.created, c.c.updated, s.c.name, c.c.robot_type,
                    func.coalesce(r.c.serial, ""), c.c.status, pose_count(None), pose_count("measured"),
                    pose_count("skipped"), latest(m.c.rms, m), latest(v.c.rms, v), latest(v.c.passed, v),
+                   c.c.kind,
                    case((c.c.status.in_(sorted(_LIVE_STATES)), started), else_=literal(None)))
             .select_from(c.join(s, s.c.id == c.c.station).outerjoin(r, r.c.id == c.c.robot)))
 
@@ -222,8 +224,8 @@ def _summary(row: Sequence[Any]) -> CampaignSummary:
     """A summary row; a live status whose run's process is gone (kill -9, power cut) reads as
     ``interrupted``, which it is: resumable (the database itself is left as it is — a reader never
     writes)."""
-    *head, passed, started = row
-    summary = CampaignSummary(*head, passed=None if passed is None else bool(passed))
+    *head, passed, kind, started = row
+    summary = CampaignSummary(*head, passed=None if passed is None else bool(passed), kind=str(kind))
     if started is not None and is_gone(json.loads(started).get("owner")):
         summary = dataclasses.replace(summary, status=INTERRUPTED)
     return summary
@@ -579,7 +581,8 @@ class Store:
         conn.execute(c.insert().values(
             id=cid, station=station_id, robot=robot_id, robot_type=info.type, config=_dumps(values),
             config_hash=config_hash(values), measure_hash=measurement_hash(values),
-            plan=_dumps_or_null(plan), status="created", software=__version__, created=now, updated=now))
+            plan=_dumps_or_null(plan), status="created", software=__version__, created=now, updated=now,
+            kind=str((plan or {}).get("kind") or CALIBRATION)))
         return cid
 
     def set_status(self, campaign: str, status: str, detail: str | None = None,

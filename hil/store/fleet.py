@@ -42,7 +42,7 @@ import hil.store.tables as tb
 from hil.errors import InputError
 from hil.store.core import UnknownCampaignError
 from hil.store.owner import is_gone
-from hil.store.records import INTERRUPTED, _AsDict
+from hil.store.records import CALIBRATION, INTERRUPTED, VERIFICATION, _AsDict
 
 if TYPE_CHECKING:
     from hil.store.core import Store
@@ -174,13 +174,28 @@ class GeometryComparison(_AsDict):
 
 
 @dataclass(frozen=True)
+class Verification(_AsDict):
+    """One ISO 9283 pose test (``hil verify``) of a robot: the worst pose's AP and RP of each mode."""
+
+    id: str
+    created: float
+    station: str
+    status: str
+    cycles: int | None
+    ap_max: Mapping[str, float]  # mode ("uncompensated", "compensated") -> worst pose AP (m)
+    rp_max: Mapping[str, float]  # mode -> worst pose RP (m)
+
+
+@dataclass(frozen=True)
 class RobotHistory(_AsDict):
-    """One robot: its record, every calibration oldest first, the current one, geometry changes."""
+    """One robot: its record, every calibration oldest first, the current one, geometry changes, and
+    its verifications (ISO 9283 pose tests) oldest first."""
 
     robot: RobotRecord
     calibrations: tuple[Calibration, ...]
     current: str | None  # campaign whose model is current
     comparisons: tuple[GeometryComparison, ...]  # consecutive good calibrations, oldest first
+    verifications: tuple[Verification, ...] = ()
 
     @property
     def moved(self) -> tuple[GeometryComparison, ...]:
@@ -212,7 +227,8 @@ def _good_campaigns() -> Any:
     has_model = select(m.c.id).where(m.c.campaign == c.c.id).correlate(c).exists()
     return (select(c.c.id, c.c.robot, c.c.created, _latest_id(tb.models).label("model"))
             .select_from(c.outerjoin(mk, mk.c.id == _latest_id(tb.marks)))
-            .where(c.c.robot.is_not(None), c.c.status == ACCEPTED, has_model, _not_marked_bad(mk)))
+            .where(c.c.robot.is_not(None), c.c.kind == CALIBRATION, c.c.status == ACCEPTED, has_model,
+                   _not_marked_bad(mk)))
 
 
 def _newest_per_robot(query: Any) -> Any:
@@ -226,7 +242,7 @@ def _newest_per_robot(query: Any) -> Any:
 
 def _all_campaigns() -> Any:
     c = tb.campaigns
-    return select(c.c.id, c.c.robot, c.c.created).where(c.c.robot.is_not(None))
+    return select(c.c.id, c.c.robot, c.c.created).where(c.c.robot.is_not(None), c.c.kind == CALIBRATION)
 
 
 def _loads(text: str | None) -> Any:
@@ -320,7 +336,8 @@ def fleet(store: Store, *, station: str | None = None, now: float | None = None)
             raise InputError(f"--station: no station named {station!r} in {store.location}"
                              + (f" (stations: {', '.join(names)})" if names else " (it has none yet)"))
         robots = conn.execute(select(r.c.id, r.c.serial, r.c.type, r.c.model).order_by(r.c.serial)).all()
-        counts = dict(conn.execute(select(c.c.robot, func.count()).where(c.c.robot.is_not(None))
+        counts = dict(conn.execute(select(c.c.robot, func.count())
+                                   .where(c.c.robot.is_not(None), c.c.kind == CALIBRATION)
                                    .group_by(c.c.robot)).all())
         last = {x.serial: x for x in _calibrations(conn, c.c.id.in_(_newest_per_robot(_all_campaigns())))}
         current = {x.serial: x for x in _calibrations(conn, c.c.id.in_(_newest_per_robot(_good_campaigns())))}
@@ -345,7 +362,9 @@ def calibrations(store: Store, *, since: float | None = None) -> list[Calibratio
     """Every calibration of a robot with a known serial, oldest first (those created at or after
     `since`, seconds since the epoch, when given): what the fleet report plots over time."""
     c = tb.campaigns
-    where = c.c.robot.is_not(None) if since is None else and_(c.c.robot.is_not(None), c.c.created >= since)
+    where = and_(c.c.robot.is_not(None), c.c.kind == CALIBRATION)
+    if since is not None:
+        where = and_(where, c.c.created >= since)
     with store.reading() as conn:
         return _calibrations(conn, where)
 
@@ -448,11 +467,36 @@ def robot_history(store: Store, serial: str, *, k: float = DEFAULT_K,
     _check_k(k)
     with store.reading() as conn:
         rid, robot = _robot(conn, serial, store.location)
-        rows = _calibrations(conn, tb.campaigns.c.robot == rid)
+        rows = _calibrations(conn, and_(tb.campaigns.c.robot == rid, tb.campaigns.c.kind == CALIBRATION))
         good = [(x.id, x.created, x.model) for x in rows if x.good and x.model is not None]
         params = _model_parameters(conn, (m for _, _, m in good), prefixes) if len(good) > 1 else {}
+        checks = _verifications(conn, rid)
     return RobotHistory(robot=robot, calibrations=tuple(rows), current=good[-1][0] if good else None,
-                        comparisons=tuple(_comparisons(good, params, k)))
+                        comparisons=tuple(_comparisons(good, params, k)), verifications=checks)
+
+
+def _verifications(conn: Connection, rid: int) -> tuple[Verification, ...]:
+    """The robot's verification campaigns, oldest first, with the figures of their result document
+    (``hil-verification/1``: ``results[mode].AP_max/RP_max``; none while unfinished)."""
+    c, s = tb.campaigns, tb.stations
+    out = []
+    for cid, created, station, status, result in conn.execute(
+            select(c.c.id, c.c.created, s.c.name, c.c.status, c.c.result)
+            .select_from(c.join(s, s.c.id == c.c.station))
+            .where(c.c.robot == rid, c.c.kind == VERIFICATION).order_by(c.c.created, c.c.id)):
+        doc = _loads(result)
+        results = doc.get("results") if isinstance(doc, Mapping) else None
+        ap: dict[str, float] = {}
+        rp: dict[str, float] = {}
+        for mode, figures in (results.items() if isinstance(results, Mapping) else ()):
+            if (a := _stat(figures, "AP_max")) is not None:
+                ap[str(mode)] = a
+            if (r := _stat(figures, "RP_max")) is not None:
+                rp[str(mode)] = r
+        cycles = doc.get("cycles") if isinstance(doc, Mapping) else None
+        out.append(Verification(id=cid, created=float(created), station=station, status=status,
+                                cycles=cycles if isinstance(cycles, int) else None, ap_max=ap, rp_max=rp))
+    return tuple(out)
 
 
 def geometry_changes(store: Store, *, since: float | None = None, k: float = DEFAULT_K,

@@ -13,6 +13,11 @@ from typing import Any
 
 ROLES: tuple[str, ...] = ("bootstrap", "calibration", "validation")
 
+#: What a campaign is: a calibration identifies a model; a verification (``hil verify``, ISO 9283)
+#: measures how well the arm reaches targets and has no model of its own.
+CALIBRATION, VERIFICATION = "calibration", "verification"
+KINDS: tuple[str, ...] = (CALIBRATION, VERIFICATION)
+
 # A campaign in one of these states is over: re-running the same command starts a new one. "failed"
 # (a hardware fault, a lost connection past its timeout) is deliberately NOT here: once the fault is
 # fixed, re-running the command continues the campaign with its measurements.
@@ -101,6 +106,7 @@ class CampaignSummary(_AsDict):
     fit_rms: float | None  # of the latest model (m)
     validation_rms: float | None  # after calibration, latest validation (m)
     passed: bool | None
+    kind: str = CALIBRATION
 
     @property
     def finished(self) -> bool:

@@ -77,6 +77,8 @@ campaigns = Table(
     Column("measure_hash", Text, nullable=False, server_default=""),
     # JSON: the controller's own kinematic model this campaign ran with (v5; NULL: not reported)
     Column("controller", Text),
+    # what the campaign is (v5): a 'calibration' (identifies a model) or a 'verification' (ISO 9283 test)
+    Column("kind", Text, nullable=False, server_default="calibration"),
     Index("campaigns_created", "created"),
     Index("campaigns_resume", "config_hash", "created"),
     Index("campaigns_measure", "measure_hash", "created"),
