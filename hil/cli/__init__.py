@@ -68,7 +68,7 @@ COMMAND_HELP: dict[str, tuple[tuple[str, str], ...]] = {
                 ("show", "print one campaign; export its model or measurements")),
     "robots": (("robots", "list the fleet: robots, last calibrations, current models"),),
     "robot": (("robot", "one robot's history; mark a calibration bad or good"),),
-    "report": (("report", "write the HTML report of a saved calibration result"),),
+    "report": (("report", "write the HTML report of a saved calibration or verification result"),),
     "fleet_report": (("fleet-report", "write the fleet's HTML report (accuracy over time, stations)"),),
     "moveb": (("moveb", "smooth error-controlled trajectories (plan, run)"),),
     "tui": (("tui", "the operator's terminal app (keyboard only, 80x24 and larger)"),),

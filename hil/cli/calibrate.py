@@ -240,7 +240,7 @@ def _run(args: argparse.Namespace) -> int:
     if args.report and outcome.result is not None:
         from hil.report import write_report
 
-        write_report(report_data(outcome, config, events, started), args.report)
+        write_report(report_data(outcome, config, events, started, result.get("verification")), args.report)
         wrote(args.report, "HTML report")
     return verified if outcome.exit_code == 0 and verified else outcome.exit_code
 

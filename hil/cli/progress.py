@@ -1,6 +1,11 @@
 """Event subscribers for a terminal: a progress bar with ETA (or plain lines) and JSON lines.
 
 Both are non-critical subscribers: if the terminal goes away, the campaign carries on.
+
+A calibration and an ISO 9283 verification (``hil verify``, ``hil calibrate --verify``) run on the same
+engine and emit the same events; `Progress` words them by what the events say. The plan's `PlanReady`
+tells a verification (its selection's ``"kind": "verification"``; each visit's pose P1–P5, mode and
+cycle), but `RunStarted` comes first: its line waits for the next event, so it can say which it is.
 """
 
 from __future__ import annotations
@@ -8,9 +13,11 @@ from __future__ import annotations
 import json
 import sys
 import time
-from typing import IO
+from collections.abc import Mapping
+from typing import IO, Any
 
 from hil.campaign.events import (
+    ControllerModel,
     Event,
     Message,
     PhaseChanged,
@@ -20,8 +27,15 @@ from hil.campaign.events import (
     Resumed,
     RunFinished,
     RunStarted,
+    StateChanged,
     Suspended,
 )
+
+#: `PlanReady.selection["kind"]` of a verification (`hil.verify.plan.KIND`; not imported, so that the
+#: CLI's start-up does not load the verification's kinematics).
+VERIFICATION = "verification"
+#: Events that may come between `RunStarted` and the plan's `PlanReady` and print nothing.
+_SILENT = (ControllerModel, StateChanged)
 
 
 class JsonLines:
@@ -48,6 +62,54 @@ class Progress:
         self.first_measure: float | None = None
         self.done_at_first = 0
         self._drawn = False
+        self._started: RunStarted | None = None  # its line, until the next event says what runs
+        self.selection: Mapping[str, Any] = {}  # the plan's (PlanReady): a verification says so
+        self.visits: dict[int, Mapping[str, Any]] = {}  # a verification's visits by index
+
+    @property
+    def verification(self) -> bool:
+        """Whether the run is an ISO 9283 verification (its plan said so), not a calibration."""
+        return self.selection.get("kind") == VERIFICATION
+
+    @property
+    def _unit(self) -> str:
+        return "visits" if self.verification else "poses"
+
+    def _visit(self, index: int) -> str:
+        """What a verification's visit is: its pose, mode and cycle ("P3 compensated, cycle 2 of 30")."""
+        v = self.visits.get(index) or {}
+        if not {"pose", "mode", "cycle"} <= set(v):
+            return ""
+        return f"{v['pose']} {v['mode']}, cycle {v['cycle']} of {self.selection.get('cycles', '?')}"
+
+    def _what(self, index: int, role: str) -> str:
+        """A point's name in a line: a calibration's pose and role, a verification's visit."""
+        if not self.verification:
+            return f"pose {index} ({role})"
+        visit = self._visit(index)
+        return f"visit {index} ({visit})" if visit else f"visit {index}"
+
+    def _deviation(self, deviation: float | None) -> str:
+        """A calibration's points are compared with the nominal arm's prediction, a verification's with
+        the pose's commanded position (`hil.verify.result.deviation`; known with a model only)."""
+        if deviation is None:
+            return ""
+        return f", {deviation * 1e3:.3f} mm from {'commanded' if self.verification else 'nominal'}"
+
+    def _say_started(self) -> None:
+        event, self._started = self._started, None
+        if event is None:
+            return
+        what = "resuming" if event.resumed else "starting"
+        done = f", {event.measured} measured" if event.resumed else ""
+        if self.verification:
+            modes = " and ".join(self.selection.get("modes") or []) or "?"
+            self._line(f"{what} verification {event.campaign} on {event.robot} ({event.station}), "
+                       f"{event.poses} visits planned (poses P1–P5, {self.selection.get('cycles', '?')} "
+                       f"cycles, {modes}){done}")
+        else:
+            self._line(f"{what} campaign {event.campaign} on {event.robot} ({event.station}), "
+                       f"{event.poses} poses planned (calibration + validation){done}")
 
     def _line(self, text: str) -> None:
         if self._drawn:
@@ -68,7 +130,7 @@ class Progress:
             return
         frac = self.done / self.total if self.total else 0.0
         filled = round(frac * self.width)
-        text = (f"[{'#' * filled}{'.' * (self.width - filled)}] {self.done}/{self.total} poses  "
+        text = (f"[{'#' * filled}{'.' * (self.width - filled)}] {self.done}/{self.total} {self._unit}  "
                 f"ETA {self._eta()}  {note}")
         self.stream.write("\r\x1b[K" + text[:120])
         self.stream.flush()
@@ -76,28 +138,32 @@ class Progress:
 
     def __call__(self, event: Event) -> None:
         if isinstance(event, RunStarted):
+            self._say_started()  # an earlier run's line still waiting, if any
             self.total, self.done = event.poses, event.measured
-            what = "resuming" if event.resumed else "starting"
-            done = f", {event.measured} measured" if event.resumed else ""
-            self._line(f"{what} campaign {event.campaign} on {event.robot} ({event.station}), "
-                       f"{event.poses} poses planned (calibration + validation){done}")
-        elif isinstance(event, PlanReady):  # the plan's own count (a resumed plan includes the measured)
+            self._started = event
+            return
+        if isinstance(event, PlanReady):  # the plan's own count (a resumed plan includes the measured)
             self.total = sum(1 for p in event.poses if p["role"] != "bootstrap")
-        elif isinstance(event, PhaseChanged):
+            self.selection = dict(event.selection or {})
+            self.visits = {int(p["index"]): p for p in event.poses} if self.verification else {}
+        if isinstance(event, _SILENT):
+            return
+        self._say_started()
+        if isinstance(event, PhaseChanged):
             self._line(f"{event.phase}: {event.detail}" if event.detail else event.phase)
         elif isinstance(event, PointMeasured):
             if event.role != "bootstrap":
                 self.done += 1
                 if self.first_measure is None:
                     self.first_measure, self.done_at_first = time.monotonic(), self.done
-            dev = "" if event.deviation is None else f", {event.deviation * 1e3:.3f} mm from nominal"
-            note = f"pose {event.index} ({event.role}){dev}"
-            if self.bar:
-                self._draw(note)
+            dev = self._deviation(event.deviation)
+            if self.bar:  # the count is on the bar: a verification's note is the visit's pose alone
+                visit = self._visit(event.index) if self.verification else ""
+                self._draw((visit or self._what(event.index, event.role)) + dev)
             else:
-                self._line(f"measured {note}")
+                self._line(f"measured {self._what(event.index, event.role)}{dev}")
         elif isinstance(event, PoseSkipped):
-            self._line(f"skipped pose {event.index} ({event.role}): {event.reason}")
+            self._line(f"skipped {self._what(event.index, event.role)}: {event.reason}")
         elif isinstance(event, Suspended):
             self._line(f"SUSPENDED ({event.kind}): {event.message}")
         elif isinstance(event, Resumed):
@@ -105,5 +171,7 @@ class Progress:
         elif isinstance(event, Message):
             self._line(f"{event.level}: {event.text}")
         elif isinstance(event, RunFinished):
-            self._line(f"campaign {event.campaign} {event.status}"
+            # a finished verification is stored "accepted" (it has no threshold): say "finished"
+            status = "finished" if self.verification and event.status == "accepted" else event.status
+            self._line(f"{'verification' if self.verification else 'campaign'} {event.campaign} {status}"
                        + (f": {event.detail}" if event.detail else ""))

@@ -21,6 +21,13 @@ def solve_joint_path(compensator: Compensator, targets: Sequence[pin.SE3], seed:
     """(N, 6) joints putting the tool at each target by the accurate model, each solved near the
     previous one (the first near `seed`).
 
+    Every target, the first included, only follows the previous joints by damped least squares (no
+    branch search): a path starts from where the arm stands (`seed`), on the configuration the arm is
+    in, and each sample is a control cycle from the last. The nearest-configuration search a single
+    target gets (`Compensator.solve`) could start a path on another configuration — one where the upper
+    arm points down, found nearer by joint distance — which the arm would have to swing through its
+    workspace to reach.
+
     A step larger than `max_step` rad between consecutive targets means the solution jumped branches
     (or passes a singularity): refused as `UnreachableError`, naming the target (``where[i]``).
     """
@@ -29,7 +36,7 @@ def solve_joint_path(compensator: Compensator, targets: Sequence[pin.SE3], seed:
     for i, target in enumerate(targets):
         name = where[i] if where else f"sample {i}"
         try:
-            q_new = compensator.solve(target, q).q
+            q_new = compensator.solve(target, q, search=False).q
         except UnreachableError as exc:
             raise UnreachableError(f"{name}: {exc}") from None
         step = float(np.max(np.abs(q_new - q)))

@@ -11,7 +11,9 @@ Typical use at the end of a campaign::
 
 `hil.report.result` builds the ``hil-result/1`` document of a finished campaign (CLI and TUI alike).
 `hil.report.fleet` is the fleet report (``hil fleet-report``), read from the store (`hil.store.fleet`).
-`hil.report.verification` is the report of an ISO 9283 pose test (``hil verify --report``).
+`hil.report.verification` is the report of an ISO 9283 pose test (``hil verify --report``, ``hil report``
+of its result); its tables and figure (`hil.report.pose_test`) are also the pose-test section of a
+``hil calibrate --verify`` campaign's report. `hil.report.html` holds the blocks every page shares.
 
 May import: `hil.verify`, `hil.store`, `hil.campaign`, `hil.station`, `hil.calibration`, `hil.arm`,
 `hil.files`, `hil.errors`.

@@ -183,6 +183,9 @@ class ReportData:
     # the controller's own model on the validation poses (tracker pose and SMR fitted for it, as for
     # "before"); None when the controller did not report its model. Its DH deltas: model["controller"]
     validation_controller: ErrorSet | None = None
+    # ``hil calibrate --verify``: the ISO 9283 pose test of the calibrated model (``hil-verification/1``,
+    # or why it has no figures: ``{"status": "not run", "reason"}``, an interrupted test's status)
+    verification: Mapping[str, Any] | None = None
 
     @property
     def controller(self) -> Mapping[str, Any] | None:
@@ -241,6 +244,7 @@ def report_data_from(
     model: Mapping[str, Any] | None = None,
     line_kind: str = "input line",
     validation_controller: ErrorStats | None = None,
+    verification: Mapping[str, Any] | None = None,
 ) -> ReportData:
     """Assemble a `ReportData` from what the campaign engine has at the end of a run.
 
@@ -257,7 +261,9 @@ def report_data_from(
     * ``line_kind`` says what the calibration measurements' ``lines`` are: ``"input line"`` (rows of a
       CSV file) or ``"pose"`` (a campaign's pose numbers);
     * ``validation_controller``: the controller's own model on the validation poses
-      (`hil.campaign.controller.controller_validation`), shown beside before and after.
+      (`hil.campaign.controller.controller_validation`), shown beside before and after;
+    * ``verification``: the pose test run after the calibration (``hil calibrate --verify``), its
+      document as the result embeds it under ``verification``.
     """
     from hil.calibration.model_file import model_document, software_versions, tracker_pose
 
@@ -335,6 +341,7 @@ def report_data_from(
         tracker_pose=tracker_pose(fit.geometry.tracker, fit.names, fit.covariance),
         validation_controller=(None if validation_controller is None
                                else ErrorSet.of_stats(validation_controller)),
+        verification=dict(verification) if verification is not None else None,
     )
 
 
@@ -472,7 +479,71 @@ def _from_result(doc: Mapping[str, Any], source: str) -> ReportData:
         tracker_pose=_tracker_pose(model, source),
         validation_controller=(None if validation.get("controller") is None else _error_set(
             validation["controller"], pv.get("controller"), f"{source}: validation.controller")),
+        verification=_verification(doc.get("verification"), source),
     )
+
+
+def _verification(block: Any, source: str) -> Mapping[str, Any] | None:
+    """The result's ``verification`` block (``hil calibrate --verify``), checked as far as the report
+    reads it: a finished test's figures, else its status (not run, interrupted), shown as such."""
+    if block is None:
+        return None
+    if not isinstance(block, Mapping):
+        raise InputError(f"{source}: field 'verification' must be an object")
+    if "results" in block:
+        check_verification(block, source, "verification.")
+    return dict(block)
+
+
+def _is_number(value: Any) -> bool:
+    """A JSON number (true and false are not)."""
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def check_verification(doc: Any, source: str, prefix: str = "") -> None:
+    """Refuse, with an InputError naming the file and field, a verification the report cannot show.
+
+    A saved result may be old, edited or cut short: what the report reads is checked first (the
+    figures of every mode as `hil.verify.result.evaluate` writes them), so ``hil report`` says what is
+    wrong in one line instead of failing half-way through the page. A test that did not finish (no
+    ``results``) is refused naming its status: it has no figures to show.
+    """
+    if not isinstance(doc, Mapping):
+        raise InputError(f"{source}: field '{prefix.rstrip('.') or 'verification'}' must be an object")
+    if "results" not in doc:
+        status, error = doc.get("status"), doc.get("error") or doc.get("reason")
+        raise InputError(f"{source}: verification {doc.get('campaign') or '?'} did not finish (status "
+                         f"{status!r}{f': {error}' if error else ''}): it has no figures, so there is no "
+                         "report to build; run the same hil verify command again to continue it")
+    results = doc["results"]
+    if not isinstance(results, Mapping) or not results:
+        raise InputError(f"{source}: field '{prefix}results' must map each mode to its figures")
+    blocks = {f"{prefix}results.{mode}": block for mode, block in results.items()}
+    if doc.get("own_frame") is not None:
+        blocks[f"{prefix}own_frame"] = doc["own_frame"]
+    for where, block in blocks.items():
+        if not isinstance(block, Mapping):
+            raise InputError(f"{source}: field '{where}' must be an object")
+        for key in ("AP_max", "RP_max"):
+            if not _is_number(block.get(key)):
+                raise InputError(f"{source}: field '{where}.{key}' must be a number (m)")
+        if not isinstance(block.get("poses"), list):
+            raise InputError(f"{source}: field '{where}.poses' must be a list of poses")
+        for i, row in enumerate(block["poses"]):
+            here = f"{where}.poses[{i}]"
+            if not isinstance(row, Mapping) or not isinstance(row.get("pose"), str):
+                raise InputError(f"{source}: field '{here}.pose' must name the pose (P1..P5)")
+            if "AP_P" not in row:
+                continue
+            for key in ("n", "AP_x", "AP_y", "AP_z", "AP_P", "S_l", "RP_l"):
+                if not _is_number(row.get(key)):
+                    raise InputError(f"{source}: field '{here}.{key}' must be a number")
+            offsets = row.get("offsets")
+            if not (isinstance(offsets, list) and offsets and all(
+                    isinstance(o, list) and len(o) == 3 and all(_is_number(v) for v in o) for o in offsets)):
+                raise InputError(f"{source}: field '{here}.offsets' must be a list of [x, y, z] (m)")
+    if isinstance(doc.get("own_frame"), Mapping) and not isinstance(doc["own_frame"].get("frame"), Mapping):
+        raise InputError(f"{source}: field '{prefix}own_frame.frame' must be an object")
 
 
 def _tracker_pose(model: Mapping[str, Any], source: str) -> Mapping[str, Any] | None:

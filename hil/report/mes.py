@@ -82,6 +82,9 @@ def mes_result(data: ReportData) -> dict[str, Any]:
       name the poses: campaign pose numbers (``line_kind`` ``"pose"``) or input file lines
       (``"input line"``)
     * ``units``: what the numbers above are in (`UNITS`: metres, radians, seconds)
+    * ``verification`` (``hil calibrate --verify`` only): the ISO 9283 pose test of the calibrated
+      model, its ``hil-verification/1`` document (``results`` per mode: AP and RP per pose), or
+      ``{"status": "not run", "reason"}``
     """
     obs = data.observability
     doc = _plain({
@@ -139,4 +142,6 @@ def mes_result(data: ReportData) -> dict[str, Any]:
     if theirs is not None:  # added only when known: readers of older results see the same keys
         doc["validation"]["controller"] = _plain(theirs.as_dict())
         doc["per_pose"]["validation"]["controller"] = _per_pose(theirs)
+    if data.verification is not None:  # likewise only with --verify
+        doc["verification"] = _plain(dict(data.verification))
     return doc

@@ -7,24 +7,30 @@ split across pages, colours are kept). Every piece of text that came from outsid
 config values, event messages…) is HTML-escaped. The markup is also well-formed XML (void elements
 self-closed, only XML's five entities), so it can be checked and post-processed with XML tools.
 
-Built with the standard library (`html.escape` and f-strings) — a template engine would be one more
-dependency for a single page.
+Built with the standard library (`html.escape` and f-strings; the blocks every page shares are in
+`hil.report.html`) — a template engine would be one more dependency for a single page.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
-import html
 import math
 import os
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
 from hil import __version__
 from hil.files.outputs import atomic_write_text
 from hil.report.data import ErrorSet, ReportData
-from hil.report.plots import data_uri, errors_per_pose, histograms, per_axis
+from hil.report.html import CSS, esc, fmt_mm, fmt_num
+from hil.report.html import figure as _figure
+from hil.report.html import finite as _finite
+from hil.report.html import kv as _kv
+from hil.report.html import section as _section
+from hil.report.html import table as _table
+from hil.report.plots import errors_per_pose, histograms, per_axis
+from hil.report.pose_test import calibration_section  # the pose test of hil calibrate --verify
 
 _ANGLE_SUFFIXES = (".rx", ".ry", ".rz")
 #: What "before calibration" is, wherever the report shows it (tables, plots, summary).
@@ -33,50 +39,9 @@ BEFORE_MEANS = "nominal arm, only the tracker pose and SMR fitted"
 CONTROLLER_MEANS = "the controller's own model (its factory calibration), tracker pose and SMR fitted for it"
 
 
-def esc(value: Any) -> str:
-    """HTML-escaped text of any value (quotes too, so it is safe in attributes)."""
-    return html.escape(str(value), quote=True)
-
-
-def _finite(v: float | None) -> bool:
-    return v is not None and isinstance(v, int | float) and math.isfinite(v)
-
-
-def fmt_mm(v: float | None, digits: int = 3) -> str:
-    """Metres as millimetres (µm resolution by default); an em dash when unknown."""
-    return f"{v * 1e3:.{digits}f} mm" if _finite(v) else "—"
-
-
-def fmt_num(v: float | None, spec: str = ".4g") -> str:
-    return format(v, spec) if _finite(v) else "—"
-
-
 def parameter_unit(name: str) -> tuple[str, float]:
     """Display unit and scale of an identification parameter: rotations in mrad, lengths in mm."""
     return ("mrad", 1e3) if name.endswith(_ANGLE_SUFFIXES) else ("mm", 1e3)
-
-
-def _table(head: Sequence[str], rows: Iterable[Sequence[str]], cls: str = "") -> str:
-    """A table from already-escaped cell HTML."""
-    th = "".join(f"<th>{h}</th>" for h in head)
-    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in row) + "</tr>" for row in rows)
-    attr = f' class="{cls}"' if cls else ""
-    return f"<table{attr}><thead><tr>{th}</tr></thead><tbody>{body}</tbody></table>"
-
-
-def _kv(rows: Iterable[tuple[str, str]]) -> str:
-    """A two-column key/value table (both cells already escaped)."""
-    body = "".join(f"<tr><th>{k}</th><td>{v}</td></tr>" for k, v in rows)
-    return f'<table class="kv"><tbody>{body}</tbody></table>'
-
-
-def _figure(png_bytes: bytes, alt: str, caption: str) -> str:
-    return (f'<figure><img src="{data_uri(png_bytes)}" alt="{esc(alt)}" />'
-            f"<figcaption>{esc(caption)}</figcaption></figure>")
-
-
-def _section(ident: str, title: str, body: str) -> str:
-    return f'<section id="{ident}"><h2>{esc(title)}</h2>{body}</section>'
 
 
 def _config_value(v: Any) -> str:
@@ -132,6 +97,7 @@ def _summary(d: ReportData) -> str:
     if d.iso9283:
         for key, value in d.iso9283.items():
             tiles.append((f"ISO 9283 {esc(key)}", f"<b>{fmt_mm(value)}</b>", "repeated validation poses"))
+    tiles += _verification_tiles(d.verification)
     if d.observability is not None:
         o = d.observability
         pct = f"{o.percent:.1f} % of bound" if o.percent is not None else "bound unknown"
@@ -179,6 +145,16 @@ def _validation(d: ReportData) -> str:
                              "Signed x, y, z residuals (tracker frame) of each calibration pose after "
                              "the fit (per-axis validation errors were not recorded)."))
     return "".join(parts)
+
+
+def _verification_tiles(doc: Mapping[str, Any] | None) -> list[tuple[str, str, str]]:
+    """Summary tiles of the pose test: each mode's worst-pose AP and RP (escaped cells)."""
+    results = (doc or {}).get("results")
+    if not isinstance(results, Mapping):
+        return []
+    return [(f"Pose test AP {esc(mode)}", f"<b>{esc(fmt_mm(block.get('AP_max')))}</b>",
+             f"RP {esc(fmt_mm(block.get('RP_max')))}; worst pose, ISO 9283")
+            for mode, block in results.items() if isinstance(block, Mapping)]
 
 
 def _calibration(d: ReportData) -> str:
@@ -410,54 +386,6 @@ def _provenance(d: ReportData) -> str:
             + (_kv(hashes) if hashes else '<p class="muted">Not recorded.</p>'))
 
 
-CSS = """
-:root { --ok: #1a7f37; --bad: #c62828; --muted: #5f6b7a; --line: #d8dde3; }
-* { box-sizing: border-box; }
-body { font: 14px/1.45 system-ui, -apple-system, "Segoe UI", Roboto, "Helvetica Neue", Arial, sans-serif;
-  color: #1d2430; margin: 0 auto; max-width: 1000px; padding: 24px; }
-header { display: flex; gap: 24px; align-items: stretch; justify-content: space-between;
-  border-bottom: 2px solid #1d2430; padding-bottom: 12px; }
-h1 { font-size: 24px; margin: 0 0 4px; }
-h2 { font-size: 18px; border-bottom: 1px solid var(--line); padding-bottom: 4px; margin-top: 28px; }
-h3 { font-size: 15px; margin: 18px 0 6px; }
-.sub, .generated, .muted, figcaption, .note { color: var(--muted); }
-.sub { margin: 2px 0; }
-.generated { font-size: 12px; margin: 6px 0 0; }
-.verdict { min-width: 260px; text-align: center; color: white; border-radius: 8px; padding: 10px 16px; }
-.verdict .big { font-size: 44px; font-weight: 800; letter-spacing: 0.08em; line-height: 1.1; }
-.verdict.pass { background: var(--ok); }
-.verdict.fail { background: var(--bad); }
-.tiles { display: grid; grid-template-columns: repeat(auto-fill, minmax(220px, 1fr)); gap: 10px;
-  margin-top: 16px; }
-.tile { border: 1px solid var(--line); border-radius: 6px; padding: 8px 12px; }
-.tile .label { font-size: 12px; text-transform: uppercase; letter-spacing: 0.04em; color: var(--muted); }
-.tile .value { font-size: 17px; margin: 2px 0; }
-.tile .note { font-size: 12px; }
-table { border-collapse: collapse; margin: 6px 0 12px; font-size: 13px; }
-th, td { border-bottom: 1px solid var(--line); padding: 3px 10px 3px 0; text-align: left;
-  vertical-align: top; }
-thead th { border-bottom: 2px solid #9aa4b1; }
-table.num td { font-variant-numeric: tabular-nums; }
-table.num td + td { text-align: right; }
-table.kv th { font-weight: 600; padding-right: 24px; }
-code { font-size: 12px; word-break: break-all; }
-figure { margin: 12px 0 18px; }
-figure img { width: 100%; height: auto; display: block; }
-figcaption { font-size: 12px; margin-top: 2px; }
-.meter { display: inline-block; width: 160px; height: 10px; background: #e8ebef; vertical-align: middle;
-  margin-left: 8px; border-radius: 2px; }
-.meter span { display: block; height: 100%; background: var(--ok); border-radius: 2px; }
-.stack { display: flex; height: 16px; max-width: 600px; border-radius: 3px; overflow: hidden; }
-.stack span { display: block; height: 100%; }
-.swatch { display: inline-block; width: 10px; height: 10px; margin-right: 6px; }
-* { -webkit-print-color-adjust: exact; print-color-adjust: exact; }
-@page { size: A4; margin: 14mm; }
-@media print {
-  body { padding: 0; max-width: none; font-size: 11px; }
-  figure, table, .tile, header { break-inside: avoid; }
-  h2, h3 { break-after: avoid; }
-}
-"""
 
 
 def render_html(data: ReportData, *, generated: str | None = None) -> str:
@@ -470,6 +398,8 @@ def render_html(data: ReportData, *, generated: str | None = None) -> str:
     title = f"Calibration {data.robot.model} {data.robot.serial} {data.campaign}".strip()
     sections = [
         _section("validation", "Validation on held-out poses", _validation(data)),
+        *([_section("verification", "ISO 9283 pose test of the calibrated model",
+                    calibration_section(data.verification))] if data.verification is not None else []),
         _section("calibration", "Calibration fit", _calibration(data)),
         _section("parameters", "Identified parameters", _parameters(data)),
         _section("correlated", "Correlated parameters", _correlated(data)),

@@ -15,7 +15,9 @@ from hil.campaign.events import Event, jsonable
 from hil.station.config import StationConfig
 
 
-def report_data(outcome: Any, config: StationConfig, events: list[Event], started: float) -> Any:
+def report_data(outcome: Any, config: StationConfig, events: list[Event], started: float,
+                verification: dict[str, Any] | None = None) -> Any:
+    """The report's data of a finished campaign; `verification`: its pose test (``--verify``)."""
     from hil.campaign.plan import BOOTSTRAP, CALIBRATION, VALIDATION, measurements_of
     from hil.report import RobotInfo, report_data_from
     from hil.report.data import Observability
@@ -42,7 +44,7 @@ def report_data(outcome: Any, config: StationConfig, events: list[Event], starte
         started=started, finished=time.time(), calibration=cal, validation=val, iso9283=iso,
         observability=obs, times=outcome.timing, events=events,
         hashes={"measurements": digest}, model=r.model, line_kind="pose",
-        validation_controller=r.controller)
+        validation_controller=r.controller, verification=verification)
 
 
 def result_document(outcome: Any, config: StationConfig, events: list[Event], started: float,

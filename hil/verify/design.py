@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from hil.arm.branches import nominal_branches
 from hil.arm.catalog import get_robot
 from hil.arm.geometry import Geometry, pose
 from hil.arm.ik import UnreachableError
@@ -192,60 +193,6 @@ def check_cube(robot: str, cube: Cube, tool: np.ndarray, keep_in: tuple[np.ndarr
         if np.any(p < lo) or np.any(p > hi):
             raise InputError(f"{where}: {name} at {np.round(p, 3).tolist()} m is outside the keep-in box "
                              f"{lo.tolist()}..{hi.tolist()}")
-
-
-def _dh(theta: float, d: float, a: float, alpha: float) -> np.ndarray:
-    ct, st, ca, sa = math.cos(theta), math.sin(theta), math.cos(alpha), math.sin(alpha)
-    return np.array([[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st],
-                     [0.0, sa, ca, d], [0.0, 0.0, 0.0, 1.0]])
-
-
-def nominal_branches(robot: str, flange: pin.SE3) -> list[np.ndarray]:
-    """The (up to) eight configurations of the *nominal* DH arm putting its flange at `flange`.
-
-    Only seeds: one per shoulder/elbow/wrist branch, each then solved on the real models by damped
-    least squares (`hil.arm.ik`), which stays on its seed's branch; hil itself never moves by a closed
-    form (the calibrated chain has none). The usual decomposition of UR's geometry (Hawkins, "Analytic
-    inverse kinematics for the Universal Robots UR-5/UR-10 arms", 2013): joint 1 from the wrist
-    centre's offset d4 from the base axis, joint 5 from the flange's, joint 6 from the flange's
-    orientation, then joints 2 and 3 as a planar two-link arm to frame 4 and joint 4 from what is left.
-    """
-    spec = get_robot(robot)
-    d, a, alpha = spec.dh.d, spec.dh.a, spec.dh.alpha
-    d1, d4, d5, d6, a2, a3 = d[0], d[3], d[4], d[5], a[1], a[2]
-    T = pin.SE3(flange).homogeneous
-    out: list[np.ndarray] = []
-    p05 = T @ np.array([0.0, 0.0, -d6, 1.0])
-    r = math.hypot(p05[0], p05[1])
-    if r <= abs(d4):
-        return out
-    psi, phi = math.atan2(p05[1], p05[0]), math.acos(d4 / r)
-    for s1 in (1.0, -1.0):
-        t1 = psi + s1 * phi + math.pi / 2
-        c5 = (T[0, 3] * math.sin(t1) - T[1, 3] * math.cos(t1) - d4) / d6
-        if abs(c5) > 1.0:
-            continue
-        for s5 in (1.0, -1.0):
-            t5 = s5 * math.acos(c5)
-            sin5 = math.sin(t5)
-            t6 = 0.0 if abs(sin5) < 1e-9 else math.atan2(
-                (-T[0, 1] * math.sin(t1) + T[1, 1] * math.cos(t1)) / sin5,
-                (T[0, 0] * math.sin(t1) - T[1, 0] * math.cos(t1)) / sin5)
-            T14 = (np.linalg.inv(_dh(t1, d1, 0.0, alpha[0])) @ T
-                   @ np.linalg.inv(_dh(t5, d5, 0.0, alpha[4]) @ _dh(t6, d6, 0.0, alpha[5])))
-            px, py = T14[0, 3], T14[1, 3]
-            length = math.hypot(px, py)
-            c3 = (length**2 - a2**2 - a3**2) / (2 * a2 * a3)
-            if abs(c3) > 1.0:
-                continue
-            for s3 in (1.0, -1.0):
-                t3 = s3 * math.acos(c3)
-                t2 = math.atan2(py, px) - math.atan2(a3 * math.sin(t3), a2 + a3 * math.cos(t3))
-                T34 = np.linalg.inv(_dh(t2, 0.0, a2, alpha[1]) @ _dh(t3, 0.0, a3, alpha[2])) @ T14
-                t4 = math.atan2(T34[1, 0], T34[0, 0])
-                out.append(np.remainder(np.array([t1, t2, t3, t4, t5, t6]) + math.pi, 2 * math.pi)
-                           - math.pi)
-    return out
 
 
 #: m: the beam is checked for the arm from this far in front of the SMR. The selector's 3 cm

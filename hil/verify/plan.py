@@ -45,8 +45,10 @@ def verification_plan(design: Design, campaign: str, done: Mapping[int, PoseReco
     """The whole test; returns `evaluate(records, skipped)` of every measured visit (by index)."""
     visits = design.visits()
     records = {i: r for i, r in done.items() if 1 <= i <= len(visits)}
+    # each visit also says its pose, mode and cycle (1-based, as "cycle k of n"): the progress lines
     yield Emit(PlanReady(campaign=campaign, poses=[{"index": v.index, "role": ROLE,
-                                                    "q": [float(x) for x in v.q]} for v in visits],
+                                                    "q": [float(x) for x in v.q], "pose": v.pose,
+                                                    "mode": v.mode, "cycle": v.cycle + 1} for v in visits],
                          selection={"kind": KIND, "cycles": design.cycles, "modes": list(design.modes)}))
     todo = [v for v in visits if v.index not in records]
     yield Phase("measure", f"{len(todo)} of {len(visits)} visits to measure: {design.cycles} cycles of "

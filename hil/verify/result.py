@@ -39,9 +39,8 @@ STANDARD = ("ISO 9283:1998 pose accuracy AP (§7.2.1) and pose repeatability RP 
             "only; test cube and poses P1-P5 as in §6.2-6.3")
 FRAME_NOTES = {
     "model": "commanded positions put into the tracker frame by the model's tracker pose and SMR offset",
-    "registered": ("no model: tracker pose and SMR offset fitted to the measured points with the "
-                   "controller's own model, which takes up any error a rigid motion explains (AP is a "
-                   "lower bound)"),
+    "registered": ("tracker pose and SMR offset fitted to the measured points with the controller's own "
+                   "model, which takes up any error a rigid motion explains (AP is a lower bound)"),
 }
 
 

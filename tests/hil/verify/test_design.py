@@ -1,12 +1,10 @@
 """The pose test's targets: both modes as the compensator solves them, every pose safe and seen, the
-branch search (the nominal arm's eight configurations), and cubes refused in one line."""
+branch search (the nominal arm's eight configurations, tests/hil/arm/test_branches.py), and cubes
+refused in one line."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
-import pinocchio as pin
 import pytest
 
 from hil.arm.geometry import Geometry
@@ -22,25 +20,8 @@ from hil.verify.design import (
     check_cube,
     design_test,
     facing,
-    nominal_branches,
 )
 from tests.hil.verify.station import KEEP_IN, cell
-
-
-@pytest.mark.parametrize("robot", ["ur5e", "ur10e", "ur3e", "ur5"])
-def test_the_nominal_branches_are_the_arms_configurations(robot: str) -> None:
-    kin = Kinematics(Geometry.nominal(robot))
-    rng = np.random.default_rng(2)
-    for _ in range(30):
-        q = rng.uniform(-math.pi, math.pi, 6)
-        target = pin.SE3(kin.flange_poses(q)[0])
-        branches = nominal_branches(robot, target)
-        assert 1 <= len(branches) <= 8
-        for b in branches:  # each one reaches the target ...
-            assert np.allclose(kin.flange_poses(b)[0], target.homogeneous, atol=1e-9)
-        # ... and the configuration it came from is among them
-        assert any(np.allclose(np.remainder(b - q + math.pi, 2 * math.pi) - math.pi, 0, atol=1e-7)
-                   for b in branches)
 
 
 def test_both_modes_are_the_compensators_joints_and_reach_the_cube() -> None:
