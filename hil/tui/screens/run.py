@@ -10,6 +10,7 @@ import numpy as np
 from rich.text import Text
 from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
+from textual.css.query import NoMatches
 from textual.widgets import DataTable, Footer, ProgressBar, Static
 
 from hil.tui.screens.base import HilScreen
@@ -166,10 +167,19 @@ class RunScreen(HilScreen):
         self.query_one("#errors", PlotView).plot(series)
 
     def tick(self) -> None:
-        """Once a second: the elapsed wait in the banner and the ETA."""
-        if self.is_mounted:
+        """Once a second: the elapsed wait in the banner and the ETA.
+
+        The app's timer can fire between the screen being pushed (mounted) and its widgets being
+        composed; that tick has nothing to update yet, and the next one will (seen on a loaded machine:
+        the query for the banner found nothing and the app stopped).
+        """
+        if not self.is_mounted:
+            return
+        try:
             self._banner(self.hil.run_state)
             self._status(self.hil.run_state)
+        except NoMatches:
+            return
 
     def _banner(self, run: RunState) -> None:
         banner = self.query_one("#banner", Static)
