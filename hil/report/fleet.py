@@ -35,9 +35,11 @@ from matplotlib.ticker import LogFormatterSciNotation, MaxNLocator
 
 from hil import __version__
 from hil.files.outputs import atomic_write_text
+from hil.report.html import CSS, esc, fmt_mm
+from hil.report.html import figure as _html_figure
+from hil.report.html import section as _section
+from hil.report.html import table as _table
 from hil.report.plots import AFTER, BEFORE, _figure, _style, png
-from hil.report.render import CSS, _section, _table, esc, fmt_mm
-from hil.report.render import _figure as _html_figure
 from hil.store.fleet import (
     DEFAULT_K,
     Calibration,
