@@ -11,6 +11,11 @@ The controller gets its own factory calibration: the truth file's ``controller``
 else one fitted to this truth by seed (`mocks.ur.factory_calibration`), and the truth document the
 service reports carries it, so tests and benches know the model the controller moves with.
 
+The arm is a real one unless ``rigid``: the random truth sags under gravity and its payload and warms
+up as the controller runs (the world evaluates ``truth.warmed(t)`` on the controller's clock), and the
+controller reports the warming in RTDE ``joint_temperatures`` (`joint_temperatures`). A truth file's
+``noise.encoder_sigma`` sets the controller's encoder noise.
+
 Faults it adds to the controller (``inject(name, **args)`` / the control channel): ``block_beam``
 (``on``, ``reason``), ``tracker_unplug``, ``tracker_garble`` (GeoCOM), ``emscon_drop`` (close the
 emScon client now), ``emscon_stall`` (``seconds``: wall seconds without reading or sending),
@@ -24,14 +29,29 @@ from typing import Any
 
 import numpy as np
 
+from hil.arm.thermal import Thermal
 from hil.calibration.model_file import load_truth, read_json, truth_controller, truth_document
 from hil.calibration.synthetic import Noise, random_truth
 from mocks.emscon.instrument import EmsconConfig
 from mocks.emscon.server import EmsconSimulator, ServerConfig
 from mocks.geocom.instrument import InstrumentConfig
 from mocks.geocom.server import GeoComSimulator, LinkConfig, SimulatorConfig
+from mocks.ur.arm import AMBIENT_TEMPERATURE, TemperatureFn
 from mocks.ur.factory_calibration import factory_calibration
 from mocks.world import World
+
+
+def joint_temperatures(thermal: Thermal | None) -> TemperatureFn:
+    """Every joint at the lab's ambient plus the arm's warm-up ΔT(t) (none without a thermal block).
+
+    The truth's thermal block is one ΔT for the whole arm (DESIGN.md), so every joint reports it: the
+    temperatures say how far the warm-up has come, the number a warm-up watch reads.
+    """
+    def at(t: float) -> list[float]:
+        rise = thermal.rise_at(t) if thermal is not None else 0.0
+        return [AMBIENT_TEMPERATURE + rise] * 6
+
+    return at
 
 
 class StationService:
@@ -68,19 +88,25 @@ class StationService:
 
 def station_service(controller: Any, truth: str | None = None, seed: int = 0,
                     acceptance_angle: float = 30.0, baudrate: int | None = None,
-                    tracker_port: int = 0) -> StationService:
-    """Build the world and the tracker simulator around a running `SimController`."""
+                    tracker_port: int = 0, rigid: bool = False) -> StationService:
+    """Build the world and the tracker simulator around a running `SimController`.
+
+    `rigid` (without `truth`): the random arm without compliance, payload and warm-up.
+    """
     rng = np.random.default_rng(seed)
     if truth:
         geometry, noise = load_truth(truth)
         calibration = truth_controller(read_json(truth), str(truth))
+        controller.arm.set_encoder_noise(noise.encoder_sigma)
     else:
-        geometry, noise = random_truth(controller.config.robot, rng), Noise()
+        geometry, noise = random_truth(controller.config.robot, rng, rigid=rigid), Noise()
         calibration = None
     if calibration is None:
         calibration = factory_calibration(geometry, seed)
     controller.set_calibration(calibration)
-    world = World(geometry, controller.true_joints, acceptance_angle)
+    controller.arm.set_temperatures(joint_temperatures(geometry.thermal))
+    # the arm warms with the controller's running time: its SimClock counts from the controller's start
+    world = World(geometry, controller.true_joints, acceptance_angle, clock=controller.clock.now)
     home = world.home_pose(rng)
     controller.inject("set_joints", q=home.tolist())
     config = SimulatorConfig(instrument=InstrumentConfig(seed=seed), link=LinkConfig(baudrate=baudrate),
@@ -103,25 +129,27 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
 
 
 def station_spec(truth: str | None = None, seed: int = 0, acceptance_angle: float = 30.0,
-                 baudrate: int | None = None) -> str:
+                 baudrate: int | None = None, rigid: bool = False) -> str:
     """The service spec that puts the world and the tracker into the robot simulator's process."""
     import json
 
-    options = {"truth": truth, "seed": seed, "acceptance_angle": acceptance_angle, "baudrate": baudrate}
+    options = {"truth": truth, "seed": seed, "acceptance_angle": acceptance_angle, "baudrate": baudrate,
+               "rigid": rigid}
     return "mocks.station:station_service " + json.dumps(options)
 
 
 def start_station(robot: str = "ur5e", truth: str | None = None, speed: float = 1.0, seed: int = 0,
-                  acceptance_angle: float = 30.0, baudrate: int | None = None) -> Any:
+                  acceptance_angle: float = 30.0, baudrate: int | None = None, rigid: bool = False) -> Any:
     """Start the whole simulated station in its own process on a free loopback address.
 
     Returns the running `mocks.ur.process.SimProcess`; ``.info["services"][0]`` holds the tracker's
-    URL and pty and the hidden truth. The caller must `stop()` it.
+    URL and pty and the hidden truth. The caller must `stop()` it. `rigid`: a random arm without
+    compliance, payload and warm-up (the arm of the simulator before they existed).
     """
     from mocks.ur.controller import SimConfig
     from mocks.ur.testing import start_sim
 
-    spec = station_spec(truth, seed, acceptance_angle, baudrate)
+    spec = station_spec(truth, seed, acceptance_angle, baudrate, rigid)
     # each seed is another arm of a fleet (its own truth), so its own serial number, as a plant's robots
     # have: seed 1 is 20235500001, the controller's default
     serial = f"202355{seed % 100_000:05d}"

@@ -5,6 +5,12 @@ The robot simulator owns the joints; the tracker simulator asks this world where
 geometry, never from the nominal model the controller reports with, so a calibration has real
 errors to find. The SMR is visible when its opening axis (the flange z axis) points within the
 acceptance half-angle of the line to the tracker.
+
+The truth is a real arm: it sags under gravity by its joints' compliance (`Kinematics` applies the
+truth's ``compliance`` for its ``payload``) and grows as it warms up. At simulated time t the arm is
+``truth.warmed(t)`` (DESIGN.md, "Non-geometric errors"), t read from `clock`: the robot simulator's
+`SimClock`, whose seconds count from when the simulated controller started, so the running time of the
+arm is the time since its controller was switched on. Without a clock the arm stays cold.
 """
 
 from __future__ import annotations
@@ -25,28 +31,54 @@ from selector.arm import segment_distance
 BEAM_CLEARANCE = 0.03
 #: The simulated links' thickness as a fraction of the selector's (enveloping) capsules.
 TRUE_LINK_FRACTION = 0.8
+#: The warmed arm's model is rebuilt when its growth factor moved by more than this (relative): a
+#: nanometre per metre of arm, far below any tracker's resolution, while the trackers poll the world
+#: hundreds of times a second and the factor changes continuously.
+SCALE_TOLERANCE = 1e-9
 
 
 @dataclass
 class World:
-    """Truth + the arm's joints → the true SMR position in the tracker frame, and its visibility."""
+    """Truth + the arm's joints → the true SMR position in the tracker frame, and its visibility.
+
+    `clock` gives the simulated running time (s) that warms the arm (`Geometry.warmed`); None: cold.
+    """
 
     truth: Geometry
     joints: Callable[[], np.ndarray]
     acceptance_deg: float = 30.0
     blocked: str = ""  # non-empty: something (a person, a cable) is in the beam, and what
+    clock: Callable[[], float] | None = None
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     def __post_init__(self) -> None:
-        self._kin = Kinematics(self.truth)
+        self._cold = Kinematics(self.truth)
+        self._kin = self._cold
+        self._scale = 1.0
         # The selector plans with capsules that envelop the links; the real links are slimmer.
         planned = arm_shape(self.truth.robot)
         self._arm = replace(planned, radii=tuple(TRUE_LINK_FRACTION * r for r in planned.radii))
 
+    def running_time(self) -> float:
+        """Simulated seconds the arm has been running (0 without a clock)."""
+        return float(self.clock()) if self.clock is not None else 0.0
+
+    def _warm_kinematics(self) -> Kinematics:
+        """The arm as warm as it is now (call with the lock held): rebuilt only when it grew."""
+        thermal = self.truth.thermal
+        if thermal is None or self.clock is None:
+            return self._cold
+        t = self.running_time()
+        scale = thermal.scale_at(t)
+        if abs(scale - self._scale) > SCALE_TOLERANCE * scale:
+            self._kin = self._cold if scale == 1.0 else Kinematics(self.truth.warmed(t))
+            self._scale = scale
+        return self._kin
+
     def state(self, q: np.ndarray) -> tuple[np.ndarray, float]:
         """(SMR in the tracker frame, angle in degrees between its axis and the line to the tracker)."""
-        with self._lock:  # one pinocchio Data: the simulator's threads take turns
-            F = self._kin.flange_poses(q)[0]
+        with self._lock:  # one pinocchio Data per model: the simulator's threads take turns
+            F = self._warm_kinematics().flange_poses(q)[0]
         p_base = F[:3, :3] @ self.truth.smr + F[:3, 3]
         return self._in_tracker(p_base), self._angle(F, p_base)
 
@@ -60,9 +92,12 @@ class World:
         return float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
 
     def blocked_by_arm(self, q: np.ndarray) -> bool:
-        """Whether a link of the (true) arm cuts the beam between the SMR and the tracker."""
+        """Whether a link of the (true) arm cuts the beam between the SMR and the tracker.
+
+        Checked on the cold arm: its growth (a tenth of a millimetre) is nothing next to a link's radius.
+        """
         with self._lock:
-            frames = self._kin.joint_frames(q)
+            frames = self._cold.joint_frames(q)
         F = frames[0, 6]
         smr = F[:3, :3] @ self.truth.smr + F[:3, 3]
         tracker = self.truth.tracker.translation

@@ -290,6 +290,9 @@ class IsolatedURRobot:
     def tcp_pose(self) -> np.ndarray:
         return self._call("tcp_pose", timeout=_MARGIN)
 
+    def joint_temperatures(self) -> np.ndarray:
+        return self._call("joint_temperatures", timeout=_MARGIN)
+
     def validate_target(self, q: Any) -> np.ndarray:
         return self._call("validate_target", np.asarray(q, dtype=float).tolist(), timeout=_MARGIN)
 

@@ -420,6 +420,12 @@ class URRobot:
         _, r = self._require()
         return np.asarray(r.getActualTCPPose(), dtype=float)
 
+    def joint_temperatures(self) -> np.ndarray:
+        """The six joints' temperatures (°C): RTDE output ``joint_temperatures``, read by ur_rtde's
+        ``RTDEReceiveInterface.getJointTemperatures`` (the warm-up and drift watch record them)."""
+        _, r = self._require()
+        return np.asarray(r.getJointTemperatures(), dtype=float)
+
     # ------------------------------------------------------------------ streaming
     def follow(self, Q: object, *, lookahead: float = 0.1, gain: float = 300.0,
                settle: float = 0.0) -> FollowResult:

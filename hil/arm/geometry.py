@@ -21,7 +21,13 @@ import numpy as np
 import pinocchio as pin
 
 from hil.arm.catalog import RobotSpec, get_robot
+from hil.arm.payload import FLOOR_GRAVITY, Payload, parse_gravity
+from hil.arm.thermal import Thermal
 from hil.errors import InputError
+
+#: Largest joint compliance a file may give (rad/Nm): a thousand times a cobot's strain-wave joint
+#: (about 1e-5 rad/Nm, see `hil.arm.physical`); beyond that the arm would fold under its own weight.
+MAX_COMPLIANCE = 1e-2
 
 
 def pose(xyz: Sequence[float], rpy: Sequence[float] = (0.0, 0.0, 0.0)) -> pin.SE3:
@@ -42,13 +48,22 @@ def _dh_origin(a: float, alpha: float, d_next: float) -> pin.SE3:
 
 @dataclass
 class Geometry:
-    """Joint origins, flange, SMR offset and tracker pose of one arm (metres, radians)."""
+    """Joint origins, flange, SMR offset and tracker pose of one arm (metres, radians).
+
+    The optional non-geometric blocks (DESIGN.md): `compliance` (rad/Nm per joint; None is a rigid
+    arm), the `payload` it carries (None: nothing), `gravity` in the base frame (the mounting) and, in
+    a simulator's truth only, `thermal` growth. `Kinematics` applies the compliance for the payload.
+    """
 
     robot: str
     joints: list[pin.SE3]
     flange: pin.SE3
     smr: np.ndarray
     tracker: pin.SE3 = field(default_factory=pin.SE3.Identity)
+    compliance: np.ndarray | None = None
+    payload: Payload | None = None
+    gravity: np.ndarray = field(default_factory=lambda: FLOOR_GRAVITY.copy())
+    thermal: Thermal | None = None
 
     def __post_init__(self) -> None:
         if len(self.joints) != 6:
@@ -57,6 +72,14 @@ class Geometry:
         self.flange = pin.SE3(self.flange)
         self.tracker = pin.SE3(self.tracker)
         self.smr = np.array(self.smr, dtype=float).reshape(3)
+        if self.compliance is not None:
+            self.compliance = np.array(self.compliance, dtype=float).reshape(6)
+        self.gravity = np.array(self.gravity, dtype=float).reshape(3)
+
+    @property
+    def compliant(self) -> bool:
+        """Whether the arm sags under gravity (a compliance block with a non-zero value)."""
+        return self.compliance is not None and bool(np.any(self.compliance != 0.0))
 
     @property
     def spec(self) -> RobotSpec:
@@ -80,7 +103,33 @@ class Geometry:
                    pin.SE3.Identity() if tracker is None else tracker)
 
     def copy(self) -> Geometry:
+        return Geometry(self.robot, list(self.joints), self.flange, self.smr.copy(), self.tracker,
+                        None if self.compliance is None else self.compliance.copy(), self.payload,
+                        self.gravity.copy(), self.thermal)
+
+    def rigid(self) -> Geometry:
+        """The same arm without its non-geometric blocks (what URDF and ROS YAML can hold)."""
         return Geometry(self.robot, list(self.joints), self.flange, self.smr.copy(), self.tracker)
+
+    def with_payload(self, payload: Payload | None) -> Geometry:
+        """The same arm carrying another payload (a model predicts for the payload it is told of)."""
+        out = self.copy()
+        out.payload = payload
+        return out
+
+    def warmed(self, t: float) -> Geometry:
+        """The arm after `t` seconds of running: link translations grown by its `thermal` block.
+
+        Every joint origin's and the flange's translation is scaled by 1 + expansion·ΔT(t); the SMR
+        offset and the tracker pose do not grow (DESIGN.md). Without a thermal block: unchanged.
+        """
+        out = self.copy()
+        if self.thermal is None:
+            return out
+        k = self.thermal.scale_at(t)
+        out.joints = [pin.SE3(M.rotation, k * M.translation) for M in self.joints]
+        out.flange = pin.SE3(self.flange.rotation, k * self.flange.translation)
+        return out
 
     # --- the JSON geometry block -------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
@@ -91,7 +140,21 @@ class Geometry:
             "flange": pose_to_dict(self.flange),
             "smr": [float(v) for v in self.smr],
             "tracker": pose_to_dict(self.tracker),
+            **self.non_geometric_dict(),
         }
+
+    def non_geometric_dict(self) -> dict[str, Any]:
+        """The optional blocks this arm has (compliance, payload, gravity when not floor, thermal)."""
+        out: dict[str, Any] = {}
+        if self.compliance is not None:
+            out["compliance"] = [float(v) for v in self.compliance]
+        if self.payload is not None:
+            out["payload"] = self.payload.to_dict()
+        if not np.allclose(self.gravity, FLOOR_GRAVITY, rtol=0.0, atol=1e-12):
+            out["gravity"] = [float(v) for v in self.gravity]
+        if self.thermal is not None:
+            out["thermal"] = self.thermal.to_dict()
+        return out
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], source: str = "geometry") -> Geometry:
@@ -109,7 +172,20 @@ class Geometry:
         flange = _pose_field(_require(data, "flange", source), "flange", source)
         smr = _vector(_require(data, "smr", source), "smr", source)
         tracker = _pose_field(_require(data, "tracker", source), "tracker", source)
-        return cls(spec.name, parsed, flange, smr, tracker)
+        compliance = None
+        if data.get("compliance") is not None:
+            compliance = _vector(data["compliance"], "compliance", source, 6)
+            # a fitted compliance may come out slightly negative within its standard deviation
+            if np.any(np.abs(compliance) > MAX_COMPLIANCE):
+                raise InputError(f"{source}: field 'compliance' must hold 6 values within "
+                                 f"±{MAX_COMPLIANCE:g} rad/Nm")
+        payload = (Payload.from_dict(data["payload"], f"{source}: payload")
+                   if data.get("payload") is not None else None)
+        gravity = (parse_gravity(data["gravity"], f"{source}: gravity")
+                   if data.get("gravity") is not None else FLOOR_GRAVITY.copy())
+        thermal = (Thermal.from_dict(data["thermal"], f"{source}: thermal")
+                   if data.get("thermal") is not None else None)
+        return cls(spec.name, parsed, flange, smr, tracker, compliance, payload, gravity, thermal)
 
 
 def _require(data: Mapping[str, Any], key: str, source: str) -> Any:

@@ -7,7 +7,13 @@ The calibration parameters are small errors applied *multiplicatively* to the cu
 * the SMR centre in the flange frame, s ← s + δ_s                        (3, ``smr.x/y/z``)
 * the tracker frame in the base frame, T_bt ← T_bt·exp(δ_t)              (6, ``tracker.*``)
 
-A measured point is p = T_bt⁻¹ · T_base_flange(q) · s (the tracker frame). Only 27 combinations are
+and, when the arm is compliant (DESIGN.md, "Non-geometric errors"), the joints' compliance:
+
+* c_j (rad/Nm): the link lags its encoder, q_link = q − c ⊙ g(q)                (6, ``compliance.j1 … j6``)
+
+A measured point is p = T_bt⁻¹ · T_base_flange(q_link) · s (the tracker frame); every forward kinematics
+here evaluates at the link angles of the geometry's compliance and payload (`hil.arm.gravity`), so all
+that predicts positions (fk, validation, compensation) applies the sag. Only 27 combinations are
 identifiable from position measurements (`identifiable_parameters`). The Jacobian of the joint-origin
 errors is pinocchio's ``computeJointKinematicRegressor`` (the right-multiplied exp6 convention); the
 flange, SMR and tracker columns are the closed-form derivatives of the expression above.
@@ -20,6 +26,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -27,6 +34,7 @@ import scipy.linalg
 
 from hil.arm.catalog import RobotSpec, get_robot
 from hil.arm.geometry import Geometry, pose
+from hil.arm.payload import FLOOR_GRAVITY, Payload
 
 _AXES = ("tx", "ty", "tz", "rx", "ry", "rz")
 
@@ -37,11 +45,16 @@ PARAMETER_NAMES: tuple[str, ...] = (
     + ("smr.x", "smr.y", "smr.z")
     + tuple(f"tracker.{ax}" for ax in _AXES)
 )
-N_PARAMETERS = len(PARAMETER_NAMES)  # 51
+N_PARAMETERS = len(PARAMETER_NAMES)  # 51 geometric parameters
 JOINT_SLICE = slice(0, 36)
 FLANGE_SLICE = slice(36, 42)
 SMR_SLICE = slice(42, 45)
 TRACKER_SLICE = slice(45, 51)
+#: The joints' compliance (rad/Nm), after the geometry: indices 51..56 of the full vector.
+COMPLIANCE_NAMES: tuple[str, ...] = tuple(f"compliance.j{i + 1}" for i in range(6))
+ALL_PARAMETER_NAMES: tuple[str, ...] = PARAMETER_NAMES + COMPLIANCE_NAMES
+N_ALL_PARAMETERS = len(ALL_PARAMETER_NAMES)  # 57
+COMPLIANCE_SLICE = slice(51, 57)
 
 
 def _skew(v: np.ndarray) -> np.ndarray:
@@ -87,11 +100,29 @@ class Kinematics:
         self.model = model
         self.data = model.createData()
         self._tracker_inv = self.geometry.tracker.inverse()
+        self._gravity: Any = None
+
+    # --- compliance ----------------------------------------------------------------------------
+    @property
+    def gravity(self) -> Any:
+        """The arm's `hil.arm.gravity.GravityModel` with its payload (built on first use)."""
+        if self._gravity is None:
+            from hil.arm.gravity import GravityModel
+
+            self._gravity = GravityModel(self.geometry)
+        return self._gravity
+
+    def link_angles(self, q: np.ndarray) -> np.ndarray:
+        """(N, 6) link angles at encoder readings `q`: q − c ⊙ g(q) on a compliant arm, else `q`."""
+        Q = as_configurations(q)
+        if not self.geometry.compliant:
+            return Q
+        return Q - self.geometry.compliance * self.gravity.torques(Q)
 
     # --- forward kinematics --------------------------------------------------------------------
     def joint_frames(self, q: np.ndarray) -> np.ndarray:
         """(N, 7, 4, 4): the six joint frames (after their rotation) and the flange, base frame."""
-        Q = as_configurations(q)
+        Q = self.link_angles(q)
         out = np.empty((len(Q), 7, 4, 4))
         model, data, flange = self.model, self.data, self.geometry.flange
         for n, qn in enumerate(Q):
@@ -103,7 +134,7 @@ class Kinematics:
 
     def flange_poses(self, q: np.ndarray) -> np.ndarray:
         """(N, 4, 4) flange poses in the robot base frame (the controller's TCP with no offset)."""
-        Q = as_configurations(q)
+        Q = self.link_angles(q)
         out = np.empty((len(Q), 4, 4))
         model, data, flange = self.model, self.data, self.geometry.flange
         for n, qn in enumerate(Q):
@@ -126,29 +157,41 @@ class Kinematics:
         return p
 
     # --- identification Jacobian ---------------------------------------------------------------
-    def point_and_jacobian(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """SMR positions in the tracker frame (N, 3) and their Jacobian (N, 3, 51).
+    def point_and_jacobian(self, q: np.ndarray, compliance: bool = False
+                           ) -> tuple[np.ndarray, np.ndarray]:
+        """SMR positions in the tracker frame (N, 3) and their Jacobian (N, 3, 51), or (N, 3, 57)
+        with the compliance columns when `compliance` is set.
 
-        Columns follow `PARAMETER_NAMES`; each is the derivative for the multiplicative update
-        described in the module docstring, evaluated at zero error.
+        Columns follow `ALL_PARAMETER_NAMES`; each is the derivative for the multiplicative update
+        described in the module docstring, evaluated at zero error. The compliance column of joint j
+        is ∂p/∂q_j at the link angles times −g_j(q): the sag a unit of compliance adds (the change of
+        g with the small geometric errors is second order and left out).
         """
         Q = as_configurations(q)
         n = len(Q)
+        torques = self.gravity.torques(Q) if (compliance or self.geometry.compliant) else None
+        Q_link = Q if not self.geometry.compliant else Q - self.geometry.compliance * torques
         J_joint = np.empty((n, 3, 36))
         R6 = np.empty((n, 3, 3))
         p_base = np.empty((n, 3))
+        axes = np.empty((n, 6, 3))
+        origins = np.empty((n, 6, 3))
         model, data, placement = self.model, self.data, self._smr_placement
-        for k, qk in enumerate(Q):
+        for k, qk in enumerate(Q_link):
             pin.forwardKinematics(model, data, qk)
             reg = pin.computeJointKinematicRegressor(model, data, 6, pin.LOCAL_WORLD_ALIGNED, placement)
             J_joint[k] = reg[:3]
             M6 = data.oMi[6]
             R6[k] = M6.rotation
             p_base[k] = M6.act(placement.translation)
+            if compliance:
+                for j in range(6):
+                    axes[k, j] = data.oMi[j + 1].rotation[:, 2]
+                    origins[k, j] = data.oMi[j + 1].translation
         Ti = self._tracker_inv
         Rt = Ti.rotation  # base -> tracker rotation
         p = p_base @ Rt.T + Ti.translation
-        J = np.empty((n, 3, N_PARAMETERS))
+        J = np.empty((n, 3, N_ALL_PARAMETERS if compliance else N_PARAMETERS))
         J[:, :, JOINT_SLICE] = np.einsum("ij,njk->nik", Rt, J_joint)
         R_bs = np.einsum("ij,njk->nik", Rt, R6 @ self.geometry.flange.rotation)  # flange axes in tracker
         s = self.geometry.smr
@@ -156,33 +199,46 @@ class Kinematics:
         J[:, :, SMR_SLICE] = R_bs
         J[:, :, TRACKER_SLICE] = np.concatenate(
             [np.broadcast_to(-np.eye(3), (n, 3, 3)), _skew(p)], axis=2)
+        if compliance:
+            dp_dq = np.cross(axes, p_base[:, None, :] - origins)  # (n, 6, 3) base frame
+            J[:, :, COMPLIANCE_SLICE] = np.einsum("ij,nkj->nik", Rt, dp_dq) * -torques[:, None, :]
         return p, J
 
     def jacobian(self, q: np.ndarray, params: np.ndarray | None = None) -> np.ndarray:
-        """(N, 3, P) identification Jacobian, restricted to the parameter indices `params`."""
-        _, J = self.point_and_jacobian(q)
+        """(N, 3, P) identification Jacobian, restricted to the parameter indices `params`
+        (indices past the 51 geometric ones are compliance columns, computed only then)."""
+        compliance = params is not None and bool(np.any(np.asarray(params) >= N_PARAMETERS))
+        _, J = self.point_and_jacobian(q, compliance)
         return J if params is None else J[:, :, params]
 
 
 def apply_update(geometry: Geometry, delta: np.ndarray) -> Geometry:
-    """The geometry after a full-length (51) parameter step, applied multiplicatively on SE(3)."""
+    """The geometry after a full-length parameter step (51, or 57 with compliance), applied
+    multiplicatively on SE(3) (the compliance additively)."""
     delta = np.asarray(delta, dtype=float)
     g = geometry.copy()
     g.joints = [M * pin.exp6(delta[6 * i: 6 * i + 6]) for i, M in enumerate(g.joints)]
     g.flange = g.flange * pin.exp6(delta[FLANGE_SLICE])
     g.smr = g.smr + delta[SMR_SLICE]
     g.tracker = g.tracker * pin.exp6(delta[TRACKER_SLICE])
+    if delta.size > N_PARAMETERS and np.any(delta[COMPLIANCE_SLICE] != 0.0):
+        base = np.zeros(6) if g.compliance is None else g.compliance
+        g.compliance = base + delta[COMPLIANCE_SLICE]
     return g
 
 
-def deviation_from(reference: Geometry, geometry: Geometry) -> np.ndarray:
-    """Full-length (51) parameter vector δ with `geometry` = `reference` updated by δ (log on SE(3))."""
-    out = np.zeros(N_PARAMETERS)
+def deviation_from(reference: Geometry, geometry: Geometry, compliance: bool = False) -> np.ndarray:
+    """Full-length parameter vector δ with `geometry` = `reference` updated by δ (log on SE(3)): 51
+    long, or 57 with the compliance difference (a missing block counts as zero)."""
+    out = np.zeros(N_ALL_PARAMETERS if compliance else N_PARAMETERS)
     for i in range(6):
         out[6 * i: 6 * i + 6] = pin.log6(reference.joints[i].inverse() * geometry.joints[i]).vector
     out[FLANGE_SLICE] = pin.log6(reference.flange.inverse() * geometry.flange).vector
     out[SMR_SLICE] = geometry.smr - reference.smr
     out[TRACKER_SLICE] = pin.log6(reference.tracker.inverse() * geometry.tracker).vector
+    if compliance:
+        out[COMPLIANCE_SLICE] = ((np.zeros(6) if geometry.compliance is None else geometry.compliance)
+                                 - (np.zeros(6) if reference.compliance is None else reference.compliance))
     return out
 
 
@@ -194,6 +250,11 @@ _GROUP_ORDER: tuple[slice, ...] = (
 )
 #: Relative size below which a projected (unit-norm) column counts as dependent.
 RANK_TOLERANCE = 1e-7
+#: A joint's compliance is identified only when a typical cobot compliance (`hil.arm.physical`) moves
+#: the SMR by more than this (RMS over generic poses, m): a quarter of a tracker's 20 µm per-axis noise.
+#: Below it the column is numerically independent but carries no information (joint 1 of a floor arm
+#: holds no gravity torque at all; joint 6 only what an off-axis payload gives it).
+MIN_COMPLIANCE_EFFECT = 1e-6
 
 
 def generic_geometry(robot: str | RobotSpec) -> Geometry:
@@ -213,7 +274,8 @@ def generic_configurations(robot: str | RobotSpec, count: int = 60, seed: int = 
 
 
 def select_identifiable(J: np.ndarray, tol: float = RANK_TOLERANCE) -> np.ndarray:
-    """Indices of a maximal set of independent columns of the stacked Jacobian `J` (rows × 51).
+    """Indices of a maximal set of independent columns of the stacked Jacobian `J` (rows × 51, or
+    × 57 with the compliance columns, which come last: geometry wins where they are equivalent).
 
     Pivoted QR (LAPACK geqp3) on unit-norm columns, group by group in `_GROUP_ORDER`: each group's
     columns are first projected on the complement of the columns already chosen, and pivoted QR then
@@ -225,8 +287,9 @@ def select_identifiable(J: np.ndarray, tol: float = RANK_TOLERANCE) -> np.ndarra
     Js = J / np.where(norms > 0, norms, 1.0)
     basis = np.zeros((J.shape[0], 0))
     chosen: list[int] = []
-    for group in _GROUP_ORDER:
-        idx = np.arange(N_PARAMETERS)[group]
+    groups = _GROUP_ORDER + ((COMPLIANCE_SLICE,) if J.shape[1] > N_PARAMETERS else ())
+    for group in groups:
+        idx = np.arange(J.shape[1])[group]
         cols = Js[:, idx] - basis @ (basis.T @ Js[:, idx])
         cols[:, norms[idx] == 0] = 0.0
         q, r, piv = scipy.linalg.qr(cols, mode="economic", pivoting=True)
@@ -257,3 +320,32 @@ def identifiable_parameters(robot: str | RobotSpec) -> np.ndarray:
     """Indices (into `PARAMETER_NAMES`) of the identifiable parameter set: 27 for a UR arm."""
     name = robot.name if isinstance(robot, RobotSpec) else get_robot(robot).name
     return np.array(_identifiable_cached(name), dtype=int)
+
+
+@lru_cache(maxsize=64)
+def _identifiable_compliance_cached(robot: str, payload: Payload | None,
+                                    gravity: tuple[float, float, float]) -> tuple[int, ...]:
+    from hil.arm.physical import typical_compliance
+
+    g = generic_geometry(robot)
+    g.payload, g.gravity = payload, np.asarray(gravity, float)
+    Q = generic_configurations(robot)
+    J = Kinematics(g).jacobian(Q, np.arange(N_ALL_PARAMETERS))
+    effect = np.sqrt(np.mean(np.sum(J[:, :, COMPLIANCE_SLICE] ** 2, axis=1), axis=0))
+    effect *= typical_compliance(robot)
+    J[:, :, COMPLIANCE_SLICE][:, :, effect < MIN_COMPLIANCE_EFFECT] = 0.0
+    return tuple(select_identifiable(J.reshape(-1, N_ALL_PARAMETERS)))
+
+
+def identifiable_with_compliance(robot: str | RobotSpec, payload: Payload | None = None,
+                                 gravity: np.ndarray | None = None) -> np.ndarray:
+    """Indices (into `ALL_PARAMETER_NAMES`) of the geometry's identifiable set plus the joints whose
+    compliance the arm's gravity torques make identifiable, for this payload and mounting.
+
+    Found numerically like the geometry's (at the generic point, generic poses), after dropping the
+    joints whose sag stays below `MIN_COMPLIANCE_EFFECT`: on a floor arm joint 1 holds no torque and
+    joint 6 only what an off-axis payload gives it.
+    """
+    name = robot.name if isinstance(robot, RobotSpec) else get_robot(robot).name
+    g = FLOOR_GRAVITY if gravity is None else np.asarray(gravity, float)
+    return np.array(_identifiable_compliance_cached(name, payload, tuple(float(v) for v in g)), dtype=int)

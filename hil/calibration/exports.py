@@ -154,6 +154,14 @@ def export(document: dict[str, Any], geometry: Geometry, fmt: str, source: str =
     provenance = document.get("input", {}) if isinstance(document.get("input"), dict) else {}
     comment = (f"calibrated by hil {hil.__version__} from {provenance.get('file') or source} "
                f"sha256 {provenance.get('sha256') or 'unknown (not recorded in the model)'}")
+    if fmt in ("urdf", "ros-kinematics") and geometry.compliant:
+        # neither format has a place for a joint's compliance: say what is left out, never drop it silently
+        c = ", ".join(f"{v:.3g}" for v in geometry.compliance)
+        load = (f"payload {geometry.payload.mass:g} kg at {list(geometry.payload.com)} m"
+                if geometry.payload is not None else "no payload")
+        comment += (f"; RIGID GEOMETRY ONLY: this format cannot hold the model's joint compliance "
+                    f"[{c}] rad/Nm ({load}); positions predicted from it omit the gravity sag, "
+                    "which hil fk and hil compensate apply from the JSON model")
     if fmt == "urdf":
         return to_urdf(geometry, comment)
     if fmt == "ros-kinematics":

@@ -30,8 +30,8 @@ from scipy.spatial.transform import Rotation
 
 from hil.arm.geometry import Geometry
 from hil.arm.kinematics import (
+    ALL_PARAMETER_NAMES,
     N_PARAMETERS,
-    PARAMETER_NAMES,
     SMR_SLICE,
     TRACKER_SLICE,
     Kinematics,
@@ -39,8 +39,10 @@ from hil.arm.kinematics import (
     deviation_from,
     generic_geometry,
     identifiable_parameters,
+    identifiable_with_compliance,
     numerical_rank,
 )
+from hil.arm.payload import Payload
 from hil.calibration.measurements import Measurements, measurements_sha256
 from hil.errors import HilError, InputError
 
@@ -81,7 +83,7 @@ class FitResult:
 
     geometry: Geometry
     robot: str
-    indices: np.ndarray  # identified parameters (into PARAMETER_NAMES)
+    indices: np.ndarray  # identified parameters (into ALL_PARAMETER_NAMES: 51.. are compliances)
     values: np.ndarray  # their deviation from the nominal geometry (m, rad; SMR absolute)
     std: np.ndarray  # their standard deviations (local error coordinates at the solution)
     covariance: np.ndarray  # (n, n)
@@ -102,7 +104,12 @@ class FitResult:
 
     @property
     def names(self) -> list[str]:
-        return [PARAMETER_NAMES[i] for i in self.indices]
+        return [ALL_PARAMETER_NAMES[i] for i in self.indices]
+
+    @property
+    def with_compliance(self) -> bool:
+        """Whether the joints' compliance was identified with the geometry."""
+        return bool(np.any(self.indices >= N_PARAMETERS))
 
     def prediction_covariance(self, q: np.ndarray) -> np.ndarray:
         """(N, 3, 3) covariance of the model's predicted SMR positions at configurations `q`."""
@@ -115,9 +122,21 @@ def minimum_poses(n_parameters: int) -> int:
     return -(-(n_parameters + 3) // 3)
 
 
-def check_design(meas: Measurements, robot: str) -> None:
-    """Raise InputError if these poses cannot identify the model, naming what is wrong."""
-    idx = identifiable_parameters(robot)
+def _parameters(robot: str, compliance: bool, template: Geometry) -> np.ndarray:
+    """The identified set: the geometry's, plus the identifiable compliances when asked."""
+    if not compliance:
+        return identifiable_parameters(robot)
+    return identifiable_with_compliance(robot, template.payload, template.gravity)
+
+
+def check_design(meas: Measurements, robot: str, compliance: bool = False,
+                 template: Geometry | None = None) -> None:
+    """Raise InputError if these poses cannot identify the model, naming what is wrong.
+
+    `template` carries the payload and gravity the compliance columns need (its geometry is unused).
+    """
+    template = Geometry.nominal(robot) if template is None else template
+    idx = _parameters(robot, compliance, template)
     n, m, src = len(idx), len(meas), meas.source
     need = minimum_poses(n)
     if m < need:
@@ -131,12 +150,14 @@ def check_design(meas: Measurements, robot: str) -> None:
         raise InputError(f"{src}: column(s) {', '.join(still)} never change (spread below "
                          f"{MIN_JOINT_SPREAD} rad): every joint must move for its parameters to be "
                          "identifiable")
-    J = Kinematics(generic_geometry(robot)).jacobian(meas.q, idx).reshape(-1, n)
+    generic = generic_geometry(robot)
+    generic.payload, generic.gravity = template.payload, template.gravity
+    J = Kinematics(generic).jacobian(meas.q, idx).reshape(-1, n)
     if numerical_rank(J) < n:
         norms = np.linalg.norm(J, axis=0)
         _, r, piv = scipy.linalg.qr(J / norms, mode="economic", pivoting=True)
         d = np.abs(np.diag(r))
-        lost = [PARAMETER_NAMES[idx[piv[k]]] for k in range(n) if d[k] <= 1e-7 * d[0]]
+        lost = [ALL_PARAMETER_NAMES[idx[piv[k]]] for k in range(n) if d[k] <= 1e-7 * d[0]]
         raise InputError(f"{src}: degenerate pose set: the poses cannot identify {', '.join(lost)} "
                          "(use more distinct poses that move every joint)")
     extent = np.linalg.svd(meas.p - meas.p.mean(axis=0), compute_uv=False) / np.sqrt(m)
@@ -165,12 +186,13 @@ def align_tracker(geometry: Geometry, meas: Measurements) -> Geometry:
 class _State:
     geometry: Geometry
     p: np.ndarray
-    J: np.ndarray  # (m, 3, 51)
+    J: np.ndarray  # (m, 3, 51), or (m, 3, 57) with the compliance columns
+    compliance: bool = False
 
     @classmethod
-    def at(cls, geometry: Geometry, q: np.ndarray) -> _State:
-        p, J = Kinematics(geometry).point_and_jacobian(q)
-        return cls(geometry, p, J)
+    def at(cls, geometry: Geometry, q: np.ndarray, compliance: bool = False) -> _State:
+        p, J = Kinematics(geometry).point_and_jacobian(q, compliance)
+        return cls(geometry, p, J, compliance)
 
 
 def _levenberg_marquardt(state: _State, q: np.ndarray, p_meas: np.ndarray, idx: np.ndarray,
@@ -189,9 +211,9 @@ def _levenberg_marquardt(state: _State, q: np.ndarray, p_meas: np.ndarray, idx: 
             with warnings.catch_warnings():  # degenerate data: the rank check after the fit says so
                 warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
                 step = scipy.linalg.solve(A + lam * np.diag(D), g, assume_a="pos")
-            full = np.zeros(N_PARAMETERS)
+            full = np.zeros(state.J.shape[2])
             full[idx] = step
-            cand = _State.at(apply_update(state.geometry, full), q)
+            cand = _State.at(apply_update(state.geometry, full), q, state.compliance)
             r_c = (p_meas - cand.p).ravel()
             cost_c = float(r_c @ r_c)
             if cost_c < cost:
@@ -258,16 +280,26 @@ def register(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
 
 def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None, *,
              reject_outliers: bool = True, alpha: float = 0.01, max_iter: int = 100,
-             correlation_threshold: float = 0.95) -> FitResult:
-    """Identify the calibration geometry of `robot` from `meas` (see the module docstring)."""
+             correlation_threshold: float = 0.95, compliance: bool = False,
+             payload: Payload | None = None, gravity: np.ndarray | None = None) -> FitResult:
+    """Identify the calibration geometry of `robot` from `meas` (see the module docstring).
+
+    With `compliance` the joints' compliance is identified too, for the arm carrying `payload` under
+    `gravity` (base frame; default floor mounting): the model then carries both and predicts the sag.
+    """
     t0 = time.perf_counter()
-    check_design(meas, robot)
-    idx = identifiable_parameters(robot)
-    n, m = len(idx), len(meas)
     nominal = Geometry.nominal(robot, smr=(0.0, 0.0, 0.0) if smr_guess is None else smr_guess)
+    nominal.payload = payload
+    if gravity is not None:
+        nominal.gravity = np.asarray(gravity, dtype=float)
+    check_design(meas, robot, compliance, nominal)
+    idx = _parameters(robot, compliance, nominal)
+    n, m = len(idx), len(meas)
+    if compliance:
+        nominal.compliance = np.zeros(6)
     start = align_tracker(nominal, meas)
     used = np.ones(m, dtype=bool)
-    state = _State.at(start, meas.q)
+    state = _State.at(start, meas.q, compliance)
     initial_rms = float(np.sqrt(np.mean(np.sum((meas.p - state.p) ** 2, axis=1))))
 
     # Tracker pose and SMR offset first: a far-off SMR guess otherwise drags the joints around.
@@ -277,10 +309,10 @@ def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
     max_reject = min(m // 5, m - minimum_poses(n))
     while True:
         q_u, p_u = meas.q[used], meas.p[used]
-        sub = _State(state.geometry, state.p[used], state.J[used])
+        sub = _State(state.geometry, state.p[used], state.J[used], compliance)
         sub, its, converged = _levenberg_marquardt(sub, q_u, p_u, idx, max_iter)
         iterations += its
-        state = _State.at(sub.geometry, meas.q)
+        state = _State.at(sub.geometry, meas.q, compliance)
         res = meas.p - state.p
         Jp = state.J[used][:, :, idx]
         inv, sigma2, cond = _statistics(Jp.reshape(-1, n), res[used].ravel())
@@ -303,13 +335,13 @@ def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
     std = np.sqrt(np.maximum(np.diag(cov), 0.0))
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(std, std)
-    names = [PARAMETER_NAMES[i] for i in idx]
+    names = [ALL_PARAMETER_NAMES[i] for i in idx]
     correlated = [Correlation(names[a], names[b], float(corr[a, b]))
                   for a in range(n) for b in range(a + 1, n)
                   if abs(corr[a, b]) >= correlation_threshold]
     correlated.sort(key=lambda c: -abs(c.rho))
     reference = Geometry.nominal(robot)
-    values = deviation_from(reference, state.geometry)[idx]
+    values = deviation_from(reference, state.geometry, compliance)[idx]
     norms = np.linalg.norm(res[used], axis=1)
     return FitResult(
         geometry=state.geometry, robot=robot, indices=idx, values=values, std=std, covariance=cov,

@@ -62,7 +62,8 @@ PARAMETER_COORDINATES = (
     "joint<i>.*, flange.* and tracker.* (tx ty tz m, rx ry rz rad) are se(3) log coordinates of "
     "nominal^-1 * identified placement (for the tracker the nominal is the identity: they are the log "
     "coordinates of the tracker pose, not its position or angles, which are 'tracker' and "
-    "'tracker_pose'); smr.x/y/z (m) is the SMR centre in the flange frame. std is one standard "
+    "'tracker_pose'); smr.x/y/z (m) is the SMR centre in the flange frame; compliance.j<i> (rad/Nm) "
+    "is joint i's compliance (the 'compliance' block, for the 'payload' block). std is one standard "
     "deviation in the local error coordinates at the solution (T * exp(delta))."
 )
 _TRACKER_AXES = ("tracker.tx", "tracker.ty", "tracker.tz", "tracker.rx", "tracker.ry", "tracker.rz")

@@ -16,6 +16,10 @@ Choices made here:
 * **Expected error magnitudes** (column scaling "expected" for O2–O5): 0.5 mm and 1 mrad for joint and
   flange placements (the synthetic truths' σ), 1 mm for the SMR offset and the tracker position,
   1 mrad for the tracker orientation.
+* **Compliance** (``compliance=True``, the campaign's default): the joints whose compliance the
+  arm's gravity torques make identifiable (for the payload and mounting) join the parameters, so the
+  poses are chosen to separate the sag from the geometry too; their expected magnitude is the typical
+  strain-wave compliance (`hil.arm.physical.typical_compliance`).
 * **Link thickness** scales with the upper-arm length: (|a2| / 0.425)^0.6 times a UR5e's.
 """
 
@@ -32,7 +36,12 @@ import scipy.linalg
 import selector
 from hil.arm.catalog import get_robot
 from hil.arm.geometry import Geometry, look_at_tracker
-from hil.arm.kinematics import PARAMETER_NAMES, Kinematics, identifiable_parameters
+from hil.arm.kinematics import (
+    ALL_PARAMETER_NAMES,
+    Kinematics,
+    identifiable_parameters,
+    identifiable_with_compliance,
+)
 from hil.errors import InputError
 from selector.arm import ArmShape
 from selector.bound import d_optimal_bound
@@ -47,8 +56,12 @@ DEFAULT_TRACKER_FOR_JACOBIAN = (2.5, 0.0, 0.5)
 FORMAT = "hil-poses/1"
 
 
-def _expected_magnitude(name: str) -> float:
+def _expected_magnitude(name: str, robot: str) -> float:
     group, axis = name.split(".")
+    if group == "compliance":
+        from hil.arm.physical import typical_compliance
+
+        return float(typical_compliance(robot)[int(axis[1:]) - 1])
     if group == "smr":
         return 1e-3
     if group == "tracker":
@@ -60,11 +73,16 @@ class SelectionModel:
     """`selector.model.PoseModel` for one arm + SMR + tracker (module docstring for the choices)."""
 
     def __init__(self, robot: str, smr: Sequence[float] = (0.0, 0.0, 0.045),
-                 tracker: Sequence[float] | None = None) -> None:
+                 tracker: Sequence[float] | None = None, *, compliance: bool = False,
+                 payload: Any = None, gravity: Sequence[float] | None = None) -> None:
         self.spec = get_robot(robot)
         position = DEFAULT_TRACKER_FOR_JACOBIAN if tracker is None else tracker
         self.geometry = Geometry.nominal(self.spec, smr=np.asarray(smr, float),
                                          tracker=look_at_tracker(position))
+        self.compliance = compliance
+        self.geometry.payload = payload
+        if gravity is not None:
+            self.geometry.gravity = np.asarray(gravity, dtype=float)
         self.kinematics = Kinematics(self.geometry)
         self.lower, self.upper = self.spec.lower.copy(), self.spec.upper.copy()
         self.max_joint_speed = self.spec.max_joint_speed.copy()
@@ -73,18 +91,22 @@ class SelectionModel:
         self._origins = np.array([M.homogeneous for M in self.geometry.joints])
         self._flange = self.geometry.flange.homogeneous
         self.parameters, self.unobservable = self._observable_parameters()
-        self.parameter_names = tuple(PARAMETER_NAMES[i] for i in self.parameters)
-        self.parameter_scale = np.array([_expected_magnitude(n) for n in self.parameter_names])
+        self.parameter_names = tuple(ALL_PARAMETER_NAMES[i] for i in self.parameters)
+        self.parameter_scale = np.array([_expected_magnitude(n, self.spec.name)
+                                         for n in self.parameter_names])
 
     def _observable_parameters(self) -> tuple[np.ndarray, list[str]]:
-        idx = identifiable_parameters(self.spec.name)
+        if self.compliance:
+            idx = identifiable_with_compliance(self.spec.name, self.geometry.payload, self.geometry.gravity)
+        else:
+            idx = identifiable_parameters(self.spec.name)
         q = np.random.default_rng(11).uniform(-math.pi, math.pi, size=(120, 6))
         J = self.kinematics.jacobian(q, idx).reshape(-1, len(idx))
         J = J / np.linalg.norm(J, axis=0)
         _, r, piv = scipy.linalg.qr(J, mode="economic", pivoting=True)
         d = np.abs(np.diag(r))
         keep = np.sort(piv[d > 1e-7 * d[0]])
-        lost = [PARAMETER_NAMES[idx[i]] for i in np.sort(piv[d <= 1e-7 * d[0]])]
+        lost = [ALL_PARAMETER_NAMES[idx[i]] for i in np.sort(piv[d <= 1e-7 * d[0]])]
         return idx[keep], lost
 
     def frames(self, q: np.ndarray) -> np.ndarray:
@@ -131,8 +153,13 @@ def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str
                  method: str = "tabu", seed: int = 0, smr: Sequence[float] = (0.0, 0.0, 0.045),
                  constraints: Constraints | None = None, scaling: str = "expected",
                  start: Sequence[float] | None = None, settings: TabuSettings | None = None,
-                 bound: bool = True, progress: Callable[[str, str], None] | None = None) -> dict[str, Any]:
+                 bound: bool = True, progress: Callable[[str, str], None] | None = None,
+                 compliance: bool = False, payload: Any = None,
+                 gravity: Sequence[float] | None = None) -> dict[str, Any]:
     """Choose `count` measurement poses for `robot`; the JSON-ready report (see ``hil select``).
+
+    With `compliance` the identifiable joint compliances (for `payload` and `gravity`) are parameters
+    of the design too.
 
     `progress(phase, text)` hears what is going on ("candidates", "search", "bound", "order"): repeated
     calls with one phase update the same line of a display.
@@ -146,7 +173,8 @@ def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str
                                          f"{', '.join(SCALINGS)}")
         if method not in METHODS:
             raise selector.SelectorError(f"unknown method {method!r}: choose one of {', '.join(METHODS)}")
-        model = SelectionModel(robot, smr, constraints.tracker)
+        model = SelectionModel(robot, smr, constraints.tracker, compliance=compliance, payload=payload,
+                               gravity=gravity)
         n = len(model.parameters)
         check_count(count, candidates, n)
         say("candidates", f"drawing up to {candidates} feasible configurations of the {model.spec.name}")

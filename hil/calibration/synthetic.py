@@ -4,6 +4,11 @@ The same generator seeds the simulators' random "truth", so a benchmark and a si
 describe an arm the same way: every joint origin and the flange carry a random 6-D placement error
 (σ 0.5 mm per translation axis, 1 mrad per rotation axis by default), the SMR sits a few centimetres
 off the flange axis, and the tracker stands 2–4 m from the base facing it.
+
+Unless asked for a rigid arm, the truth is a real one (DESIGN.md, "Non-geometric errors"): its joints
+are compliant (UR's typical strain-wave stiffness, `hil.arm.physical.typical_compliance`, each joint
+0.8–1.2 times it), it carries the SMR, its nest and an adaptor plate (`smr_payload`), and it warms up
+as it runs (`Thermal` defaults). Its encoders read with a UR joint's noise (`ENCODER_SIGMA`).
 """
 
 from __future__ import annotations
@@ -16,8 +21,43 @@ import pinocchio as pin
 from hil.arm.catalog import get_robot
 from hil.arm.geometry import Geometry, look_at_tracker
 from hil.arm.kinematics import N_PARAMETERS, SMR_SLICE, TRACKER_SLICE, Kinematics, apply_update
+from hil.arm.payload import Payload
+from hil.arm.physical import typical_compliance
+from hil.arm.thermal import Thermal
 
 DEFAULT_SMR = (0.0, 0.0, 0.045)  # flange-mounted SMR nest, 45 mm out along the flange axis
+
+#: Standard deviation (rad) of one joint reading of a UR arm (RTDE ``actual_q`` at rest). We found no
+#: published figure for UR's encoders, but their repeatability bounds it: the controller holds each
+#: joint where its encoder reads it (a UR joint senses its angle on both sides of the gear, UR's
+#: patent WO2015131904), so reading noise shows in the pose repeatability, ±0.03 mm for the UR3e/UR5e
+#: and ±0.05 mm for the UR10e/UR16e (ISO 9283; UR e-Series technical specifications). ISO 9283's
+#: RP = l̄ + 3·S_l is 3.6 σ for an isotropic Gaussian scatter of σ per axis, so σ ≤ 8 µm; the six
+#: joints of a UR5e in a working pose move the flange by √Σr² ≈ 0.9 m per radian, about 0.5 m per
+#: axis, so a joint may read at most 1.6e-5 rad noisy. Friction and servo error take most of that
+#: budget, so a third of it is the encoders': 5e-6 rad, about one count of a 20-bit absolute encoder
+#: (2π/2²⁰ = 6.0e-6 rad).
+ENCODER_SIGMA = 5e-6
+
+#: A tracker target on the flange (kg, m): a 1.5" SMR (a 38.1 mm steel ball, 0.23 kg solid, about
+#: 0.18 kg hollowed for its cube corner) in a magnetic nest (about 0.1 kg), on an aluminium adaptor
+#: plate Ø100 × 12 mm bolted to the ISO 9409-1-50-4-M6 tool flange (π·0.05²·0.012 m³ × 2700 kg/m³
+#: ≈ 0.25 kg, its centre 6 mm out).
+SMR_AND_NEST_MASS = 0.28
+ADAPTOR_PLATE_MASS = 0.25
+ADAPTOR_PLATE_COM = (0.0, 0.0, 0.006)
+#: Each joint's compliance is UR's typical value times a factor drawn from this range: a strain-wave
+#: gear's catalogue stiffness is a typical value, not a limit, and joints of one size differ by tens of
+#: percent (their bearings, preload and assembly add their own compliance).
+COMPLIANCE_SPREAD = (0.8, 1.2)
+
+
+def smr_payload(smr: np.ndarray) -> Payload:
+    """What an arm carrying a tracker target weighs at the flange: the plate plus the nest at `smr`."""
+    mass = SMR_AND_NEST_MASS + ADAPTOR_PLATE_MASS
+    com = (SMR_AND_NEST_MASS * np.asarray(smr, dtype=float)
+           + ADAPTOR_PLATE_MASS * np.asarray(ADAPTOR_PLATE_COM)) / mass
+    return Payload(mass, tuple(float(v) for v in com))  # type: ignore[arg-type]
 
 
 @dataclass(frozen=True)
@@ -25,7 +65,7 @@ class Noise:
     """Measurement noise of a simulated station."""
 
     tracker_sigma: float = 20e-6  # m, per axis (isotropic Gaussian)
-    encoder_sigma: float = 0.0  # rad, per joint reading
+    encoder_sigma: float = ENCODER_SIGMA  # rad, per joint reading (a UR joint's, see ENCODER_SIGMA)
 
     def as_dict(self) -> dict[str, float]:
         return {"tracker_sigma": self.tracker_sigma, "encoder_sigma": self.encoder_sigma}
@@ -33,8 +73,14 @@ class Noise:
 
 def random_truth(robot: str, rng: np.random.Generator, *, translation_sigma: float = 0.5e-3,
                  rotation_sigma: float = 1e-3, smr: np.ndarray | None = None,
-                 tracker_distance: tuple[float, float] = (2.0, 4.0)) -> Geometry:
-    """A realistic true geometry: nominal + random placement errors, an SMR and a tracker pose."""
+                 tracker_distance: tuple[float, float] = (2.0, 4.0), rigid: bool = False) -> Geometry:
+    """A realistic true arm: nominal + random placement errors, an SMR and a tracker pose, and (unless
+    `rigid`) compliant joints, the SMR's payload and thermal growth.
+
+    The non-geometric blocks are drawn from a child of `rng` (`Generator.spawn` leaves its stream where
+    it is), so a seed gives the same geometry either way, and the caller's later draws (poses, noise)
+    are the same too: a rigid and a realistic arm of one seed differ only by those blocks.
+    """
     spec = get_robot(robot)
     if smr is None:
         smr = np.array([rng.uniform(-0.04, 0.04), rng.uniform(-0.04, 0.04), rng.uniform(0.02, 0.06)])
@@ -47,7 +93,19 @@ def random_truth(robot: str, rng: np.random.Generator, *, translation_sigma: flo
     errors[: placements.size] = rng.normal(0.0, placements)
     errors[SMR_SLICE] = 0.0
     errors[TRACKER_SLICE] = 0.0
-    return apply_update(Geometry.nominal(spec, smr=smr, tracker=tracker), errors)
+    truth = apply_update(Geometry.nominal(spec, smr=smr, tracker=tracker), errors)
+    if rigid:
+        return truth
+    child = rng.spawn(1)[0]
+    truth.compliance = typical_compliance(spec.name) * child.uniform(*COMPLIANCE_SPREAD, 6)
+    truth.payload = smr_payload(truth.smr)
+    # DESIGN.md's example warm-up: aluminium links (2.3e-5 /K), 6 K in a 15-min time constant. UR joints
+    # do warm as they run: a UR3's and a UR5's viscous friction fell by a fifth "under rising joint
+    # temperatures" over repeated runs of one trajectory (Robotics 2021, 10(3), 83,
+    # doi:10.3390/robotics10030083), and UR has a cold arm warm up with slow motions before full speed
+    # ("Robot start-up in cold environments", universal-robots.com).
+    truth.thermal = Thermal()
+    return truth
 
 
 def random_configurations(robot: str, count: int, rng: np.random.Generator) -> np.ndarray:
@@ -56,10 +114,29 @@ def random_configurations(robot: str, count: int, rng: np.random.Generator) -> n
     return rng.uniform(-np.pi, np.pi, size=(count, 6))
 
 
-def measure(truth: Geometry, q: np.ndarray, noise: Noise, rng: np.random.Generator
-            ) -> tuple[np.ndarray, np.ndarray]:
-    """Simulated readings at configurations `q`: (joint readings, tracker points with noise)."""
+def measure(truth: Geometry, q: np.ndarray, noise: Noise, rng: np.random.Generator,
+            times: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Simulated readings at configurations `q`: (joint readings, tracker points with noise).
+
+    `times` (s of running, one per pose) warm an arm with a thermal block: pose i sees
+    ``truth.warmed(times[i])``. Without `times` every pose sees the cold arm.
+    """
     q = np.asarray(q, dtype=float)
-    p = Kinematics(truth).points(q) + rng.normal(0.0, noise.tracker_sigma, size=(len(q), 3))
+    p = true_points(truth, q, times) + rng.normal(0.0, noise.tracker_sigma, size=(len(q), 3))
     q_read = q + rng.normal(0.0, noise.encoder_sigma, size=q.shape) if noise.encoder_sigma else q.copy()
     return q_read, p
+
+
+def true_points(truth: Geometry, q: np.ndarray, times: np.ndarray | None = None) -> np.ndarray:
+    """(N, 3) noise-free SMR positions in the tracker frame, each pose on the arm as warm as at its time."""
+    Q = np.atleast_2d(np.asarray(q, dtype=float))
+    if times is None or truth.thermal is None:
+        return Kinematics(truth).points(Q)
+    t = np.asarray(times, dtype=float).reshape(-1)
+    if t.shape != (len(Q),):
+        raise ValueError(f"times: expected one running time per pose ({len(Q)}), got {t.size}")
+    out = np.empty((len(Q), 3))
+    for ti in np.unique(t):  # one model per distinct time: poses measured together share it
+        rows = t == ti
+        out[rows] = Kinematics(truth.warmed(float(ti))).points(Q[rows])
+    return out

@@ -2,7 +2,9 @@
 
 * `steps` — the plain steps a plan yields (move, settle, read joints, measure, checkpoint), dry runs
   and the motion check of a whole plan;
-* `plan` — the calibration plan: bootstrap, select, measure, identify, validate;
+* `plan` — the calibration plan: bootstrap, select, warm up, measure, identify, validate;
+* `warmup` — the warm-up before measuring and the drift watch of a reference pose while measuring;
+  `reference_lines` — the operator's words for their events;
 * `controller` — the controller's own kinematic model: the record kept, its error on the validation poses;
 * `chooser` — the plan's pose chooser on a station (tabu calibration poses, random validation poses);
 * `engine` — the state machine that executes a plan: pause, resume, abort, checkpoints, suspenders;

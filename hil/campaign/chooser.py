@@ -52,7 +52,8 @@ def campaign_chooser(config: Any) -> Any:
         report = select_poses(
             request.model.robot, request.count, candidates=request.candidates, index=request.index,
             method="tabu", seed=request.seed, smr=request.model.smr, constraints=constraints,
-            start=request.start, bound=True)
+            start=request.start, bound=True, compliance=bool(config.campaign["compliance"]),
+            payload=config.payload, gravity=config.gravity)
         info = {k: report[k] for k in ("index", "value", "o1", "bound", "percent_of_bound", "method",
                                        "seconds", "travel_time", "candidates", "parameters")}
         return Choice(np.array(report["poses"]), info)

@@ -44,14 +44,17 @@ from hil.campaign.events import (
     SuspendExtended,
 )
 from hil.campaign.steps import (
+    REFERENCE,
     Acquire,
     Checkpoint,
+    Conditions,
     Emit,
     Measure,
     Move,
     Phase,
     Plan,
     PoseRecord,
+    ReadConditions,
     ReadJoints,
     Settle,
     Skipped,
@@ -228,6 +231,7 @@ class Engine:
         self._extend = 0  # request_extend: pending "wait longer" requests for the current suspension
         self._poke = threading.Event()  # wakes a suspension's wait for any request
         self._last_q: np.ndarray | None = None
+        self._t0: float | None = None  # the clock when the run started (`ReadConditions`)
         self.current: Acquire | None = None
         self.records: list[PoseRecord] = []
 
@@ -317,7 +321,7 @@ class Engine:
     # --- execution --------------------------------------------------------------------------------
     def run(self, plan: Plan) -> Any:
         """Execute `plan` to its end; returns the plan's return value."""
-        t0 = self.clock.monotonic()
+        t0 = self._t0 = self.clock.monotonic()
         self._set_state(RUNNING)
         if self.home is not None:
             self._last_q = np.asarray(self.home, dtype=float)
@@ -365,7 +369,34 @@ class Engine:
             return None
         if isinstance(step, Checkpoint):
             return None
+        if isinstance(step, ReadConditions):
+            return self._conditions(step.temperatures)
+        if isinstance(step, Move) and step.optional:
+            try:
+                return self._with_suspenders(lambda: self._device_step(step))
+            except UnsafePathError as exc:
+                return Skipped(-1, "", str(exc), lost=False)
         return self._with_suspenders(lambda: self._device_step(step))
+
+    def station_time(self) -> float:
+        """Seconds since the run started, on the station's clock: the engine's clock scaled by its
+        ``speed`` (`RealClock` of a fast-time simulation: the simulators' seconds; 1 on a station)."""
+        if self._t0 is None:
+            return 0.0
+        return (self.clock.monotonic() - self._t0) * float(getattr(self.clock, "speed", 1.0))
+
+    def _conditions(self, temperatures: bool) -> Conditions:
+        """`ReadConditions`: the station time and, when asked and the arm has ``joint_temperatures()``
+        (RTDE ``joint_temperatures``, `drivers.robot.ur.URRobot`), its joint temperatures. A reading
+        that fails is left out (None): it describes the measurement, it is not one."""
+        temps = None
+        read = getattr(self.robot, "joint_temperatures", None) if temperatures else None
+        if callable(read):
+            try:
+                temps = tuple(float(v) for v in np.asarray(read(), dtype=float).reshape(-1))
+            except Exception as exc:  # a missing RTDE field, a dropped link: the next move will tell
+                log.debug("reading the joint temperatures failed: %s", exc)
+        return Conditions(self.station_time(), temps)
 
     def _device_step(self, step: Step) -> Any:
         clock = self.clock
@@ -428,14 +459,18 @@ class Engine:
         A visit given up is answered with `Skipped` (saying whether the beam was lost), so the plan
         can tell a tracker that sees nothing from a pose with no safe path."""
         self.current = group
-        self.emit(PoseStarted(campaign=self.campaign, index=group.index, role=group.role,
-                              target=list(group.target)))
+        # a reference visit is not a campaign pose: its events are the plan's (ReferenceMeasured)
+        pose = group.role != REFERENCE
+        if pose:
+            self.emit(PoseStarted(campaign=self.campaign, index=group.index, role=group.role,
+                                  target=list(group.target)))
         t0 = self.clock.monotonic()
         try:
             results = self._with_suspenders(lambda: [self._device_step(s) for s in group.steps])
         except (PoseSkippedError, UnsafePathError) as exc:
-            self.emit(PoseSkipped(campaign=self.campaign, index=group.index, role=group.role,
-                                  reason=str(exc)))
+            if pose:
+                self.emit(PoseSkipped(campaign=self.campaign, index=group.index, role=group.role,
+                                      reason=str(exc)))
             self.current = None
             return Skipped(group.index, group.role, str(exc), lost=isinstance(exc, PoseSkippedError))
         reading = next(r for s, r in zip(group.steps, results, strict=True) if isinstance(s, ReadJoints))
@@ -446,6 +481,9 @@ class Engine:
             q=np.asarray(reading.q, float), q_spread=np.asarray(reading.spread, float),
             p=xyz, p_spread=np.asarray(point.spread, float), samples=int(point.samples),
             seconds=self.clock.monotonic() - t0)
+        if not pose:  # handed back to the plan only: never a campaign point, never in a fit
+            self.current = None
+            return record
         self.emit(PoseReached(campaign=self.campaign, index=group.index, role=group.role,
                               q=record.q.tolist(), q_spread=record.q_spread.tolist(),
                               seconds=record.seconds))

@@ -101,6 +101,8 @@ class PlanReady(Event):
     poses: list[dict[str, Any]]  # {"index": i, "role": r, "q": [6 floats]}
     tracker: dict[str, Any] | None = None  # tracker pose estimate used to plan ({"xyz","rpy"})
     selection: dict[str, Any] = field(default_factory=dict)  # index value, % of bound, method...
+    # the warm-up and drift reference pose (6 joint angles), kept so a resumed run measures the same one
+    reference: list[float] | None = None
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -170,6 +172,63 @@ class SuspendExtended(Event):
 class Resumed(Event):
     kind: str
     waited: float  # seconds
+
+
+@dataclass(frozen=True, kw_only=True)
+class ReferenceMeasured(Event):
+    """The reference pose measured (warm-up or drift watch, `hil.campaign.warmup`); never a campaign
+    point: the store keeps it in the campaign's log, and no fit ever sees it.
+
+    Displacements are the reference's movement as the tracker saw it minus what the arm's own joint
+    readings explain (the arm does not return to exactly the same joints), in metres."""
+
+    seq: int  # the campaign's reference measurements, numbered from 1 across runs
+    run: int  # which run of the campaign measured it (1; a resumed run adds one)
+    phase: str  # "warmup" or "drift"
+    elapsed: float  # station seconds since this run started (simulated seconds in a fast-time simulation)
+    q: list[float]  # joints read at the reference (rad)
+    xyz: list[float]  # the SMR in the tracker frame (m)
+    p_spread: list[float] = field(default_factory=list)
+    moved: float | None = None  # since this run's previous reference measurement (m)
+    drift: float | None = None  # from the baseline (m); None while there is none yet
+    baseline: bool = False  # this measurement is the baseline later ones are compared with
+    limit: float | None = None  # the phase's limit (m): warm-up's on `moved`, the drift watch's on `drift`
+    temperatures: list[float] | None = None  # joint temperatures (°C) when the arm reports them
+
+
+@dataclass(frozen=True, kw_only=True)
+class WarmupProgress(Event):
+    """One warm-up check: the reference moved `moved` m in `interval` s (warm below `limit`)."""
+
+    elapsed: float  # station seconds since the warm-up started
+    moved: float
+    interval: float
+    limit: float
+    max_time: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class WarmupFinished(Event):
+    """The warm-up ended: `converged` (the reference settled within the limit) or not (max_time
+    reached, or no reference or motion possible: `reason`)."""
+
+    seconds: float  # station seconds it took
+    converged: bool
+    references: int  # reference measurements it made
+    moved: float | None = None  # the last check's movement (m)
+    limit: float = 0.0
+    reason: str = ""
+
+
+@dataclass(frozen=True, kw_only=True)
+class DriftFlagged(Event):
+    """The reference moved more than the drift limit from its baseline: the campaign is flagged (its
+    accept/reject verdict still comes from validation)."""
+
+    drift: float  # m
+    limit: float  # m
+    elapsed: float  # station seconds since this run started
+    seq: int  # the reference measurement that showed it
 
 
 @dataclass(frozen=True, kw_only=True)

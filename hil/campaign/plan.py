@@ -18,6 +18,9 @@ pose selection and identification are computations on what the engine sends back
 * **Select**: calibration poses by the injected chooser (the tabu selector in production), then
   validation poses the fit never sees. `PlanReady` carries them to the store, so a resumed run visits
   exactly the same poses.
+* **Warm up** (``[warmup]``, `hil.campaign.warmup`): cycle through the planned calibration poses,
+  re-measuring a reference pose (stored with the plan) until it settles, so every point is measured on
+  a warm arm; a resumed run with poses left warms up again.
 * **Measure**: before each visit the pose is checked again against the tracker and SMR fitted to the
   points measured so far (`_SightCheck`); one the tracker would not see is skipped at once, with the
   reason, rather than driven to and waited on. Each pose is one `Acquire` (move, settle, read joints,
@@ -25,7 +28,9 @@ pose selection and identification are computations on what the engine sends back
   `PointMeasured` event reaches the store before the next move. Poses already measured (a resumed
   run) are skipped. After `campaign.max_consecutive_lost` poses in a row lost the beam the run stops
   (`TrackerLooksWrong`): the tracker is not where the plan has it, and waiting out the re-lock time
-  at every remaining pose would only cost time.
+  at every remaining pose would only cost time. The reference is measured again every
+  ``drift.every`` poses (drift watch); a drift beyond ``drift.limit`` flags the campaign. Reference
+  measurements are never campaign points: no fit or validation sees them.
 * **Identify** on the calibration (and bootstrap) points; **validate** on the others: before (the
   nominal arm with only the tracker pose and SMR fitted) and after, plus ISO 9283 pose accuracy (AP)
   and repeatability (RP) when validation poses are visited more than once, plus — when the controller
@@ -60,9 +65,11 @@ from hil.campaign.events import (
     ModelIdentified,
     PlanReady,
     PoseSkipped,
+    ReferenceMeasured,
     ValidationDone,
 )
 from hil.campaign.steps import Emit, Phase, Plan, PoseRecord, ReadJoints, Skipped, acquire
+from hil.campaign.warmup import ReferenceWatch, reference_pose
 from hil.errors import HilError, InputError
 from hil.station.config import StationConfig
 
@@ -118,6 +125,10 @@ class ResumeState:
     bootstrap: list[tuple[int, np.ndarray]] | None = None
     records: dict[tuple[str, int], PoseRecord] = field(default_factory=dict)
     selection: dict[str, Any] = field(default_factory=dict)
+    # the warm-up/drift reference pose stored with the plan (None: choose one) and the campaign's
+    # reference measurements so far, in order (the store's ReferenceMeasured events)
+    reference: np.ndarray | None = None
+    references: list[ReferenceMeasured] = field(default_factory=list)
 
 
 @dataclass
@@ -135,6 +146,8 @@ class CampaignResult:
     model: dict[str, Any]
     # the controller's own model on the validation poses (`controller_validation`); None: not reported
     controller: ErrorStats | None = None
+    # warm-up and drift watch (`ReferenceWatch.summary`); None when both are off
+    drift: dict[str, Any] | None = None
 
 
 def bootstrap_targets(start: np.ndarray, count: int) -> np.ndarray:
@@ -353,13 +366,26 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
         selection = {"calibration": cal.info, "validation": val.info}
     else:
         planned = resume.poses
+    reference = resume.reference
+    if reference is None:  # a new plan (or one stored by an older hil): the same one from now on
+        reference = reference_pose(model, np.array([q for _, r, q in planned if r == VALIDATION] or
+                                                   [q for _, _, q in planned]),
+                                   np.array([q for _, _, q in planned]))
     yield Emit(PlanReady(campaign=campaign, poses=[{"index": i, "role": r, "q": list(map(float, q))}
                                                    for i, r, q in planned],
-                         tracker=pose_to_dict(tracker), selection=selection))
+                         tracker=pose_to_dict(tracker), selection=selection,
+                         reference=[float(v) for v in reference]))
 
     # --- measure -------------------------------------------------------------------------------
     todo = [(i, r, q) for i, r, q in planned if (r, i) not in records]
+    # the tracker frame was located from measured points (the bootstrap) unless it was configured
+    watch = ReferenceWatch(config, campaign, reference, model, visit, resume.references,
+                           located=config.tracker["position"] is None)
+    if todo:  # warm (again, on a resume: the arm may have cooled) before measuring anything
+        yield from watch.warm_up([q for _, r, q in planned if r == CALIBRATION])
     yield Phase("measure", f"{len(todo)} of {len(planned)} poses to measure")
+    if todo:
+        yield from watch.start()
     sight = _SightCheck(robot, smr_guess, tracker.translation, config.smr["acceptance_angle"],
                         getattr(choose, "hidden", None))
     lost: list[Skipped] = []  # beam lost at each of these poses, one after another
@@ -374,18 +400,22 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
         if isinstance(record, PoseRecord):
             records[(role, i)] = record
             lost = []
+            yield from watch.after_pose()
         elif isinstance(record, Skipped) and record.lost:
             lost.append(record)
             if len(lost) >= camp["max_consecutive_lost"]:
                 raise TrackerLooksWrong(_tracker_looks_wrong(
                     config, lost, tracker, list(records.values()), smr_guess))
 
-    # --- identify and validate -----------------------------------------------------------------
+    yield from watch.finish()
+
+    # --- identify and validate (reference measurements are not records: no fit ever sees them) ---
     yield Phase("identify")
     fit_records = [r for (role, _), r in sorted(records.items()) if role in (BOOTSTRAP, CALIBRATION)]
     fitted = measurements_of(fit_records, f"campaign {campaign}")
     try:
-        fit = identify(fitted, robot, smr_guess)
+        fit = identify(fitted, robot, smr_guess, compliance=camp["compliance"], payload=config.payload,
+                       gravity=config.gravity)
     except InputError as exc:  # too many poses skipped: the run failed, the input was fine
         raise IdentificationError(f"cannot identify from the measured poses: {exc}") from None
     yield Emit(ModelIdentified(campaign=campaign, rms=fit.rms, max=fit.max_error,
@@ -409,5 +439,6 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     yield Emit(ValidationDone(campaign=campaign, before=before.as_dict(), after=after.as_dict(),
                               passed=passed, controller=None if theirs is None else theirs.as_dict()))
     doc = model_document(fit, after.as_dict(), controller=controller)
+    drift = watch.summary() if config.warmup["enabled"] or config.drift["every"] or watch.points else None
     return CampaignResult(fit, before, after, passed, list(records.values()), tracker, selection,
-                          iso, doc, theirs)
+                          iso, doc, theirs, drift)

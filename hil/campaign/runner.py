@@ -36,6 +36,7 @@ from hil.campaign.events import (
     EventBus,
     PlanReady,
     PointMeasured,
+    ReferenceMeasured,
     RunFinished,
     RunStarted,
 )
@@ -127,9 +128,13 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
     measured = sum(1 for role, _ in resume.records if role != BOOTSTRAP) if resume else 0
 
     def judge(result: CampaignResult) -> tuple[str, str]:
+        # the verdict is the validation's; a drift beyond its limit flags the campaign, said beside it
+        drift = result.drift or {}
+        flag = (f"; drift flagged: the reference moved {drift['max'] * 1e6:.1f} µm "
+                f"(limit {drift['limit'] * 1e6:.1f} µm)" if drift.get("flagged") else "")
         return ("accepted" if result.passed else "rejected",
                 f"validation RMS {result.after.rms * 1e3:.4f} mm "
-                f"{'<=' if result.passed else '>'} {camp['acceptance'] * 1e3:.4f} mm")
+                f"{'<=' if result.passed else '>'} {camp['acceptance'] * 1e3:.4f} mm{flag}")
 
     return run_plan(
         config, lambda run: calibration_plan(config, choose, run.campaign, resume, validation_cycles,
@@ -273,6 +278,8 @@ def plan_saver(store: Any, campaign: str) -> Callable[[Any], None]:
     def save(event: Any) -> None:
         if isinstance(event, PlanReady) and event.campaign == campaign:
             summary: dict[str, Any] = {"tracker": event.tracker, "selection": event.selection}
+            if event.reference is not None:  # the warm-up/drift reference pose: a resume keeps it
+                summary["reference"] = event.reference
         elif isinstance(event, BootstrapPlanned) and event.campaign == campaign:
             # the "bootstrap" key tells `resume_state` these poses are the whole bootstrap plan
             summary = {"tracker": None, "selection": {}, "bootstrap": {"start": event.start}}
@@ -316,7 +323,8 @@ def _record_failed(store: Any, what: str, exc: BaseException) -> RecordFailed:
 
 
 def resume_state(store: Any, campaign: str) -> ResumeState:
-    """What an interrupted campaign already has: its plan, tracker estimate and measured poses."""
+    """What an interrupted campaign already has: its plan, tracker estimate and measured poses, its
+    reference pose and reference measurements (warm-up and drift watch: the log's ReferenceMeasured)."""
     record = store.campaign(campaign)
     plan = record.plan or {}
     tracker = None
@@ -337,5 +345,11 @@ def resume_state(store: Any, campaign: str) -> ResumeState:
             index=index, role=m.role, target=target, q=np.array(m.q),
             q_spread=np.array(m.q_spread if m.q_spread is not None else np.zeros(6)), p=np.array(m.p),
             p_spread=np.array(m.p_spread if m.p_spread is not None else np.zeros(3)), samples=m.samples)
-    return ResumeState(poses=planned if tracker is not None and planned else None, tracker=tracker,
-                       records=records, selection=plan.get("selection") or {}, bootstrap=bootstrap)
+    reference = plan.get("reference")
+    references = [e for e in store.events(campaign, types=("ReferenceMeasured",))
+                  if isinstance(e, ReferenceMeasured)]
+    resumed = planned if tracker is not None and planned else None
+    return ResumeState(poses=resumed, tracker=tracker,
+                       records=records, selection=plan.get("selection") or {}, bootstrap=bootstrap,
+                       reference=np.array(reference, dtype=float) if reference and resumed else None,
+                       references=references)

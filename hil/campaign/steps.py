@@ -10,6 +10,9 @@ every motion checked against the joint limits and the keep-in zone before the ar
 `Acquire` groups the steps of one pose (move, settle, read joints, measure). It is the unit of
 recovery: if a suspender trips inside it (protective stop mid-move, lost beam), the engine resumes
 by re-running the whole group, so a joint reading is never paired with a point from another visit.
+An `Acquire` of role `REFERENCE` measures the warm-up and drift reference pose (`hil.campaign.warmup`):
+the engine hands its record back to the plan only, never as a campaign point (`PointMeasured`), so a
+reference measurement cannot reach the identification or the validation.
 """
 
 from __future__ import annotations
@@ -24,14 +27,23 @@ from hil.arm.catalog import RobotSpec
 from hil.arm.geometry import Geometry
 from hil.arm.safety import check_target
 
+#: The role of a reference-pose visit (warm-up and drift watch): not one of the campaign's poses.
+REFERENCE = "reference"
+
 
 @dataclass(frozen=True)
 class Move:
-    """Move the arm to joint vector `q` (radians) and wait until it is steady."""
+    """Move the arm to joint vector `q` (radians) and wait until it is steady.
+
+    `optional`: a target with no safe path from where the arm is (`UnsafePathError`) is answered with
+    `Skipped` instead of ending the run — the warm-up's cycling motion, where one target more or less
+    only changes how the arm warms.
+    """
 
     q: tuple[float, ...]
     speed: float | None = None
     acceleration: float | None = None
+    optional: bool = False
 
 
 @dataclass(frozen=True)
@@ -59,13 +71,31 @@ class Measure:
 class Acquire:
     """One pose visit: the steps above as a unit that is retried whole after a suspension."""
 
-    index: int
-    role: str  # bootstrap, calibration, validation
+    index: int  # the pose's campaign index; a reference visit's: its number among the references
+    role: str  # bootstrap, calibration, validation, reference
     steps: tuple[Move | Settle | ReadJoints | Measure, ...]
 
     @property
     def target(self) -> tuple[float, ...]:
         return next(s.q for s in self.steps if isinstance(s, Move))
+
+
+@dataclass(frozen=True)
+class ReadConditions:
+    """The station's running time and, if asked and the arm reports them, its joint temperatures.
+
+    Answered with `Conditions`. The time is the engine's clock since the run started, in the station's
+    seconds (a fast-time simulation's, not the wall clock's), so a plan can cycle for a given time."""
+
+    temperatures: bool = True
+
+
+@dataclass(frozen=True)
+class Conditions:
+    """What `ReadConditions` reads: seconds since the run started, joint temperatures (°C) or None."""
+
+    t: float
+    temperatures: tuple[float, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -90,7 +120,7 @@ class Checkpoint:
     label: str
 
 
-Step = Move | Settle | ReadJoints | Measure | Acquire | Phase | Emit | Checkpoint
+Step = Move | Settle | ReadJoints | Measure | Acquire | Phase | Emit | Checkpoint | ReadConditions
 Plan = Generator[Step, Any, Any]
 
 

@@ -30,6 +30,28 @@ def triplet_or_none(text: str | None, option: str, *, max_length: float | None =
     return vector
 
 
+PAYLOAD_HELP = ("what the arm carries: MASS (kg) or MASS,X,Y,Z with its centre of mass in the flange frame "
+                "(m); 0 for nothing")
+
+
+def payload_or_none(text: str | None, option: str = "--payload") -> Any:
+    """An optional ``--payload MASS[,X,Y,Z]`` as a `hil.arm.payload.Payload` (InputError naming the
+    option when malformed); ``0`` is an empty flange."""
+    from hil.arm.payload import Payload
+
+    if text is None:
+        return None
+    parts = [p.strip() for p in str(text).split(",")]
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        raise InputError(f"{option}: expected MASS or MASS,X,Y,Z (kg, m), got {text!r}") from None
+    if len(values) not in (1, 4):
+        raise InputError(f"{option}: expected MASS or MASS,X,Y,Z (kg, m), got {len(values)} numbers")
+    com = values[1:] if len(values) == 4 else [0.0, 0.0, 0.0]
+    return Payload.from_dict({"mass": values[0], "com": com}, option)
+
+
 def mm(value: float) -> str:
     """Metres shown as millimetres with µm resolution."""
     return f"{value * 1e3:.3f} mm"

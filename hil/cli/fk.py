@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from hil.cli._common import wrote
+from hil.cli._common import PAYLOAD_HELP, payload_or_none, wrote
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -19,6 +19,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "the robot base's")
     p.add_argument("--point", choices=("smr", "flange"), default="smr",
                    help="which point: the SMR centre or the flange centre (tool0)")
+    p.add_argument("--payload", metavar="MASS[,X,Y,Z]",
+                   help=PAYLOAD_HELP + "; default: the payload the model was calibrated with (a compliant "
+                        "model predicts the sag for it)")
     p.add_argument("--out", required=True, metavar="P.csv", help="CSV to write (x,y,z in metres)")
     p.set_defaults(func=run)
 
@@ -34,6 +37,9 @@ def run(args: argparse.Namespace) -> int:
     check_output(args.out, field="--out", inputs={"--model": args.model, "--joints": args.joints},
                  store=db, store_field=where)
     geometry, _ = load_geometry(args.model)
+    payload = payload_or_none(args.payload)
+    if payload is not None:
+        geometry = geometry.with_payload(payload if payload.mass > 0 else None)
     q, _ = read_joints(args.joints)
     points = Kinematics(geometry).points(q, frame=args.frame, point=args.point)
     atomic_write_text(args.out, format_csv(("x", "y", "z"), points))

@@ -6,7 +6,7 @@ import argparse
 from typing import TYPE_CHECKING
 
 from hil.arm.catalog import ROBOT_NAMES, get_robot
-from hil.cli._common import mm, print_json, triplet_or_none, wrote
+from hil.cli._common import PAYLOAD_HELP, mm, payload_or_none, print_json, triplet_or_none, wrote
 
 if TYPE_CHECKING:
     from hil.calibration.identification import FitResult
@@ -21,6 +21,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--smr", metavar="X,Y,Z", help="rough SMR offset in the flange frame (m)")
     p.add_argument("--validation", metavar="V.csv", help="held-out measurements to validate on")
     p.add_argument("--no-reject", action="store_true", help="keep every pose (no outlier rejection)")
+    p.add_argument("--compliance", action="store_true",
+                   help="identify the joints' compliance (rad/Nm) with the geometry, for --payload")
+    p.add_argument("--payload", metavar="MASS[,X,Y,Z]", help=PAYLOAD_HELP + " (default: nothing)")
+    p.add_argument("--mounting", metavar="R,P,Y",
+                   help="base orientation in the world (roll, pitch, yaw in rad; default 0,0,0: floor)")
     p.add_argument("--json", action="store_true", help="print the fit summary as JSON")
     p.add_argument("--out", required=True, metavar="model.json", help="model file to write")
     p.set_defaults(func=run)
@@ -39,6 +44,7 @@ def summary(fit: FitResult) -> dict:
 
 
 def run(args: argparse.Namespace) -> int:
+    from hil.arm.payload import gravity_of_mounting
     from hil.calibration.identification import identify, validate
     from hil.calibration.measurements import read_measurements
     from hil.calibration.model_file import model_document, write_json
@@ -53,7 +59,11 @@ def run(args: argparse.Namespace) -> int:
     smr = triplet_or_none(args.smr, "--smr", max_length=MAX_SMR_OFFSET, where="of the flange")
     meas = read_measurements(args.measurements)
     held_out = read_measurements(args.validation) if args.validation else None
-    fit = identify(meas, robot, smr, reject_outliers=not args.no_reject)
+    payload = payload_or_none(args.payload)
+    mounting = triplet_or_none(args.mounting, "--mounting")
+    fit = identify(meas, robot, smr, reject_outliers=not args.no_reject, compliance=args.compliance,
+                   payload=payload if payload is not None and payload.mass > 0 else None,
+                   gravity=gravity_of_mounting(mounting) if mounting is not None else None)
     validation = validate(fit.geometry, held_out).as_dict() if held_out is not None else None
     write_json(args.out, model_document(fit, validation))
     wrote(args.out, f"hil-model/1, {len(fit.indices)} parameters")
@@ -73,6 +83,10 @@ def run(args: argparse.Namespace) -> int:
               f"max {mm(validation['max'])}")
     for r in fit.rejected:
         print(f"  rejected pose {r.index} (line {r.line}): residual {mm(r.residual)}")
+    if fit.with_compliance:
+        for name, v, sd in zip(fit.names, fit.values, fit.std, strict=True):
+            if name.startswith("compliance."):
+                print(f"  {name:<16} {v:.3e} ± {sd:.1e} rad/Nm")
     for c in fit.correlated[:10]:
         print(f"  correlated: {c.a} ~ {c.b}  ρ = {c.rho:+.3f}")
     return 0

@@ -18,18 +18,23 @@ from typing import IO, Any
 
 from hil.campaign.events import (
     ControllerModel,
+    DriftFlagged,
     Event,
     Message,
     PhaseChanged,
     PlanReady,
     PointMeasured,
     PoseSkipped,
+    ReferenceMeasured,
     Resumed,
     RunFinished,
     RunStarted,
     StateChanged,
     Suspended,
+    WarmupFinished,
+    WarmupProgress,
 )
+from hil.campaign.reference_lines import describe as describe_reference
 
 #: `PlanReady.selection["kind"]` of a verification (`hil.verify.plan.KIND`; not imported, so that the
 #: CLI's start-up does not load the verification's kinematics).
@@ -170,6 +175,10 @@ class Progress:
             self._line(f"resumed after {event.kind} ({event.waited:.1f} s)")
         elif isinstance(event, Message):
             self._line(f"{event.level}: {event.text}")
+        elif isinstance(event, WarmupProgress | WarmupFinished | ReferenceMeasured | DriftFlagged):
+            line = describe_reference(event)  # warm-up and drift watch (hil.campaign.warmup)
+            if line is not None:
+                self._line(line)
         elif isinstance(event, RunFinished):
             # a finished verification is stored "accepted" (it has no threshold): say "finished"
             status = "finished" if self.verification and event.status == "accepted" else event.status

@@ -70,6 +70,10 @@ def register(sub: Any) -> None:
     p.add_argument("--disable", action="append", default=[],
                    help=f"switch constraints off (comma list; repeatable): {', '.join(CONSTRAINT_NAMES)}")
     p.add_argument("--start", help="current joint configuration q1..q6 (rad): the route starts there")
+    p.add_argument("--compliance", action="store_true",
+                   help="choose poses that identify the joints' compliance too (for --payload)")
+    p.add_argument("--payload", metavar="MASS[,X,Y,Z]",
+                   help="what the arm carries (kg; centre of mass in the flange frame, m); default nothing")
     p.add_argument("--prune", action="store_true",
                    help="drop poses that add nothing to the result: may return fewer than --count")
     p.add_argument("--no-bound", dest="bound", action="store_false",
@@ -155,13 +159,17 @@ def run(args: argparse.Namespace) -> int:
         if outside:
             raise InputError(f"--start: {'; '.join(outside)} rad, the {spec.title}'s joint limits")
     constraints = parse_constraints(tracker=tracker, disabled=disabled, **settings)
+    from hil.cli._common import payload_or_none
+
+    payload = payload_or_none(args.payload)
     status = StatusLine(None if args.quiet else sys.stderr)
     try:
         report = select_poses(args.robot, args.count, candidates=args.candidates, index=args.index,
                               method=args.method, seed=args.seed, smr=smr, constraints=constraints,
                               scaling=args.scaling, start=None if start is None else np.array(start),
                               settings=TabuSettings(prune=True) if args.prune else None,
-                              bound=args.bound, progress=status)
+                              bound=args.bound, progress=status, compliance=args.compliance,
+                              payload=payload if payload is not None and payload.mass > 0 else None)
     except BaseException:
         status.close(keep=False)  # the error is then the one line below the finished phases
         raise

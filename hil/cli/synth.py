@@ -17,8 +17,10 @@ from hil.cli._common import SEED, bounded_int, finite_float, wrote
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("synth", help="write a synthetic truth and simulated measurements",
                        description="Make a random realistic arm (or load --truth), measure it at random "
-                                   "poses with tracker noise and write truth.json, measurements.csv "
-                                   "and validation.csv into --out-dir.")
+                                   "poses with tracker and encoder noise and write truth.json, "
+                                   "measurements.csv and validation.csv into --out-dir. The random arm "
+                                   "has compliant joints carrying an SMR payload and warms up as it "
+                                   "runs (the poses are measured cold); --rigid makes it without.")
     p.add_argument("--robot", help=f"robot type ({', '.join(ROBOT_NAMES)}; default ur5e, or the truth's)")
     p.add_argument("--truth", metavar="truth.json", help="use this hil-truth/1 instead of a random one")
     # rows of a CSV: 100 000 are ~10 MB; 1e9 asked numpy for 45 GiB (exit 70)
@@ -30,6 +32,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     # instrument, and 1 (m) is a value in millimetres
     p.add_argument("--noise", type=finite_float(0, 1e-3, "m"), default=None, metavar="METRES",
                    help="tracker noise per axis (default 20e-6, or the truth's)")
+    p.add_argument("--rigid", action="store_true",
+                   help="a random arm without compliance, payload and warm-up (geometry errors only)")
     p.add_argument("--seed", type=SEED, default=1,
                    help="random seed of the truth, the poses and the noise; equal seeds give equal files")
     p.add_argument("--out-dir", required=True, metavar="DIR", help="directory to write the three files to")
@@ -48,6 +52,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--poses must be at least 1 and --validation at least 0")
     if args.noise is not None and not (np.isfinite(args.noise) and args.noise >= 0):
         raise InputError("--noise must be a non-negative number of metres")
+    if args.rigid and args.truth:
+        raise InputError("--rigid makes a random arm: it cannot be combined with --truth")
     rng = np.random.default_rng(args.seed)
     from hil.station.robot_type import Claim, agreed_robot, option_claim
 
@@ -57,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
         # --robot beside --truth must name the truth's arm: silently using either hides a mistake
         agreed_robot([*claims, Claim(truth.robot, f"the truth {args.truth} is for {truth.robot}")])
     else:
-        truth, noise = random_truth(agreed_robot(claims, default="ur5e"), rng), Noise()
+        truth, noise = random_truth(agreed_robot(claims, default="ur5e"), rng, rigid=args.rigid), Noise()
     if args.noise is not None:
         noise = Noise(args.noise, noise.encoder_sigma)
     out = Path(args.out_dir)

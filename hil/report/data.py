@@ -23,7 +23,16 @@ from hil.arm.kinematics import Kinematics
 from hil.calibration.identification import Correlation, ErrorStats, FitResult, RejectedPose
 from hil.calibration.measurements import Measurements
 from hil.calibration.model_file import RESULT_FORMAT, check_geometry_block
-from hil.campaign.events import Event, Message, PoseSkipped, Resumed, Suspended
+from hil.campaign.events import (
+    DriftFlagged,
+    Event,
+    Message,
+    PoseSkipped,
+    Resumed,
+    Suspended,
+    WarmupFinished,
+)
+from hil.campaign.reference_lines import describe as describe_reference
 from hil.errors import InputError
 from hil.files.inputs import json_number
 from hil.station.config import StationConfig
@@ -186,6 +195,14 @@ class ReportData:
     # ``hil calibrate --verify``: the ISO 9283 pose test of the calibrated model (``hil-verification/1``,
     # or why it has no figures: ``{"status": "not run", "reason"}``, an interrupted test's status)
     verification: Mapping[str, Any] | None = None
+    # warm-up and drift watch (`hil.campaign.warmup.ReferenceWatch.summary`: the reference's series,
+    # the largest drift, its limit, flagged, the warm-ups); None when both were off
+    drift: Mapping[str, Any] | None = None
+
+    @property
+    def drift_flagged(self) -> bool:
+        """The reference drifted beyond its limit while measuring (the verdict stays the validation's)."""
+        return bool((self.drift or {}).get("flagged"))
 
     @property
     def controller(self) -> Mapping[str, Any] | None:
@@ -220,6 +237,8 @@ def summarise_events(events: Iterable[Event]) -> tuple[tuple[Suspension, ...], t
             notes.append(f"{ev.role} pose {ev.index} skipped: {ev.reason}")
         elif isinstance(ev, Message) and ev.level in ("warning", "error"):
             notes.append(f"{ev.level}: {ev.text}")
+        elif (isinstance(ev, WarmupFinished) and not ev.converged) or isinstance(ev, DriftFlagged):
+            notes.append(str(describe_reference(ev)))
     return tuple(suspensions), tuple(notes)
 
 
@@ -245,6 +264,7 @@ def report_data_from(
     line_kind: str = "input line",
     validation_controller: ErrorStats | None = None,
     verification: Mapping[str, Any] | None = None,
+    drift: Mapping[str, Any] | None = None,
 ) -> ReportData:
     """Assemble a `ReportData` from what the campaign engine has at the end of a run.
 
@@ -263,7 +283,8 @@ def report_data_from(
     * ``validation_controller``: the controller's own model on the validation poses
       (`hil.campaign.controller.controller_validation`), shown beside before and after;
     * ``verification``: the pose test run after the calibration (``hil calibrate --verify``), its
-      document as the result embeds it under ``verification``.
+      document as the result embeds it under ``verification``;
+    * ``drift``: the warm-up and drift watch (`hil.campaign.plan.CampaignResult.drift`).
     """
     from hil.calibration.model_file import model_document, software_versions, tracker_pose
 
@@ -342,6 +363,7 @@ def report_data_from(
         validation_controller=(None if validation_controller is None
                                else ErrorSet.of_stats(validation_controller)),
         verification=dict(verification) if verification is not None else None,
+        drift=dict(drift) if drift is not None else None,
     )
 
 
@@ -480,7 +502,30 @@ def _from_result(doc: Mapping[str, Any], source: str) -> ReportData:
         validation_controller=(None if validation.get("controller") is None else _error_set(
             validation["controller"], pv.get("controller"), f"{source}: validation.controller")),
         verification=_verification(doc.get("verification"), source),
+        drift=_drift(doc.get("drift"), source),
     )
+
+
+def _drift(block: Any, source: str) -> Mapping[str, Any] | None:
+    """The result's ``drift`` block, checked as far as the report reads it: its series' points carry
+    a run, a station time and a drift (m, or null), its limit is a number."""
+    if block is None:
+        return None
+    if not isinstance(block, Mapping):
+        raise InputError(f"{source}: field 'drift' must be an object")
+    series = block.get("series")
+    if not isinstance(series, list):
+        raise InputError(f"{source}: field 'drift.series' must be a list of reference measurements")
+    for i, point in enumerate(series):
+        ok = (isinstance(point, Mapping) and _is_number(point.get("elapsed")) and _is_number(point.get("run"))
+              and (point.get("drift") is None or _is_number(point.get("drift"))))
+        if not ok:
+            raise InputError(f"{source}: field 'drift.series[{i}]' needs numbers 'run', 'elapsed' and "
+                             "'drift' (m, or null)")
+    for key in ("limit", "max"):
+        if block.get(key) is not None and not _is_number(block.get(key)):
+            raise InputError(f"{source}: field 'drift.{key}' must be a number (m)")
+    return dict(block)
 
 
 def _verification(block: Any, source: str) -> Mapping[str, Any] | None:

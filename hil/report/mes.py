@@ -85,6 +85,14 @@ def mes_result(data: ReportData) -> dict[str, Any]:
     * ``verification`` (``hil calibrate --verify`` only): the ISO 9283 pose test of the calibrated
       model, its ``hil-verification/1`` document (``results`` per mode: AP and RP per pose), or
       ``{"status": "not run", "reason"}``
+    * ``drift`` (when the warm-up or the drift watch was on): ``{"reference": q (rad), "every": N,
+      "limit": m, "max": m | null, "flagged": bool, "baseline": seq | null, "series": [{"seq", "run",
+      "phase": "warmup" | "drift", "elapsed": station s since the run started, "time": Unix s, "q",
+      "xyz": m (tracker frame), "moved": m | null, "drift": m from the baseline | null, "baseline",
+      "temperatures": °C | null}], "warmup": {"enabled", "interval", "limit", "max_time", "ran",
+      "seconds", "converged", "reason", "runs": [{"run", "seconds", "converged", "references"}]}}``.
+      ``flagged``: the reference drifted beyond ``limit`` while measuring; ``passed`` is still the
+      validation's verdict alone
     """
     obs = data.observability
     doc = _plain({
@@ -144,4 +152,6 @@ def mes_result(data: ReportData) -> dict[str, Any]:
         doc["per_pose"]["validation"]["controller"] = _per_pose(theirs)
     if data.verification is not None:  # likewise only with --verify
         doc["verification"] = _plain(dict(data.verification))
+    if data.drift is not None:  # likewise only with a warm-up or a drift watch
+        doc["drift"] = _plain(dict(data.drift))
     return doc

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import base64
 import io
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 from matplotlib.axes import Axes
@@ -170,4 +172,77 @@ def per_axis(vectors: np.ndarray, *, xlabel: str = "validation pose",
         patch.set_facecolor(color)
         patch.set_alpha(0.55)
     right.set_title("spread", fontsize=9)
+    return png(fig)
+
+
+WARMUP_COLOR = "#ff7f0e"  # orange: the arm warming up
+DRIFT_COLOR = AFTER  # blue: the drift watch while measuring
+
+
+def _run_offsets(series: list[Mapping[str, Any]]) -> dict[int, float]:
+    """Each run's start on one time axis (s): a resumed run starts where the previous one's last
+    reference measurement was, plus a minute's gap (each run's station clock starts at zero)."""
+    offsets: dict[int, float] = {}
+    end = 0.0
+    for run in sorted({int(s["run"]) for s in series}):
+        offsets[run] = end + (60.0 if offsets else 0.0)
+        end = offsets[run] + max(float(s["elapsed"]) for s in series if int(s["run"]) == run)
+    return offsets
+
+
+def drift_plot(drift: Mapping[str, Any]) -> bytes:
+    """The reference's displacement from its baseline (µm) against station time (min): warm-up
+    measurements in orange, the drift watch's in blue, the baseline as a star, the drift limit as a red
+    line; a resumed run's series follows the previous one's after a dotted line. With joint temperatures
+    reported, a lower panel shows them (°C)."""
+    series = [s for s in drift.get("series") or [] if s.get("drift") is not None]
+    temps = [s for s in series if s.get("temperatures")]
+    fig = _figure(3.6 if temps else 2.9)
+    if temps:
+        ax, tax = fig.subplots(2, 1, sharex=True, height_ratios=[3, 1])
+    else:
+        ax, tax = fig.add_subplot(), None
+    _style(ax)
+    offsets = _run_offsets(series) if series else {}
+    minutes = np.array([(offsets[int(s["run"])] + float(s["elapsed"])) / 60.0 for s in series])
+    y = np.array([float(s["drift"]) * 1e6 for s in series])
+    phase = np.array([str(s.get("phase")) for s in series])
+    handles: list[Any] = []
+    for name, color, label in (("warmup", WARMUP_COLOR, "warm-up"), ("drift", DRIFT_COLOR, "drift watch")):
+        mask = phase == name
+        if np.any(mask):
+            handles += ax.plot(minutes[mask], y[mask], "o-", color=color, ms=4, lw=1, label=label)
+    base = [i for i, s in enumerate(series) if s.get("baseline")]
+    if base:
+        handles += ax.plot(minutes[base], y[base], "*", color="black", ms=11, clip_on=False, zorder=3,
+                           label="baseline")
+    limit = drift.get("limit")
+    top = float(np.max(y)) if len(y) else 0.0
+    if isinstance(limit, int | float) and not isinstance(limit, bool):
+        handles.append(ax.axhline(float(limit) * 1e6, color=THRESHOLD, ls=":", lw=1.4,
+                                  label=f"drift limit {float(limit) * 1e6:g} µm"))
+        top = max(top, float(limit) * 1e6)
+    for run, start in offsets.items():
+        if run != min(offsets):
+            ax.axvline(start / 60.0, color="#6b7684", ls=":", lw=1)
+            if tax is not None:
+                tax.axvline(start / 60.0, color="#6b7684", ls=":", lw=1)
+    ax.set_ylim(-0.04 * top if top > 0 else -1.0, 1.08 * top if top > 0 else 1.0)
+    ax.set_ylabel("from baseline (µm)", fontsize=9)
+    ax.legend(handles=handles, fontsize=8, ncols=len(handles) or 1, loc="lower center",
+              bbox_to_anchor=(0.5, 1.0), frameon=False)
+    if tax is not None:
+        _style(tax)
+        tm = np.array([(offsets[int(s["run"])] + float(s["elapsed"])) / 60.0 for s in temps])
+        tv = np.array([np.asarray(s["temperatures"], dtype=float) for s in temps])
+        if np.allclose(tv, tv[:, :1]):  # one temperature for every joint: one line
+            tax.plot(tm, tv[:, 0], lw=0.9, label=f"joints 1–{tv.shape[1]}")
+        else:
+            for j in range(tv.shape[1]):
+                tax.plot(tm, tv[:, j], lw=0.9, label=f"joint {j + 1}")
+        tax.set_ylabel("joints (°C)", fontsize=9)
+        tax.legend(fontsize=7, ncols=6, loc="upper left", frameon=False)
+        tax.set_xlabel("station time (min)", fontsize=9)
+    else:
+        ax.set_xlabel("station time (min)", fontsize=9)
     return png(fig)

@@ -29,7 +29,7 @@ from hil.report.html import finite as _finite
 from hil.report.html import kv as _kv
 from hil.report.html import section as _section
 from hil.report.html import table as _table
-from hil.report.plots import errors_per_pose, histograms, per_axis
+from hil.report.plots import drift_plot, errors_per_pose, histograms, per_axis
 from hil.report.pose_test import calibration_section  # the pose test of hil calibrate --verify
 
 _ANGLE_SUFFIXES = (".rx", ".ry", ".rz")
@@ -40,7 +40,10 @@ CONTROLLER_MEANS = "the controller's own model (its factory calibration), tracke
 
 
 def parameter_unit(name: str) -> tuple[str, float]:
-    """Display unit and scale of an identification parameter: rotations in mrad, lengths in mm."""
+    """Display unit and scale of an identification parameter: rotations in mrad, lengths in mm,
+    joint compliances in µrad/Nm (a cobot's strain-wave joint is a few µrad per newton-metre)."""
+    if name.startswith("compliance."):
+        return ("µrad/Nm", 1e6)
     return ("mrad", 1e3) if name.endswith(_ANGLE_SUFFIXES) else ("mm", 1e3)
 
 
@@ -67,8 +70,22 @@ def _header(d: ReportData, generated: str) -> str:
 <p class="sub">{esc(when)}</p></div>
 <div class="verdict {verdict.lower()}"><div class="big">{verdict}</div>
 <div>validation RMS {esc(fmt_mm(d.validation_after.rms))} {cmp} acceptance {esc(fmt_mm(d.accept_rms))}</div>
-</div></header>
+{_drift_flag(d)}</div></header>
 <p class="generated">Generated {esc(generated)} by hil {esc(__version__)}.</p>"""
+
+
+def _drift_flag(d: ReportData) -> str:
+    """The verdict box's flag for a campaign whose reference drifted beyond its limit (the verdict
+    itself stays the validation's)."""
+    if not d.drift_flagged:
+        return ""
+    block = d.drift or {}
+    return (f'<div><b>DRIFT FLAGGED</b>: reference moved {esc(_um(block.get("max")))} '
+            f'(limit {esc(_um(block.get("limit")))})</div>')
+
+
+def _um(v: Any) -> str:
+    return f"{v * 1e6:.1f} µm" if _finite(v) else "—"
 
 
 def _improvement(before: ErrorSet, after: ErrorSet) -> str:
@@ -98,6 +115,17 @@ def _summary(d: ReportData) -> str:
         for key, value in d.iso9283.items():
             tiles.append((f"ISO 9283 {esc(key)}", f"<b>{fmt_mm(value)}</b>", "repeated validation poses"))
     tiles += _verification_tiles(d.verification)
+    if d.drift is not None:
+        block = d.drift
+        warm = block.get("warmup") or {}
+        if warm.get("ran"):
+            note = (f"warm-up {warm.get('seconds') or 0:.0f} s, "
+                    + ("settled" if warm.get("converged") else "did not settle"))
+        else:
+            note = "no warm-up"
+        flag = "FLAGGED: " if d.drift_flagged else ""
+        tiles.append(("Reference drift", f"<b>{esc(flag + _um(block.get('max')))}</b>",
+                      esc(f"limit {_um(block.get('limit'))}; {note}")))
     if d.observability is not None:
         o = d.observability
         pct = f"{o.percent:.1f} % of bound" if o.percent is not None else "bound unknown"
@@ -157,6 +185,46 @@ def _verification_tiles(doc: Mapping[str, Any] | None) -> list[tuple[str, str, s
             for mode, block in results.items() if isinstance(block, Mapping)]
 
 
+def _drift(d: ReportData) -> str:
+    """Warm-up and drift watch: what ran, what the reference did, the plot."""
+    block = d.drift or {}
+    warm = block.get("warmup") or {}
+    rows = []
+    if warm.get("ran"):
+        why = warm.get("reason") or "still moving beyond the limit at max_time"
+        settled = "yes" if warm.get("converged") else f"no — {why}; measured anyway"
+        every_s = fmt_num(warm.get("interval"), "g")
+        rows += [("warm-up", esc(f"{warm.get('seconds') or 0:.0f} s of cycling through the calibration "
+                                 f"poses, the reference re-measured every {every_s} s")),
+                 ("warm-up settled (two consecutive reference measurements within "
+                  f"{esc(_um(warm.get('limit')))})", esc(settled))]
+    else:
+        rows.append(("warm-up", esc("on, but nothing was left to measure in this run" if warm.get("enabled")
+                                    else "off (warmup.enabled = false)")))
+    for run in warm.get("runs") or []:
+        if isinstance(run, Mapping) and len(warm.get("runs") or []) > 1:
+            rows.append((esc(f"warm-up of run {run.get('run')}"),
+                         esc(f"{run.get('seconds') or 0:.0f} s, "
+                             + ("settled" if run.get("converged") else "did not settle"))))
+    every = block.get("every")
+    rows += [("drift watch", esc(f"the reference re-measured after every {every} poses" if every else "off")),
+             ("largest drift while measuring", esc(_um(block.get("max")))),
+             ("drift limit", esc(_um(block.get("limit")))),
+             ("flagged", esc("YES — the accept/reject verdict above is still the validation's"
+                             if d.drift_flagged else "no"))]
+    parts = ['<p class="muted">The arm\'s links grow as its joints warm up (about 0.1 mm per metre over the '
+             "first tens of minutes), so the campaign warms it up before measuring and re-measures a "
+             "reference pose while measuring (ISO 9283 §6.2, §7.6). Reference measurements are never "
+             "used in the fit or the validation. Drift is the reference's displacement from its baseline "
+             "(its position at the end of the warm-up).</p>", _kv(rows)]
+    if any(isinstance(s, Mapping) and s.get("drift") is not None for s in block.get("series") or []):
+        parts.append(_figure(drift_plot(block), "reference drift over the campaign",
+                             "Displacement of the reference pose from its baseline against station time: "
+                             "warm-up (orange), drift watch while measuring (blue), the baseline (star) and "
+                             "the drift limit (dotted red); a dotted vertical line marks a resumed run."))
+    return "".join(parts)
+
+
 def _calibration(d: ReportData) -> str:
     f = d.fit
     before = d.calibration_before
@@ -190,7 +258,7 @@ def _parameter_rows(params: Iterable[Any]) -> list[list[str]]:
     for p in params:
         unit, scale = parameter_unit(p.name)
         # The SMR offset and tracker pose are absolute placements, not errors: no significance.
-        placement_error = p.name.startswith(("joint", "flange"))
+        placement_error = p.name.startswith(("joint", "flange", "compliance"))
         ratio = abs(p.value) / p.std if placement_error and _finite(p.std) and p.std > 0 else math.nan
         rows.append([esc(p.name), esc(fmt_num(p.value * scale, ".4f")), esc(fmt_num(p.std * scale, ".4f")),
                      esc(unit), esc(fmt_num(ratio, ".1f"))])
@@ -220,10 +288,23 @@ def _parameters(d: ReportData) -> str:
     rest = [p for p in d.parameters if not p.name.startswith("tracker.")]
     note = ('<p class="muted">Deviations from the nominal geometry as 6-D placement errors of each '
             "joint origin and the flange (se(3) log coordinates: translations tx, ty, tz in mm, "
-            "rotations rx, ry, rz in mrad) and the SMR centre in the flange frame. σ is one standard "
+            "rotations rx, ry, rz in mrad), the SMR centre in the flange frame and, when the joints' "
+            "compliance was identified, each joint's compliance (µrad/Nm: the link lags its encoder by "
+            "it times the gravity torque the joint holds). σ is one standard "
             "deviation; |value|/σ below about 3 means the deviation is not distinguishable from noise "
             "(not shown for the SMR, a placement rather than an error).</p>")
-    parts = [note, _table(["parameter", "value", "σ", "unit", "|value|/σ"], _parameter_rows(rest), "num")]
+    parts = [note]
+    if any(p.name.startswith("compliance.") for p in rest):
+        payload = d.model.get("payload") if d.model is not None else None
+        load = (f"{payload['mass']:g} kg with its centre of mass at "
+                f"{', '.join(f'{v * 1e3:.0f}' for v in payload['com'])} mm in the flange frame"
+                if isinstance(payload, Mapping) and "mass" in payload else "no payload")
+        missing = [f"j{j}" for j in range(1, 7) if not any(p.name == f"compliance.j{j}" for p in rest)]
+        parts.append(f'<p class="muted">Compliance identified for the arm carrying {esc(load)}. '
+                     + (f"Not identified ({esc(', '.join(missing))}): those joints hold no gravity torque "
+                        "this payload and mounting would reveal; the model keeps them rigid.</p>"
+                        if missing else "</p>"))
+    parts.append(_table(["parameter", "value", "σ", "unit", "|value|/σ"], _parameter_rows(rest), "num"))
     if d.tracker_pose is not None:
         parts.append(_tracker_placement(d.tracker_pose))
     if tracker:
@@ -400,6 +481,7 @@ def render_html(data: ReportData, *, generated: str | None = None) -> str:
         _section("validation", "Validation on held-out poses", _validation(data)),
         *([_section("verification", "ISO 9283 pose test of the calibrated model",
                     calibration_section(data.verification))] if data.verification is not None else []),
+        *([_section("drift", "Warm-up and drift", _drift(data))] if data.drift is not None else []),
         _section("calibration", "Calibration fit", _calibration(data)),
         _section("parameters", "Identified parameters", _parameters(data)),
         _section("correlated", "Correlated parameters", _correlated(data)),

@@ -172,14 +172,19 @@ def _lost_limit(v: Any) -> str | None:
 _ALL_PARAMETERS = 6 * 6 + 6 + 3 + 6
 
 
-def minimum_calibration_poses(robot: str) -> tuple[int, int]:
+def minimum_calibration_poses(robot: str, compliance: bool = False, payload: Any = None,
+                              gravity: Any = None) -> tuple[int, int]:
     """(fewest calibration poses, identifiable parameters) of `robot`: the fit identifies the
     parameters from 3 coordinates per pose and keeps 3 to spare (`selector.design.minimum_poses`, the
-    rule the selector and the fit apply), so fewer would fail only after the bootstrap moved the arm."""
-    from hil.arm.kinematics import identifiable_parameters
+    rule the selector and the fit apply), so fewer would fail only after the bootstrap moved the arm.
+    With `compliance` the joints' identifiable compliances (for this payload and gravity) count too."""
+    from hil.arm.kinematics import identifiable_parameters, identifiable_with_compliance
     from selector.design import minimum_poses
 
-    n = len(identifiable_parameters(robot))
+    if compliance:
+        n = len(identifiable_with_compliance(robot, payload, gravity))
+    else:
+        n = len(identifiable_parameters(robot))
     return minimum_poses(n), n
 
 
@@ -205,6 +210,13 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # joint readings come at the RTDE rate (500 Hz e-Series, 125 Hz CB3): 1000 are 2-8 s per pose,
         # already far past what averaging the encoders' noise gains
         "joint_samples": Key("int", 10, _within(1, 1000), "joint readings averaged per pose"),
+        # what the arm carries during the campaign (Polyscope's Payload: mass and centre of mass in the
+        # flange frame); a compliant arm sags by compliance x the gravity torque, so the model needs it
+        "payload": Key("payload?", None, help="{mass = kg, com = [x, y, z]} in the flange frame (m)"),
+        # roll, pitch, yaw (rad) of the base in the world (Polyscope's Mounting tilt and rotation): a
+        # floor arm is [0, 0, 0], a ceiling arm [3.14159, 0, 0]; gravity is turned with it
+        "mounting": Key("vec3", (0.0, 0.0, 0.0), _each_within(2 * math.pi),
+                        "base orientation in the world (rpy, rad)"),
     },
     "tracker": {
         "protocol": Key("str", "geocom", _protocol,
@@ -266,9 +278,48 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "candidates": Key("int", 20000, _within(1, MAX_CANDIDATES), "candidate poses for the selector"),
         # numpy's generators take non-negative seeds (-1 was exit 70 in the simulator); 32 bits suffice
         "seed": Key("int", 1, _within(0, 2**32 - 1)),
+        # a UR's strain-wave joints sag by tenths of a millimetre under their own weight and payload
+        # (hil.arm.physical): the fit identifies the joints' compliance beside the geometry
+        "compliance": Key("bool", True, help="identify the joints' compliance (rad/Nm) with the geometry"),
         "max_consecutive_lost": Key("int", 3, _lost_limit,
                                     "poses in a row that lose the beam before the run stops, saying the "
                                     "tracker position looks wrong"),
+    },
+    # Warm-up before measuring (ISO 9283:1998 §6.2, conditions prior to testing: the robot is warmed up
+    # before it is measured; every tracker calibration guide says the same). A UR's joints warm by a few
+    # kelvin over the first tens of minutes of motion and its aluminium links grow with them (2.3e-5 /K,
+    # `hil.arm.thermal`): a metre of arm grows by about 0.1 mm, the size of the whole acceptance. The run
+    # cycles through the planned calibration poses and re-measures a reference pose every `interval`
+    # seconds until two consecutive measurements agree within `limit`.
+    "warmup": {
+        "enabled": Key("bool", True, help="warm the arm up before measuring"),
+        # a joint's warm-up time constant is about 15 min (`hil.arm.thermal`, τ = 900 s): a check every
+        # 2 min sees the growth per interval fall (17 µm, then 15, 13... on a metre of UR5e arm) and costs
+        # one reference visit (~10 s, under 10 % of the motion); under 10 s is mostly reference visits, and
+        # over an hour no warm-up is seen at all
+        "interval": Key("float", 120.0, _within(10, 3600, "s"),
+                        "seconds of cycling motion between reference measurements"),
+        # a tenth of the default 0.1 mm acceptance; a tracker repeats an averaged point to a few µm
+        # (AT960: ±(15 µm + 6 µm/m) MPE, typically half, and 5 samples averaged), so 10 µm is met once
+        # the growth per interval has fallen to a few µm; 1 mm is a value typed in millimetres
+        "limit": Key("float", 10e-6, _within(0, 1e-3, "m", lo_open=True),
+                     "warm when two consecutive reference measurements differ by less (m)"),
+        # 40 min ≈ 2.7 τ: 93 % of the rise; an arm still moving by more than the limit after that is
+        # drifting for another reason (the tracker's stand, the room): the run goes on, with a warning
+        "max_time": Key("float", 2400.0, _within(10, 4 * 3600, "s"),
+                        "longest warm-up (s); then the run measures anyway, with a warning"),
+    },
+    # Drift watch (ISO 9283:1998 §7.6, drift of pose characteristics): the reference pose is measured
+    # again every `every` poses; a campaign whose reference moved more than `limit` from where it was
+    # after the warm-up is flagged (it keeps the verdict its validation gives).
+    "drift": {
+        # every 10 poses is a reference visit per ~2 min of measuring (+10 % time); 0 turns it off
+        "every": Key("int", 10, _within(0, MAX_POSES),
+                     "re-measure the reference after every N poses (0: off)"),
+        # 30 % of the default 0.1 mm acceptance: a drift that large is a third of the error budget the
+        # calibration is judged on; three times the warm-up limit, so noise alone does not flag a campaign
+        "limit": Key("float", 30e-6, _within(0, 1e-3, "m", lo_open=True),
+                     "flag the campaign when the reference moved more than this (m)"),
     },
     "timeouts": {
         # how long the run waits before calling something lost; the longest move of a UR arm (half a
@@ -333,8 +384,28 @@ class StationConfig:
         return parse_config(merged, self.source)
 
     def as_dict(self) -> dict[str, dict[str, Any]]:
-        return {s: {k: (list(v) if isinstance(v, tuple) else v) for k, v in d.items()}
-                for s, d in self.values.items()}
+        return {s: {k: _plain(v) for k, v in d.items()} for s, d in self.values.items()}
+
+    @property
+    def payload(self) -> Any:
+        """The robot's `hil.arm.payload.Payload` (None: nothing on the flange)."""
+        return self.values["robot"]["payload"]
+
+    @property
+    def gravity(self) -> Any:
+        """Gravity (m/s²) in the robot base frame, from ``robot.mounting``."""
+        from hil.arm.payload import gravity_of_mounting
+
+        return gravity_of_mounting(self.values["robot"]["mounting"])
+
+
+def _plain(v: Any) -> Any:
+    """A config value as TOML/JSON holds it (tuples as lists, a payload as its table)."""
+    if isinstance(v, tuple):
+        return list(v)
+    if hasattr(v, "to_dict"):
+        return v.to_dict()
+    return v
 
 
 def _coerce(value: Any, key: Key, where: str) -> Any:
@@ -357,6 +428,11 @@ def _coerce(value: Any, key: Key, where: str) -> Any:
         if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
             raise InputError(f"{where}: must be a number, got {value!r}")
         return float(value)
+    if kind == "payload":
+        from hil.arm.payload import Payload
+
+        # with_overrides re-parses the parsed values: a Payload is already checked
+        return value if isinstance(value, Payload) else Payload.from_dict(value, where)
     if kind == "vec3":
         ok = (isinstance(value, list | tuple) and len(value) == 3
               and all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
@@ -395,9 +471,18 @@ def parse_config(data: dict[str, Any], source: str = "<config>") -> StationConfi
     lo, hi = values["keep_in"]["min"], values["keep_in"]["max"]
     if any(a >= b for a, b in zip(lo, hi, strict=True)):
         raise InputError(f"{source}: keep_in.min must be below keep_in.max on every axis")
+    warmup = values["warmup"]
+    if warmup["max_time"] < warmup["interval"]:
+        raise InputError(f"{source}: warmup.max_time: {warmup['max_time']:g} s is shorter than one "
+                         f"warmup.interval ({warmup['interval']:g} s): the warm-up could not check the arm "
+                         "once")
     cal, robot = values["campaign"]["calibration_poses"], values["robot"]["type"]
-    if 3 * cal < _ALL_PARAMETERS + 3:  # else enough for any arm, known without importing the kinematics
-        need, n = minimum_calibration_poses(robot)
+    compliance = values["campaign"]["compliance"]
+    if 3 * cal < _ALL_PARAMETERS + 6 * compliance + 3:  # else enough for any arm, known without kinematics
+        from hil.arm.payload import gravity_of_mounting
+
+        need, n = minimum_calibration_poses(robot, compliance, values["robot"]["payload"],
+                                            gravity_of_mounting(values["robot"]["mounting"]))
         if cal < need:
             raise InputError(f"{source}: campaign.calibration_poses: {cal} is too few: identifying the {n} "
                              f"parameters of a {robot} from 3 coordinates per pose needs at least {need}")

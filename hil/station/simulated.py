@@ -3,6 +3,10 @@
 Shared by ``hil calibrate --sim``, ``hil moveb run --sim`` and ``hil tui --sim``. The simulator's
 address is random, so a run is identified in the store by what it simulates (robot, seed, truth
 file's hash) rather than by where it listens: re-running the same command resumes the same campaign.
+
+The configuration says what an operator of that arm would know: the payload on its flange
+(``robot.payload``, the truth's) and how its base is mounted (``robot.mounting``, from the truth's
+gravity); never the truth's compliance or warm-up, which are what hil has to find out or cope with.
 """
 
 from __future__ import annotations
@@ -13,6 +17,8 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from hil.arm.catalog import get_robot
 from hil.station.config import StationConfig, default_config
 from hil.station.robot_type import Claim, agreed_robot
@@ -20,7 +26,7 @@ from hil.station.robot_type import Claim, agreed_robot
 
 @contextlib.contextmanager
 def simulated_station(robot: str | None = None, truth: str | None = None, speed: float = 1.0, seed: int = 1,
-                      tracker_protocol: str = "geocom",
+                      tracker_protocol: str = "geocom", *, rigid: bool = False,
                       **overrides: Any) -> Iterator[tuple[StationConfig, dict[str, Any], dict, Any]]:
     """(config to run, config identifying the run, hidden truth document, running simulator).
 
@@ -29,7 +35,8 @@ def simulated_station(robot: str | None = None, truth: str | None = None, speed:
 
     The robot is `robot`, else the truth's, else a UR5e; a `robot` the truth disagrees with is refused
     (InputError naming both) rather than silently replaced, so the simulated controller always reports
-    the arm the caller asked for and the truth describes.
+    the arm the caller asked for and the truth describes. `rigid` (without `truth`): a random arm
+    without compliance, payload and warm-up.
     """
     truth_sha = ""
     if truth:
@@ -43,12 +50,13 @@ def simulated_station(robot: str | None = None, truth: str | None = None, speed:
     robot = get_robot("ur5e" if robot is None else robot).name
     from mocks.station import start_station
 
-    sim = start_station(robot=robot, truth=truth, speed=speed, seed=seed)
+    sim = start_station(robot=robot, truth=truth, speed=speed, seed=seed, rigid=rigid)
     try:
         station = sim.info["services"][0]
+        known = {**operator_knowledge(station["truth"]), **overrides}
         base = default_config().with_overrides(
             station__name="simulated station", robot__type=robot, robot__speed=1.0,
-            robot__acceleration=2.0, campaign__seed=seed, tracker__protocol=tracker_protocol, **overrides)
+            robot__acceleration=2.0, campaign__seed=seed, tracker__protocol=tracker_protocol, **known)
         url = station["tracker_emscon_url"] if tracker_protocol == "emscon" else station["tracker_url"]
         config = base.with_overrides(robot__address=sim.address, tracker__url=url)
         identity = base.with_overrides(robot__address="sim",
@@ -56,3 +64,22 @@ def simulated_station(robot: str | None = None, truth: str | None = None, speed:
         yield config, identity, station["truth"], sim
     finally:
         sim.stop()
+
+
+def operator_knowledge(truth: dict[str, Any]) -> dict[str, Any]:
+    """Config overrides for what the simulated arm's operator knows: its payload and its mounting.
+
+    The mounting is the roll and pitch that turn floor gravity into the truth's (yaw does not change
+    gravity): with u = −g/|g| the base's world z axis seen in the base frame, u = (−sin p, cos p sin r,
+    cos p cos r) for R = Ry(p)·Rx(r).
+    """
+    out: dict[str, Any] = {}
+    if truth.get("payload") is not None:
+        out["robot__payload"] = truth["payload"]
+    gravity = truth.get("gravity")
+    if gravity is not None:
+        u = -np.asarray(gravity, dtype=float) / np.linalg.norm(gravity)
+        pitch = float(np.arcsin(np.clip(-u[0], -1.0, 1.0)))
+        roll = float(np.arctan2(u[1], u[2]))
+        out["robot__mounting"] = [roll, pitch, 0.0]
+    return out

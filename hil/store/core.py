@@ -1178,18 +1178,22 @@ class Store:
         spread = value.get("q_spread")
         return spread if value.get("index") == index and isinstance(spread, list) else None
 
-    def event_log(self, campaign: str, *, after: int = 0) -> list[tuple[int, dict[str, Any]]]:
+    def event_log(self, campaign: str, *, after: int = 0,
+                  types: Sequence[str] | None = None) -> list[tuple[int, dict[str, Any]]]:
         """``(seq, event dict)`` pairs with seq > `after`, in order: a reader polls with the last
-        seq it saw (the TUI following a run from another process, a report)."""
+        seq it saw (the TUI following a run from another process, a report). `types`: only events of
+        these type names (``("ReferenceMeasured",)``: a campaign's reference measurements, which the
+        log alone keeps — they are never campaign points; `hil.campaign.warmup`)."""
         e = tb.events
-        rows = self._query(lambda conn: conn.execute(
-            select(e.c.seq, e.c.data).where(e.c.campaign == campaign, e.c.seq > after)
-            .order_by(e.c.seq)).all())
+        q = select(e.c.seq, e.c.data).where(e.c.campaign == campaign, e.c.seq > after)
+        if types is not None:
+            q = q.where(e.c.type.in_(list(types)))
+        rows = self._query(lambda conn: conn.execute(q.order_by(e.c.seq)).all())
         return [(seq, json.loads(data)) for seq, data in rows]
 
-    def events(self, campaign: str, *, after: int = 0) -> list[Event]:
+    def events(self, campaign: str, *, after: int = 0, types: Sequence[str] | None = None) -> list[Event]:
         """The log as Event objects (types this version does not know are left out)."""
-        return [Event.from_dict(d) for _, d in self.event_log(campaign, after=after)
+        return [Event.from_dict(d) for _, d in self.event_log(campaign, after=after, types=types)
                 if d.get("event") in Event.registry]
 
 

@@ -43,7 +43,10 @@ def config_hash(config: Mapping[str, Any]) -> str:
 #   verify.*        — the ISO 9283 test's cube and cycles, which a calibration never uses (a
 #                     verification carries them in an identity block of its own, `hil.verify.session`);
 #                     stored configurations from before the section existed have none, so no stored
-#                     hash changes.
+#                     hash changes;
+#   warmup.*, drift.* — how long the arm is warmed up before measuring and how often a reference pose
+#                     is re-measured: the same poses are measured (a resumed run warms up again
+#                     anyway); dropped whole, like verify, so no stored hash changes either.
 # Everything else stays: the robot type and motion settings, the tracker's protocol (GeoCOM and emScon
 # measure differently: a stationary measuring time, a reflector choice), its position guess and the
 # atmospheric correction (which change every distance), the SMR, the keep-in box, the campaign's
@@ -56,6 +59,8 @@ MEASUREMENT_IGNORED: Mapping[str, tuple[str, ...] | None] = {
     "timeouts": None,
     "store": None,
     "verify": None,
+    "warmup": None,
+    "drift": None,
 }
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from hil.campaign.events import (
+    DriftFlagged,
     Event,
     Message,
     PhaseChanged,
@@ -18,6 +19,7 @@ from hil.campaign.events import (
     PoseReached,
     PoseSkipped,
     PoseStarted,
+    ReferenceMeasured,
     Resumed,
     RunFinished,
     RunStarted,
@@ -25,7 +27,10 @@ from hil.campaign.events import (
     Suspended,
     SuspendExtended,
     ValidationDone,
+    WarmupFinished,
+    WarmupProgress,
 )
+from hil.campaign.reference_lines import describe as describe_reference
 
 # Suspended.kind -> (station field, reading while suspended, reading once resumed); the run's own
 # events keep the Station screen current while the run has the devices (it does not poll them then).
@@ -110,6 +115,9 @@ class RunState:
     plan: PlanReady | None = None
     messages: list[str] = field(default_factory=list)
     ended: bool = False  # the session's final word on the run arrived (see `end`)
+    # warm-up and drift watch: the latest line about the reference pose (`hil.campaign.reference_lines`)
+    reference_line: str = ""
+    drift_flagged: bool = False  # the reference drifted beyond its limit (the verdict stays validation's)
 
     @property
     def measured(self) -> int:
@@ -172,6 +180,11 @@ class RunState:
             self.validation = event
         elif isinstance(event, Message):
             self.messages.append(f"{event.level}: {event.text}")
+        elif isinstance(event, WarmupProgress | WarmupFinished | ReferenceMeasured | DriftFlagged):
+            if self.drift_flagged and not isinstance(event, DriftFlagged):
+                return  # the flag stays in view once raised
+            self.reference_line = describe_reference(event) or self.reference_line
+            self.drift_flagged = self.drift_flagged or isinstance(event, DriftFlagged)
         elif isinstance(event, RunFinished):
             self.finished, self.active, self.suspended = event, False, None
             self.suspend_deadline = None

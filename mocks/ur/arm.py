@@ -9,17 +9,23 @@ one re-entrant lock, so it is safe to read ``true_joints()`` from another servic
 Encoder noise is added to ``actual_q`` only; ``actual_TCP_pose`` is computed from ``actual_q`` with the
 controller's *own* model (nominal DH plus its factory deltas, `mocks.ur.hil_model.controller_fk`), as a
 real controller does not know the arm's hidden errors. `set_fk` swaps that model (a new calibration).
+
+``joint_temperatures`` come from `SimArm.temperatures`, a function of the controller's running time set by
+whoever knows how the arm warms (the simulated station, from its truth's thermal block); without one
+every joint stays at the lab's `AMBIENT_TEMPERATURE`.
 """
 
 from __future__ import annotations
 
 import logging
 import threading
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
 
+from hil.calibration.synthetic import ENCODER_SIGMA
 from mocks.ur.clock import SimClock
 from mocks.ur.kin import FkFn, matrix_to_pose, pose_to_matrix
 from mocks.ur.motion import Decelerate, JointMove, LinearMove, MotionError
@@ -33,6 +39,15 @@ SAFETY_STOP_DECEL = 8.0  # rad/s^2 of the fastest joint in a category-1/2 stop
 # replaced by another): a real controller brings the arm to a controlled stop on its trajectory with the
 # drives powered (UR user manual, "Stop Categories": category 2), it never lets the last motion run on.
 PROGRAM_STOP_DECEL = 4.0
+#: °C, a joint's temperature when it has not warmed up: a lab's air. 20–25 °C is an air-conditioned
+#: workshop (ISO 1 puts the reference temperature of dimensional metrology at 20 °C); UR's own guideline
+#: takes 21 °C of internal joint temperature as warmed enough for full speed ("Robot start-up in cold
+#: environments", universal-robots.com, Robot care & maintenance), so an idle arm in a 25 °C lab is warm
+#: enough to run.
+AMBIENT_TEMPERATURE = 25.0
+
+#: The joints' temperatures (°C, 6 values) after `t` simulated seconds of running.
+TemperatureFn = Callable[[float], Sequence[float]]
 
 
 class Program(Protocol):
@@ -54,7 +69,7 @@ class ArmConfig:
     upper: np.ndarray = field(default_factory=lambda: np.full(6, 2 * np.pi))
     max_speed: np.ndarray = field(default_factory=lambda: np.array([3.14, 3.14, 3.14, 3.14, 3.14, 3.14]))
     rate_hz: float = 500.0
-    encoder_noise: float = 2e-6  # rad, standard deviation of actual_q around the true joints
+    encoder_noise: float = ENCODER_SIGMA  # rad, standard deviation of actual_q around the true joints
     seed: int = 0
     q_home: np.ndarray = field(
         default_factory=lambda: np.array([0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0]))
@@ -97,6 +112,7 @@ class SimArm:
         self.steady_since: float | None = self._t_last
         self.snapshot: dict[str, Any] = {}
         self.listeners: list[Any] = []  # callables(event: str, **info) told about safety events
+        self.temperatures: TemperatureFn | None = None  # None: every joint at AMBIENT_TEMPERATURE
         self._refresh_snapshot()
 
     # ----------------------------------------------------------------- kinematics
@@ -367,6 +383,27 @@ class SimArm:
                 self.motion = Decelerate(self.qd, SAFETY_STOP_DECEL)
             self._refresh_snapshot()
 
+    def set_encoder_noise(self, sigma: float) -> None:
+        """Standard deviation (rad) of ``actual_q`` around the true joints from the next cycle on."""
+        if not (np.isfinite(sigma) and sigma >= 0):
+            raise ValueError(f"encoder noise must be a non-negative number of radians, got {sigma!r}")
+        with self.lock:
+            self.config.encoder_noise = float(sigma)
+
+    def set_temperatures(self, temperatures: TemperatureFn | None) -> None:
+        """Report joint temperatures from `temperatures(running seconds)` from the next cycle on."""
+        with self.lock:
+            self.temperatures = temperatures
+
+    def _joint_temperatures(self) -> list[float]:
+        """°C per joint at the current running time (the controller's timestamp)."""
+        if self.temperatures is None:
+            return [AMBIENT_TEMPERATURE] * 6
+        values = [float(v) for v in self.temperatures(self.timestamp)]
+        if len(values) != 6:
+            raise ValueError(f"joint temperatures: expected 6 values, got {len(values)}")
+        return values
+
     def _refresh_snapshot(self) -> None:
         noise = self._rng.normal(0.0, self.config.encoder_noise, 6) if self.config.encoder_noise > 0 else 0.0
         self.actual_q = self.q + noise
@@ -393,7 +430,7 @@ class SimArm:
             "target_TCP_pose": matrix_to_pose(T_tgt).tolist(),
             "target_TCP_speed": zeros6,
             "actual_digital_input_bits": 0,
-            "joint_temperatures": [30.0] * 6,
+            "joint_temperatures": self._joint_temperatures(),
             "actual_execution_time": 0.2,
             "robot_mode": int(self.robot_mode),
             "joint_mode": [253 if self.robot_mode == RobotMode.RUNNING else 255] * 6,

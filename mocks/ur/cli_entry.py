@@ -13,6 +13,7 @@ import sys
 from collections.abc import Sequence
 from typing import Any
 
+from hil.calibration.synthetic import ENCODER_SIGMA
 from mocks.ur.controller import SimConfig
 from mocks.ur.process import serve
 
@@ -32,7 +33,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--serial", default="20235500001")
     p.add_argument("--local-control", action="store_true", help="start in local control (not remote)")
     p.add_argument("--speed-slider", type=float, default=1.0, help="speed slider fraction 0..1")
-    p.add_argument("--encoder-noise", type=float, default=2e-6, help="rad, std of actual_q")
+    p.add_argument("--encoder-noise", type=float, default=ENCODER_SIGMA,
+                   help=f"rad, std of actual_q (default {ENCODER_SIGMA:g}, a UR joint's)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--fault", action="append", default=[], choices=FAULTS,
                    help="fault active from the start (repeatable)")

@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from hil.arm.controller_model import ControllerCalibration
+from hil.calibration.synthetic import ENCODER_SIGMA
 from mocks.ur.arm import ArmConfig, SimArm
 from mocks.ur.clock import SimClock
 from mocks.ur.dashboard import DashboardServer
@@ -76,7 +77,7 @@ class SimConfig:
     secondary_port: int = 30002  # secondary client interface; 0 = any free port
     control_port: int | None = 0  # JSON-lines fault channel; 0 = any free port, None = off
     rate_hz: float | None = None  # default 500 (e-series) / 125 (CB3)
-    encoder_noise: float = 2e-6
+    encoder_noise: float = ENCODER_SIGMA  # rad, std of actual_q (hil.calibration.synthetic.ENCODER_SIGMA)
     seed: int = 0
     q_home: list[float] | None = None
     lower: list[float] | None = None

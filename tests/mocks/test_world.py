@@ -1,6 +1,8 @@
 import numpy as np
+import pytest
 
 from hil.arm.geometry import Geometry, look_at_tracker
+from hil.arm.kinematics import Kinematics
 from mocks.world import World
 
 
@@ -56,3 +58,57 @@ def test_start_pose_sees_the_tracker_for_any_random_truth():
         home = world.home_pose(np.random.default_rng(1))
         world.joints = lambda home=home: home
         assert world.target().visible, (seed, world.target().reason)
+
+
+def test_a_warming_arm_moves_the_smr_by_expansion_times_rise_times_reach():
+    """Every link translation grows by expansion·ΔT(t) (DESIGN.md); the SMR offset does not."""
+    from hil.arm.thermal import Thermal
+
+    thermal = Thermal(expansion=2.3e-5, rise=6.0, time_constant=900.0)
+    truth = Geometry.nominal("ur5e", smr=(0.0, 0.0, 0.045), tracker=look_at_tracker((2.0, 0.0, 0.4)))
+    truth.thermal = thermal
+    q = np.array([0.3, -1.2, 1.4, -1.7, -1.4, 0.2])
+    now = [0.0]
+    world = World(truth, lambda: q, clock=lambda: now[0])
+    cold, _ = world.state(q)
+    flange = Kinematics(truth).flange_poses(q)[0, :3, 3]  # every translation of the chain grows
+    for t in (60.0, 900.0, 3600.0):
+        now[0] = t
+        warm, _ = world.state(q)
+        expected = thermal.expansion * thermal.rise_at(t) * np.linalg.norm(flange)
+        assert np.linalg.norm(warm - cold) == pytest.approx(expected, rel=1e-6)
+    assert np.linalg.norm(warm - cold) > 1e-4  # a tenth of a millimetre after an hour: what hil must see
+    # without a clock the arm stays cold
+    assert np.allclose(World(truth, lambda: q).state(q)[0], cold, atol=1e-12)
+
+
+def test_the_world_rebuilds_the_warm_arm_only_when_it_grew():
+    from hil.arm.thermal import Thermal
+
+    truth = Geometry.nominal("ur5e", smr=(0.0, 0.0, 0.045), tracker=look_at_tracker((2.0, 0.0, 0.4)))
+    truth.thermal = Thermal()
+    now = [100.0]
+    world = World(truth, lambda: np.zeros(6), clock=lambda: now[0])
+    world.state(np.zeros(6))
+    built = world._kin
+    now[0] += 1e-3  # a millisecond grows a metre by 1.5e-13 m: the same model
+    world.state(np.zeros(6))
+    assert world._kin is built
+    now[0] += 10.0
+    world.state(np.zeros(6))
+    assert world._kin is not built
+
+
+def test_the_world_sees_the_arm_synthetic_measurements_see(rng):
+    """The simulator's world and `synthetic.measure` describe one arm: compliant, loaded, warming."""
+    from hil.calibration.synthetic import random_truth, true_points
+
+    truth = random_truth("ur5e", np.random.default_rng(4))
+    assert truth.compliant and truth.payload is not None and truth.thermal is not None
+    q = rng.uniform(-np.pi, np.pi, (5, 6))
+    world = World(truth, lambda: q[0], clock=lambda: 1200.0)
+    seen = np.array([world.state(qi)[0] for qi in q])
+    np.testing.assert_allclose(seen, true_points(truth, q, np.full(5, 1200.0)), atol=1e-12)
+    rigid = World(truth.rigid(), lambda: q[0], clock=lambda: 1200.0)
+    sag = np.linalg.norm(seen - np.array([rigid.state(qi)[0] for qi in q]), axis=1)
+    assert np.all(sag > 1e-6)  # the compliant, warm arm is not the rigid cold one

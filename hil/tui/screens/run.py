@@ -110,6 +110,9 @@ class RunScreen(HilScreen):
         yield Static(id="run-status")
         yield ProgressBar(id="run-progress", total=1, show_eta=False)
         yield Static(id="run-step")
+        drift = Static(id="run-drift")  # warm-up and drift watch: shown once there is something to say
+        drift.display = False
+        yield drift
         table: DataTable[Text] = DataTable(id="poses", cursor_type="row", zebra_stripes=True)
         for label, key in COLUMNS:
             table.add_column(Text(label), key=key)  # Text: "[deg]" is not markup
@@ -204,7 +207,14 @@ class RunScreen(HilScreen):
             line.append("  (resumes by itself once cleared)")
         banner.update(Text.assemble(line, "\n", (s.message, "bold")))
 
+    def _drift(self, run: RunState) -> None:
+        """The warm-up's and the drift watch's latest line (red once the campaign is flagged)."""
+        line = self.query_one("#run-drift", Static)
+        line.display = bool(run.reference_line)
+        line.update(Text(run.reference_line, style="bold red" if run.drift_flagged else "cyan"))
+
     def _status(self, run: RunState) -> None:
+        self._drift(run)
         status = self.query_one("#run-status", Static)
         bar = self.query_one("#run-progress", ProgressBar)
         step = self.query_one("#run-step", Static)

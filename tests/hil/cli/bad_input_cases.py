@@ -595,6 +595,10 @@ def _cases() -> list[Case]:
     add("identify", "--out=directory", [*ident, "--out", f"{d}/sub"], ["/sub"])
     add("identify", "--out=store", [*ident, "--out", f"{d}/store.db"], ["store.db"],
         env={"HIL_DB": f"{d}/store.db"})
+    for v in ("abc", "3,0,0", "-1", "1e9", "nan", "3,0,0,9"):
+        add("identify", f"--payload={v}", [*ident, "--compliance", f"--payload={v}", *out_model], ["--payload"])
+    for v in ("1,2", "a,b,c", "nan,0,0"):
+        add("identify", f"--mounting={v}", [*ident, f"--mounting={v}", *out_model], ["--mounting"])
 
     # ---------------------------------------------------------------- validate
     val = ["validate", "--model", f"{d}/model.json", "--measurements", f"{d}/validation.csv"]
@@ -615,6 +619,8 @@ def _cases() -> list[Case]:
     add("fk", "--out=--joints", [*fk, "--out", f"{d}/joints.csv"], ["joints.csv"])
     add("fk", "--out=--model", [*fk, "--out", f"{d}/model.json"], ["model.json"])
     add("fk", "--out=directory", [*fk, "--out", f"{d}/sub"], ["/sub"])
+    for v in ("abc", "2,1", "-3", "inf", "1,0,0,5"):
+        add("fk", f"--payload={v}", [*fk, f"--payload={v}", "--out", f"{d}/p.csv"], ["--payload"])
 
     # ---------------------------------------------------------------- export
     ex = ["export", "--model", f"{d}/model.json", "--format", "urdf"]
@@ -688,11 +694,15 @@ def _cases() -> list[Case]:
                                       f"{d}/model.json"], ["model.json"])
     add("synth", "--out-dir=holds-the---truth", ["synth", "--poses", "12", "--validation", "3", "--truth",
                                                  f"{d}/truth.json", "--out-dir", d], ["truth.json"])
+    add("synth", "--rigid-with---truth", [*sy, "--rigid", "--truth", f"{d}/truth.json"],
+        ["--rigid", "--truth"])
 
     # ---------------------------------------------------------------- select
     se = ["select", "--robot", "ur5e", "--count", "12", "--candidates", "100", "--method", "random",
           "--quiet", "--no-bound", "--out", f"{d}/poses.json"]
     add("select", "--robot=ur99", [*se, "--robot", "ur99"], ["ur99"])
+    for v in ("x", "1,2", "-2", "500"):
+        add("select", f"--payload={v}", [*se, "--compliance", f"--payload={v}"], ["--payload"])
     numbers("select", se, "--count", (*BAD_COUNTS, "1000000000"))
     numbers("select", se, "--candidates", (*BAD_COUNTS, "1000000000"))
     numbers("select", se, "--seed", ("-1", "abc"))

@@ -1,0 +1,62 @@
+"""Thermal growth of a simulated arm as it warms up (truth only; DESIGN.md, "Non-geometric errors").
+
+Aluminium links lengthen with temperature, and a UR's joints warm up over the first tens of minutes of
+running, so an arm measured cold and used warm is a few hundredths to tenths of a millimetre off. The
+simulator scales every joint origin's and the flange's translation by 1 + expansion·ΔT(t), with
+ΔT(t) = rise·(1 − exp(−t/time_constant)) (a first-order warm-up, t the running time); the SMR offset
+and the tracker pose do not grow. Models never carry this block: hil handles the drift by warming the
+arm up and watching a reference pose, not by predicting temperature.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from hil.errors import InputError
+
+#: Linear expansion coefficient of aluminium alloys (1/K): 23.1e-6 for pure Al, 23.6e-6 for 6061-T6
+#: (ASM Handbook Vol. 2; MatWeb "Aluminum 6061-T6"); UR's links are cast and extruded aluminium.
+ALUMINIUM_EXPANSION = 2.3e-5
+
+
+@dataclass(frozen=True)
+class Thermal:
+    """Expansion coefficient (1/K), final temperature rise (K) and warm-up time constant (s)."""
+
+    expansion: float = ALUMINIUM_EXPANSION
+    rise: float = 6.0
+    time_constant: float = 900.0
+
+    def rise_at(self, t: float) -> float:
+        """ΔT (K) after `t` seconds of running."""
+        return self.rise * (1.0 - math.exp(-max(t, 0.0) / self.time_constant))
+
+    def scale_at(self, t: float) -> float:
+        """The factor every link translation is multiplied by after `t` seconds of running."""
+        return 1.0 + self.expansion * self.rise_at(t)
+
+    def to_dict(self) -> dict[str, float]:
+        return {"expansion": self.expansion, "rise": self.rise, "time_constant": self.time_constant}
+
+    @classmethod
+    def from_dict(cls, data: Any, source: str = "thermal") -> Thermal:
+        """Parse the truth's ``thermal`` block; InputError naming the field when wrong."""
+        if not isinstance(data, Mapping):
+            raise InputError(f"{source}: expected an object with 'expansion', 'rise' and 'time_constant'")
+        out = {}
+        # bounds: invar to plastics (0..2e-4 /K), a rise a running arm can have (0..60 K), a warm-up
+        # between a second and a day
+        for key, low, high in (("expansion", 0.0, 2e-4), ("rise", 0.0, 60.0),
+                               ("time_constant", 1.0, 86400.0)):
+            if key not in data:
+                raise InputError(f"{source}: missing field '{key}'")
+            v = data[key]
+            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+                raise InputError(f"{source}.{key}: expected a finite number, got {v!r}")
+            if not low <= v <= high:
+                raise InputError(f"{source}.{key}: {v:g} is outside {low:g}..{high:g}")
+            out[key] = float(v)
+        return cls(**out)

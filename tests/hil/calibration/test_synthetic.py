@@ -1,0 +1,87 @@
+"""Synthetic truths are real arms (compliance, payload, warm-up) and measure as the simulator does."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hil.arm.kinematics import Kinematics
+from hil.arm.payload import Payload, gravity_of_mounting
+from hil.arm.physical import typical_compliance
+from hil.arm.thermal import Thermal
+from hil.calibration.model_file import load_truth, truth_document, write_json
+from hil.calibration.synthetic import (
+    ENCODER_SIGMA,
+    Noise,
+    measure,
+    random_configurations,
+    random_truth,
+    smr_payload,
+)
+
+
+def test_a_realistic_truth_is_the_rigid_one_plus_its_non_geometric_blocks() -> None:
+    rng_real, rng_rigid = np.random.default_rng(7), np.random.default_rng(7)
+    real = random_truth("ur5e", rng_real)
+    rigid = random_truth("ur5e", rng_rigid, rigid=True)
+    for a, b in zip([*real.joints, real.flange, real.tracker], [*rigid.joints, rigid.flange, rigid.tracker],
+                    strict=True):
+        assert np.array_equal(a.homogeneous, b.homogeneous)
+    assert np.array_equal(real.smr, rigid.smr)
+    # the caller's generator went on the same way: poses and noise drawn next are the same
+    assert rng_real.random() == rng_rigid.random()
+    assert rigid.compliance is None and rigid.payload is None and rigid.thermal is None
+    factor = real.compliance / typical_compliance("ur5e")
+    assert np.all((factor >= 0.8) & (factor <= 1.2)) and np.ptp(factor) > 0
+    assert real.payload == smr_payload(real.smr) and 0.5 <= real.payload.mass <= 1.0
+    assert real.thermal == Thermal()
+
+
+def test_the_smr_payload_sits_between_the_plate_and_the_smr() -> None:
+    p = smr_payload(np.array([0.0, 0.0, 0.045]))
+    assert p.com[0] == p.com[1] == 0.0 and 0.01 < p.com[2] < 0.045
+
+
+def test_a_truth_with_every_block_survives_its_file(tmp_path) -> None:
+    truth = random_truth("ur10e", np.random.default_rng(2))
+    truth.gravity = gravity_of_mounting((0.4, -0.3, 0.0))  # a tilted base
+    path = tmp_path / "truth.json"
+    write_json(path, truth_document(truth, Noise(15e-6, 3e-6)))
+    back, noise = load_truth(path)
+    assert noise == Noise(15e-6, 3e-6)
+    np.testing.assert_array_equal(back.compliance, truth.compliance)
+    assert back.payload == Payload(truth.payload.mass, truth.payload.com)
+    np.testing.assert_array_equal(back.gravity, truth.gravity)
+    assert back.thermal == truth.thermal
+    q = random_configurations("ur10e", 20, np.random.default_rng(3))
+    np.testing.assert_allclose(Kinematics(back).points(q), Kinematics(truth).points(q), atol=1e-12)
+
+
+def test_measure_warms_the_arm_pose_by_pose_when_given_running_times() -> None:
+    truth = random_truth("ur5e", np.random.default_rng(5))
+    q = random_configurations("ur5e", 6, np.random.default_rng(6))
+    exact = Noise(0.0, 0.0)
+    times = np.array([0.0, 0.0, 900.0, 900.0, 1e5, 1e5])
+    q_read, p = measure(truth, q, exact, np.random.default_rng(0), times)
+    np.testing.assert_array_equal(q_read, q)
+    for i, t in enumerate(times):
+        np.testing.assert_allclose(p[i], Kinematics(truth.warmed(t)).points(q[i])[0], atol=1e-12)
+    cold = measure(truth, q, exact, np.random.default_rng(0))[1]
+    np.testing.assert_allclose(cold, Kinematics(truth).points(q), atol=1e-12)
+    np.testing.assert_allclose(p[:2], cold[:2], atol=1e-12)
+    grown = np.linalg.norm(p[4:] - cold[4:], axis=1)
+    assert np.all(grown > 1e-5)  # fully warm: tens of micrometres and more at the SMR
+    # a rigid cold arm ignores the times
+    rigid = truth.rigid()
+    np.testing.assert_allclose(measure(rigid, q, exact, np.random.default_rng(0), times)[1],
+                               Kinematics(rigid).points(q), atol=1e-12)
+    with pytest.raises(ValueError, match="one running time per pose"):
+        measure(truth, q, exact, np.random.default_rng(0), times[:3])
+
+
+def test_the_default_noise_reads_the_joints_as_a_ur_does() -> None:
+    assert Noise().encoder_sigma == ENCODER_SIGMA
+    truth = random_truth("ur5e", np.random.default_rng(1), rigid=True)
+    q = random_configurations("ur5e", 2000, np.random.default_rng(2))
+    q_read, _ = measure(truth, q, Noise(), np.random.default_rng(3))
+    assert np.std(q_read - q) == pytest.approx(ENCODER_SIGMA, rel=0.05)
