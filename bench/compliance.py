@@ -10,8 +10,9 @@ constraints, measured at the times a campaign at the example config's speed woul
 * (a) geometry only, the campaign starting on a cold arm;
 * (b) geometry + compliance, the same cold start;
 * (c) (b) after a warm-up: the poses cycled, a reference re-measured every 120 s, until the first-order
-  fit of its drift (`hil.calibration.warmup`) says less than 5 µm is still to come and three time
-  constants have passed, or an hour; then a drift watch every 10 poses (reported, never fitted);
+  fit of its drift (`hil.calibration.warmup`, τ from the joint temperatures the controller reports)
+  says less than 5 µm is still to come and three time constants have passed, or an hour; then a drift
+  watch every 10 poses (reported, never fitted);
 * (d) (c) with the poses chosen for the compliance parameters too (the selector's design includes
   them), to show what the selection gains.
 
@@ -69,12 +70,13 @@ def timeline(Q: np.ndarray, start_time: float, start_q: np.ndarray) -> np.ndarra
 
 def warm_up(truth, cycle: np.ndarray, reference: np.ndarray, rng) -> tuple[float, dict]:
     """Cycle the poses, re-measure `reference` every interval; (end time, what happened)."""
-    t, q, times, points = 0.0, reference, [], []
+    t, q, times, points, temps = 0.0, reference, [], [], []
     while True:
         p = true_points(truth, reference[None], np.array([t]))[0]
         points.append(p + rng.normal(0, NOISE.tracker_sigma / np.sqrt(REFERENCE_SAMPLES), 3))
         times.append(t)
-        fit = fit_warmup(np.array(times), np.array(points))
+        temps.append(25.0 + truth.thermal.rise_at(t))  # what the simulated controller reports
+        fit = fit_warmup(np.array(times), np.array(points), temperatures=np.array(temps))
         if fit is not None and fit.remaining < WARMUP_LIMIT and t >= 3 * fit.time_constant:
             return t, {"converged": True, "seconds": t, "fit": fit}
         if t >= WARMUP_MAX:

@@ -8,6 +8,12 @@ the warm-up is judged on the whole series instead: the three axes are fitted tog
 scalar search, a and b by linear least squares for each τ) and the drift still to come,
 ‖b‖·exp(−t_last/τ), is what the campaign compares with its limit. scipy does the search; the model is
 written here because no library fits this exact shared-τ form.
+
+When the controller reports its joint temperatures (RTDE ``joint_temperatures``) and they moved by
+more than `MIN_TEMPERATURE_SPAN`, τ is fitted to their mean instead: they carry no tracker noise, so
+the time constant (and with it "three time constants have passed") no longer hangs on micrometres of
+noise — fitted to the positions alone, a noisy series can show a short τ and call the arm warm early.
+The growth is still judged on the positions, with that τ.
 """
 
 from __future__ import annotations
@@ -19,6 +25,9 @@ import scipy.optimize
 
 #: Fewest reference measurements the fit needs (three parameters per axis plus τ, and one to judge it).
 MIN_POINTS = 4
+#: Joint temperatures that moved less than this (K) over the series say nothing about τ (RTDE reports
+#: them as doubles; a real joint's sensor resolves about 0.1 K).
+MIN_TEMPERATURE_SPAN = 0.3
 
 
 @dataclass(frozen=True)
@@ -35,13 +44,14 @@ class DriftFit:
                 "total": self.total}
 
 
-def fit_warmup(times: np.ndarray, points: np.ndarray, tau_range: tuple[float, float] = (30.0, 7200.0)
-               ) -> DriftFit | None:
+def fit_warmup(times: np.ndarray, points: np.ndarray, tau_range: tuple[float, float] = (30.0, 7200.0),
+               temperatures: np.ndarray | None = None) -> DriftFit | None:
     """Fit d(t) = a + b·exp(−t/τ) to reference positions `points` (N, 3) at `times` (N,) seconds.
 
     None with fewer than `MIN_POINTS` measurements. τ is searched in `tau_range` (log scale): a warm-up
     faster than half a minute is not seen between reference checks, one slower than two hours is not a
-    warm-up a campaign waits for.
+    warm-up a campaign waits for. `temperatures` (N,) or (N, joints), °C: τ from their mean (module
+    docstring).
     """
     t = np.asarray(times, dtype=float)
     P = np.asarray(points, dtype=float).reshape(-1, 3)
@@ -49,19 +59,24 @@ def fit_warmup(times: np.ndarray, points: np.ndarray, tau_range: tuple[float, fl
         return None
     t = t - t[0]
 
-    def solve(log_tau: float) -> tuple[float, np.ndarray]:
+    def solve(log_tau: float, Y: np.ndarray) -> tuple[float, np.ndarray]:
         A = np.column_stack([np.ones_like(t), np.exp(-t / np.exp(log_tau))])
-        coef, *_ = np.linalg.lstsq(A, P, rcond=None)
-        r = P - A @ coef
+        coef, *_ = np.linalg.lstsq(A, Y, rcond=None)
+        r = Y - A @ coef
         return float(np.sum(r * r)), coef
 
+    Y = P
+    if temperatures is not None:
+        T = np.asarray(temperatures, dtype=float).reshape(len(t), -1).mean(axis=1, keepdims=True)
+        if np.ptp(T) > MIN_TEMPERATURE_SPAN:
+            Y = T
     lo, hi = np.log(tau_range[0]), np.log(tau_range[1])
     grid = np.linspace(lo, hi, 41)  # the cost is not unimodal in τ at few points: grid, then refine
-    best = grid[int(np.argmin([solve(g)[0] for g in grid]))]
+    best = grid[int(np.argmin([solve(g, Y)[0] for g in grid]))]
     step = grid[1] - grid[0]
-    res = scipy.optimize.minimize_scalar(lambda g: solve(g)[0], bounds=(max(lo, best - step),
+    res = scipy.optimize.minimize_scalar(lambda g: solve(g, Y)[0], bounds=(max(lo, best - step),
                                          min(hi, best + step)), method="bounded")
-    cost, coef = solve(float(res.x))
+    cost, coef = solve(float(res.x), P)
     tau = float(np.exp(res.x))
     b = coef[1]
     remaining = float(np.linalg.norm(b) * np.exp(-t[-1] / tau))

@@ -198,13 +198,16 @@ class ReferenceMeasured(Event):
 
 @dataclass(frozen=True, kw_only=True)
 class WarmupProgress(Event):
-    """One warm-up check: the reference moved `moved` m in `interval` s (warm below `limit`)."""
+    """One warm-up check: the reference moved `moved` m in `interval` s; the first-order fit of the
+    series says `remaining` m of drift is still to come (warm below `limit`; `hil.campaign.warmup`)."""
 
     elapsed: float  # station seconds since the warm-up started
     moved: float
     interval: float
     limit: float
     max_time: float
+    remaining: float | None = None  # None before the fit has enough measurements
+    time_constant: float | None = None  # the fitted warm-up time constant (s)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -218,6 +221,8 @@ class WarmupFinished(Event):
     moved: float | None = None  # the last check's movement (m)
     limit: float = 0.0
     reason: str = ""
+    remaining: float | None = None  # the fitted drift still to come (m) at the end
+    time_constant: float | None = None  # the fitted time constant (s)
 
 
 @dataclass(frozen=True, kw_only=True)

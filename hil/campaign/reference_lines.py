@@ -22,15 +22,18 @@ def um(metres: float | None) -> str:
 def describe(event: Any) -> str | None:
     """The operator's line for a warm-up or drift event (CLI progress, TUI run screen); None for others."""
     if isinstance(event, WarmupProgress):
-        return (f"warm-up: reference moved {um(event.moved)} in {event.interval:.0f} s "
-                f"(limit {um(event.limit)}), {event.elapsed:.0f} s of at most {event.max_time:.0f} s")
+        ahead = ("still to come: judged from the 4th measurement" if event.remaining is None else
+                 f"about {um(event.remaining)} still to come")
+        return (f"warm-up: reference moved {um(event.moved)} in {event.interval:.0f} s, {ahead} "
+                f"(limit {um(event.limit)}), {event.elapsed / 60:.0f} of at most "
+                f"{event.max_time / 60:.0f} min")
     if isinstance(event, WarmupFinished):
         if event.converged:
-            return (f"warm-up: done after {event.seconds:.0f} s: the reference moved {um(event.moved)} "
-                    f"in the last interval (limit {um(event.limit)})")
-        why = event.reason or (f"the reference still moved {um(event.moved)} in the last interval "
+            return (f"warm-up: done after {event.seconds / 60:.1f} min: about {um(event.remaining)} of drift "
+                    f"still to come (limit {um(event.limit)})")
+        why = event.reason or (f"about {um(event.remaining)} of drift still to come "
                                f"(limit {um(event.limit)})")
-        return (f"warning: warm-up stopped after {event.seconds:.0f} s without settling: {why}; "
+        return (f"warning: warm-up stopped after {event.seconds / 60:.1f} min without settling: {why}; "
                 "measuring anyway")
     if isinstance(event, ReferenceMeasured) and event.phase == DRIFT:
         if event.baseline:

@@ -18,9 +18,16 @@ How (the plan steps of `ReferenceWatch`; the plan, `hil.campaign.plan`, says whe
   repeatability ±0.03 mm, UR's e-Series data sheet) adds as little as it can to what is watched.
 * **Warm-up** (`warm_up`, ``[warmup]``): measure the reference, cycle through the planned calibration
   poses in order for ``interval`` seconds of station time (real motion, so the joints warm as they will
-  while measuring), measure it again; the arm is warm when two consecutive measurements differ by less
-  than ``limit``. After ``max_time`` the run goes on with a warning (`WarmupFinished`,
-  ``converged`` false), recorded in the result. The last warm-up measurement is the **baseline**.
+  while measuring), measure it again, and so on. Each check reports how far the reference moved since
+  the previous one, but that is not what decides: with a 2-minute interval and a 15-minute time
+  constant one interval shows only an eighth of the growth still to come, so "two consecutive
+  measurements within 10 µm" would call an arm warm with some 80 µm of growth ahead (and the tracker's
+  noise decides the last micrometres). The arm is warm when the first-order fit of the whole series
+  (`hil.calibration.warmup.fit_warmup`, from its 4th measurement) says the drift still to come is below
+  ``limit`` and the series spans three fitted time constants (the fit has then seen the curve
+  flatten, not guessed it from its start). After ``max_time`` the run goes on with a warning
+  (`WarmupFinished`, ``converged`` false), recorded in the result. The last warm-up measurement is
+  the **baseline**.
 * **Drift watch** (`start`, `after_pose`, `finish`, ``[drift]``): the reference is measured again after
   every ``every`` measured poses and once when the measuring ends; its drift is its displacement from
   the baseline. Beyond ``limit`` the campaign is flagged (`DriftFlagged`, the result's ``drift``
@@ -50,8 +57,11 @@ from typing import Any
 
 import numpy as np
 
+from hil.arm.catalog import get_robot
 from hil.arm.geometry import Geometry
 from hil.arm.kinematics import Kinematics
+from hil.arm.safety import check_target
+from hil.calibration.warmup import DriftFit, fit_warmup
 from hil.campaign.events import (
     DriftFlagged,
     Message,
@@ -72,11 +82,28 @@ from hil.campaign.steps import (
     Step,
     acquire,
 )
+from hil.errors import InputError
 from hil.station.config import StationConfig
 
 #: The approach offset (rad, every joint): each reference visit first goes this far below the
 #: reference in every joint, so it is always reached the same way (ISO 9283 §7.2.1).
 APPROACH = 0.05
+
+
+def approach_pose(config: StationConfig, reference: np.ndarray) -> np.ndarray | None:
+    """Where every reference visit starts from (`APPROACH` below the reference in every joint), or None
+    when that pose or the way from it to the reference is not safe (joint limits, keep-in box: the
+    engine's own checks): the reference is then approached from wherever the arm is."""
+    q = np.asarray(reference, float) - APPROACH
+    spec = get_robot(config.robot["type"])
+    box = (np.array(config.keep_in["min"]), np.array(config.keep_in["max"]))
+    model = Geometry.nominal(spec, config.smr["offset"])
+    try:
+        check_target(q, spec, box, model)
+        check_target(np.asarray(reference, float), spec, box, model, start=q)
+    except InputError:
+        return None
+    return q
 
 
 def reference_pose(model: Geometry, validation: np.ndarray, planned: np.ndarray) -> np.ndarray:
@@ -102,6 +129,7 @@ class ReferenceWatch:
                  located: bool = False) -> None:
         self.config, self.campaign = config, campaign
         self.reference = np.asarray(reference, float).reshape(6)
+        self.approach = approach_pose(config, self.reference)
         self.visit = dict(visit)
         self.kin = Kinematics(model) if located else None
         self.points: list[ReferenceMeasured] = list(earlier)
@@ -116,16 +144,40 @@ class ReferenceWatch:
     # --- measuring the reference ----------------------------------------------------------------
     def displacement(self, a: ReferenceMeasured, b: ReferenceMeasured) -> float:
         """How far the reference moved from `a` to `b` (m), see the module docstring."""
-        d = np.asarray(b.xyz, float) - np.asarray(a.xyz, float)
-        if self.kin is not None:
-            pred = self.kin.points(np.array([a.q, b.q], dtype=float))
-            d = d - (pred[1] - pred[0])
-        return float(np.linalg.norm(d))
+        return float(np.linalg.norm(self.positions([a, b])[1]))
+
+    def positions(self, points: Sequence[ReferenceMeasured]) -> np.ndarray:
+        """The reference's positions (N, 3; tracker frame, m) relative to the first of `points`, with
+        what the arm's joint readings explain taken out (when the tracker frame was located)."""
+        xyz = np.array([p.xyz for p in points], dtype=float).reshape(-1, 3)
+        d = xyz - xyz[0]
+        if self.kin is not None and len(points):
+            pred = self.kin.points(np.array([p.q for p in points], dtype=float))
+            d = d - (pred - pred[0])
+        return d
+
+    def settled(self, series: Sequence[ReferenceMeasured]) -> tuple[bool, DriftFit | None]:
+        """Whether a warm-up `series` (this run's, in order) shows the arm warm: the fitted drift still
+        to come below ``warmup.limit`` over a series spanning three fitted time constants; and the fit
+        (None before `hil.calibration.warmup.MIN_POINTS` measurements)."""
+        times = np.array([p.elapsed for p in series], dtype=float)
+        # the joint temperatures the controller reports, when every measurement has them, fix τ
+        # without the tracker's noise (hil.calibration.warmup)
+        temps = ([p.temperatures for p in series]
+                 if series and all(p.temperatures for p in series) else None)
+        fit = (fit_warmup(times, self.positions(series),
+                          temperatures=None if temps is None else np.array(temps, dtype=float))
+               if len(series) else None)
+        if fit is None:
+            return False, None
+        limit = float(self.config.warmup["limit"])
+        return bool(fit.remaining < limit and times[-1] - times[0] >= 3.0 * fit.time_constant), fit
 
     def _visit(self) -> Generator[Step, Any, tuple[PoseRecord, Conditions] | None]:
         """Approach and measure the reference; None (said in a warning) when the visit was given up."""
-        yield Move(tuple(float(v) for v in self.reference - APPROACH), self.visit.get("speed"),
-                   self.visit.get("acceleration"), optional=True)
+        if self.approach is not None:
+            yield Move(tuple(float(v) for v in self.approach), self.visit.get("speed"),
+                       self.visit.get("acceleration"), optional=True)
         seq = 1 + max((p.seq for p in self.points), default=0)
         record = yield acquire(seq, REFERENCE, self.reference, **self.visit)
         if not isinstance(record, PoseRecord):
@@ -167,26 +219,28 @@ class ReferenceWatch:
         yield Phase(WARMUP, f"cycling {len(cycle)} calibration poses; the reference pose is measured every "
                             f"{interval:g} s until it moves less than {um(limit)} (at most {max_time:g} s)")
         start = (yield ReadConditions(temperatures=False)).t
-        last: ReferenceMeasured | None = None
+        series: list[ReferenceMeasured] = []
         moved: float | None = None
-        converged, reason, count = False, "", 0
+        fit: DriftFit | None = None
+        converged, reason = False, ""
         while True:
             got = yield from self._visit()
             if got is not None:
                 record, conditions = got
                 elapsed = conditions.t - start
-                if last is not None:
-                    moved = self.displacement(last, _as_point(record))
-                    converged = moved < limit
+                candidate = [*series, _as_point(record, conditions.t)]
+                converged, fit = self.settled(candidate)
                 end = converged or elapsed >= max_time
                 event = yield from self._record(record, conditions, WARMUP, limit=limit,
                                                 baseline=end and self.baseline is None)
-                count += 1
-                if last is not None:
-                    yield Emit(WarmupProgress(campaign=self.campaign, elapsed=elapsed, moved=float(moved),
-                                              interval=conditions.t - last.elapsed, limit=limit,
-                                              max_time=max_time))
-                last = event
+                if series:
+                    moved = event.moved
+                    yield Emit(WarmupProgress(
+                        campaign=self.campaign, elapsed=elapsed, moved=float(moved or 0.0),
+                        interval=conditions.t - series[-1].elapsed, limit=limit, max_time=max_time,
+                        remaining=None if fit is None else fit.remaining,
+                        time_constant=None if fit is None else fit.time_constant))
+                series.append(event)
                 if end:
                     break
                 now = conditions.t
@@ -199,10 +253,19 @@ class ReferenceWatch:
                 reason = "no calibration pose could be reached safely to cycle through"
                 break
         seconds = (yield ReadConditions(temperatures=False)).t - start
-        self.warmup = {"seconds": seconds, "converged": converged, "references": count, "reason": reason,
-                       "moved": moved}
+        if not converged and not reason and fit is not None and fit.remaining < limit:
+            span = series[-1].elapsed - series[0].elapsed
+            three = 3 * fit.time_constant / 60
+            reason = (f"about {um(fit.remaining)} of drift is still to come, but the measurements span "
+                      f"{span / 60:.0f} min, under three fitted time constants ({three:.0f} min): too "
+                      "short to trust the fit")
+        remaining = None if fit is None else fit.remaining
+        tau = None if fit is None else fit.time_constant
+        self.warmup = {"seconds": seconds, "converged": converged, "references": len(series),
+                       "reason": reason, "moved": moved, "remaining": remaining, "time_constant": tau}
         yield Emit(WarmupFinished(campaign=self.campaign, seconds=seconds, converged=converged,
-                                  references=count, moved=moved, limit=limit, reason=reason))
+                                  references=len(series), moved=moved, limit=limit, reason=reason,
+                                  remaining=remaining, time_constant=tau))
 
     def _cycle(self, cycle: Sequence[np.ndarray], until: float) -> Generator[Step, Any, bool]:
         """Move through `cycle` (going on where the last cycle stopped) until station time `until`;
@@ -268,13 +331,15 @@ class ReferenceWatch:
         runs = []
         for run in sorted({p.run for p in self.points} | ({self.run} if self.warmup else set())):
             if run == self.run and self.warmup is not None:
-                runs.append({"run": run, **{k: self.warmup[k]
-                                            for k in ("seconds", "converged", "references")}})
+                runs.append({"run": run, **{k: self.warmup[k] for k in (
+                    "seconds", "converged", "references", "remaining", "time_constant")}})
                 continue
             ws = [p for p in self.points if p.run == run and p.phase == WARMUP]
-            if ws:
+            if ws:  # an earlier run: judged again from its stored series
+                settled, fit = self.settled(ws)
                 runs.append({"run": run, "seconds": ws[-1].elapsed - ws[0].elapsed, "references": len(ws),
-                             "converged": ws[-1].moved is not None and ws[-1].moved < float(w["limit"])})
+                             "converged": settled, "remaining": None if fit is None else fit.remaining,
+                             "time_constant": None if fit is None else fit.time_constant})
         mine = self.warmup or {}
         return {
             "reference": [float(v) for v in self.reference],
@@ -288,11 +353,12 @@ class ReferenceWatch:
                        "limit": float(w["limit"]), "max_time": float(w["max_time"]),
                        "ran": self.warmup is not None, "seconds": mine.get("seconds"),
                        "converged": mine.get("converged"), "reason": mine.get("reason", ""),
+                       "remaining": mine.get("remaining"), "time_constant": mine.get("time_constant"),
                        "runs": runs},
         }
 
 
-def _as_point(record: PoseRecord) -> ReferenceMeasured:
-    """A record as a (not emitted) reference measurement, for `ReferenceWatch.displacement`."""
-    return ReferenceMeasured(campaign="", seq=0, run=0, phase="", elapsed=0.0, q=list(record.q),
+def _as_point(record: PoseRecord, elapsed: float) -> ReferenceMeasured:
+    """A record as a (not emitted) reference measurement, for `ReferenceWatch.settled`."""
+    return ReferenceMeasured(campaign="", seq=0, run=0, phase="", elapsed=float(elapsed), q=list(record.q),
                              xyz=list(record.p))

@@ -12,6 +12,11 @@ station is reached changed (a tracker URL, the robot's address, a timeout: see
 campaign is driving, is refused (exit 2, naming that process) before anything moves; a campaign whose
 process died (kill -9, a power cut) is taken over and continued (`hil.store.leases`).
 
+Before measuring, the arm is warmed up (``[warmup]``: cycling the planned poses until a reference pose
+stops moving; ``--no-warmup`` skips it for an arm that is already warm) and, while measuring, the
+reference is re-measured every ``drift.every`` poses; a drift beyond ``drift.limit`` flags the campaign
+(a warning line, the result's ``drift`` block, the report) without changing its verdict or exit code.
+
 Progress goes to stderr (a bar with ETA on a terminal, plain lines otherwise); ``--json`` prints one
 event per line on stdout; ``--out`` writes the final result (``hil-result/1``, the calibrated model
 under ``model``) and ``--report`` a self-contained HTML report — both only when the campaign
@@ -73,6 +78,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"validation RMS threshold, {RMS_THRESHOLD_HELP}; overrides the config")
     p.add_argument("--cycles", type=CYCLES, default=1,
                    help="visits of each validation pose (>1 adds ISO 9283 AP/RP)")
+    p.add_argument("--no-warmup", action="store_true",
+                   help="measure without warming the arm up first (it has been running already); "
+                        "overrides warmup.enabled, the drift watch stays as configured")
     p.add_argument("--db", metavar="PATH", help="campaign database (default: config, $HIL_DB, data dir)")
     again = p.add_mutually_exclusive_group()
     again.add_argument("--resume", action="store_true", help="continue the last unfinished campaign")
@@ -149,6 +157,8 @@ def _run(args: argparse.Namespace) -> int:
     from hil.store import FINISHED, Store, StoreError, address_lock, resolve_location
 
     with station_from_args(args) as (config, identity, truth):
+        if args.no_warmup:  # not part of what identifies the campaign (`hil.store.hashing`)
+            config = config.with_overrides(warmup__enabled=False)
         cube = _verify_cube(args, config)  # --verify: the [verify] cube, refused before anything connects
         # An existing store is opened (so a damaged or newer one is refused) before the arm is touched;
         # a new one is created only once the controller has confirmed the configured robot, so a

@@ -207,11 +207,15 @@ def drift_plot(drift: Mapping[str, Any]) -> bytes:
     minutes = np.array([(offsets[int(s["run"])] + float(s["elapsed"])) / 60.0 for s in series])
     y = np.array([float(s["drift"]) * 1e6 for s in series])
     phase = np.array([str(s.get("phase")) for s in series])
+    runs = np.array([int(s["run"]) for s in series])
     handles: list[Any] = []
     for name, color, label in (("warmup", WARMUP_COLOR, "warm-up"), ("drift", DRIFT_COLOR, "drift watch")):
-        mask = phase == name
-        if np.any(mask):
-            handles += ax.plot(minutes[mask], y[mask], "o-", color=color, ms=4, lw=1, label=label)
+        drawn = None
+        for run in sorted(set(runs.tolist())):  # one line per run: a resume is a break, not a slope
+            mask = (phase == name) & (runs == run)
+            if np.any(mask):
+                drawn = ax.plot(minutes[mask], y[mask], "o-", color=color, ms=4, lw=1, label=label)
+        handles += drawn or []
     base = [i for i, s in enumerate(series) if s.get("baseline")]
     if base:
         handles += ax.plot(minutes[base], y[base], "*", color="black", ms=11, clip_on=False, zorder=3,
@@ -235,11 +239,14 @@ def drift_plot(drift: Mapping[str, Any]) -> bytes:
         _style(tax)
         tm = np.array([(offsets[int(s["run"])] + float(s["elapsed"])) / 60.0 for s in temps])
         tv = np.array([np.asarray(s["temperatures"], dtype=float) for s in temps])
-        if np.allclose(tv, tv[:, :1]):  # one temperature for every joint: one line
-            tax.plot(tm, tv[:, 0], lw=0.9, label=f"joints 1–{tv.shape[1]}")
-        else:
-            for j in range(tv.shape[1]):
-                tax.plot(tm, tv[:, j], lw=0.9, label=f"joint {j + 1}")
+        trun = np.array([int(s["run"]) for s in temps])
+        same = np.allclose(tv, tv[:, :1])  # one temperature for every joint: one line
+        colors = [f"C{j}" for j in range(tv.shape[1])]
+        for k, run in enumerate(sorted(set(trun.tolist()))):
+            m = trun == run
+            for j in range(1 if same else tv.shape[1]):
+                name = f"joints 1–{tv.shape[1]}" if same else f"joint {j + 1}"
+                tax.plot(tm[m], tv[m, j], lw=0.9, color=colors[j], label=name if k == 0 else None)
         tax.set_ylabel("joints (°C)", fontsize=9)
         tax.legend(fontsize=7, ncols=6, loc="upper left", frameon=False)
         tax.set_xlabel("station time (min)", fontsize=9)

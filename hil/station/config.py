@@ -290,23 +290,25 @@ SCHEMA: dict[str, dict[str, Key]] = {
     # kelvin over the first tens of minutes of motion and its aluminium links grow with them (2.3e-5 /K,
     # `hil.arm.thermal`): a metre of arm grows by about 0.1 mm, the size of the whole acceptance. The run
     # cycles through the planned calibration poses and re-measures a reference pose every `interval`
-    # seconds until two consecutive measurements agree within `limit`.
+    # seconds until the first-order fit of those measurements says less than `limit` of drift is still
+    # to come (`hil.campaign.warmup`).
     "warmup": {
         "enabled": Key("bool", True, help="warm the arm up before measuring"),
         # a joint's warm-up time constant is about 15 min (`hil.arm.thermal`, τ = 900 s): a check every
-        # 2 min sees the growth per interval fall (17 µm, then 15, 13... on a metre of UR5e arm) and costs
-        # one reference visit (~10 s, under 10 % of the motion); under 10 s is mostly reference visits, and
-        # over an hour no warm-up is seen at all
+        # 2 min gives the fit 7 points per time constant and costs one reference visit (~10 s, under 10 %
+        # of the motion); under 10 s is mostly reference visits, and over an hour sees no warm-up at all
         "interval": Key("float", 120.0, _within(10, 3600, "s"),
                         "seconds of cycling motion between reference measurements"),
-        # a tenth of the default 0.1 mm acceptance; a tracker repeats an averaged point to a few µm
-        # (AT960: ±(15 µm + 6 µm/m) MPE, typically half, and 5 samples averaged), so 10 µm is met once
-        # the growth per interval has fallen to a few µm; 1 mm is a value typed in millimetres
+        # a tenth of the default 0.1 mm acceptance, and a third of the drift watch's limit, so a warm arm
+        # does not flag the campaign; a tracker repeats an averaged point to a few µm (AT960: ±(15 µm +
+        # 6 µm/m) MPE, typically half), which the fit of the whole series averages further; 1 mm is a value
+        # typed in millimetres
         "limit": Key("float", 10e-6, _within(0, 1e-3, "m", lo_open=True),
-                     "warm when two consecutive reference measurements differ by less (m)"),
-        # 40 min ≈ 2.7 τ: 93 % of the rise; an arm still moving by more than the limit after that is
-        # drifting for another reason (the tracker's stand, the room): the run goes on, with a warning
-        "max_time": Key("float", 2400.0, _within(10, 4 * 3600, "s"),
+                     "warm when the drift still to come (fitted) is below this (m)"),
+        # the fit is trusted once its series spans three time constants (95 % of the rise): 45 min for
+        # a UR's 15; an hour leaves room for a slower arm, and an arm still drifting after it is drifting
+        # for another reason (the tracker's stand, the room): the run goes on, with a warning
+        "max_time": Key("float", 3600.0, _within(10, 4 * 3600, "s"),
                         "longest warm-up (s); then the run measures anyway, with a warning"),
     },
     # Drift watch (ISO 9283:1998 §7.6, drift of pose characteristics): the reference pose is measured

@@ -99,12 +99,12 @@ def build_fleet(path: Path | str, server: Any = None) -> Fleet:
     hit[PARAMETER_NAMES.index(HIT_PARAMETER)] = HIT
     with Store.open(path) as store:
         for r, (serial, robot) in enumerate(ROBOTS.items()):
-            truth = random_truth(robot, rng)
+            truth = random_truth(robot, rng, rigid=True)  # geometry histories: rigid arms, exact encoders
             ids = fleet.campaigns.setdefault(serial, [])
             for k in range(3):
                 if serial == HIT_ROBOT and k == 2:
                     truth = apply_update(truth, hit)  # hit between the 2nd and 3rd calibration
-                noise = Noise(tracker_sigma=300e-6) if serial == REJECTING and k == 2 else Noise()
+                noise = Noise(300e-6 if serial == REJECTING and k == 2 else 20e-6, encoder_sigma=0.0)
                 station = STATIONS[(r + k) % 2]
                 t = T0 + k * 30 * DAY + r * 3600.0
                 ids.append(_calibrate(store, rng, truth, serial, robot, station, t, noise))

@@ -59,7 +59,7 @@ def held_out_error(model_doc: dict, truth: Geometry, seed: int = 0) -> tuple[flo
 def cli(tmp: Path, *extra: str) -> list[str]:
     return [sys.executable, "-m", "hil", "calibrate", "--sim", "--speed", str(SPEED), "--seed", "11",
             "--truth", str(tmp / "truth.json"), "--poses", "30", "--validation", "10",
-            "--candidates", "4000", "--db", str(tmp / "hil.db"), *extra]
+            "--candidates", "4000", "--db", str(tmp / "hil.db"), "--no-warmup", *extra]
 
 
 @pytest.fixture
@@ -145,7 +145,7 @@ class Station:
             robot__address=self.sim.address, tracker__protocol=protocol, tracker__url=url, robot__speed=1.0,
             robot__acceleration=2.0, campaign__calibration_poses=14, campaign__validation_poses=4,
             campaign__candidates=3000, timeouts__relock=20.0,
-            timeouts__suspend=90.0)
+            timeouts__suspend=90.0, warmup__enabled=False)  # faults, not warm-up, are tested here
         self.store = Store.open(tmp_path / "hil.db")
         self.campaign = self.store.create_campaign(self.config, "ur5e")
         self.events: list = []

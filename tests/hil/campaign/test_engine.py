@@ -55,8 +55,11 @@ class Station:
         start = visible_poses(self.truth, 1, self.rng)[0]
         self.arm = FakeArm(start, **arm_kw)
         self.tracker = FakeTracker(self.arm, self.truth)
+        # warm-up and drift watch off: these tests count moves and measurements of the plan's poses
+        # (tests/hil/campaign/test_warmup.py tests those)
         overrides = dict(campaign__calibration_poses=cal, campaign__validation_poses=val,
-                         robot__settle_time=0.0, smr__offset=tuple(self.truth.smr + 0.003))
+                         robot__settle_time=0.0, smr__offset=tuple(self.truth.smr + 0.003),
+                         warmup__enabled=False, drift__every=0)
         if tracker_known:
             overrides["tracker__position"] = tuple(self.truth.tracker.translation + 0.05)
         self.config = default_config().with_overrides(**overrides)

@@ -35,7 +35,8 @@ def test_no_planned_pose_is_hidden_from_the_tracker(seed: int) -> None:
     world = World(truth, lambda: np.zeros(6))
     home = world.home_pose(rng)
     config = default_config().with_overrides(campaign__calibration_poses=30, campaign__validation_poses=20,
-                                             campaign__candidates=3000, campaign__seed=seed)
+                                             campaign__candidates=3000, campaign__seed=seed,
+                                             warmup__enabled=False, drift__every=0)  # a dry run of poses
     plan = calibration_plan(config, campaign_chooser(config), "test")
     chosen: list[PlanReady] = []
 
@@ -81,7 +82,8 @@ def test_a_planned_pose_the_tracker_would_not_see_is_skipped_without_moving_ther
     world = World(truth, lambda: np.zeros(6))
     config = default_config().with_overrides(campaign__calibration_poses=14, campaign__validation_poses=4,
                                              tracker__position=tuple(truth.tracker.translation + 0.04),
-                                             smr__offset=tuple(truth.smr + 0.003))
+                                             smr__offset=tuple(truth.smr + 0.003),
+                                             warmup__enabled=False, drift__every=0)  # a dry run of poses
 
     def seen(q: np.ndarray) -> bool:
         return world.state(q)[1] <= 25 and not world.blocked_by_arm(q)

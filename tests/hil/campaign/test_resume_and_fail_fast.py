@@ -66,7 +66,8 @@ class BootCell:
         self.tracker = FakeTracker(self.arm, self.truth)
         self.config = default_config().with_overrides(
             campaign__calibration_poses=12, campaign__validation_poses=4, campaign__samples=2,
-            robot__settle_time=0.0, robot__joint_samples=2, smr__offset=tuple(self.truth.smr + 0.003))
+            robot__settle_time=0.0, robot__joint_samples=2, smr__offset=tuple(self.truth.smr + 0.003),
+            warmup__enabled=False)  # a wall-clock run on fakes (test_warmup.py resumes warm-ups)
         self.rng = rng
         self.store = Store.open(tmp_path / "hil.db")
         self.campaign = self.store.create_campaign(self.config, "ur5e")
@@ -142,7 +143,8 @@ class LostCell:
         self.config = default_config().with_overrides(
             campaign__calibration_poses=cal, campaign__validation_poses=val, robot__settle_time=0.0,
             smr__offset=tuple(self.truth.smr + 0.003),
-            tracker__position=tuple(self.truth.tracker.translation + 0.05), **overrides)
+            tracker__position=tuple(self.truth.tracker.translation + 0.05),
+            warmup__enabled=False, drift__every=0, **overrides)  # counts lost poses in a row
         visits = []
         measure = self.tracker.measure_point
 
@@ -238,7 +240,7 @@ def test_a_wrong_tracker_position_on_the_simulated_station_stops_after_three_los
             robot__address=sim.address, tracker__url=svc["tracker_url"], robot__speed=1.0,
             robot__acceleration=2.0, campaign__calibration_poses=14, campaign__validation_poses=4,
             campaign__candidates=3000, tracker__position=(-3.0, 0.0, 0.3), timeouts__relock=1.0,
-            timeouts__suspend=30.0)
+            timeouts__suspend=30.0, warmup__enabled=False, drift__every=0)  # lost poses in a row
         selector = campaign_chooser(config)
 
         def choose(request):  # the station's constraints, random poses: the tabu search's seconds

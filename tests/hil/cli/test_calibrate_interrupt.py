@@ -72,7 +72,9 @@ class Cell:
                                f'[tracker]\nurl = "/dev/ttyFAKE"\nposition = [{tracker}]\n'
                                f"[smr]\noffset = [{smr}]\n"
                                "[keep_in]\nmin = [-2.0, -2.0, -0.5]\nmax = [2.0, 2.0, 2.0]\n"
-                               "[campaign]\nsamples = 2\nacceptance = 0.01\n")
+                               "[campaign]\nsamples = 2\nacceptance = 0.01\n"
+                               # a wall-clock run counting measurements: no warm-up, no reference visits
+                               "[warmup]\nenabled = false\n[drift]\nevery = 0\n")
         self.db, self.out, self.report = tmp_path / "hil.db", tmp_path / "result.json", tmp_path / "r.html"
 
         def open_devices(config):
@@ -166,7 +168,7 @@ def test_ctrl_c_through_the_real_command_is_clean(tmp_path):
     out.write_text("an earlier result\n")
     cmd = [sys.executable, "-m", "hil", "calibrate", "--sim", "--speed", "40", "--seed", "5", "--poses", "14",
            "--validation", "4", "--candidates", "2000", "--db", str(tmp_path / "hil.db"), "--json",
-           "--out", str(out)]
+           "--out", str(out), "--no-warmup"]
     proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             start_new_session=True)  # its own group, as a shell's foreground job
     events = []

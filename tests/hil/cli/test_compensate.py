@@ -22,7 +22,7 @@ from tests.hil.compensation.world import assert_lands, random_controller
 def station(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A simulator truth that carries its controller's calibration, and targets made on it."""
     out = tmp_path_factory.mktemp("compensate")
-    assert main(["synth", "--robot", "ur5e", "--poses", "5", "--validation", "2", "--seed", "8",
+    assert main(["synth", "--robot", "ur5e", "--poses", "5", "--validation", "2", "--seed", "8", "--rigid",
                  "--out-dir", str(out)]) == 0
     doc = json.loads((out / "truth.json").read_text())
     doc["controller"] = random_controller(np.random.default_rng(8)).to_dict()

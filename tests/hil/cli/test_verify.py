@@ -39,7 +39,7 @@ class Station:
 
     def __init__(self, tmp_path: Path, monkeypatch, *, kinematics: bool = False, centre: bool = True) -> None:
         rng = np.random.default_rng(4)
-        self.truth = random_truth("ur5e", rng)
+        self.truth = random_truth("ur5e", rng, rigid=True)  # verifying, not modelling the sag
         self.arm = FakeArm(World(self.truth, lambda: np.zeros(6)).home_pose(rng))
         deltas = ControllerCalibration(rng.normal(0, 1e-3, 6), rng.normal(0, 3e-4, 6), rng.normal(0, 3e-4, 6),
                                        rng.normal(0, 1e-3, 6))
@@ -67,7 +67,8 @@ class Station:
         self.config.write_text('[station]\nname = "cell-9"\n[robot]\nsettle_time = 0.0\njoint_samples = 2\n'
                                '[tracker]\nurl = "/dev/ttyFAKE"\n'
                                "[keep_in]\nmin = [-2.0, -2.0, 0.0]\nmax = [2.0, 2.0, 2.0]\n"
-                               "[campaign]\nsamples = 2\nacceptance = 0.01\n" + verify)
+                               "[campaign]\nsamples = 2\nacceptance = 0.01\n"
+                               "[warmup]\nenabled = false\n[drift]\nevery = 0\n" + verify)  # wall clock
         self.model = tmp_path / "model.json"
         self.model.write_text(json.dumps({"format": "hil-model/1", **self.truth.to_dict()}))
         self.db, self.out, self.report = tmp_path / "hil.db", tmp_path / "result.json", tmp_path / "r.html"

@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parents[3]
 
 
 def test_verify_on_the_simulated_station_with_the_true_model(tmp_path: Path) -> None:
-    truth = random_truth("ur5e", np.random.default_rng(21))
+    truth = random_truth("ur5e", np.random.default_rng(21), rigid=True)  # cold and rigid: the model is exact
     (tmp_path / "truth.json").write_text(json.dumps(truth_document(truth, Noise())))
     (tmp_path / "model.json").write_text(json.dumps({"format": "hil-model/1", **truth.to_dict()}))
     out = tmp_path / "result.json"

@@ -24,7 +24,7 @@ NEAR = np.array([0.3, -1.2, 1.5, -1.9, -1.6, 0.2])
 @pytest.fixture(scope="module")
 def compensator() -> Compensator:
     rng = np.random.default_rng(11)
-    truth = random_truth("ur5e", rng)
+    truth = random_truth("ur5e", rng, rigid=True)
     cal = ControllerCalibration(rng.normal(0, 1e-3, 6), rng.normal(0, 5e-4, 6), rng.normal(0, 5e-4, 6),
                                 rng.normal(0, 1e-3, 6))
     return Compensator(truth, cal.geometry("ur5e"), pose((0.01, -0.02, 0.12), (0.1, 0.0, 0.3)))

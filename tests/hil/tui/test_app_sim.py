@@ -17,7 +17,9 @@ from hil.tui.screens.results import ResultsScreen
 from tests.hil.tui.conftest import press_to_close, screen_text, wait_for
 
 SIZE = (80, 24)
-SMALL = {"campaign.calibration_poses": 12, "campaign.validation_poses": 4, "campaign.candidates": 3000}
+# the warm-up (an hour of the simulated arm's time) is not what these test: off
+SMALL = {"campaign.calibration_poses": 12, "campaign.validation_poses": 4, "campaign.candidates": 3000,
+         "warmup.enabled": False}
 
 
 def sim_app(tmp_path, **kwargs):
