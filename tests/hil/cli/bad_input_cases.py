@@ -596,7 +596,8 @@ def _cases() -> list[Case]:
     add("identify", "--out=store", [*ident, "--out", f"{d}/store.db"], ["store.db"],
         env={"HIL_DB": f"{d}/store.db"})
     for v in ("abc", "3,0,0", "-1", "1e9", "nan", "3,0,0,9"):
-        add("identify", f"--payload={v}", [*ident, "--compliance", f"--payload={v}", *out_model], ["--payload"])
+        add("identify", f"--payload={v}", [*ident, "--compliance", f"--payload={v}", *out_model],
+            ["--payload"])
     for v in ("1,2", "a,b,c", "nan,0,0"):
         add("identify", f"--mounting={v}", [*ident, f"--mounting={v}", *out_model], ["--mounting"])
 
