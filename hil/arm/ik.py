@@ -6,6 +6,11 @@ the *nominal* arm would be. Damped least squares on the flange frame's Jacobian 
 solves the calibrated chain itself. It is seeded from the previous sample along a path, so it stays on
 the current branch; a target it cannot reach, or one that leaves the joint limits, raises
 `UnreachableError` (never a silently clamped or nearby answer).
+
+A compliant model (`Geometry.compliance`) is solved in two steps: the rigid chain gives the link angles
+that put the flange at the target, then the encoder angles are the fixed point of
+q = q_link + c ⊙ g(q) (the link lags its encoder by c ⊙ g, DESIGN.md), a contraction by about
+c·∂g/∂q ≈ 10⁻³ per step, so a few steps reach the tolerance.
 """
 
 from __future__ import annotations
@@ -49,6 +54,8 @@ def solve_ik(kin: Kinematics, target: pin.SE3, seed: np.ndarray, *, tolerance: f
     else:
         raise UnreachableError(f"IK did not converge (pose error {err:.3g}): the target is out of reach "
                                "or at a singularity")
+    if kin.geometry.compliant:
+        q = _encoder_angles(kin, q, tolerance)
     lo, hi = model.lowerPositionLimit, model.upperPositionLimit
     # a revolute joint reaches the same pose a turn away: take the turn nearest the seed that lies
     # within the limits (the same pose, not a clamp; far seeds otherwise wander off by 2π)
@@ -61,6 +68,18 @@ def solve_ik(kin: Kinematics, target: pin.SE3, seed: np.ndarray, *, tolerance: f
         j = int(np.flatnonzero((q < lo) | (q > hi))[0])
         raise UnreachableError(f"IK answer leaves the limits of joint {j + 1} ({q[j]:.3f} rad)")
     return q
+
+
+def _encoder_angles(kin: Kinematics, q_link: np.ndarray, tolerance: float) -> np.ndarray:
+    """The encoder angles whose sagging link angles are `q_link` (fixed point, see the docstring)."""
+    c = kin.geometry.compliance
+    q = q_link.copy()
+    for _ in range(50):
+        nxt = q_link + c * kin.gravity.torques(q)[0]
+        if np.max(np.abs(nxt - q)) < 1e-3 * tolerance:
+            return nxt
+        q = nxt
+    raise UnreachableError("IK: the sag under gravity does not settle (compliance too large)")
 
 
 def solve_path(kin: Kinematics, targets: list[pin.SE3], seed: np.ndarray, max_step: float = 0.05,

@@ -14,6 +14,12 @@ emitted and the exception propagates.
 
 The engine never prints. It emits events; the store subscribes as a critical subscriber, so a
 measurement is committed before the next move starts.
+
+For the warm-up and the drift watch (`hil.campaign.warmup`) it also answers `ReadConditions` (the
+station time since the run started, its clock scaled by the clock's ``speed``, and the arm's joint
+temperatures when the driver reads them), skips an ``optional`` move without a safe path instead of
+failing, and hands a visit of role `REFERENCE` back to the plan alone: no pose events, no
+`PointMeasured`, never among `records`.
 """
 
 from __future__ import annotations

@@ -217,7 +217,8 @@ class ReferenceWatch:
             return
         interval, limit, max_time = float(w["interval"]), float(w["limit"]), float(w["max_time"])
         yield Phase(WARMUP, f"cycling {len(cycle)} calibration poses; the reference pose is measured every "
-                            f"{interval:g} s until it moves less than {um(limit)} (at most {max_time:g} s)")
+                            f"{interval:g} s until less than {um(limit)} of drift is still to come (at "
+                            f"most {max_time:g} s)")
         start = (yield ReadConditions(temperatures=False)).t
         series: list[ReferenceMeasured] = []
         moved: float | None = None
@@ -228,7 +229,7 @@ class ReferenceWatch:
             if got is not None:
                 record, conditions = got
                 elapsed = conditions.t - start
-                candidate = [*series, _as_point(record, conditions.t)]
+                candidate = [*series, _as_point(record, conditions)]
                 converged, fit = self.settled(candidate)
                 end = converged or elapsed >= max_time
                 event = yield from self._record(record, conditions, WARMUP, limit=limit,
@@ -358,7 +359,9 @@ class ReferenceWatch:
         }
 
 
-def _as_point(record: PoseRecord, elapsed: float) -> ReferenceMeasured:
-    """A record as a (not emitted) reference measurement, for `ReferenceWatch.settled`."""
-    return ReferenceMeasured(campaign="", seq=0, run=0, phase="", elapsed=float(elapsed), q=list(record.q),
-                             xyz=list(record.p))
+def _as_point(record: PoseRecord, conditions: Conditions) -> ReferenceMeasured:
+    """A visit as a (not yet emitted) reference measurement, for `ReferenceWatch.settled`: its time and
+    joint temperatures with it, as the emitted one will have them."""
+    temps = None if conditions.temperatures is None else list(conditions.temperatures)
+    return ReferenceMeasured(campaign="", seq=0, run=0, phase="", elapsed=float(conditions.t),
+                             q=list(record.q), xyz=list(record.p), temperatures=temps)

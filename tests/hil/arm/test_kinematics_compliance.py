@@ -1,6 +1,7 @@
 """The compliant arm in the calibration model: sag in every prediction, its columns, identifiability."""
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from hil.arm.geometry import Geometry
@@ -128,3 +129,29 @@ def test_geometry_round_trip_with_the_non_geometric_blocks():
     assert np.allclose(back.gravity, g.gravity)
     assert "gravity" not in Geometry.nominal("ur5e").to_dict()
     assert "compliance" not in g.rigid().to_dict()
+
+
+def test_ik_of_a_compliant_model_gives_encoder_angles_whose_sagging_arm_reaches_the_target(rng):
+    from hil.arm.ik import solve_ik
+
+    g = compliant(rng=rng)
+    kin = Kinematics(g)
+    q0 = np.array([0.3, -1.2, 1.4, -0.8, 1.2, 0.4])
+    target = pin.SE3(kin.flange_poses(q0)[0])
+    q = solve_ik(kin, target, q0 + 0.05, tolerance=1e-12)
+    assert np.abs(q - q0).max() < 1e-9
+    rigid = solve_ik(Kinematics(g.rigid()), target, q0 + 0.05, tolerance=1e-12)
+    assert np.abs(rigid - q0).max() > 1e-5  # the rigid answer misses the sag
+
+
+def test_compensation_with_a_compliant_model_puts_the_sagging_arm_on_target(rng):
+    from hil.compensation.solve import Compensator
+
+    accurate = compliant(rng=rng)
+    controller = Geometry.nominal("ur5e")
+    comp = Compensator(accurate, controller)
+    q0 = np.array([-0.4, -1.6, 1.2, -1.1, -1.4, 0.7])
+    target = pin.SE3(Kinematics(controller).flange_poses(q0)[0])
+    out = comp.solve(target, q0)
+    reached = Kinematics(accurate).flange_poses(out.q)[0]
+    assert np.linalg.norm(reached[:3, 3] - target.translation) < 1e-9

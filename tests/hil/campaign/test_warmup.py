@@ -106,6 +106,8 @@ def test_the_warm_up_ends_once_the_fitted_drift_still_to_come_is_below_the_limit
     assert done.converged and done.remaining < cell.config.warmup["limit"]
     # the series spans three fitted time constants; the arm's own is 900 s: about 45 min, not 2 hours
     assert done.seconds >= 3 * done.time_constant and 1800 < done.seconds < cell.config.warmup["max_time"]
+    # the time constant comes from the joint temperatures the arm reports: the truth's, not noise's
+    assert done.time_constant == pytest.approx(UR_THERMAL.time_constant, rel=0.02)
     warm = [e for e in cell.of(ReferenceMeasured) if e.phase == "warmup"]
     assert len(warm) == done.references == len(cell.of(WarmupProgress)) + 1
     # the truth: less than the limit of growth was left when the warm-up ended
