@@ -116,8 +116,12 @@ def _check_poses(args: argparse.Namespace) -> None:
         return
     from hil.station.config import load_config, minimum_calibration_poses
 
-    robot = args.robot or (load_config(args.config).robot["type"] if args.config else "ur5e")
-    need, n = minimum_calibration_poses(robot)
+    config = load_config(args.config) if args.config else None
+    robot = args.robot or (config.robot["type"] if config is not None else "ur5e")
+    # with the compliance (on unless the station turns it off) its identifiable joints count too
+    compliance = bool(config.campaign["compliance"]) if config is not None else True
+    need, n = minimum_calibration_poses(robot, compliance, config.payload if config else None,
+                                        config.gravity if config else None)
     if args.poses < need:
         raise InputError(f"--poses {args.poses}: too few calibration poses: identifying the {n} parameters "
                          f"of a {robot} from 3 coordinates per pose needs at least {need}")

@@ -33,16 +33,17 @@ def test_poses_too_few_to_identify_are_refused_before_the_simulated_station_star
     db = tmp_path / "hil.db"
     assert main(["calibrate", "--sim", "--speed", "40", "--poses", "3", "--db", str(db)]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "--poses 3" in err and "at least 10" in err and "27 parameters" in err
+    # 27 geometric parameters and the compliance of joints 2, 3 and 4 (the campaign identifies it by default)
+    assert err.count("\n") == 1 and "--poses 3" in err and "at least 11" in err and "30 parameters" in err
     assert not db.exists()
 
 
 def test_poses_too_few_are_refused_before_the_configured_station_is_connected(tmp_path, monkeypatch, capsys):
     cell = Cell(tmp_path, monkeypatch)
-    assert main(["calibrate", "--config", str(cell.config), "--db", str(cell.db), "--poses", "9"]) == 2
-    assert "--poses 9" in capsys.readouterr().err
+    assert main(["calibrate", "--config", str(cell.config), "--db", str(cell.db), "--poses", "10"]) == 2
+    assert "--poses 10" in capsys.readouterr().err
     assert cell.opened == [] and cell.arm.moves == 0 and not cell.db.exists()
-    assert main(["calibrate", "--config", str(cell.config), "--db", str(cell.db), "--poses", "10",
+    assert main(["calibrate", "--config", str(cell.config), "--db", str(cell.db), "--poses", "11",
                  "--validation", "4"]) in (0, 1)  # the least that identifies is accepted
 
 
@@ -52,7 +53,7 @@ def test_a_configured_count_too_few_to_identify_is_refused_naming_the_key(tmp_pa
     cell.config.write_text(text.replace("[campaign]\n", "[campaign]\ncalibration_poses = 5\n"))
     assert main(["calibrate", "--config", str(cell.config), "--db", str(cell.db)]) == 2
     err = capsys.readouterr().err
-    assert f"{cell.config}: campaign.calibration_poses: 5 is too few" in err and "at least 10" in err
+    assert f"{cell.config}: campaign.calibration_poses: 5 is too few" in err and "at least 11" in err
     assert cell.opened == [] and not cell.db.exists()
 
 

@@ -11,7 +11,12 @@ from pathlib import Path
 import pytest
 
 from hil.arm.catalog import ROBOT_NAMES
-from hil.arm.kinematics import N_PARAMETERS, identifiable_parameters
+from hil.arm.kinematics import (
+    N_ALL_PARAMETERS,
+    N_PARAMETERS,
+    identifiable_parameters,
+    identifiable_with_compliance,
+)
 from hil.errors import InputError
 from hil.station import config as config_module
 from hil.station.config import EXAMPLE, default_config, load_config, parse_config
@@ -20,11 +25,13 @@ from selector.design import minimum_poses
 ROOT = Path(__file__).resolve().parents[3]
 
 
+@pytest.mark.parametrize("compliance", [True, False])
 @pytest.mark.parametrize("robot", ROBOT_NAMES)
-def test_fewer_calibration_poses_than_identify_the_robot_are_refused_naming_the_key(robot):
-    n = len(identifiable_parameters(robot))
+def test_fewer_calibration_poses_than_identify_the_robot_are_refused_naming_the_key(robot, compliance):
+    # with the compliance (the default) the joints a floor arm's gravity loads count too
+    n = len(identifiable_with_compliance(robot) if compliance else identifiable_parameters(robot))
     need = minimum_poses(n)
-    data = {"robot": {"type": robot}, "campaign": {"calibration_poses": need - 1}}
+    data = {"robot": {"type": robot}, "campaign": {"calibration_poses": need - 1, "compliance": compliance}}
     with pytest.raises(InputError) as caught:
         parse_config(data, "station.toml")
     assert str(caught.value) == (f"station.toml: campaign.calibration_poses: {need - 1} is too few: "
@@ -37,7 +44,9 @@ def test_fewer_calibration_poses_than_identify_the_robot_are_refused_naming_the_
 def test_the_cheap_bound_is_every_parameter_of_the_model():
     # counts of at least minimum_poses(every parameter) skip the kinematics: that must stay sufficient
     assert config_module._ALL_PARAMETERS == N_PARAMETERS
+    assert config_module._ALL_PARAMETERS + 6 == N_ALL_PARAMETERS  # and the six compliances
     assert all(len(identifiable_parameters(r)) <= N_PARAMETERS for r in ROBOT_NAMES)
+    assert all(len(identifiable_with_compliance(r)) <= N_ALL_PARAMETERS for r in ROBOT_NAMES)
 
 
 def test_reading_a_usual_configuration_does_not_load_the_kinematics():
