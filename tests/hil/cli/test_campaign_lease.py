@@ -132,7 +132,7 @@ def test_two_real_processes_on_the_simulator(tmp_path):
 
     def command(out: str) -> list[str]:
         return [sys.executable, "-m", "hil", "calibrate", "--sim", "--speed", "100", "--seed", "5", "--poses",
-                "10", "--validation", "3", "--candidates", "500", "--db", str(db), "--json",
+                "12", "--validation", "3", "--candidates", "500", "--db", str(db), "--json",
                 "--out", str(tmp_path / out), "--no-warmup"]
 
     log = (tmp_path / "first.err").open("w")
