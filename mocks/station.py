@@ -14,7 +14,9 @@ service reports carries it, so tests and benches know the model the controller m
 The arm is a real one unless ``rigid``: the random truth sags under gravity and its payload and warms
 up as the controller runs (the world evaluates ``truth.warmed(t)`` on the controller's clock), and the
 controller reports the warming in RTDE ``joint_temperatures`` (`joint_temperatures`). A truth file's
-``noise.encoder_sigma`` sets the controller's encoder noise.
+``noise.encoder_sigma`` sets the controller's encoder noise. Every arm rings after its joint moves
+(`mocks.ringing`, seen by the trackers, not by the encoders), and the GeoCOM instrument takes
+`GEOCOM_MEASURE_S` of the controller's time per measurement.
 
 Faults it adds to the controller (``inject(name, **args)`` / the control channel): ``block_beam``
 (``on``, ``reason``), ``tracker_unplug``, ``tracker_garble`` (GeoCOM), ``emscon_drop`` (close the
@@ -36,9 +38,18 @@ from mocks.emscon.instrument import EmsconConfig
 from mocks.emscon.server import EmsconSimulator, ServerConfig
 from mocks.geocom.instrument import InstrumentConfig
 from mocks.geocom.server import GeoComSimulator, LinkConfig, SimulatorConfig
+from mocks.ringing import Ringing
 from mocks.ur.arm import AMBIENT_TEMPERATURE, TemperatureFn
 from mocks.ur.factory_calibration import factory_calibration
 from mocks.world import World
+
+#: Seconds one GeoCOM measuring RPC (TMC_GetSimpleMea in tracking mode) takes inside the simulated
+#: instrument. GeoCOM is the language of Leica's motorised total stations (DESIGN.md); their tracking
+#: distance mode delivers about 10 distances a second (Leica TPS1200 technical data, "Tracking" EDM
+#: mode, ≈0.15 s per distance; the driver's TMC_GetSimpleMea waits up to 100 ms, `TrackerConfig.wait_ms`,
+#: for one): 0.1 s is the faster end of that. The emScon simulator's point takes its stationary
+#: measuring time (`tracker.measure_time`, 0.5 s by default) per sample, as an AT9xx does.
+GEOCOM_MEASURE_S = 0.1
 
 
 def joint_temperatures(thermal: Thermal | None) -> TemperatureFn:
@@ -106,12 +117,19 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
     controller.set_calibration(calibration)
     controller.arm.set_temperatures(joint_temperatures(geometry.thermal))
     # the arm warms with the controller's running time: its SimClock counts from the controller's start
-    world = World(geometry, controller.true_joints, acceptance_angle, clock=controller.clock.now)
+    # a GeoCOM reading integrates the SMR's position over its measuring time
+    world = World(geometry, controller.true_joints, acceptance_angle, clock=controller.clock.now,
+                  ringing=Ringing(), reading_time=GEOCOM_MEASURE_S)
+    # the links ring after every joint move (`mocks.ringing`): the tracker sees it, the encoders do not
+    controller.arm.listeners.append(world.ringing.listener(world.tip_direction))
     home = world.home_pose(rng)
     controller.inject("set_joints", q=home.tolist())
-    config = SimulatorConfig(instrument=InstrumentConfig(seed=seed), link=LinkConfig(baudrate=baudrate),
+    config = SimulatorConfig(instrument=InstrumentConfig(seed=seed, processing_s=GEOCOM_MEASURE_S),
+                             link=LinkConfig(baudrate=baudrate),
                              address=controller.config.address, port=tracker_port)
-    simulator = GeoComSimulator(world, config)
+    # the instrument measures on the controller's clock, as the emScon simulator does: a fast-time
+    # station shortens its measuring time with everything else
+    simulator = GeoComSimulator(world, config, sleep=controller.clock.sleep)
     emscon = EmsconSimulator(world, ServerConfig(instrument=EmsconConfig(seed=seed),
                                                  address=controller.config.address, port=0),
                              clock=controller.clock.now)
@@ -124,6 +142,10 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
         "emscon_stall": lambda seconds: emscon.stall(float(seconds)),
         "emscon_garbage": lambda: emscon.garbage(),
         "emscon_laser_cold": lambda seconds: emscon.laser_cold(float(seconds)),
+    })
+    controller.extra_state.update({
+        "tracker_measurements": lambda: simulator.instrument.measurements,
+        "tracker_measuring_seconds": lambda: simulator.instrument.measuring_seconds,
     })
     return StationService(simulator, world, truth_document(geometry, noise, calibration), home, emscon)
 

@@ -11,6 +11,11 @@ truth's ``compliance`` for its ``payload``) and grows as it warms up. At simulat
 ``truth.warmed(t)`` (DESIGN.md, "Non-geometric errors"), t read from `clock`: the robot simulator's
 `SimClock`, whose seconds count from when the simulated controller started, so the running time of the
 arm is the time since its controller was switched on. Without a clock the arm stays cold.
+
+The arm also rings after its moves (`mocks.ringing`): with a `ringing` model, the SMR the tracker sees
+(`target`) is displaced by the links' residual vibration at the clock's time, while the joints (and so
+the controller's ``actual_q``) are not. `tip_direction` gives that model the true arm's SMR direction
+of travel at a move's end.
 """
 
 from __future__ import annotations
@@ -25,7 +30,12 @@ from hil.arm.geometry import Geometry
 from hil.arm.kinematics import Kinematics
 from hil.calibration.selection import arm_shape
 from mocks.geocom.target import TargetState
+from mocks.ringing import Ringing
 from selector.arm import segment_distance
+
+#: Points at which a reading's integration of the ring is evaluated (over a 0.1 s reading of a 9 Hz
+#: ring: about 18 per period).
+READING_SAMPLES = 16
 
 #: The beam is checked from this far beyond the SMR centre (the SMR's own nest is not an obstacle).
 BEAM_CLEARANCE = 0.03
@@ -49,6 +59,8 @@ class World:
     acceptance_deg: float = 30.0
     blocked: str = ""  # non-empty: something (a person, a cable) is in the beam, and what
     clock: Callable[[], float] | None = None
+    ringing: Ringing | None = None  # the links' residual vibration after moves (needs `clock`)
+    reading_time: float = 0.0  # seconds one tracker reading integrates over (`ring_offset`)
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     def __post_init__(self) -> None:
@@ -58,6 +70,33 @@ class World:
         # The selector plans with capsules that envelop the links; the real links are slimmer.
         planned = arm_shape(self.truth.robot)
         self._arm = replace(planned, radii=tuple(TRUE_LINK_FRACTION * r for r in planned.radii))
+        self._ring_kin = Kinematics(self.truth)  # its own pinocchio data: called from the arm's thread
+        self._ring_lock = threading.Lock()
+
+    def tip_direction(self, q: np.ndarray, u: np.ndarray, step: float = 1e-6) -> np.ndarray:
+        """The SMR's displacement (m, base frame) per radian of the lead joint at `q`, the joints moving
+        along `u` (radians per lead-joint radian): the direction and lever of a stop's tip acceleration."""
+        q = np.asarray(q, dtype=float)
+        u = np.asarray(u, dtype=float)
+        with self._ring_lock:
+            F = self._ring_kin.flange_poses(np.stack([q - step * u, q]))
+        p = np.einsum("nij,j->ni", F[:, :3, :3], self.truth.smr) + F[:, :3, 3]
+        return (p[1] - p[0]) / step
+
+    def ring_offset(self) -> np.ndarray:
+        """The SMR's vibration displacement (m, tracker frame) as a reading sees it: averaged over the
+        `reading_time` that has just passed (a distance measurement integrates over its measuring time;
+        an instantaneous sample of a 9 Hz ring every 0.1 s would alias it to a slow, steady-looking
+        offset that no real instrument reports). Zero without a ringing model."""
+        if self.ringing is None or self.clock is None:
+            return np.zeros(3)
+        now = float(self.clock())
+        if self.reading_time > 0:
+            times = now - self.reading_time * (np.arange(READING_SAMPLES) + 0.5) / READING_SAMPLES
+            offset = np.mean([self.ringing.offset(float(t)) for t in times], axis=0)
+        else:
+            offset = self.ringing.offset(now)
+        return self.truth.tracker.rotation.T @ offset
 
     def running_time(self) -> float:
         """Simulated seconds the arm has been running (0 without a clock)."""
@@ -110,6 +149,7 @@ class World:
 
     def target(self) -> TargetState:
         p, angle = self.state(np.asarray(self.joints(), dtype=float))
+        p = p + self.ring_offset()  # the links ring; the joints (the encoders) do not show it
         if self.blocked:
             return TargetState(p, False, self.blocked)
         if angle > self.acceptance_deg:

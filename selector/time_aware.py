@@ -50,6 +50,13 @@ from selector.order import order_poses, refine_order
 #: small enough that a full-rank set's f is unaffected to 1e-6, large enough to keep M⁻¹ finite.
 RIDGE = 1e-9
 
+#: A recreate step inserts one of this many best-ratio candidates at random (a deterministic greedy
+#: would rebuild what the ruin removed).
+EXPLORE = 3
+
+#: Relative tolerance of "f reaches the target" (two computations of f differ by rounding).
+TOLERANCE = 1e-9
+
 #: Candidates scored per insertion step: this many of the cheapest to insert, and as many at random.
 SHORTLIST = 800
 
@@ -234,7 +241,7 @@ def time_aware_select(G: np.ndarray, Q: np.ndarray, profile: MotionProfile, dwel
     def total(nodes: np.ndarray) -> float:
         return tour.move_time(nodes) + dwell * len(nodes)
 
-    def fill(nodes: np.ndarray) -> np.ndarray:
+    def fill(nodes: np.ndarray, explore: bool = False) -> np.ndarray:
         """Greedy cost-benefit insertion until the target is met (or nothing more fits the budget)."""
         nodes = np.asarray(nodes, dtype=int)
         in_set = np.zeros(len(Q), dtype=bool)
@@ -265,7 +272,12 @@ def time_aware_select(G: np.ndarray, Q: np.ndarray, profile: MotionProfile, dwel
                 return nodes
             if not len(idx):
                 return nodes
-            k = int(np.argmax(gain / np.maximum(cost[idx], 1e-6)))
+            ratio = gain / np.maximum(cost[idx], 1e-6)
+            if explore and len(ratio) > EXPLORE:  # a recreate step: one of the few best, at random
+                top = np.argpartition(-ratio, EXPLORE)[:EXPLORE]
+                k = int(rng.choice(top))
+            else:
+                k = int(np.argmax(ratio))
             c = int(idx[k])
             p = int(pos[c]) - (1 if tour.start is not None else 0)
             nodes = np.insert(nodes, max(p, 0), c)
@@ -277,19 +289,28 @@ def time_aware_select(G: np.ndarray, Q: np.ndarray, profile: MotionProfile, dwel
         f = design.criterion(chosen)
         short = 0.0 if len(chosen) >= min_count else float(min_count - len(chosen))
         if target is not None:
-            return (short + max(0.0, f / target - 1.0), total(nodes))
+            # (the greedy's f and this one are computed differently: equal within rounding)
+            return (short + max(0.0, f / target - 1.0 - TOLERANCE), total(nodes))
         return (short + f, total(nodes))
 
-    nodes = tour.reorder(fill(tour.reorder(fixed_nodes, thorough=True)), thorough=True)
+    nodes = tour.reorder(fixed_nodes, thorough=True)
+    if budget is not None and total(nodes) > budget:
+        raise SelectorError(f"the {len(fixed)} fixed poses alone take {total(nodes):.1f} s, over the "
+                            f"budget of {budget:g} s")
+    nodes = tour.reorder(fill(nodes), thorough=True)
     nodes = tour.reorder(fill(nodes))
     best, best_obj = nodes, objective(nodes)
     iterations = accepted = 0
     while time.perf_counter() - t0 < time_limit and (best >= 0).sum() > 1:
         iterations += 1
         cand = best[_ruin(best, design, tour, rng)]
-        cand = tour.reorder(fill(tour.reorder(cand, quick=True)), quick=True)
+        cand = tour.reorder(fill(tour.reorder(cand, quick=True), explore=True), quick=True)
         if budget is not None and total(cand) > budget + 1e-9:
             continue
+        if target is not None:  # a refill can leave poses the target no longer needs
+            cand = _prune(cand, design, tour, target, min_count, dwell, quick=True)
+        if total(cand) < 1.03 * best_obj[1]:  # close: worth the full reordering before judging
+            cand = tour.reorder(cand)
         obj = objective(cand)
         if obj < best_obj:
             best, best_obj = tour.reorder(cand), obj
@@ -348,7 +369,7 @@ def _ruin(nodes: np.ndarray, design: _Design, tour: _Tour, rng: np.random.Genera
 
 
 def _prune(nodes: np.ndarray, design: _Design, tour: _Tour, target: float, min_count: int,
-           dwell: float) -> np.ndarray:
+           dwell: float, quick: bool = False) -> np.ndarray:
     """Remove, one at a time, the pose whose removal saves the most time while f stays ≤ target."""
     while True:
         chosen = nodes[nodes >= 0]
@@ -356,11 +377,11 @@ def _prune(nodes: np.ndarray, design: _Design, tour: _Tour, target: float, min_c
             return nodes
         f = design.criterion(chosen)
         loss = design.remove_losses(chosen)
-        ok = np.flatnonzero(f + loss <= target)
+        ok = np.flatnonzero(f + loss <= target * (1 + TOLERANCE))
         if not len(ok):
             return nodes
         pos = np.flatnonzero(nodes >= 0)
         base = tour.move_time(nodes)
         saving = [base - tour.move_time(np.delete(nodes, pos[i])) for i in ok]
         i = ok[int(np.argmax(saving))]
-        nodes = tour.reorder(np.delete(nodes, pos[i]))
+        nodes = tour.reorder(np.delete(nodes, pos[i]), quick=quick)

@@ -269,6 +269,19 @@ class IsolatedURRobot:
                           acceleration=acceleration, samples=samples,
                           timeout=self.config.move_timeout + self.config.settle_timeout + _MARGIN)
 
+    def start_move(self, q: Any, *, speed: float | None = None,
+                   acceleration: float | None = None) -> np.ndarray:
+        """`URRobot.start_move` in the child: returns once the move is sent (the target checks, the
+        keep-in FK checks included, take well under the connect timeout)."""
+        return self._call("start_move", np.asarray(q, dtype=float).tolist(), speed=speed,
+                          acceleration=acceleration, timeout=self.config.connect_timeout + _MARGIN)
+
+    def wait_move(self, samples: int = 1) -> JointReading:
+        """`URRobot.wait_move` in the child; `stop()` interrupts it as it does a `move_to`. The
+        child's own move time-out runs from the send, so this call's limit is the move's whole one."""
+        return self._call("wait_move", samples,
+                          timeout=self.config.move_timeout + self.config.settle_timeout + _MARGIN)
+
     def follow(self, Q: Any, *, lookahead: float = 0.1, gain: float = 300.0,
                settle: float = 0.0) -> FollowResult:
         """`URRobot.follow` in the child: the servo loop runs next to ur_rtde, not across the pipe.

@@ -15,6 +15,8 @@ Design choices, and why:
   speed slider are polled every few milliseconds, so a protective stop, an e-stop or a dropped link
   surfaces within a cycle as ProtectiveStop / EmergencyStop / ConnectionLost instead of a bare False.
   On any error of its own (timeout, slider, abort) the driver stops the arm before raising.
+  `move_to` is `start_move` (send) + `wait_move` (watch), also callable apart, so a caller can use
+  the travel time (the campaign engine commits the previous point meanwhile).
 * `getForwardKinematics(q)` with a zero TCP offset reads stale registers in ur_rtde 1.6.5, so the
   driver always passes a non-zero offset.
 * Servo streaming: `follow(Q)` runs a whole trajectory's 500 Hz loop inside the driver, so under
@@ -81,6 +83,7 @@ class URRobot:
         self._r: Any = None  # rtde_receive.RTDEReceiveInterface
         self._cmd_lock = threading.Lock()
         self._abort = threading.Event()
+        self._moving: tuple[np.ndarray, float] | None = None  # start_move's target, and when it was sent
 
     # ------------------------------------------------------------------ connection
     def open(self) -> RobotInfo:
@@ -324,6 +327,20 @@ class URRobot:
         Raises TargetRejected before moving, the safety/link errors while moving, MotionTimeout when
         the arm does not settle within the configured timeouts (after stopping it).
         """
+        self.start_move(q, speed=speed, acceleration=acceleration)
+        return self.wait_move(samples)
+
+    def start_move(self, q: Sequence[float], *, speed: float | None = None,
+                   acceleration: float | None = None) -> np.ndarray:
+        """The first half of `move_to`: validate `q` and send the movej; returns (the validated
+        target) as soon as the controller accepted it, with the arm on its way.
+
+        So a caller can do something else while the arm travels (the campaign engine commits the
+        previous point to the store) and then call `wait_move`, which watches the motion as
+        `move_to` does. Until then nothing polls the controller: a protective stop or a dropped link
+        surfaces in `wait_move`, and `stop()` works meanwhile as always. Raises what `move_to`
+        raises before moving (TargetRejected, the controller's state errors).
+        """
         cfg = self.config
         self.check_status()  # a stopped controller answers the checks below with bare RuntimeErrors
         target = self.validate_target(q)
@@ -332,17 +349,28 @@ class URRobot:
         c, _r = self._require()
         self.check_status()
         self._abort.clear()
+        self._moving = None
         with self._typed_errors(), self._cmd_lock:
             accepted = c.moveJ(target.tolist(), v, a, True)
         if not accepted:
             self._explain(ProgramStopped("the controller did not accept the move"))
-        self._watch_motion(target)
+        # the move's time limit runs from when it was sent, not from when someone waits for it
+        self._moving = (target, time.monotonic())
+        return target
+
+    def wait_move(self, samples: int = 1) -> JointReading:
+        """The second half of `move_to`: watch the move `start_move` sent until the arm is steady at
+        its target (safety, link, slider and time-out checks as in `move_to`), then return the
+        joints read there. Raises RobotError when no move was started."""
+        moving, self._moving = self._moving, None
+        if moving is None:
+            raise RobotError("wait_move() without a move started by start_move()")
+        self._watch_motion(*moving)
         return self.read_joints(samples)
 
-    def _watch_motion(self, target: np.ndarray) -> None:
+    def _watch_motion(self, target: np.ndarray, t0: float) -> None:
         cfg = self.config
         c, r = self._require()
-        t0 = time.monotonic()
         deadline = t0 + cfg.move_timeout
         profile_done_at: float | None = None
         while True:

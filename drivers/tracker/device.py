@@ -105,6 +105,11 @@ class Tracker(Protocol):
         """One averaged point (TargetLost after bounded re-locks, UnstablePoint above the threshold)."""
         ...
 
+    def sample(self) -> TrackerPoint:
+        """One reading of the SMR now, no averaging and no stability check (TargetLost after bounded
+        re-locks): what `hil.campaign` settles on evidence with, reading until the last few agree."""
+        ...
+
     def relock(self) -> bool:
         """Try to find the SMR again; True when the beam is locked on it."""
         ...

@@ -195,6 +195,32 @@ class GeoComTracker:
         return measure_with_retries(lambda: self._measure_once(samples), relock,
                                     self.config.max_relocks, self.config.link_retries)
 
+    def sample(self) -> TrackerPoint:
+        """One reading of the SMR now (one TMC_GetSimpleMea; tracking started once, not per reading),
+        without averaging or a stability check: the building block of settling on evidence. A lost
+        target is re-locked as in `measure_point`; its spread is 0 (one reading)."""
+        def once() -> TrackerPoint:
+            if not self._tracking:
+                if self.commands.read_lock_status() == LockStatus.LOCKED_OUT:
+                    raise TargetLost("MOT_ReadLockStatus: locked out", 0, 6021)
+                self._start_tracking()
+            try:
+                r = self._sample()
+            except TargetLost:
+                self._tracking = False
+                raise
+            xyz = polar_to_cartesian(r.hz, r.v, r.distance).reshape(-1)
+            if not np.all(np.isfinite(xyz)):
+                raise TrackerError("non-finite coordinate from the instrument")
+            status = PointStatus.WARNING if r.warning else PointStatus.OK
+            return TrackerPoint((float(xyz[0]), float(xyz[1]), float(xyz[2])), (0.0, 0.0, 0.0), 1, status)
+
+        def relock() -> bool:
+            self._tracking = False
+            return self.relock()
+
+        return measure_with_retries(once, relock, self.config.max_relocks, self.config.link_retries)
+
     # --- paths
     def stream(
         self,

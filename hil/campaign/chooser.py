@@ -14,10 +14,23 @@ import numpy as np
 
 import selector
 from hil.calibration.selection import SelectionModel, hidden_reason, parse_constraints, select_poses
+from hil.calibration.timed_selection import select_timed
 from hil.campaign.plan import Choice, SelectionRequest
 from hil.errors import InputError
 from selector.candidates import Constraints, generate_candidates
+from selector.motion_time import Dwell
 from selector.order import order_poses
+
+#: Seconds per pose for reading the joints and the controller's steady check (RTDE at 500 Hz: 10
+#: readings are 20 ms; the driver polls the steady state every few milliseconds).
+DWELL_OVERHEAD = 0.05
+
+#: Seconds one GeoCOM distance-and-angle reading takes: the simulated instrument's measuring time
+#: (`mocks.station`, a tracking-mode EDM reading of a TPS1200-class instrument, about 0.1-0.15 s).
+GEOCOM_READING_TIME = 0.1
+
+#: `campaign.selection` of the time-aware selection.
+TIME_AWARE = "time-aware"
 
 #: Degrees kept between the selector's acceptance cone and the SMR's own, so poses chosen with an
 #: approximate tracker position (a bootstrap estimate) are still visible.
@@ -49,6 +62,8 @@ def campaign_chooser(config: Any) -> Any:
             floor=float(request.keep_in[0][2]), joint_lower=CAMPAIGN_LOWER, joint_upper=CAMPAIGN_UPPER)
         if request.role != CALIBRATION:
             return _random_poses(request, constraints)
+        if config.campaign["selection"] == TIME_AWARE:
+            return _time_aware(config, request, constraints)
         report = select_poses(
             request.model.robot, request.count, candidates=request.candidates, index=request.index,
             method="tabu", seed=request.seed, smr=request.model.smr, constraints=constraints,
@@ -61,6 +76,40 @@ def campaign_chooser(config: Any) -> Any:
     # the same line-of-sight and acceptance tests, asked again during the run (`plan._SightCheck`)
     choose.hidden = hidden_reason  # type: ignore[attr-defined]
     return choose
+
+
+def pose_dwell(config: Any) -> Dwell:
+    """The robot time a pose costs besides its move, as the station is configured (for the selector).
+
+    Measuring: ``campaign.samples`` readings, each ``tracker.measure_time`` (emScon's stationary
+    measuring time) or, over GeoCOM, `GEOCOM_READING_TIME`. Settling: ``robot.settle_time`` in the fixed
+    mode; with ``robot.settle = "stable"`` nothing beyond the readings themselves, since a UR's ring after
+    a move at the usual accelerations has died out within the first few readings (`mocks.ringing`) and
+    the readings of a ringing arm are still measuring time. Overhead: the joint reading and the
+    controller's steady check.
+    """
+    reading = (float(config.tracker["measure_time"]) if config.tracker["protocol"] == "emscon"
+               else GEOCOM_READING_TIME)
+    settle = float(config.robot["settle_time"]) if config.robot["settle"] == "fixed" else 0.0
+    return Dwell(settle=settle, measure=float(config.campaign["samples"]) * reading, overhead=DWELL_OVERHEAD)
+
+
+def _time_aware(config: Any, request: SelectionRequest, constraints: Constraints) -> Choice:
+    """Calibration poses and one tour through them and the validation poses (`request.fixed`)."""
+    from hil.campaign.plan import Choice
+
+    camp = config.campaign
+    budget = float(camp["time_budget"]) or None
+    report = select_timed(
+        request.model.robot, request.count, speed=config.robot["speed"],
+        acceleration=config.robot["acceleration"], dwell=pose_dwell(config), budget=budget,
+        fixed=request.fixed, start=request.start, candidates=request.candidates, index=request.index,
+        seed=request.seed, smr=request.model.smr, constraints=constraints,
+        compliance=bool(camp["compliance"]), payload=config.payload, gravity=config.gravity)
+    info = {k: report[k] for k in ("index", "value", "o1", "method", "form", "seconds", "travel_time",
+                                   "candidates", "parameters", "predicted", "seed_method", "motion",
+                                   "dwell", "budget", "tour")}
+    return Choice(np.array(report["poses"]), info)
 
 
 def _random_poses(request: Any, constraints: Constraints) -> Any:

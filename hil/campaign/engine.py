@@ -12,8 +12,20 @@ clears (bounded by `suspend_timeout`) and re-runs the interrupted pose visit fro
 Anything no suspender claims ends the run: the arm is stopped, `RunFinished(status="failed")` is
 emitted and the exception propagates.
 
-The engine never prints. It emits events; the store subscribes as a critical subscriber, so a
-measurement is committed before the next move starts.
+The engine never prints. It emits events; the store subscribes as a critical subscriber (delivered
+first: a failure ends the run). A measured point's events (`PoseReached`, `PointMeasured`) are held
+back until the next step: when that step is a move and the arm can be started and waited for apart
+(`start_move` / `wait_move`, `drivers.robot.ur.URRobot`), the engine sends the move, delivers the
+held events — the store commits the point — while the arm travels, then waits for the arm; any other
+step, any other event, a pause or the end of the run delivers them first. So the order of events is
+unchanged for every subscriber, the commit costs no robot time, and it is always finished before the
+next measurement. A failed commit stops the arm and fails the run (no suspender retries it).
+What the operator is promised stays true: a point reported measured (a `PointMeasured` that reached
+the displays, which come after the store) is in the store; an interrupted run (Ctrl-C, a stop
+request, an abort) stops the arm and then commits the point it holds; only a ``kill -9`` (or a power
+cut) during the next move can lose the point whose commit had not finished, and the resumed
+campaign measures that one pose again — at most that one. ``overlap=False`` commits each point
+before the next move starts, as an engine without it did.
 
 For the warm-up and the drift watch (`hil.campaign.warmup`) it also answers `ReadConditions` (the
 station time since the run started, its clock scaled by the clock's ``speed``, and the arm's joint
@@ -33,6 +45,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from drivers.tracker.errors import UnstablePoint
 from hil.arm.catalog import RobotSpec
 from hil.arm.geometry import Geometry
 from hil.arm.safety import check_target
@@ -63,6 +76,8 @@ from hil.campaign.steps import (
     ReadConditions,
     ReadJoints,
     Settle,
+    Settled,
+    SettleMeasure,
     Skipped,
     Step,
 )
@@ -169,6 +184,9 @@ class TrackerDevice(Protocol):
 
     def measure_point(self, samples: int = 1) -> Any: ...  # .xyz (or .position), .spread, .samples
 
+    # and, for `SettleMeasure`, ``sample()``: one reading now (a tracker without it is read with
+    # ``measure_point(1)``)
+
 
 @dataclass
 class Suspender:
@@ -200,6 +218,8 @@ class RunStats:
     measure: float = 0.0
     suspended: float = 0.0
     compute: float = 0.0  # plan code between steps (selection, identification)
+    events: float = 0.0  # delivering events (the store's commits first) with the arm standing still
+    events_in_motion: float = 0.0  # delivering a point's events while the arm travels (in `motion`)
     total: float = 0.0
     retries: int = 0
 
@@ -224,6 +244,7 @@ class Engine:
     max_retries: int = 5  # suspensions of the same pose visit before giving up
     deviation: Callable[[PoseRecord], float | None] | None = None  # for PointMeasured events
     home: np.ndarray | None = None  # a safe pose to route through when a direct path is unsafe
+    overlap: bool = True  # commit a point while the arm moves to the next pose (module docstring)
 
     def __post_init__(self) -> None:
         self.state = IDLE
@@ -240,6 +261,9 @@ class Engine:
         self._t0: float | None = None  # the clock when the run started (`ReadConditions`)
         self.current: Acquire | None = None
         self.records: list[PoseRecord] = []
+        # events held back for delivery during the next move, each with the record it commits
+        self._pending: list[tuple[Event, PoseRecord | None]] = []
+        self._commit_error: BaseException | None = None  # a failed delivery: never a suspension
 
     # --- requests from other threads -------------------------------------------------------------
     def request_pause(self) -> None:
@@ -288,7 +312,45 @@ class Engine:
 
     # --- state ------------------------------------------------------------------------------------
     def emit(self, event: Event) -> None:
-        self.bus.emit(event)
+        """Deliver `event` now, after any held back (subscribers see events in the order they arose)."""
+        self._flush()
+        self._deliver(event)
+
+    def _deliver(self, event: Event, moving: bool = False) -> None:
+        t = self.clock.monotonic()
+        try:
+            self.bus.emit(event)
+        finally:
+            if moving:
+                self.stats.events_in_motion += self.clock.monotonic() - t
+            else:
+                self.stats.events += self.clock.monotonic() - t
+
+    def _flush(self, moving: bool = False) -> None:
+        """Deliver the held-back events in order; a point's record joins `records` once delivered.
+
+        Each is taken off the queue before it is delivered, so one whose delivery failed (or was
+        interrupted) is never delivered twice."""
+        while self._pending:
+            event, record = self._pending.pop(0)
+            self._deliver(event, moving)
+            if record is not None:
+                self.records.append(record)
+
+    @property
+    def _overlaps(self) -> bool:
+        """Whether a point's commit can run during the next move (the arm has start/wait)."""
+        return self.overlap and callable(getattr(self.robot, "start_move", None)) and \
+            callable(getattr(self.robot, "wait_move", None))
+
+    def _hold(self, event: Event, record: PoseRecord | None = None) -> None:
+        """Deliver `event` with the next move (`_move`), or now when moves cannot overlap."""
+        if self._overlaps:
+            self._pending.append((event, record))
+            return
+        self.emit(event)
+        if record is not None:
+            self.records.append(record)
 
     def _set_state(self, new: str) -> None:
         with self._lock:
@@ -365,6 +427,8 @@ class Engine:
             self.stats.total = self.clock.monotonic() - t0
 
     def _execute(self, step: Step) -> Any:
+        if not isinstance(step, Acquire | Move):  # only a move overlaps a held point's commit
+            self._flush()
         if isinstance(step, Acquire):
             return self._acquire(step)
         if isinstance(step, Phase):
@@ -406,11 +470,13 @@ class Engine:
 
     def _device_step(self, step: Step) -> Any:
         clock = self.clock
+        if not isinstance(step, Move):  # a held point is committed before anything is measured
+            self._flush()
         t = clock.monotonic()
         if isinstance(step, Move):
             result = None
             for target in self._route(np.asarray(step.q, dtype=float)):
-                result = self.robot.move_to(target, speed=step.speed, acceleration=step.acceleration)
+                result = self._move(target, step)
                 self._last_q = target
             self.stats.motion += clock.monotonic() - t
             return result
@@ -426,7 +492,69 @@ class Engine:
             result = self.tracker.measure_point(step.samples)
             self.stats.measure += clock.monotonic() - t
             return result
+        if isinstance(step, SettleMeasure):
+            return self._settle_measure(step)
         raise TypeError(f"the engine cannot execute {step!r}")
+
+    def _settle_measure(self, step: SettleMeasure) -> Settled:
+        """`SettleMeasure`: single readings, each followed by the joints, until the window is still.
+
+        The time until the accepted window's first reading counts as settling, the window itself as
+        measuring (its joint readings included). Waits are in the station's seconds (`station_time`).
+        """
+        clock = self.clock
+        speed = float(getattr(clock, "speed", 1.0))
+        window = max(2, int(step.samples))
+        frames = max(1, -(-int(step.joint_samples) // window))  # joint frames after each reading
+        sample = getattr(self.tracker, "sample", None)
+        read = sample if callable(sample) else (lambda: self.tracker.measure_point(1))
+        t0 = clock.monotonic()
+        points: list[np.ndarray] = []
+        joints: list[np.ndarray] = []
+        stamps: list[float] = []
+        while True:
+            stamps.append(clock.monotonic())
+            point = read()
+            points.append(np.asarray(point.xyz if hasattr(point, "xyz") else point.position, float))
+            joints.append(np.asarray(self.robot.read_joints(frames).q, float))
+            if len(points) >= window:
+                P = np.array(points[-window:])
+                spread = P.std(axis=0, ddof=1)
+                if float(spread.max()) <= step.stability:
+                    break
+            # judged on a full window only: in fast time one slow reading (wall milliseconds times the
+            # speed) can pass max_wait before a window exists, and the arm may well be still
+            if len(points) >= window and (clock.monotonic() - t0) * speed > step.max_wait:
+                last = np.array(points[-window:])
+                worst = float(last.std(axis=0, ddof=1).max()) if len(last) > 1 else float("nan")
+                raise UnstablePoint(f"not steady within {step.max_wait:g} s: the last {len(last)} readings "
+                                    f"spread {worst * 1e6:.1f} µm > {step.stability * 1e6:.1f} µm",
+                                    tuple(float(v) for v in (last.std(axis=0, ddof=1) if len(last) > 1
+                                                             else np.zeros(3))))
+        end = clock.monotonic()
+        start = stamps[-window]
+        self.stats.settle += start - t0
+        self.stats.measure += end - start
+        Q = np.array(joints[-window:])
+        return Settled(p=P.mean(axis=0), p_spread=spread, samples=window, q=Q.mean(axis=0),
+                       q_spread=Q.std(axis=0, ddof=1), waited=(start - t0) * speed,
+                       readings=len(points))
+
+    def _move(self, target: np.ndarray, step: Move) -> Any:
+        """One leg of a `Move`. With events held back (the last point's), the move is sent first,
+        they are delivered while the arm travels, and then the arm is waited for; a delivery that
+        fails stops the arm and ends the run. Without (or when moves cannot overlap): deliver, move."""
+        if not (self._pending and self._overlaps):
+            self._flush()
+            return self.robot.move_to(target, speed=step.speed, acceleration=step.acceleration)
+        self.robot.start_move(target, speed=step.speed, acceleration=step.acceleration)  # type: ignore[attr-defined]
+        try:
+            self._flush(moving=True)
+        except BaseException as exc:
+            self._commit_error = exc  # the point may not be kept: no suspender may retry this visit
+            self._stop_arm()
+            raise
+        return self.robot.wait_move()  # type: ignore[attr-defined]
 
     def _route(self, q: np.ndarray) -> list[np.ndarray]:
         """Targets to move through to reach `q` safely.
@@ -467,9 +595,13 @@ class Engine:
         self.current = group
         # a reference visit is not a campaign pose: its events are the plan's (ReferenceMeasured)
         pose = group.role != REFERENCE
-        if pose:
-            self.emit(PoseStarted(campaign=self.campaign, index=group.index, role=group.role,
-                                  target=list(group.target)))
+        if pose:  # after the last point's held-back events, which its move delivers
+            started = PoseStarted(campaign=self.campaign, index=group.index, role=group.role,
+                                  target=list(group.target))
+            if self._pending:
+                self._hold(started)
+            else:
+                self.emit(started)
         t0 = self.clock.monotonic()
         try:
             results = self._with_suspenders(lambda: [self._device_step(s) for s in group.steps])
@@ -479,28 +611,36 @@ class Engine:
                                       reason=str(exc)))
             self.current = None
             return Skipped(group.index, group.role, str(exc), lost=isinstance(exc, PoseSkippedError))
-        reading = next(r for s, r in zip(group.steps, results, strict=True) if isinstance(s, ReadJoints))
-        point = next(r for s, r in zip(group.steps, results, strict=True) if isinstance(s, Measure))
-        xyz = np.asarray(point.xyz if hasattr(point, "xyz") else point.position, dtype=float)
-        record = PoseRecord(
-            index=group.index, role=group.role, target=np.array(group.target),
-            q=np.asarray(reading.q, float), q_spread=np.asarray(reading.spread, float),
-            p=xyz, p_spread=np.asarray(point.spread, float), samples=int(point.samples),
-            seconds=self.clock.monotonic() - t0)
+        settled = next((r for r in results if isinstance(r, Settled)), None)
+        if settled is not None:  # settled on evidence: joints and point from the same window
+            record = PoseRecord(
+                index=group.index, role=group.role, target=np.array(group.target),
+                q=settled.q, q_spread=settled.q_spread, p=settled.p, p_spread=settled.p_spread,
+                samples=settled.samples, seconds=self.clock.monotonic() - t0,
+                extra={"settle_s": settled.waited, "readings": settled.readings})
+        else:
+            reading = next(r for s, r in zip(group.steps, results, strict=True) if isinstance(s, ReadJoints))
+            point = next(r for s, r in zip(group.steps, results, strict=True) if isinstance(s, Measure))
+            xyz = np.asarray(point.xyz if hasattr(point, "xyz") else point.position, dtype=float)
+            record = PoseRecord(
+                index=group.index, role=group.role, target=np.array(group.target),
+                q=np.asarray(reading.q, float), q_spread=np.asarray(reading.spread, float),
+                p=xyz, p_spread=np.asarray(point.spread, float), samples=int(point.samples),
+                seconds=self.clock.monotonic() - t0)
         if not pose:  # handed back to the plan only: never a campaign point, never in a fit
             self.current = None
             return record
-        self.emit(PoseReached(campaign=self.campaign, index=group.index, role=group.role,
-                              q=record.q.tolist(), q_spread=record.q_spread.tolist(),
-                              seconds=record.seconds))
+        self._hold(PoseReached(campaign=self.campaign, index=group.index, role=group.role,
+                               q=record.q.tolist(), q_spread=record.q_spread.tolist(),
+                               seconds=record.seconds))
         dev = self.deviation(record) if self.deviation is not None else None
-        # The store is a critical subscriber: this returns only once the point is committed.
-        self.emit(PointMeasured(campaign=self.campaign, index=record.index, role=record.role,
-                                q=record.q.tolist(), p=record.p.tolist(),
-                                p_spread=record.p_spread.tolist(), samples=record.samples,
-                                deviation=dev, q_spread=record.q_spread.tolist(),
-                                target=record.target.tolist()))
-        self.records.append(record)
+        # Committed by the store (critical) during the next move, or before any other step or event
+        # (module docstring); the record joins `records` once it is.
+        self._hold(PointMeasured(campaign=self.campaign, index=record.index, role=record.role,
+                                 q=record.q.tolist(), p=record.p.tolist(),
+                                 p_spread=record.p_spread.tolist(), samples=record.samples,
+                                 deviation=dev, q_spread=record.q_spread.tolist(),
+                                 target=record.target.tolist()), record)
         self.current = None
         return record
 
@@ -523,7 +663,7 @@ class Engine:
                 self._between_steps()
 
     def _suspender_for(self, exc: BaseException) -> Suspender | None:
-        if isinstance(exc, RunAborted | KeyboardInterrupt):
+        if isinstance(exc, RunAborted | KeyboardInterrupt) or exc is self._commit_error:
             return None
         return next((s for s in self.suspenders if s.matches(exc)), None)
 

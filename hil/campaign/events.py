@@ -237,6 +237,22 @@ class DriftFlagged(Event):
 
 
 @dataclass(frozen=True, kw_only=True)
+class AcquisitionStopped(Event):
+    """The stopping rule (``campaign.stop_early``, `hil.campaign.stopping`) ended the calibration
+    poses early: the fit so far predicts the acceptance with margin. The remaining calibration poses
+    are not visited; validation poses still are. The store keeps it, so a resumed campaign keeps the
+    decision."""
+
+    reason: str  # the verdict in words
+    predicted_rms: float  # predicted validation RMS (m), σ at its upper confidence bound
+    target: float  # margin × acceptance (m): the prediction reached it
+    poses_used: int  # calibration poses measured when it stopped
+    poses_left: int  # calibration poses planned but not to be visited
+    skipped: list[int] = field(default_factory=list)  # their indices
+    figures: dict[str, Any] = field(default_factory=dict)  # the rule's record (`StoppingRule.record`)
+
+
+@dataclass(frozen=True, kw_only=True)
 class ModelIdentified(Event):
     rms: float
     max: float

@@ -28,7 +28,11 @@ pose selection and identification are computations on what the engine sends back
   `PointMeasured` event reaches the store before the next move. Poses already measured (a resumed
   run) are skipped. After `campaign.max_consecutive_lost` poses in a row lost the beam the run stops
   (`TrackerLooksWrong`): the tracker is not where the plan has it, and waiting out the re-lock time
-  at every remaining pose would only cost time. The reference is measured again every
+  at every remaining pose would only cost time. With ``campaign.stop_early`` the stopping rule
+  (`hil.campaign.stopping`) fits the points after each calibration pose and, once the fit predicts the
+  acceptance with margin, the remaining calibration poses are not visited (`AcquisitionStopped`, kept
+  by the store, so a resumed run keeps the decision); validation poses, wherever they are in the
+  visiting order, are all still measured. The reference is measured again every
   ``drift.every`` poses (drift watch); a drift beyond ``drift.limit`` flags the campaign. Reference
   measurements are never campaign points: no fit or validation sees them.
 * **Identify** on the calibration (and bootstrap) points; **validate** on the others: before (the
@@ -68,12 +72,25 @@ from hil.campaign.events import (
     ReferenceMeasured,
     ValidationDone,
 )
-from hil.campaign.steps import Emit, Phase, Plan, PoseRecord, ReadJoints, Skipped, acquire
+from hil.campaign.steps import (
+    Emit,
+    Phase,
+    Plan,
+    PoseRecord,
+    ReadJoints,
+    Skipped,
+    acquire,
+    visit_settings,
+)
+from hil.campaign.stopping import EarlyStop, StoppingRule
 from hil.campaign.warmup import ReferenceWatch, reference_pose
 from hil.errors import HilError, InputError
 from hil.station.config import StationConfig
 
 BOOTSTRAP, CALIBRATION, VALIDATION = "bootstrap", "calibration", "validation"
+
+#: `campaign.selection` of the time-aware selection: calibration and validation poses in one tour.
+TIME_AWARE = "time-aware"
 
 # Small moves of joints 1-3 around the start pose; joint 4 compensates joints 2+3 so the wrist, and
 # with it the SMR, keeps facing the tracker (joint 1 turns it by at most 0.15 rad ≈ 9°).
@@ -100,6 +117,9 @@ class SelectionRequest:
     seed: int
     exclude: np.ndarray  # poses already chosen (validation must differ from calibration)
     start: np.ndarray | None = None  # where the arm is (for the visiting order)
+    # poses the same tour visits anyway (time-aware selection: the validation poses); the Choice's
+    # info then has a "tour" saying where they come
+    fixed: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -129,6 +149,8 @@ class ResumeState:
     # reference measurements so far, in order (the store's ReferenceMeasured events)
     reference: np.ndarray | None = None
     references: list[ReferenceMeasured] = field(default_factory=list)
+    # the stopping rule's decision (the figures of the store's AcquisitionStopped event), kept as it was
+    stopping: dict[str, Any] | None = None
 
 
 @dataclass
@@ -148,6 +170,23 @@ class CampaignResult:
     controller: ErrorStats | None = None
     # warm-up and drift watch (`ReferenceWatch.summary`); None when both are off
     drift: dict[str, Any] | None = None
+    # the stopping rule (`EarlyStop.summary`: stopped or not, why, the prediction); None when it is off
+    stopping: dict[str, Any] | None = None
+
+
+def _tour_plan(first: int, cal: Choice, val: Choice) -> list[tuple[int, str, np.ndarray]]:
+    """The planned poses in the time-aware chooser's tour (``cal.info["tour"]``: selected poses and the
+    fixed validation poses interleaved), numbered in visiting order from `first`."""
+    tour = cal.info.get("tour")
+    if tour is None:  # a chooser without a tour: calibration, then validation
+        tour = ([{"role": "selected", "index": i} for i in range(len(cal.poses))]
+                + [{"role": "fixed", "index": i} for i in range(len(val.poses))])
+    planned = []
+    for k, stop in enumerate(tour):
+        calibration = stop["role"] == "selected"
+        q = (cal.poses if calibration else val.poses)[int(stop["index"])]
+        planned.append((first + k, CALIBRATION if calibration else VALIDATION, np.asarray(q, dtype=float)))
+    return planned
 
 
 def bootstrap_targets(start: np.ndarray, count: int) -> np.ndarray:
@@ -298,9 +337,7 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     camp = config.campaign
     smr_guess = np.array(config.smr["offset"])
     keep_in = (np.array(config.keep_in["min"]), np.array(config.keep_in["max"]))
-    visit = dict(settle=config.robot["settle_time"], joint_samples=config.robot["joint_samples"],
-                 samples=camp["samples"], speed=config.robot["speed"],
-                 acceleration=config.robot["acceleration"])
+    visit = visit_settings(config)
     records = dict(resume.records)
 
     # --- where is the tracker? -----------------------------------------------------------------
@@ -353,16 +390,27 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
                               f"{camp['validation_poses']} validation poses")
         base = dict(model=model, keep_in=keep_in, acceptance_angle=config.smr["acceptance_angle"],
                     index=camp["index"], candidates=camp["candidates"])
-        cal = choose(SelectionRequest(CALIBRATION, camp["calibration_poses"], seed=camp["seed"],
-                                      exclude=np.zeros((0, 6)), **base))
-        val = choose(SelectionRequest(VALIDATION, camp["validation_poses"], seed=camp["seed"] + 1,
-                                      exclude=cal.poses, start=cal.poses[-1], **base))
         # one numbering across roles, after the bootstrap's (skipped ones included)
         first = 1 + max([i for _, i in records] + [i for i, _ in boot_plan or ()], default=-1)
-        planned = [(first + i, CALIBRATION, q) for i, q in enumerate(cal.poses)]
-        n = first + len(planned)
-        for cycle in range(validation_cycles):
-            planned += [(n + cycle * len(val.poses) + i, VALIDATION, q) for i, q in enumerate(val.poses)]
+        if camp["selection"] == TIME_AWARE and validation_cycles == 1:
+            # validation poses first (a sample of the workspace, as always), then the calibration poses
+            # and one tour through both, from where the arm stands now
+            here = np.asarray((yield ReadJoints(config.robot["joint_samples"])).q, dtype=float)
+            val = choose(SelectionRequest(VALIDATION, camp["validation_poses"], seed=camp["seed"] + 1,
+                                          exclude=np.zeros((0, 6)), **base))
+            cal = choose(SelectionRequest(CALIBRATION, camp["calibration_poses"], seed=camp["seed"],
+                                          exclude=val.poses, start=here, fixed=val.poses, **base))
+            planned = _tour_plan(first, cal, val)
+        else:
+            cal = choose(SelectionRequest(CALIBRATION, camp["calibration_poses"], seed=camp["seed"],
+                                          exclude=np.zeros((0, 6)), **base))
+            val = choose(SelectionRequest(VALIDATION, camp["validation_poses"], seed=camp["seed"] + 1,
+                                          exclude=cal.poses, start=cal.poses[-1], **base))
+            planned = [(first + i, CALIBRATION, q) for i, q in enumerate(cal.poses)]
+            n = first + len(planned)
+            for cycle in range(validation_cycles):
+                planned += [(n + cycle * len(val.poses) + i, VALIDATION, q)
+                            for i, q in enumerate(val.poses)]
         selection = {"calibration": cal.info, "validation": val.info}
     else:
         planned = resume.poses
@@ -378,18 +426,40 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
 
     # --- measure -------------------------------------------------------------------------------
     todo = [(i, r, q) for i, r, q in planned if (r, i) not in records]
+    # the stopping rule (campaign.stop_early): a stop the store holds is kept as it was decided
+    stop = EarlyStop(StoppingRule(robot, smr_guess, np.array([q for _, r, q in planned if r == VALIDATION]),
+                                  camp["acceptance"], camp["stop_margin"], compliance=camp["compliance"],
+                                  payload=config.payload, gravity=config.gravity)
+                     if camp["stop_early"] else None, resume.stopping)
+
+    def fitted() -> list[PoseRecord]:
+        return [r for (role, _), r in sorted(records.items()) if role in (BOOTSTRAP, CALIBRATION)]
+
+    def calibration_left(after: int) -> list[int]:
+        return [j for j, r, _ in todo[after:] if r == CALIBRATION and (r, j) not in records]
+
+    def measured_calibration() -> int:
+        return sum(1 for role, _ in records if role == CALIBRATION)
+
+    if measured_calibration():  # resumed: the check the interrupted run may not have made on these
+        stopped = stop.consider(campaign, fitted(), measured_calibration(), calibration_left(0))
+        if stopped is not None:
+            yield Emit(stopped)
     # the tracker frame was located from measured points (the bootstrap) unless it was configured
     watch = ReferenceWatch(config, campaign, reference, model, visit, resume.references,
                            located=config.tracker["position"] is None)
     if todo:  # warm (again, on a resume: the arm may have cooled) before measuring anything
         yield from watch.warm_up([q for _, r, q in planned if r == CALIBRATION])
-    yield Phase("measure", f"{len(todo)} of {len(planned)} poses to measure")
+    left = [(i, r) for i, r, _ in todo if not (r == CALIBRATION and stop.stopped)]
+    yield Phase("measure", f"{len(left)} of {len(planned)} poses to measure")
     if todo:
         yield from watch.start()
     sight = _SightCheck(robot, smr_guess, tracker.translation, config.smr["acceptance_angle"],
                         getattr(choose, "hidden", None))
     lost: list[Skipped] = []  # beam lost at each of these poses, one after another
-    for i, role, q in todo:
+    for k, (i, role, q) in enumerate(todo):
+        if role == CALIBRATION and stop.stopped:  # the fit so far already predicts the acceptance
+            continue
         sight.refine(list(records.values()))
         reason = sight.hidden(q)
         if reason is not None:  # don't drive there and wait for a beam that cannot come
@@ -401,6 +471,10 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
             records[(role, i)] = record
             lost = []
             yield from watch.after_pose()
+            if role == CALIBRATION:
+                stopped = stop.consider(campaign, fitted(), measured_calibration(), calibration_left(k + 1))
+                if stopped is not None:
+                    yield Emit(stopped)
         elif isinstance(record, Skipped) and record.lost:
             lost.append(record)
             if len(lost) >= camp["max_consecutive_lost"]:
@@ -441,4 +515,4 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     doc = model_document(fit, after.as_dict(), controller=controller)
     drift = watch.summary() if config.warmup["enabled"] or config.drift["every"] or watch.points else None
     return CampaignResult(fit, before, after, passed, list(records.values()), tracker, selection,
-                          iso, doc, theirs, drift)
+                          iso, doc, theirs, drift, stop.summary())

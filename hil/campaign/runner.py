@@ -30,6 +30,7 @@ from hil.calibration.measurements import Measurements
 from hil.campaign.controller import controller_record
 from hil.campaign.engine import Clock, Engine, RealClock, RunAborted, RunInterrupted
 from hil.campaign.events import (
+    AcquisitionStopped,
     BootstrapPlanned,
     ControllerModel,
     Event,
@@ -42,6 +43,7 @@ from hil.campaign.events import (
 )
 from hil.campaign.plan import BOOTSTRAP, CampaignResult, ChoosePoses, ResumeState, calibration_plan
 from hil.campaign.steps import PoseRecord
+from hil.campaign.stopping import stopped_words
 from hil.campaign.suspenders import suspenders
 from hil.errors import HilError, InputError
 from hil.station.config import StationConfig
@@ -134,7 +136,8 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
                 f"(limit {drift['limit'] * 1e6:.1f} µm)" if drift.get("flagged") else "")
         return ("accepted" if result.passed else "rejected",
                 f"validation RMS {result.after.rms * 1e3:.4f} mm "
-                f"{'<=' if result.passed else '>'} {camp['acceptance'] * 1e3:.4f} mm{flag}")
+                f"{'<=' if result.passed else '>'} {camp['acceptance'] * 1e3:.4f} mm{flag}"
+                f"{stopped_words(result.stopping)}")
 
     return run_plan(
         config, lambda run: calibration_plan(config, choose, run.campaign, resume, validation_cycles,
@@ -324,7 +327,8 @@ def _record_failed(store: Any, what: str, exc: BaseException) -> RecordFailed:
 
 def resume_state(store: Any, campaign: str) -> ResumeState:
     """What an interrupted campaign already has: its plan, tracker estimate and measured poses, its
-    reference pose and reference measurements (warm-up and drift watch: the log's ReferenceMeasured)."""
+    reference pose and reference measurements (warm-up and drift watch: the log's ReferenceMeasured),
+    and the stopping rule's decision (the log's AcquisitionStopped)."""
     record = store.campaign(campaign)
     plan = record.plan or {}
     tracker = None
@@ -349,7 +353,11 @@ def resume_state(store: Any, campaign: str) -> ResumeState:
     references = [e for e in store.events(campaign, types=("ReferenceMeasured",))
                   if isinstance(e, ReferenceMeasured)]
     resumed = planned if tracker is not None and planned else None
+    # the stopping rule's decision: the remaining calibration poses stay unvisited (the last stop)
+    stops = [e for e in store.events(campaign, types=("AcquisitionStopped",))
+             if isinstance(e, AcquisitionStopped)]
     return ResumeState(poses=resumed, tracker=tracker,
                        records=records, selection=plan.get("selection") or {}, bootstrap=bootstrap,
                        reference=np.array(reference, dtype=float) if reference and resumed else None,
-                       references=references)
+                       references=references,
+                       stopping=dict(stops[-1].figures) if stops and resumed else None)

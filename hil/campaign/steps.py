@@ -7,7 +7,9 @@ own. Because steps are plain data, a plan can be dry-run against canned replies 
 every motion checked against the joint limits and the keep-in zone before the arm moves
 (`check_motion`).
 
-`Acquire` groups the steps of one pose (move, settle, read joints, measure). It is the unit of
+`Acquire` groups the steps of one pose (move, settle, read joints, measure; or move and
+`SettleMeasure`, which settles on the tracker's evidence and reads the joints in the same window). It
+is the unit of
 recovery: if a suspender trips inside it (protective stop mid-move, lost beam), the engine resumes
 by re-running the whole group, so a joint reading is never paired with a point from another visit.
 An `Acquire` of role `REFERENCE` measures the warm-up and drift reference pose (`hil.campaign.warmup`):
@@ -68,12 +70,47 @@ class Measure:
 
 
 @dataclass(frozen=True)
+class SettleMeasure:
+    """Settle on evidence: take single tracker readings until the last `samples` agree, then measure.
+
+    Replaces `Settle` + `ReadJoints` + `Measure` (``robot.settle = "stable"``). After the move the
+    tracker reads the SMR one reading at a time, and after each reading the joints are read (enough
+    controller cycles that the window holds at least `joint_samples` of them). As soon as the last
+    ``max(samples, 2)`` readings have a per-axis spread (sample standard deviation) ≤ `stability` (m),
+    the point is their mean and the joints are the mean of the same window's frames: the arm's ring
+    (the links flex after a stop; the encoders do not see it) has died out, and nothing waits longer
+    than it must. Two readings at least, because one reading has no spread to judge stillness by.
+    Nothing for `max_wait` seconds of station time (a ring that does not die out, a vibrating floor):
+    the tracker's `UnstablePoint`, as a fixed wait's measurement would raise. No minimum wait:
+    ``robot.settle_time`` is the fixed mode's wait only. Answered with `Settled`.
+    """
+
+    samples: int
+    joint_samples: int
+    stability: float
+    max_wait: float
+
+
+@dataclass(frozen=True)
+class Settled:
+    """What `SettleMeasure` measured: the window's point and joints, how long it waited (station s)."""
+
+    p: np.ndarray
+    p_spread: np.ndarray
+    samples: int
+    q: np.ndarray
+    q_spread: np.ndarray
+    waited: float  # from the end of the move to the first reading of the accepted window
+    readings: int  # tracker readings taken in all (the window's and those before it)
+
+
+@dataclass(frozen=True)
 class Acquire:
     """One pose visit: the steps above as a unit that is retried whole after a suspension."""
 
     index: int  # the pose's campaign index; a reference visit's: its number among the references
     role: str  # bootstrap, calibration, validation, reference
-    steps: tuple[Move | Settle | ReadJoints | Measure, ...]
+    steps: tuple[Move | Settle | ReadJoints | Measure | SettleMeasure, ...]
 
     @property
     def target(self) -> tuple[float, ...]:
@@ -120,7 +157,8 @@ class Checkpoint:
     label: str
 
 
-Step = Move | Settle | ReadJoints | Measure | Acquire | Phase | Emit | Checkpoint | ReadConditions
+Step = (Move | Settle | ReadJoints | Measure | SettleMeasure | Acquire | Phase | Emit | Checkpoint
+        | ReadConditions)
 Plan = Generator[Step, Any, Any]
 
 
@@ -157,14 +195,26 @@ class Skipped:
 
 
 def acquire(index: int, role: str, q: Iterable[float], *, settle: float, joint_samples: int,
-            samples: int, speed: float | None = None, acceleration: float | None = None) -> Acquire:
-    """The standard pose visit: move, settle, read averaged joints, measure."""
-    return Acquire(index, role, (
-        Move(tuple(float(v) for v in q), speed, acceleration),
-        Settle(settle),
-        ReadJoints(joint_samples),
-        Measure(samples),
-    ))
+            samples: int, speed: float | None = None, acceleration: float | None = None,
+            mode: str = "fixed", stability: float = 50e-6, settle_max: float = 5.0) -> Acquire:
+    """The standard pose visit: move, then (``mode="fixed"``) wait `settle` s, read averaged joints,
+    measure; or (``mode="stable"``) settle and measure on the tracker's evidence (`SettleMeasure`)."""
+    move = Move(tuple(float(v) for v in q), speed, acceleration)
+    if mode == "stable":
+        return Acquire(index, role, (move, SettleMeasure(samples, joint_samples, stability, settle_max)))
+    if mode != "fixed":
+        raise ValueError(f"settle mode must be 'stable' or 'fixed', got {mode!r}")
+    return Acquire(index, role, (move, Settle(settle), ReadJoints(joint_samples), Measure(samples)))
+
+
+def visit_settings(config: Any) -> dict[str, Any]:
+    """`acquire`'s keyword arguments from a station configuration (`hil.station.config.StationConfig`):
+    every pose visit of a campaign (and its warm-up's reference visits) is made the same way."""
+    robot = config.robot
+    return dict(settle=robot["settle_time"], joint_samples=robot["joint_samples"],
+                samples=config.campaign["samples"], speed=robot["speed"],
+                acceleration=robot["acceleration"], mode=robot["settle"],
+                stability=config.campaign["stability"], settle_max=robot["settle_max"])
 
 
 def dry_run(plan: Plan, respond: Callable[[Step], Any], limit: int = 100_000) -> tuple[list[Step], Any]:

@@ -50,12 +50,20 @@ from hil.cli._common import (
     SEED,
     SIM_SPEED,
     VERIFY_CYCLES,
+    finite_float,
     rms_threshold,
 )
 from hil.cli.progress import JsonLines, Progress
 from hil.cli.station_args import add_tracker_protocol, station_from_args
 from hil.errors import InputError
 from hil.files.outputs import atomic_write_text, check_output
+
+#: ``--stop-margin``: a fraction of the acceptance threshold, as ``campaign.stop_margin``.
+STOP_MARGIN = finite_float(0, 1, lo_open=True)
+#: --time-budget: robot seconds (campaign.time_budget's range, without its 0 = "no budget")
+TIME_BUDGET = finite_float(0, 86_400, "s", lo_open=True)
+#: --selection: campaign.selection's values (hil.station.config.SELECTIONS)
+SELECTIONS = ("tabu", "time-aware")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -78,6 +86,18 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"validation RMS threshold, {RMS_THRESHOLD_HELP}; overrides the config")
     p.add_argument("--cycles", type=CYCLES, default=1,
                    help="visits of each validation pose (>1 adds ISO 9283 AP/RP)")
+    p.add_argument("--stop-early", action="store_true",
+                   help="stop visiting calibration poses once the fit so far predicts the acceptance with "
+                        "margin (validation poses are all still measured); overrides campaign.stop_early")
+    p.add_argument("--stop-margin", type=STOP_MARGIN, metavar="F",
+                   help="with the stopping rule: stop once the predicted validation RMS is at most F x the "
+                        "acceptance, 0 < F <= 1 (default: campaign.stop_margin, 0.7)")
+    p.add_argument("--selection", choices=SELECTIONS,
+                   help="pose selection: tabu (method 000, then the tour) or time-aware (poses and tour "
+                        "together for the least robot time); overrides campaign.selection")
+    p.add_argument("--time-budget", type=TIME_BUDGET, metavar="SECONDS",
+                   help="time-aware: the most accurate tour within this much robot time; overrides "
+                        "campaign.time_budget")
     p.add_argument("--no-warmup", action="store_true",
                    help="measure without warming the arm up first (it has been running already); "
                         "overrides warmup.enabled, the drift watch stays as configured")
@@ -104,6 +124,8 @@ def run(args: argparse.Namespace) -> int:
     _check_outputs(args)
     if args.verify_cycles is not None and not args.verify:
         raise InputError("--verify-cycles goes with --verify")
+    _check_stop_margin(args)
+    _check_time_budget(args)
     with interruptible():  # Ctrl-C, SIGTERM, SIGHUP: the arm stops, the campaign stays resumable
         return _run(args)
 
@@ -125,6 +147,31 @@ def _check_poses(args: argparse.Namespace) -> None:
     if args.poses < need:
         raise InputError(f"--poses {args.poses}: too few calibration poses: identifying the {n} parameters "
                          f"of a {robot} from 3 coordinates per pose needs at least {need}")
+
+
+def _check_stop_margin(args: argparse.Namespace) -> None:
+    """--stop-margin without the stopping rule on (--stop-early, or the configuration's
+    campaign.stop_early) would be silently ignored: refused before the station starts."""
+    if args.stop_margin is None or args.stop_early:
+        return
+    from hil.station.config import load_config
+
+    if not (args.config and load_config(args.config).campaign["stop_early"]):
+        raise InputError("--stop-margin goes with --stop-early (or campaign.stop_early = true in --config)")
+
+
+def _check_time_budget(args: argparse.Namespace) -> None:
+    """--time-budget without the time-aware selection (--selection time-aware, or the configuration's
+    campaign.selection) would be silently ignored: refused before the station starts."""
+    if args.time_budget is None or args.selection == "time-aware":
+        return
+    from hil.station.config import load_config
+
+    configured = args.config and load_config(args.config).campaign["selection"] == "time-aware"
+    if args.selection is None and configured:
+        return
+    raise InputError("--time-budget goes with --selection time-aware (or campaign.selection = "
+                     "\"time-aware\" in --config)")
 
 
 def _check_outputs(args: argparse.Namespace) -> None:

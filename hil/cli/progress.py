@@ -17,6 +17,7 @@ from collections.abc import Mapping
 from typing import IO, Any
 
 from hil.campaign.events import (
+    AcquisitionStopped,
     ControllerModel,
     DriftFlagged,
     Event,
@@ -169,6 +170,9 @@ class Progress:
                 self._line(f"measured {self._what(event.index, event.role)}{dev}")
         elif isinstance(event, PoseSkipped):
             self._line(f"skipped {self._what(event.index, event.role)}: {event.reason}")
+        elif isinstance(event, AcquisitionStopped):  # the stopping rule: fewer poses to go
+            self.total = max(self.done, self.total - event.poses_left)
+            self._line(f"stopping early: {event.reason}; {event.poses_left} calibration poses not needed")
         elif isinstance(event, Suspended):
             self._line(f"SUSPENDED ({event.kind}): {event.message}")
         elif isinstance(event, Resumed):

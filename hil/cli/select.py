@@ -2,6 +2,13 @@
 
     hil select --robot ur5e --count 30 [--candidates 20000] [--index O1] [--method tabu|exchange|random]
                [--seed S] [--tracker X,Y,Z] [--smr X,Y,Z] [--out poses.json] [constraint options]
+    hil select --robot ur5e --count 30 --method time-aware [--budget SECONDS] [--speed V]
+               [--acceleration A] [--dwell S] ...
+
+``--method time-aware`` chooses poses and their order together for the most accuracy per second of
+robot time (`hil.calibration.timed_selection`): without ``--budget`` it reaches the predicted accuracy
+of method 000's ``--count`` poses in the least time (the pose count is free), with ``--budget`` it finds
+the most accurate tour that fits; ``predicted`` and ``seed_method`` in the JSON compare the two.
 
 The JSON (``hil-poses/1``) has robot, index, value, bound (O1's D-optimal bound), percent_of_bound,
 method, seconds (the selection itself), poses (6-lists in radians, in visiting order), the travel time
@@ -28,6 +35,9 @@ from selector.search import METHODS
 
 DEFAULT_SMR = "0,0,0.045"
 
+#: `--method` value of the time-aware selection (`hil.calibration.timed_selection`).
+TIME_AWARE = "time-aware"
+
 #: Farthest tracker range (m) a --range may give: Leica's AT403 measures to 80 m (160 m diameter), the
 #: longest of the laser trackers hil drives.
 MAX_TRACKER_RANGE = 80.0
@@ -44,7 +54,20 @@ def register(sub: Any) -> None:
     p.add_argument("--index", default="O1",
                    help=f"what to maximise: observability index {', '.join(INDEX_NAMES)}")
     p.add_argument("--method", default="tabu",
-                   help=f"search method: {', '.join(METHODS)} (the last two are baselines to compare with)")
+                   help=f"search method: {', '.join(METHODS)} (the last two are baselines to compare with), "
+                        f"or {TIME_AWARE} (poses and order together, for robot time)")
+    # ur_rtde's moveJ takes at most 3.14 rad/s and 40 rad/s² (hil.station.config, robot.speed)
+    p.add_argument("--speed", type=finite_float(0, 3.14, "rad/s", lo_open=True), default=0.5,
+                   help="time-aware: joint speed of the moves (rad/s, the station's robot.speed)")
+    p.add_argument("--acceleration", type=finite_float(0, 40, "rad/s²", lo_open=True), default=1.0,
+                   help="time-aware: joint acceleration of the moves (rad/s², robot.acceleration)")
+    p.add_argument("--dwell", type=finite_float(0, 120, "s"), default=None,
+                   help="time-aware: robot seconds per pose besides moving (settle, read, measure; "
+                        "default 0.85)")
+    p.add_argument("--budget", type=finite_float(0, 86_400, "s", lo_open=True), default=None,
+                   help="time-aware: the most accurate tour within this many seconds of robot time")
+    p.add_argument("--time-limit", type=finite_float(0, 3600, "s", lo_open=True), default=5.0,
+                   help="time-aware: seconds of search after the first tour")
     p.add_argument("--seed", type=SEED, default=0, help="random seed; equal seeds give equal output")
     p.add_argument("--tracker", help="tracker position X,Y,Z in the robot base frame (m); without it the "
                                      "range, acceptance and line-of-sight constraints are off")
@@ -163,13 +186,31 @@ def run(args: argparse.Namespace) -> int:
 
     payload = payload_or_none(args.payload)
     status = StatusLine(None if args.quiet else sys.stderr)
+    timed = args.method == TIME_AWARE
+    if not timed:
+        for name in ("budget", "dwell"):
+            if getattr(args, name) is not None:
+                raise InputError(f"--{name}: only with --method {TIME_AWARE}")
     try:
-        report = select_poses(args.robot, args.count, candidates=args.candidates, index=args.index,
-                              method=args.method, seed=args.seed, smr=smr, constraints=constraints,
-                              scaling=args.scaling, start=None if start is None else np.array(start),
-                              settings=TabuSettings(prune=True) if args.prune else None,
-                              bound=args.bound, progress=status, compliance=args.compliance,
-                              payload=payload if payload is not None and payload.mass > 0 else None)
+        if timed:
+            from hil.calibration.timed_selection import select_timed
+            from selector.motion_time import Dwell
+
+            dwell = Dwell() if args.dwell is None else Dwell(settle=0.0, measure=args.dwell, overhead=0.0)
+            report = select_timed(
+                args.robot, args.count, speed=args.speed, acceleration=args.acceleration, dwell=dwell,
+                budget=args.budget, start=None if start is None else np.array(start),
+                candidates=args.candidates, index=args.index, seed=args.seed, smr=smr,
+                constraints=constraints, scaling=args.scaling, compliance=args.compliance,
+                payload=payload if payload is not None and payload.mass > 0 else None,
+                time_limit=args.time_limit, progress=status)
+        else:
+            report = select_poses(args.robot, args.count, candidates=args.candidates, index=args.index,
+                                  method=args.method, seed=args.seed, smr=smr, constraints=constraints,
+                                  scaling=args.scaling, start=None if start is None else np.array(start),
+                                  settings=TabuSettings(prune=True) if args.prune else None,
+                                  bound=args.bound, progress=status, compliance=args.compliance,
+                                  payload=payload if payload is not None and payload.mass > 0 else None)
     except BaseException:
         status.close(keep=False)  # the error is then the one line below the finished phases
         raise

@@ -24,7 +24,8 @@ def add_tracker_protocol(parser: argparse.ArgumentParser) -> None:
 
 
 def config_overrides(args: argparse.Namespace) -> dict[str, Any]:
-    """The campaign keys a command's options override (--poses, --validation, --candidates, --accept)."""
+    """The campaign keys a command's options override (--poses, --validation, --candidates, --accept,
+    and calibrate's --stop-early, --stop-margin)."""
     out: dict[str, Any] = {}
     for option, key in (("poses", "campaign__calibration_poses"),
                         ("validation", "campaign__validation_poses"),
@@ -36,6 +37,14 @@ def config_overrides(args: argparse.Namespace) -> dict[str, Any]:
             out[key] = value
     if args.cycles < 1:
         raise InputError(f"--cycles must be at least 1, got {args.cycles}")
+    if getattr(args, "stop_early", False):  # hil calibrate: the stopping rule (hil.campaign.stopping)
+        out["campaign__stop_early"] = True
+    if getattr(args, "stop_margin", None) is not None:
+        out["campaign__stop_margin"] = args.stop_margin
+    if getattr(args, "selection", None) is not None:  # hil calibrate: tabu or time-aware
+        out["campaign__selection"] = args.selection
+    if getattr(args, "time_budget", None) is not None:
+        out["campaign__time_budget"] = args.time_budget
     return out
 
 

@@ -198,6 +198,9 @@ class ReportData:
     # warm-up and drift watch (`hil.campaign.warmup.ReferenceWatch.summary`: the reference's series,
     # the largest drift, its limit, flagged, the warm-ups); None when both were off
     drift: Mapping[str, Any] | None = None
+    # the stopping rule (`hil.campaign.plan.CampaignResult.stopping`: stopped, reason, predicted_rms,
+    # target, poses_used, poses_left, ...); None when it was off
+    stopping: Mapping[str, Any] | None = None
 
     @property
     def drift_flagged(self) -> bool:
@@ -265,6 +268,7 @@ def report_data_from(
     validation_controller: ErrorStats | None = None,
     verification: Mapping[str, Any] | None = None,
     drift: Mapping[str, Any] | None = None,
+    stopping: Mapping[str, Any] | None = None,
 ) -> ReportData:
     """Assemble a `ReportData` from what the campaign engine has at the end of a run.
 
@@ -284,7 +288,8 @@ def report_data_from(
       (`hil.campaign.controller.controller_validation`), shown beside before and after;
     * ``verification``: the pose test run after the calibration (``hil calibrate --verify``), its
       document as the result embeds it under ``verification``;
-    * ``drift``: the warm-up and drift watch (`hil.campaign.plan.CampaignResult.drift`).
+    * ``drift``: the warm-up and drift watch (`hil.campaign.plan.CampaignResult.drift`);
+    * ``stopping``: the stopping rule's record (`hil.campaign.plan.CampaignResult.stopping`).
     """
     from hil.calibration.model_file import model_document, software_versions, tracker_pose
 
@@ -364,6 +369,7 @@ def report_data_from(
                                else ErrorSet.of_stats(validation_controller)),
         verification=dict(verification) if verification is not None else None,
         drift=dict(drift) if drift is not None else None,
+        stopping=dict(stopping) if stopping is not None else None,
     )
 
 
@@ -503,7 +509,25 @@ def _from_result(doc: Mapping[str, Any], source: str) -> ReportData:
             validation["controller"], pv.get("controller"), f"{source}: validation.controller")),
         verification=_verification(doc.get("verification"), source),
         drift=_drift(doc.get("drift"), source),
+        stopping=_stopping(doc.get("stopping"), source),
     )
+
+
+def _stopping(block: Any, source: str) -> Mapping[str, Any] | None:
+    """The result's ``stopping`` block, checked as far as the report reads it: ``stopped`` a boolean,
+    the RMS figures numbers (m) or null, the pose counts whole numbers."""
+    if block is None:
+        return None
+    if not isinstance(block, Mapping) or not isinstance(block.get("stopped"), bool):
+        raise InputError(f"{source}: field 'stopping' must be an object with a boolean 'stopped'")
+    for key in ("predicted_rms", "target"):
+        if block.get(key) is not None and not _is_number(block.get(key)):
+            raise InputError(f"{source}: field 'stopping.{key}' must be a number (m) or null")
+    for key in ("poses_used", "poses_left"):
+        value = block.get(key)
+        if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 0):
+            raise InputError(f"{source}: field 'stopping.{key}' must be a whole number of poses")
+    return dict(block)
 
 
 def _drift(block: Any, source: str) -> Mapping[str, Any] | None:

@@ -93,6 +93,11 @@ def mes_result(data: ReportData) -> dict[str, Any]:
       "seconds", "converged", "reason", "runs": [{"run", "seconds", "converged", "references"}]}}``.
       ``flagged``: the reference drifted beyond ``limit`` while measuring; ``passed`` is still the
       validation's verdict alone
+    * ``stopping`` (when the stopping rule was on, ``campaign.stop_early``): ``{"stopped": bool,
+      "reason", "predicted_rms": m, "target": m (margin × acceptance), "acceptance": m, "margin",
+      "confidence", "poses_used", "poses_left": calibration poses measured and not visited,
+      "fitted_points", "sigma": m, "sigma_bound": m, "model_rms": m, "effective_dof"}`` (the figures of
+      the check that stopped the run, or of the last check when it did not stop)
     """
     obs = data.observability
     doc = _plain({
@@ -154,4 +159,6 @@ def mes_result(data: ReportData) -> dict[str, Any]:
         doc["verification"] = _plain(dict(data.verification))
     if data.drift is not None:  # likewise only with a warm-up or a drift watch
         doc["drift"] = _plain(dict(data.drift))
+    if data.stopping is not None:  # likewise only with the stopping rule on
+        doc["stopping"] = _plain(dict(data.stopping))
     return doc

@@ -71,6 +71,7 @@ def _header(d: ReportData, generated: str) -> str:
 <div class="verdict {verdict.lower()}"><div class="big">{verdict}</div>
 <div>validation RMS {esc(fmt_mm(d.validation_after.rms))} {cmp} acceptance {esc(fmt_mm(d.accept_rms))}</div>
 {_drift_flag(d)}</div></header>
+{_stopping(d)}
 <p class="generated">Generated {esc(generated)} by hil {esc(__version__)}.</p>"""
 
 
@@ -82,6 +83,25 @@ def _drift_flag(d: ReportData) -> str:
     block = d.drift or {}
     return (f'<div><b>DRIFT FLAGGED</b>: reference moved {esc(_um(block.get("max")))} '
             f'(limit {esc(_um(block.get("limit")))})</div>')
+
+
+def _stopping(d: ReportData) -> str:
+    """One sentence under the header when the stopping rule was on: whether it stopped acquiring
+    calibration poses, after how many, and on what prediction (the verdict is still validation's)."""
+    block = d.stopping
+    if block is None:
+        return ""
+    used, left = block.get("poses_used"), block.get("poses_left")
+    predicted, target = block.get("predicted_rms"), block.get("target")
+    if block.get("stopped"):
+        text = (f"Acquisition stopped early: after {used} of {(used or 0) + (left or 0)} calibration poses "
+                f"the fit predicted a validation RMS of {fmt_mm(predicted)}, within the stopping target "
+                f"of {fmt_mm(target)} ({block.get('margin')} × acceptance); {left} calibration poses "
+                "were not visited. Every validation pose was measured.")
+    else:
+        text = (f"Stopping rule on, not triggered: all {used} calibration poses were measured "
+                f"(last prediction {fmt_mm(predicted)}, stopping target {fmt_mm(target)}).")
+    return f'<p class="stopping">{esc(text)}</p>'
 
 
 def _um(v: Any) -> str:

@@ -44,7 +44,8 @@ def report_data(outcome: Any, config: StationConfig, events: list[Event], starte
         started=started, finished=time.time(), calibration=cal, validation=val, iso9283=iso,
         observability=obs, times=outcome.timing, events=events,
         hashes={"measurements": digest}, model=r.model, line_kind="pose",
-        validation_controller=r.controller, verification=verification, drift=r.drift)
+        validation_controller=r.controller, verification=verification, drift=r.drift,
+        stopping=r.stopping)
 
 
 def result_document(outcome: Any, config: StationConfig, events: list[Event], started: float,

@@ -157,8 +157,24 @@ def _index(v: Any) -> str | None:
     return None if v in ("O1", "O2", "O3", "O4", "O5") else f"must be one of O1..O5, got {v!r}"
 
 
+#: `campaign.selection` values: method 000 then the tour, or poses and tour together.
+SELECTIONS = ("tabu", "time-aware")
+
+
+def _selection(v: Any) -> str | None:
+    return None if v in SELECTIONS else f"must be one of {', '.join(SELECTIONS)}, got {v!r}"
+
+
 def _protocol(v: Any) -> str | None:
     return None if v in PROTOCOLS else f"must be one of {', '.join(PROTOCOLS)}, got {v!r}"
+
+
+#: How a pose visit waits for the arm to be still before it measures (`hil.campaign.steps.acquire`).
+SETTLE_MODES = ("stable", "fixed")
+
+
+def _settle(v: Any) -> str | None:
+    return None if v in SETTLE_MODES else f"must be one of {', '.join(SETTLE_MODES)}, got {v!r}"
 
 
 def _lost_limit(v: Any) -> str | None:
@@ -207,6 +223,15 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # a UR arm is steady within a fraction of a second of arriving; a minute per pose is a value
         # typed in milliseconds
         "settle_time": Key("float", 0.3, _within(0, 60, "s"), "wait after the arm is steady (s)"),
+        # "stable": measure as soon as the tracker's last readings agree within campaign.stability (the
+        # arm's ring has died out), the joints read in the same window; "fixed": wait settle_time, then
+        # read the joints, then measure (hil.campaign.steps.SettleMeasure)
+        "settle": Key("str", "stable", _settle, "stable (settle on the tracker's evidence) or fixed "
+                                                 "(wait settle_time)"),
+        # a UR's ring dies out within a second or two (mocks.ringing); a minute still ringing is a fault
+        # (a loose SMR nest, a vibrating floor), not a wait
+        "settle_max": Key("float", 5.0, _within(0, 60, "s", lo_open=True),
+                          "stable: longest wait for steady readings before the point is unstable (s)"),
         # joint readings come at the RTDE rate (500 Hz e-Series, 125 Hz CB3): 1000 are 2-8 s per pose,
         # already far past what averaging the encoders' noise gains
         "joint_samples": Key("int", 10, _within(1, 1000), "joint readings averaged per pose"),
@@ -275,6 +300,14 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "acceptance": Key("float", 0.1e-3, _within(0, MAX_ACCEPTANCE, "m", lo_open=True),
                           "validation RMS threshold (m)"),
         "index": Key("str", "O1", _index, "observability index for pose selection"),
+        # method 000 (tabu, the seed's) chooses calibration_poses poses, then their order; time-aware
+        # chooses poses and order together for robot time (hil.calibration.timed_selection): the
+        # predicted accuracy of method 000's calibration_poses, or the best within time_budget
+        "selection": Key("str", "tabu", _selection, "pose selection: tabu (method 000) or time-aware"),
+        # a campaign of 10 poses takes about a minute of robot time; a day is a value in milliseconds
+        "time_budget": Key("float", 0.0, _within(0, 86_400, "s"),
+                           "time-aware: robot seconds for the calibration and validation tour "
+                           "(0: reach method 000's accuracy in the least time)"),
         "candidates": Key("int", 20000, _within(1, MAX_CANDIDATES), "candidate poses for the selector"),
         # numpy's generators take non-negative seeds (-1 was exit 70 in the simulator); 32 bits suffice
         "seed": Key("int", 1, _within(0, 2**32 - 1)),
@@ -284,6 +317,17 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "max_consecutive_lost": Key("int", 3, _lost_limit,
                                     "poses in a row that lose the beam before the run stops, saying the "
                                     "tracker position looks wrong"),
+        # the stopping rule (hil.campaign.stopping): after each calibration pose, fit the points so far and
+        # stop visiting calibration poses once the predicted validation RMS is within stop_margin × the
+        # acceptance; the validation poses are still all measured and still give the verdict
+        "stop_early": Key("bool", False, help="stop acquiring calibration poses once the fit so far "
+                                              "predicts the acceptance with margin"),
+        # a fraction of campaign.acceptance: the prediction is an expected RMS, and one campaign's validation
+        # RMS scatters about it by up to ~1.4x (99th percentile; hil.campaign.stopping.DEFAULT_MARGIN);
+        # 1 trusts the expectation itself
+        "stop_margin": Key("float", 0.7, _within(0, 1, lo_open=True),
+                           "stop_early: stop once the predicted validation RMS is at most this fraction "
+                           "of the acceptance"),
     },
     # Warm-up before measuring (ISO 9283:1998 §6.2, conditions prior to testing: the robot is warmed up
     # before it is measured; every tracker calibration guide says the same). A UR's joints warm by a few

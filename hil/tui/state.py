@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from hil.campaign.events import (
+    AcquisitionStopped,
     DriftFlagged,
     Event,
     Message,
@@ -180,6 +181,10 @@ class RunState:
             self.validation = event
         elif isinstance(event, Message):
             self.messages.append(f"{event.level}: {event.text}")
+        elif isinstance(event, AcquisitionStopped):  # the stopping rule: the count and ETA shrink
+            self.planned = max(self.measured, self.planned - event.poses_left)
+            self.messages.append(f"info: stopping early, {event.poses_left} calibration poses not needed "
+                                 f"(predicted validation RMS {event.predicted_rms * 1e3:.4f} mm)")
         elif isinstance(event, WarmupProgress | WarmupFinished | ReferenceMeasured | DriftFlagged):
             if self.drift_flagged and not isinstance(event, DriftFlagged):
                 return  # the flag stays in view once raised

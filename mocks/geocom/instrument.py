@@ -90,6 +90,9 @@ class GeoComInstrument:
         self.config = config or InstrumentConfig()
         self.faults = faults or FaultInjector()
         self._sleep = sleep
+        # measurements taken and the seconds they took (`processing_s` each): the benches' robot time
+        self.measurements = 0
+        self.measuring_seconds = 0.0
         self._rng = np.random.default_rng(self.config.seed)
         self._lock = threading.Lock()
         self.precision = 15
@@ -221,6 +224,8 @@ class GeoComInstrument:
         """(rc, (hz, v, d)) for the measuring RPCs, following lock and measurement program."""
         if self.config.processing_s > 0:
             self._sleep(self.config.processing_s)
+            self.measuring_seconds += self.config.processing_s  # the instrument's own account
+        self.measurements += 1
         visible, position = self._visible()
         if not visible:
             self.locked = False

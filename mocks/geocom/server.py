@@ -177,10 +177,13 @@ class GeoComSimulator:
         source: TargetSource,
         config: SimulatorConfig | None = None,
         faults: FaultInjector | None = None,
+        sleep: Callable[[float], None] | None = None,
     ) -> None:
         self.config = config or SimulatorConfig()
         self.faults = faults or FaultInjector()
-        self.instrument = GeoComInstrument(source, self.config.instrument, self.faults)
+        # `sleep`: how the instrument waits out its measuring time (a simulated clock's, in a station)
+        self.instrument = GeoComInstrument(source, self.config.instrument, self.faults,
+                                           **({"sleep": sleep} if sleep is not None else {}))
         self.stopping = threading.Event()
         self._threads: list[threading.Thread] = []
         self._master_fd: int | None = None

@@ -90,6 +90,10 @@ class SimArm:
         self.q_target = self.q.copy()
         self.actual_q = self.q.copy()
         self.motion: Any = None
+        # the simulator's own account of its motion: simulated seconds with a motion primitive running
+        # and the joint moves started (the benches' robot time, free of fast-time software overhead)
+        self.motion_seconds = 0.0
+        self.joint_moves = 0
         self.tcp = np.zeros(6)
         self.robot_mode = RobotMode.RUNNING
         self.safety_mode = SafetyMode.NORMAL
@@ -111,7 +115,11 @@ class SimArm:
         self.timestamp = 0.0
         self.steady_since: float | None = self._t_last
         self.snapshot: dict[str, Any] = {}
-        self.listeners: list[Any] = []  # callables(event: str, **info) told about safety events
+        # callables(event: str, **info) told about safety events and joint moves ("movej" with its
+        # profile, "movej_cut" when one ends before its profile did): `mocks.ringing` listens
+        self.listeners: list[Any] = []
+        self._announced: Any = None  # the last "movej" told to the listeners, while it runs
+        self._tick_dt = 0.0
         self.temperatures: TemperatureFn | None = None  # None: every joint at AMBIENT_TEMPERATURE
         self._refresh_snapshot()
 
@@ -194,7 +202,13 @@ class SimArm:
             self.protective_stop("movej target outside the joint limits")
             return None
         self.motion = JointMove(self.q, q, v, a, self.config.max_speed)
+        self.joint_moves += 1
         self.q_target = self.motion.target.copy()
+        # the move's first step (this tick's) covers the tick's whole dt: it started at the previous tick
+        self._announced = self.motion
+        self._notify("movej", start=self._t_last - self._tick_dt, q0=self.q.copy(), q1=q.copy(),
+                     duration=self.motion.duration, accel_time=self.motion.accel_time,
+                     acceleration=self.motion.acceleration)
         return self.motion
 
     def start_movel(self, T: np.ndarray, v: float, a: float) -> Any:
@@ -352,6 +366,7 @@ class SimArm:
             now = self.clock.now()
             dt = max(now - self._t_last, 0.0)
             self._t_last = now
+            self._tick_dt = dt
             self.timestamp = now - self._t_start
             if self.program is not None and not self.program_paused:
                 try:
@@ -365,6 +380,9 @@ class SimArm:
             qd_old = self.qd
             if self.motion is not None and dt > 0:
                 scale = self.speed_slider if not isinstance(self.motion, Decelerate) else 1.0
+                if isinstance(self.motion, JointMove):  # the part of this tick the move still ran
+                    left = max(self.motion.duration - self.motion.tau, 0.0) / max(scale, 1e-9)
+                    self.motion_seconds += min(dt, left)
                 try:
                     self.q = self.motion.step(dt * scale, self.q)
                 except MotionError as exc:
@@ -381,6 +399,10 @@ class SimArm:
                 self.protective_stop("joint position limit violated")
             if not self.can_move and self.motion is not None and not isinstance(self.motion, Decelerate):
                 self.motion = Decelerate(self.qd, SAFETY_STOP_DECEL)
+            if self._announced is not None and self.motion is not self._announced:
+                if not self._announced.done:  # stopped (or replaced) before its profile ended
+                    self._notify("movej_cut", at=now)
+                self._announced = None
             self._refresh_snapshot()
 
     def set_encoder_noise(self, sigma: float) -> None:

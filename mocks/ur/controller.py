@@ -120,6 +120,8 @@ class SimController:
         self.clock = clock if clock is not None else SimClock(config.speed)
         # faults of services in the same process (the tracker): name -> action(**args)
         self.extra_faults: dict[str, Callable[..., Any]] = {}
+        # figures of services in the same process, reported by `state` under "services": name -> reader
+        self.extra_state: dict[str, Callable[[], Any]] = {}
         robot = config.robot.lower()
         rate = config.rate_hz or (125.0 if robot in _CB3 else 500.0)
         arm_cfg = ArmConfig(robot=robot, rate_hz=rate, encoder_noise=config.encoder_noise, seed=config.seed)
@@ -257,6 +259,9 @@ class SimController:
                 "primary_connections": self.primary.connection_count(),
                 "secondary_connections": self.secondary.connection_count(),
                 "late_ticks": self.late_ticks,
+                "motion_seconds": a.motion_seconds,
+                "joint_moves": a.joint_moves,
+                "services": {name: read() for name, read in self.extra_state.items()},
                 "controller": self.calibration.to_dict(),
             }
 

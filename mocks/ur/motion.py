@@ -80,6 +80,18 @@ class JointMove:
         self.target = self.q1
 
     @property
+    def acceleration(self) -> float:
+        """The lead joint's acceleration (rad/s²) in the ramps of its profile."""
+        return self._a
+
+    @property
+    def accel_time(self) -> float:
+        """Seconds of the acceleration ramp (and of the deceleration ramp): v/a, or half a triangle."""
+        if self._d <= 0:
+            return 0.0
+        return self._v / self._a if self._d >= self._v * self._v / self._a else self.duration / 2.0
+
+    @property
     def done(self) -> bool:
         return self.tau >= self.duration
 

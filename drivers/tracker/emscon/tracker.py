@@ -301,6 +301,23 @@ class EmsconTracker:
         return measure_with_retries(lambda: self._measure_once(samples), self.relock,
                                     self.config.max_relocks, self.config.link_retries)
 
+    def sample(self) -> TrackerPoint:
+        """One stationary measurement now (averaged inside the tracker over its measuring time), without
+        the spread check of `measure_point`: the building block of settling on evidence. Its spread is
+        the tracker's own standard deviation of that measurement's readings."""
+        def once() -> TrackerPoint:
+            self._ensure()
+            result = self._single()
+            xyz = np.array(result.position, dtype=float)
+            if not np.all(np.isfinite(xyz)):
+                raise TrackerError("non-finite coordinate from the tracker")
+            self._distance = float(np.linalg.norm(xyz))
+            std = tuple(abs(float(v)) for v in result.std)
+            return TrackerPoint((float(xyz[0]), float(xyz[1]), float(xyz[2])), (std[0], std[1], std[2]), 1,
+                                PointStatus.OK)
+
+        return measure_with_retries(once, self.relock, self.config.max_relocks, self.config.link_retries)
+
     def _measure_once(self, samples: int) -> TrackerPoint:
         self._ensure()
         positions, stds = [], []

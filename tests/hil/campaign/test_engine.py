@@ -56,9 +56,11 @@ class Station:
         self.arm = FakeArm(start, **arm_kw)
         self.tracker = FakeTracker(self.arm, self.truth)
         # warm-up and drift watch off: these tests count moves and measurements of the plan's poses
-        # (tests/hil/campaign/test_warmup.py tests those)
+        # (tests/hil/campaign/test_warmup.py tests those); a fixed settle: one tracker measurement a pose
+        # (tests/hil/campaign/test_settle_on_evidence.py tests the "stable" one)
         overrides = dict(campaign__calibration_poses=cal, campaign__validation_poses=val,
-                         robot__settle_time=0.0, smr__offset=tuple(self.truth.smr + 0.003),
+                         robot__settle_time=0.0, robot__settle="fixed",
+                         smr__offset=tuple(self.truth.smr + 0.003),
                          warmup__enabled=False, drift__every=0)
         if tracker_known:
             overrides["tracker__position"] = tuple(self.truth.tracker.translation + 0.05)

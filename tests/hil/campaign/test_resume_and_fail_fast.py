@@ -141,7 +141,9 @@ class LostCell:
         self.tracker = FakeTracker(self.arm, self.truth)
         self.rng = rng
         self.config = default_config().with_overrides(
+            # one tracker measurement per visit (the fixed settle): the fake loses the beam by visit
             campaign__calibration_poses=cal, campaign__validation_poses=val, robot__settle_time=0.0,
+            robot__settle="fixed",
             smr__offset=tuple(self.truth.smr + 0.003),
             tracker__position=tuple(self.truth.tracker.translation + 0.05),
             # counts lost poses in a row; the fake arm is rigid: the geometry alone is fitted, so the

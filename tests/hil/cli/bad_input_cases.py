@@ -481,6 +481,12 @@ def _cases() -> list[Case]:
     numbers("calibrate", cal, "--candidates", (*BAD_COUNTS, "1000000000"))
     numbers("calibrate", cal, "--accept", ("-1", "0", "nan", "inf", "0.1", "abc"))
     numbers("calibrate", cal, "--cycles", ("0", "-1", "abc", "1000000"))
+    numbers("calibrate", [*cal, "--stop-early"], "--stop-margin", ("0", "-1", "1.5", "nan", "inf", "abc"))
+    add("calibrate", "--stop-margin-without-the-rule", [*cal, "--stop-margin", "0.8"], ["--stop-margin"])
+    add("calibrate", "--selection=fastest", [*cal, "--selection", "fastest"], ["--selection|fastest"])
+    numbers("calibrate", [*cal, "--selection", "time-aware"], "--time-budget",
+            ("0", "-1", "nan", "inf", "1e308", "abc"))
+    add("calibrate", "--time-budget-without-time-aware", [*cal, "--time-budget", "300"], ["--time-budget"])
     add("calibrate", "--robot=ur99", [*cal, "--robot", "ur99"], ["ur99"])
     add("calibrate", "--robot=empty", [*cal, "--robot", ""], ["--robot"])
     add("calibrate", "--tracker-protocol=foo", [*cal, "--tracker-protocol", "foo"], ["--tracker-protocol"])
@@ -724,6 +730,15 @@ def _cases() -> list[Case]:
     numbers("select", se, "--elbow-margin", ("-1", "180", "nan"))
     numbers("select", se, "--shoulder-margin", ("-1", "nan", "1e308"))
     add("select", "--disable=gravity", [*se, "--disable", "gravity"], ["--disable|gravity"])
+    ta = [*se[:se.index("--method")], "--method", "time-aware", *se[se.index("--method") + 2:]]
+    numbers("select", ta, "--budget", ("0", "-1", "nan", "inf", "1e308", "abc"))
+    numbers("select", ta, "--speed", ("0", "-1", "4", "nan", "abc"))
+    numbers("select", ta, "--acceleration", ("0", "-1", "41", "nan", "abc"))
+    numbers("select", ta, "--dwell", ("-1", "1e308", "nan", "abc"))
+    numbers("select", ta, "--time-limit", ("0", "-1", "1e308", "nan", "abc"))
+    add("select", "--budget-without-time-aware", [*se, "--budget", "100"], ["--budget"])
+    add("select", "--dwell-without-time-aware", [*se, "--dwell", "1"], ["--dwell"])
+    add("select", "--budget-too-small", [*ta, "--budget", "1"], ["budget"])
     for v in ("1e300,0,0,0,0,0", "20,0,0,0,0,0", "nan,0,0,0,0,0", "1,2,3"):
         add("select", f"--start={v}", [*se, f"--start={v}"], ["--start"])
     add("select", "--out=directory", [*se, "--out", f"{d}/sub"], ["/sub"])
@@ -999,6 +1014,8 @@ CONFIG_VALUES: tuple[tuple[str, Any], ...] = (
     ("robot.speed", Raw("nan")),
     ("robot.acceleration", "x"), ("robot.acceleration", 0), ("robot.acceleration", 1e9),
     ("robot.settle_time", "x"), ("robot.settle_time", -1), ("robot.settle_time", 1e12),
+    ("robot.settle", "quick"), ("robot.settle", 5),
+    ("robot.settle_max", 0), ("robot.settle_max", -1), ("robot.settle_max", 1e12), ("robot.settle_max", "x"),
     ("robot.joint_samples", 2.5), ("robot.joint_samples", 0), ("robot.joint_samples", 1_000_000_000),
     ("tracker.protocol", 5), ("tracker.protocol", "carrier-pigeon"),
     ("tracker.url", 5),
@@ -1029,6 +1046,12 @@ CONFIG_VALUES: tuple[tuple[str, Any], ...] = (
     ("campaign.index", "O9"), ("campaign.index", 5),
     ("campaign.candidates", 0), ("campaign.candidates", 1_000_000_000),
     ("campaign.seed", -1), ("campaign.seed", "x"),
+    ("campaign.selection", "fastest"), ("campaign.selection", 5),
+    ("campaign.time_budget", -1), ("campaign.time_budget", 1e12), ("campaign.time_budget", "x"),
+    ("campaign.time_budget", Raw("nan")),
+    ("campaign.stop_early", "yes"), ("campaign.stop_early", 1),
+    ("campaign.stop_margin", 0), ("campaign.stop_margin", -0.5), ("campaign.stop_margin", 1.5),
+    ("campaign.stop_margin", "x"), ("campaign.stop_margin", Raw("nan")),
     ("timeouts.connect", 0), ("timeouts.connect", 1e12),
     ("timeouts.move", 0), ("timeouts.move", 1e12),
     ("timeouts.measure", 0), ("timeouts.measure", 1e12),

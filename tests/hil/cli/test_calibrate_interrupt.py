@@ -69,6 +69,8 @@ class Cell:
         tracker = ", ".join(map(str, self.truth.tracker.translation + 0.05))
         smr = ", ".join(map(str, self.truth.smr + 0.003))
         self.config.write_text(f'[station]\nname = "cell-9"\n[robot]\nsettle_time = 0.0\njoint_samples = 2\n'
+                               # one tracker measurement per visit (the signals come after counted ones)
+                               'settle = "fixed"\n'
                                f'[tracker]\nurl = "/dev/ttyFAKE"\nposition = [{tracker}]\n'
                                f"[smr]\noffset = [{smr}]\n"
                                "[keep_in]\nmin = [-2.0, -2.0, -0.5]\nmax = [2.0, 2.0, 2.0]\n"
