@@ -93,8 +93,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="with the stopping rule: stop once the predicted validation RMS is at most F x the "
                         "acceptance, 0 < F <= 1 (default: campaign.stop_margin, 0.7)")
     p.add_argument("--selection", choices=SELECTIONS,
-                   help="pose selection: tabu (method 000, then the tour) or time-aware (poses and tour "
-                        "together for the least robot time); overrides campaign.selection")
+                   help="pose selection: tabu (the most informative --poses poses, then their tour) or "
+                        "time-aware (poses and tour together: the same accuracy in the least robot time); "
+                        "overrides campaign.selection")
     p.add_argument("--time-budget", type=TIME_BUDGET, metavar="SECONDS",
                    help="time-aware: the most accurate tour within this much robot time; overrides "
                         "campaign.time_budget")

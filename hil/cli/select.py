@@ -191,6 +191,8 @@ def run(args: argparse.Namespace) -> int:
         for name in ("budget", "dwell"):
             if getattr(args, name) is not None:
                 raise InputError(f"--{name}: only with --method {TIME_AWARE}")
+    elif args.prune:  # the time-aware search already keeps only the poses its target needs
+        raise InputError(f"--prune: not with --method {TIME_AWARE} (it chooses the pose count itself)")
     try:
         if timed:
             from hil.calibration.timed_selection import select_timed

@@ -739,6 +739,7 @@ def _cases() -> list[Case]:
     add("select", "--budget-without-time-aware", [*se, "--budget", "100"], ["--budget"])
     add("select", "--dwell-without-time-aware", [*se, "--dwell", "1"], ["--dwell"])
     add("select", "--budget-too-small", [*ta, "--budget", "1"], ["budget"])
+    add("select", "--prune-with-time-aware", [*ta, "--prune"], ["--prune"])
     for v in ("1e300,0,0,0,0,0", "20,0,0,0,0,0", "nan,0,0,0,0,0", "1,2,3"):
         add("select", f"--start={v}", [*se, f"--start={v}"], ["--start"])
     add("select", "--out=directory", [*se, "--out", f"{d}/sub"], ["/sub"])
