@@ -199,6 +199,7 @@ def main() -> None:
         acc: dict[str, list[float]] = {"today": [], "time-aware": []}
         rand: dict[int, list[float]] = {n: [] for n in RANDOM_COUNTS}
         stations = []
+        failed: dict[str, list[int]] = {}
         for seed in range(args.seeds):
             with tempfile.TemporaryDirectory() as tmp:
                 # the simulator first: its home pose is where every tour starts
@@ -240,14 +241,20 @@ def main() -> None:
                             given_poses(st["timed"].poses, val, st["timed"].info["tour"])),
                     }
                     for name, (cfg, choose) in cases.items():
-                        row = run_row(sim, cfg, choose, home, args.speed, truth, qv)
+                        try:
+                            row = run_row(sim, cfg, choose, home, args.speed, truth, qv)
+                        except RuntimeError as exc:  # e.g. too many poses skipped to identify
+                            print(f"{robot} seed {seed} {name:<24} FAILED: {exc}", flush=True)
+                            failed.setdefault(name, []).append(seed)
+                            continue
                         row["poses"] = {"random + best tour": n_random}.get(name, len(
                             st["timed"].poses) if name == "time-aware" else len(cal))
                         rows.setdefault(name, []).append(row)
                         print(f"{robot} seed {seed} {name:<24} robot {row['robot_time']:7.1f} s "
                               f"(moves {row['moves']:.1f}, measuring {row['measuring']:.1f}, settle "
                               f"{row['settle']:.1f}), sim clock {row['sim_clock']:.0f} s, validation "
-                              f"{row['validation_rms'] * 1e6:.1f} µm, truth {row['truth_rms'] * 1e6:.1f} µm",
+                              f"{row['validation_rms'] * 1e6:.1f} µm, truth {row['truth_rms'] * 1e6:.1f} µm, "
+                              f"{row['visits']} poses measured",
                               flush=True)
                     tour = np.array([st["timed"].poses[s["index"]] if s["role"] == "selected"
                                      else val[s["index"]] for s in st["timed"].info["tour"]])
@@ -262,11 +269,15 @@ def main() -> None:
         truth_rms = {"today": today_rms, "method 000 + best tour": today_rms,
                      "time-aware": float(np.sqrt(np.mean(acc["time-aware"]))),
                      "random + best tour": float(np.sqrt(np.mean(rand[n_random])))}
+        if "today" not in rows:
+            print(f"{robot}: today's campaign failed on every station")
+            continue
         base = float(np.mean([r["robot_time"] for r in rows["today"]]))
         print(f"\n{robot.upper()}: {args.seeds} stations, accuracy from {args.draws} noise draws each "
               f"(truth error on {HELD_OUT} held-out poses); robot time by the simulators' own clocks")
         print(f"{'row':<24} {'poses':>6} {'truth RMS':>10} {'vs today':>9} {'robot time':>11} {'ratio':>6} "
-              f"{'moves':>7} {'measuring':>9} {'settle':>7} {'sim clock':>9} {'sim val/truth µm':>17}")
+              f"{'moves':>7} {'measuring':>9} {'settle':>7} {'sim clock':>9} {'sim val/truth µm':>17} "
+              f"{'measured':>8}")
         for name, rs in rows.items():
             t = float(np.mean([r["robot_time"] for r in rs]))
             if name == "physical limit":
@@ -279,7 +290,10 @@ def main() -> None:
                   f"{np.mean([r['measuring'] for r in rs]):>9.1f} {np.mean([r['settle'] for r in rs]):>7.1f} "
                   f"{np.mean([r['sim_clock'] for r in rs]):>9.0f} "
                   f"{np.mean([r['validation_rms'] for r in rs]) * 1e6:>8.1f}/"
-                  f"{np.sqrt(np.mean([r['truth_rms'] ** 2 for r in rs])) * 1e6:<8.1f}")
+                  f"{np.sqrt(np.mean([r['truth_rms'] ** 2 for r in rs])) * 1e6:<8.1f} "
+                  f"{np.mean([r['visits'] for r in rs]):>8.1f}")
+        for name, seeds in failed.items():
+            print(f"{name}: the campaign failed on station(s) {seeds} (not in the means above)")
         print(f"random poses needed for today's accuracy: {n_random}; time-aware selection compute "
               f"{np.mean([s['timed_seconds'] for s in stations]):.1f} s per station")
         report[robot] = {"rows": rows, "truth_rms": truth_rms, "random_count": n_random}
