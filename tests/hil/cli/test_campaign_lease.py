@@ -124,6 +124,21 @@ def test_a_changed_tracker_url_resumes_the_campaign(tmp_path, monkeypatch, capsy
     assert set(kept) < set(counts) and max(counts.values()) == 1
 
 
+def _store_writable(db) -> bool:
+    """Whether a write transaction on the SQLite store can start now (nobody holds its write lock)."""
+    import sqlite3
+
+    conn = sqlite3.connect(db, timeout=0.2)
+    try:
+        conn.execute("BEGIN IMMEDIATE")
+        conn.rollback()
+        return True
+    except sqlite3.OperationalError:
+        return False
+    finally:
+        conn.close()
+
+
 def test_two_real_processes_on_the_simulator(tmp_path):
     """The issue's scenario with real processes: the second `hil calibrate --sim` exits 2 while the
     first measures; after a kill -9 of the first a re-run takes the campaign over and resumes it.
@@ -145,7 +160,11 @@ def test_two_real_processes_on_the_simulator(tmp_path):
                 # the first is measuring (the bootstrap is behind it); hold it there, alive, however
                 # long the second takes to start on a loaded machine
                 os.kill(first.pid, signal.SIGSTOP)
-                break
+                if _store_writable(db):
+                    break
+                # stopped in the middle of its next commit (a write lock no live process would keep
+                # for long): let it finish that and stop it at a later point instead
+                os.kill(first.pid, signal.SIGCONT)
         else:
             raise AssertionError(f"the first ended early:\n{(tmp_path / 'first.err').read_text()[-2000:]}")
         second = subprocess.run(command("rb.json"), cwd=ROOT, capture_output=True, text=True, timeout=120)
