@@ -167,6 +167,18 @@ def design_space(robot: str, count: int, *, candidates: int, seed: int, smr: Seq
     return model, cands, scale_columns(cands.jacobian, scaling, model.parameter_scale)
 
 
+def design_fields(model: SelectionModel, cands: Any, requested: int, scaling: str,
+                  constraints: Constraints) -> dict[str, Any]:
+    """The report fields every selection method shares: the parameters, the SMR, the candidates and the
+    constraints they met."""
+    return {"parameters": len(model.parameters), "parameter_names": list(model.parameter_names),
+            "unobservable": model.unobservable, "scaling": scaling,
+            "smr": [float(v) for v in model.smr],
+            "candidates": {"requested": requested, "found": len(cands), "sampled": cands.sampled,
+                           "rejected": cands.rejected},
+            "constraints": constraints.as_dict()}
+
+
 def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str = "O1",
                  method: str = "tabu", seed: int = 0, smr: Sequence[float] = (0.0, 0.0, 0.045),
                  constraints: Constraints | None = None, scaling: str = "expected",
@@ -194,7 +206,6 @@ def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str
         model, cands, G = design_space(robot, count, candidates=candidates, seed=seed, smr=smr,
                                        constraints=constraints, scaling=scaling, compliance=compliance,
                                        payload=payload, gravity=gravity, say=say)
-        n = len(model.parameters)
         options: dict[str, object] = {"settings": settings} if method == "tabu" and settings else {}
         t0 = time.perf_counter()
         say("search", f"{method} search for {count} poses maximising {index}")
@@ -239,14 +250,7 @@ def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str
         "timings": {"candidates": cands.seconds, "selection": result.seconds, "bound": bound_seconds,
                     "order": order_seconds},
         "count": len(Q),
-        "parameters": n,
-        "parameter_names": list(model.parameter_names),
-        "unobservable": model.unobservable,
-        "scaling": scaling,
-        "smr": [float(v) for v in model.smr],
-        "candidates": {"requested": candidates, "found": len(cands), "sampled": cands.sampled,
-                       "rejected": cands.rejected},
-        "constraints": constraints.as_dict(),
+        **design_fields(model, cands, candidates, scaling, constraints),
         "travel_time": {"ordered": ordered, "unordered": unordered,
                         "saved_percent": 100.0 * (1.0 - ordered / unordered) if unordered > 0 else 0.0,
                         "start": None if start is None else [float(v) for v in start],

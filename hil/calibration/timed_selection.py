@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 import selector
-from hil.calibration.selection import FORMAT, design_space
+from hil.calibration.selection import FORMAT, design_fields, design_space
 from hil.errors import InputError
 from selector.candidates import Constraints
 from selector.indices import o1_from_logdet
@@ -73,7 +73,7 @@ def select_timed(robot: str, count: int, *, speed: float, acceleration: float, d
         say("search", f"method 000 (tabu) for {count} poses, the accuracy to match")
         seed_sel = select(G, count, method="tabu", index=index, seed=seed)
         seed_q = cands.q[seed_sel.chosen]
-        seed_tour = _tour_of(seed_q, fixed_q, profile, start_q)
+        seed_move = _tour_move_time(seed_q, fixed_q, profile, start_q)
         f_seed = _criterion(G[seed_sel.chosen], W)
         seed_seconds = time.perf_counter() - t0
         form = "budget" if budget is not None else "target"
@@ -91,7 +91,7 @@ def select_timed(robot: str, count: int, *, speed: float, acceleration: float, d
     chosen_q = cands.q[result.chosen]
     value = float(o1_from_logdet(result.logdet, n, len(result.chosen))) if np.isfinite(result.logdet) else 0.0
     legs = _legs_outside(model, constraints, _tour_q(result, cands.q, fixed_q), start_q)
-    seed_time = seed_tour["move_time"] + dwell.seconds * (count + len(fixed_q))
+    seed_time = seed_move + dwell.seconds * (count + len(fixed_q))
     say("search", f"{len(result.chosen)} poses, predicted {result.total_time:.0f} s of robot time "
                   f"(method 000's {count}: {seed_time:.0f} s)")
     return {
@@ -108,14 +108,7 @@ def select_timed(robot: str, count: int, *, speed: float, acceleration: float, d
         "seed": seed,
         "seconds": result.seconds + seed_seconds,
         "count": len(result.chosen),
-        "parameters": n,
-        "parameter_names": list(model.parameter_names),
-        "unobservable": model.unobservable,
-        "scaling": scaling,
-        "smr": [float(v) for v in model.smr],
-        "candidates": {"requested": candidates, "found": len(cands), "sampled": cands.sampled,
-                       "rejected": cands.rejected},
-        "constraints": constraints.as_dict(),
+        **design_fields(model, cands, candidates, scaling, constraints),
         "motion": profile.as_dict(),
         "dwell": dwell.as_dict(),
         "budget": budget,
@@ -124,7 +117,7 @@ def select_timed(robot: str, count: int, *, speed: float, acceleration: float, d
                               len(fixed_q)) | {"legs_needing_detour": legs},
         "seed_method": {"method": "tabu", "index": index, "count": int(count), "value": seed_sel.value,
                         "o1": seed_sel.o1, "seconds": seed_seconds,
-                        **_figures(f_seed, f_seed, seed_tour["move_time"],
+                        **_figures(f_seed, f_seed, seed_move,
                                    dwell.seconds * (count + len(fixed_q)), count, len(fixed_q))},
         "travel_time": {"ordered": result.move_time, "start": None if start_q is None else start_q.tolist(),
                         "model": "joint space, movej trapezoid of the leading joint (station speed and "
@@ -147,12 +140,10 @@ def _figures(f: float, f_seed: float, move: float, dwell: float, poses: int, fix
             "fixed_poses": int(fixed)}
 
 
-def _tour_of(Q: np.ndarray, fixed: np.ndarray, profile: MotionProfile,
-             start: np.ndarray | None) -> dict[str, float]:
-    """Method 000's poses and the fixed ones in their best single tour."""
-    allq = np.vstack([Q, fixed])
-    _, move = order_poses(allq, profile=profile, start=start)
-    return {"move_time": float(move), "robot_time": float(move)}
+def _tour_move_time(Q: np.ndarray, fixed: np.ndarray, profile: MotionProfile,
+                    start: np.ndarray | None) -> float:
+    """Move time of method 000's poses and the fixed ones in their best single tour."""
+    return order_poses(np.vstack([Q, fixed]), profile=profile, start=start)[1]
 
 
 def _tour_q(result: TimedSelection, Q: np.ndarray, fixed: np.ndarray) -> np.ndarray:
