@@ -47,26 +47,36 @@ class Bound:
 
 
 def _variances(G: np.ndarray, M: np.ndarray) -> np.ndarray:
-    """d_c = tr(B_c M⁻¹ B_cᵀ) = ‖L⁻¹B_cᵀ‖² for blocks `G` (N, 3, n) (batched small products)."""
+    """d_c = tr(B_c M⁻¹ B_cᵀ) = ‖L⁻¹B_cᵀ‖² for blocks `G` (N, 3, n).
+
+    One (3N × n)·(n × n) product rather than N small batched ones: the iterations call this thousands
+    of times, and the batched form costs ten times as much.
+    """
     L = scipy.linalg.cholesky(M, lower=True)
-    Linv = scipy.linalg.solve_triangular(L, np.eye(len(M)), lower=True)
-    Z = np.matmul(G, Linv.T)  # rows of B_c L⁻ᵀ
-    return np.einsum("kij,kij->k", Z, Z)
+    Linv, info = scipy.linalg.lapack.dtrtri(L, lower=1)
+    if info != 0:
+        raise np.linalg.LinAlgError("singular information matrix")
+    N, k, n = G.shape
+    Z = G.reshape(N * k, n) @ Linv.T  # rows of B_c L⁻ᵀ
+    return np.einsum("ij,ij->i", Z, Z).reshape(N, k).sum(axis=1)
 
 
 def _wynn_step(B: np.ndarray, M: np.ndarray, n: int) -> float:
     """α maximising log det((1 − α)M + α BᵀB) for one candidate block B (3, n), by bisection.
 
     With λⱼ the eigenvalues of D = BM⁻¹Bᵀ the objective is (n − 3)·log(1 − α) + Σ log(1 − α + αλⱼ),
-    concave in α, so its derivative is decreasing and bisection finds the maximiser.
+    concave in α, so its derivative is decreasing and bisection finds the maximiser. The bisection
+    runs on plain floats (three eigenvalues): array operations on three numbers cost more than the
+    arithmetic.
     """
     L = scipy.linalg.cholesky(M, lower=True)
     Z = scipy.linalg.solve_triangular(L, B.T, lower=True)
-    lam = np.linalg.eigvalsh(Z.T @ Z)
+    lam = [float(v) for v in np.linalg.eigvalsh(Z.T @ Z)]
+    rest = n - len(lam)
     lo, hi = 0.0, 1.0 - 1e-12
     for _ in range(50):
         a = 0.5 * (lo + hi)
-        slope = -(n - len(lam)) / (1.0 - a) + np.sum((lam - 1.0) / (1.0 - a + a * lam))
+        slope = -rest / (1.0 - a) + sum((x - 1.0) / (1.0 - a + a * x) for x in lam)
         lo, hi = (a, hi) if slope > 0 else (lo, a)
     return lo
 

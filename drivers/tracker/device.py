@@ -65,7 +65,8 @@ class TrackerPoint:
 
 @dataclass(frozen=True)
 class StreamSample:
-    """One sample of continuous mode: monotonic timestamp, position or None if the target was lost."""
+    """One sample of continuous mode: monotonic timestamp (the middle of the reading when the instrument
+    gives none of its own), position or None if the target was lost."""
 
     t: float
     position: tuple[float, float, float] | None

@@ -260,12 +260,14 @@ class GeoComTracker:
             if target_t > now:
                 sleep(target_t - now)
             t = clock()
+            # a reading integrates over the instrument's measuring time between request and reply, so
+            # it is stamped at the middle of that (a moving SMR is where the reading says half-way)
             try:
                 reading = self._sample()
                 xyz = polar_to_cartesian(reading.hz, reading.v, reading.distance)
                 status = PointStatus.WARNING if reading.warning else PointStatus.OK
-                yield StreamSample(t, (float(xyz[0]), float(xyz[1]), float(xyz[2])), status)
+                yield StreamSample(0.5 * (t + clock()), (float(xyz[0]), float(xyz[1]), float(xyz[2])), status)
             except TargetLost as exc:
-                yield StreamSample(t, None, None, str(exc))
+                yield StreamSample(0.5 * (t + clock()), None, None, str(exc))
             count += 1
             slot = max(slot + 1, math.floor((clock() - t0) / period) + 1)

@@ -26,6 +26,7 @@ from collections.abc import Sequence
 from typing import Any
 
 import hil
+from hil.blas_threads import limit_blas_threads
 from hil.cli._common import quiet_on_closed_stdout
 from hil.errors import FaultError, HilError, InputError
 
@@ -172,6 +173,7 @@ def _simulator_did_not_start(exc: BaseException) -> bool:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; returns the process exit code."""
     argv = sys.argv[1:] if argv is None else list(argv)
+    limit_blas_threads()
     try:
         parser = build_parser(argv)
     except KeyboardInterrupt:  # Ctrl-C while the subcommands' modules load

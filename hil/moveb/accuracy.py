@@ -4,6 +4,11 @@
   (the dense commanded polyline); max and RMS of those.
 * Corner deviation: for every interior program point, its distance to the measured path (and, for
   reference, to the commanded one: the bridge keeps that within E by design).
+* Corner resolution: the measured path between two tracker records is a straight chord, so a corner
+  between two records far apart along the path is cut by the chord whatever the arm did. For every
+  corner, the commanded path's largest distance from the chord joining it at the two measured records
+  around the corner says how far the measured figure can be off for that reason alone (a 10 Hz
+  stream on a 150 mm/s path puts records 15 mm apart: a blended corner is then not resolved).
 * Coverage: the tracker loses the SMR when the beam is blocked or the SMR turns away, and a figure
   over the first fifth of a path says nothing of the rest. Each tracker record (measured or lost)
   is placed on the path by its time stamp; the stretch between two consecutive *measured* records
@@ -69,17 +74,54 @@ def coverage(s: np.ndarray, measured: np.ndarray, length: float) -> Coverage:
     return Coverage(spans.reshape(-1, 2), float(length))
 
 
+def corner_resolution(path: np.ndarray, path_s: np.ndarray, measured_s: np.ndarray,
+                      corner_s: np.ndarray) -> list[float | None]:
+    """For each corner (its arc length), how far the commanded path strays from the chord between the
+    measured records just before and after it (mm); None where no measured record lies on one side.
+
+    `path` is the dense commanded polyline with arc lengths `path_s`; `measured_s` the arc lengths of
+    the measured records. This is the error the polyline of the records adds to the corner figure.
+    """
+    order = np.sort(np.asarray(measured_s, float))
+    out: list[float | None] = []
+    for cs in np.asarray(corner_s, float):
+        k = int(np.searchsorted(order, cs, side="right"))
+        if k == 0 or k == len(order):
+            out.append(None)
+            continue
+        a, b = order[k - 1], order[k]
+        pa = np.array([np.interp(a, path_s, path[:, i]) for i in range(path.shape[1])])
+        pb = np.array([np.interp(b, path_s, path[:, i]) for i in range(path.shape[1])])
+        inside = path[(path_s >= a) & (path_s <= b)]
+        out.append(float(distance_to_path(inside, np.vstack([pa, pb])).max()) if len(inside) else 0.0)
+    return out
+
+
 def path_accuracy(commanded: np.ndarray, measured: np.ndarray, corners: np.ndarray,
-                  corner_covered: np.ndarray | None = None, covered: float | None = None) -> dict[str, Any]:
-    """ISO 9283-style figures in mm (module docstring); a corner not covered has no measured value."""
+                  corner_covered: np.ndarray | None = None, covered: float | None = None,
+                  commanded_s: np.ndarray | None = None) -> dict[str, Any]:
+    """ISO 9283-style figures in mm (module docstring); a corner not covered has no measured value.
+
+    With the commanded polyline's arc lengths `commanded_s`, each corner's resolution too: the
+    measured points are placed on the path by where they are (their nearest commanded point), not
+    by their time stamps, so a late or early stamp cannot pick the wrong two points around a corner.
+    """
     dev = distance_to_path(measured, commanded)
+    resolution: list[float | None] | None = None
+    if commanded_s is not None and len(corners):
+        tree = cKDTree(commanded)
+        resolution = corner_resolution(commanded, commanded_s, commanded_s[tree.query(measured)[1]],
+                                       commanded_s[tree.query(corners)[1]])
     at_corner: list[float | None] = []
     if len(corners) and len(measured) > 1:
         at_corner = distance_to_path(corners, measured).tolist()
         if corner_covered is not None:
             at_corner = [d if c else None for d, c in zip(at_corner, corner_covered, strict=True)]
+            if resolution is not None:
+                resolution = [r if c else None for r, c in zip(resolution, corner_covered, strict=True)]
     return {"samples": len(measured), "coverage": covered,
             "max_deviation_mm": float(dev.max()), "rms_deviation_mm": float(np.sqrt(np.mean(dev ** 2))),
             "corner_deviation_measured_mm": at_corner,
+            "corner_resolution_mm": resolution if resolution is not None else [None] * len(at_corner),
             "corner_deviation_commanded_mm": distance_to_path(corners, commanded).tolist()
             if len(corners) else []}

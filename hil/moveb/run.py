@@ -275,7 +275,7 @@ def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, reg
     at = np.clip(np.searchsorted(step_times, [r.t for r in during]), 0, len(Q) - 1)  # sample per record
     cov = coverage(samples.s[at], measured, plan.length)
     corner_s = dense.s[cKDTree(path).query(corners)[1]] if len(corners) else np.zeros(0)
-    seen = dict(corner_covered=cov.covers(corner_s), covered=cov.fraction)
+    seen = dict(corner_covered=cov.covers(corner_s), covered=cov.fraction, commanded_s=dense.s)
     moved = register(m, samples.position[at[measured]], path)
     fitted = path_accuracy(path, moved, corners, **seen)
     shown = dict(path=path, path_s=dense.s, corners=corners, coverage=cov)

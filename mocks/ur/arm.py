@@ -75,6 +75,10 @@ class ArmConfig:
         default_factory=lambda: np.array([0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0]))
 
 
+_INT_REGISTERS = tuple(f"output_int_register_{i}" for i in range(48))
+_DOUBLE_REGISTERS = tuple(f"output_double_register_{i}" for i in range(48))
+
+
 class SimArm:
     """Controller state machine. All public methods are thread-safe."""
 
@@ -118,6 +122,8 @@ class SimArm:
         # callables(event: str, **info) told about safety events and joint moves ("movej" with its
         # profile, "movej_cut" when one ends before its profile did): `mocks.ringing` listens
         self.listeners: list[Any] = []
+        self._tcp_key, self._tcp_matrix = b"", np.eye(4)
+        self._held_key, self._held = b"", [0.0] * 6
         self._announced: Any = None  # the last "movej" told to the listeners, while it runs
         self._tick_dt = 0.0
         self.temperatures: TemperatureFn | None = None  # None: every joint at AMBIENT_TEMPERATURE
@@ -129,7 +135,17 @@ class SimArm:
 
     def fk_tcp(self, q: np.ndarray, tcp: np.ndarray | None = None) -> np.ndarray:
         off = self.tcp if tcp is None else np.asarray(tcp, dtype=float)
-        return self._fk(np.asarray(q, dtype=float)) @ pose_to_matrix(off)
+        key = off.tobytes()
+        if key != self._tcp_key:  # the TCP changes rarely; FK runs twice every cycle
+            self._tcp_key, self._tcp_matrix = key, pose_to_matrix(off)
+        return self._fk(np.asarray(q, dtype=float)) @ self._tcp_matrix
+
+    def _held_pose(self, q: np.ndarray) -> list[float]:
+        """target_TCP_pose of joints `q`: one FK per new target (an arm at rest holds one for seconds)."""
+        key = q.tobytes() + self.tcp.tobytes()
+        if key != self._held_key:
+            self._held_key, self._held = key, matrix_to_pose(self.fk_tcp(q)).tolist()
+        return self._held
 
     def set_fk(self, fk: FkFn) -> None:
         """Move with another kinematic model from the next cycle on (thread-safe).
@@ -139,6 +155,7 @@ class SimArm:
         """
         with self.lock:
             self._fk = fk
+            self._held_key = b""
             snap = dict(self.snapshot)
             held = self.q_target if self.motion is not None else self.q
             snap["actual_TCP_pose"] = matrix_to_pose(self.fk_tcp(self.actual_q)).tolist()
@@ -342,7 +359,7 @@ class SimArm:
                 log.exception("listener failed on %s", event)
 
     def _within_limits(self, q: np.ndarray) -> bool:
-        return bool(np.all(q >= self.config.lower - 1e-9) and np.all(q <= self.config.upper + 1e-9))
+        return bool(((q >= self.config.lower - 1e-9) & (q <= self.config.upper + 1e-9)).all())
 
     # ----------------------------------------------------------------- inputs
     def write_inputs(self, names: list[str], values: list[Any]) -> None:
@@ -430,7 +447,6 @@ class SimArm:
         noise = self._rng.normal(0.0, self.config.encoder_noise, 6) if self.config.encoder_noise > 0 else 0.0
         self.actual_q = self.q + noise
         T_act = self.fk_tcp(self.actual_q)
-        T_tgt = self.fk_tcp(self.q_target if self.motion is not None else self.q)
         zeros6 = [0.0] * 6
         snap: dict[str, Any] = {
             "timestamp": self.timestamp,
@@ -449,7 +465,7 @@ class SimArm:
             "actual_TCP_pose": matrix_to_pose(T_act).tolist(),
             "actual_TCP_speed": zeros6,
             "actual_TCP_force": zeros6,
-            "target_TCP_pose": matrix_to_pose(T_tgt).tolist(),
+            "target_TCP_pose": self._held_pose(self.q_target if self.motion is not None else self.q),
             "target_TCP_speed": zeros6,
             "actual_digital_input_bits": 0,
             "joint_temperatures": self._joint_temperatures(),
@@ -481,7 +497,6 @@ class SimArm:
             "output_bit_registers0_to_31": 0,
             "output_bit_registers32_to_63": 0,
         }
-        for i in range(48):
-            snap[f"output_int_register_{i}"] = self.out_int[i]
-            snap[f"output_double_register_{i}"] = self.out_double[i]
+        snap.update(zip(_INT_REGISTERS, self.out_int, strict=True))
+        snap.update(zip(_DOUBLE_REGISTERS, self.out_double, strict=True))
         self.snapshot = snap

@@ -9,6 +9,7 @@ simulator runs without that model, plus what a controller needs around FK: UR po
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -68,20 +69,25 @@ def rotvec_to_matrix(r: np.ndarray) -> np.ndarray:
 
 
 def matrix_to_rotvec(R: np.ndarray) -> np.ndarray:
-    """Inverse Rodrigues, robust near 0 and pi (what UR reports as rx, ry, rz)."""
-    cos_th = np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)
-    th = float(np.arccos(cos_th))
+    """Inverse Rodrigues, robust near 0 and pi (what UR reports as rx, ry, rz).
+
+    Scalar arithmetic on the nine numbers: the controller runs this every 2 ms cycle.
+    """
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R.tolist()
+    cos_th = min(max((r00 + r11 + r22 - 1.0) / 2.0, -1.0), 1.0)
+    th = math.acos(cos_th)
+    wx, wy, wz = r21 - r12, r02 - r20, r10 - r01
     if th < 1e-9:
-        return np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]]) / 2.0
-    if np.pi - th < 1e-6:
+        return np.array([wx / 2.0, wy / 2.0, wz / 2.0])
+    if math.pi - th < 1e-6:
         # axis from the symmetric part; sign is arbitrary at exactly pi
-        B = (R + np.eye(3)) / 2.0
+        B = (np.asarray(R, dtype=float) + np.eye(3)) / 2.0
         k = np.sqrt(np.clip(np.diag(B), 0.0, None))
         i = int(np.argmax(k))
         k = B[:, i] / np.sqrt(B[i, i])
         return k * th
-    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    return w / (2.0 * np.sin(th)) * th
+    f = th / (2.0 * math.sin(th))
+    return np.array([wx * f, wy * f, wz * f])
 
 
 def pose_to_matrix(p: np.ndarray) -> np.ndarray:

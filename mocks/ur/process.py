@@ -30,6 +30,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any, Protocol
 
+from hil.blas_threads import limit_blas_threads
 from mocks.ur.control_channel import ControlClient, ControlServer
 from mocks.ur.controller import SimConfig, SimController
 
@@ -137,6 +138,7 @@ def child_main(argv: Sequence[str] | None = None) -> int:
     Prints one line ``UR-SIM-READY {info json}`` (or ``UR-SIM-READY {"error": ...}``) on stdout.
     """
     args = list(sys.argv[1:] if argv is None else argv)
+    limit_blas_threads()  # the controller's 500 Hz loop multiplies 4 x 4 frames: threads only cost
     level = int(os.environ.get("UR_SIM_LOG_LEVEL", logging.WARNING))
     logging.basicConfig(level=level, format="ur-sim %(levelname)s %(name)s: %(message)s", stream=sys.stderr)
     raw = json.loads(args[0])
@@ -175,7 +177,7 @@ class SimProcess:
     """A simulated controller in a child process. ``with SimProcess(cfg) as sim: sim.inject(...)``."""
 
     def __init__(self, config: SimConfig, services: Sequence[str] = (), *,
-                 start_timeout: float = 20.0, log_level: int = logging.WARNING) -> None:
+                 start_timeout: float = 60.0, log_level: int = logging.WARNING) -> None:
         if config.control_port is None:
             config = replace(config, control_port=0)
         self.config = config

@@ -320,10 +320,13 @@ def test_unsupported_version() -> None:
 def test_servo_stream_follows_a_trajectory(robot: URRobot, sim: SimProcess) -> None:
     robot.move_to(Q_A)
     traj = [np.array(Q_A) + np.array([0.3, 0, 0, 0, 0, 0]) * (i / 150) for i in range(151)]
+    # the end held for 0.2 s, as a servo application does: servoStop stops the arm where it is, and the
+    # arm lags the stream by tens of ms (more when the sender was late, as on a loaded machine)
+    traj += [traj[-1]] * 100
     with robot.servo(lookahead=0.05, gain=1000) as stream:
         for q in traj:
             stream.step(q)
-    assert len(stream.periods) == 150
+    assert len(stream.periods) == 250
     assert 0.0015 < float(np.median(stream.periods)) < 0.003
     time.sleep(0.1)
     assert np.allclose(robot.read_joints(5).q, traj[-1], atol=5e-3)

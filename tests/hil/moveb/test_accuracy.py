@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hil.moveb.accuracy import coverage, path_accuracy
+from hil.moveb.accuracy import corner_resolution, coverage, path_accuracy
 
 
 def test_stretches_between_consecutive_measured_records_are_covered() -> None:
@@ -33,3 +33,24 @@ def test_a_corner_outside_the_covered_stretches_has_no_measured_deviation() -> N
     assert acc["corner_deviation_measured_mm"][0] == pytest.approx(0.05)
     assert acc["corner_deviation_measured_mm"][1] is None and acc["coverage"] == 0.3
     assert acc["corner_deviation_commanded_mm"] == [0.0, 0.0]
+
+
+def test_corner_resolution_is_how_far_the_chord_between_the_records_cuts_the_corner() -> None:
+    """A right-angle corner at s = 50 mm: records 10 mm either side cut it by 10/√2 mm, records 0.1 mm
+    either side by 0.1/√2; a corner with no measured record after it has no resolution."""
+    leg = np.linspace(0.0, 50.0, 501)
+    path = np.r_[np.c_[leg, 0 * leg, 0 * leg], np.c_[50 + 0 * leg[1:], leg[1:], 0 * leg[1:]]]
+    path_s = np.r_[leg, 50.0 + leg[1:]]
+    coarse = corner_resolution(path, path_s, np.array([0.0, 40.0, 60.0, 100.0]), np.array([50.0]))
+    fine = corner_resolution(path, path_s, np.array([49.9, 50.1]), np.array([50.0]))
+    assert coarse[0] == pytest.approx(10 / np.sqrt(2), rel=1e-6)
+    assert fine[0] == pytest.approx(0.1 / np.sqrt(2), rel=1e-6)
+    assert corner_resolution(path, path_s, np.array([10.0, 40.0]), np.array([50.0])) == [None]
+    # the measured points placed on the path by where they are: two points 10 mm either side
+    measured = np.array([[0.0, 0.0, 0.0], [40.0, 0.0, 0.0], [50.0, 10.0, 0.0], [50.0, 50.0, 0.0]])
+    acc = path_accuracy(path, measured, np.array([[50.0, 0.0, 0.0]]), commanded_s=path_s)
+    assert acc["corner_resolution_mm"][0] == pytest.approx(10 / np.sqrt(2), rel=1e-6)
+    assert acc["corner_deviation_measured_mm"][0] == pytest.approx(10 / np.sqrt(2), rel=1e-6)
+    acc = path_accuracy(path, measured, np.array([[50.0, 0.0, 0.0]]), corner_covered=np.array([False]),
+                        commanded_s=path_s)
+    assert acc["corner_resolution_mm"] == [None]  # a corner not covered has neither figure
