@@ -10,12 +10,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hil.blas_threads import limit_blas_threads
+from hil.arm.blas_threads import limit_blas_threads
 from mocks.ur.process import SimProcess
 from mocks.ur.testing import start_sim
 from tests.pg_server import PostgresServer, find_binaries
 
-# as in the hil command and the simulators: one BLAS thread per process (hil.blas_threads)
+# as in the hil command and the simulators: one BLAS thread per process (hil.arm.blas_threads)
 limit_blas_threads()
 
 

@@ -26,7 +26,7 @@ from collections.abc import Sequence
 from typing import Any
 
 import hil
-from hil.blas_threads import limit_blas_threads
+from hil.arm.blas_threads import limit_blas_threads
 from hil.cli._common import quiet_on_closed_stdout
 from hil.errors import FaultError, HilError, InputError
 

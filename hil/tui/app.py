@@ -135,7 +135,7 @@ class HilApp(App[int]):
 
     def _refresh(self, *names: str) -> None:
         for name in names or tuple(self.views):
-            self.views[name].refresh_view()
+            self.views[name].redraw()
 
     # --- quitting ------------------------------------------------------------------------------------
     def action_quit(self) -> None:  # ctrl+q and the command palette's "Quit"
@@ -346,7 +346,7 @@ class HilApp(App[int]):
             self._work(self._show_run_plan, "plan-fk", event)
         run = self.views["run"]
         if self.screen is run:
-            run.refresh_view()
+            run.redraw()
         else:
             nav = self.screen.query("NavBar")
             for widget in nav:

@@ -30,7 +30,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any, Protocol
 
-from hil.blas_threads import limit_blas_threads
+from hil.arm.blas_threads import limit_blas_threads
 from mocks.ur.control_channel import ControlClient, ControlServer
 from mocks.ur.controller import SimConfig, SimController
 

@@ -7,9 +7,11 @@ never import the app module (which imports them).
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, Protocol, cast
 
+from textual.css.query import NoMatches
 from textual.geometry import Size
 from textual.screen import Screen
 from textual.widgets import Static
@@ -62,7 +64,14 @@ class HilScreen(Screen[None]):
     def on_screen_resume(self) -> None:
         self.refresh_bindings()  # the footer otherwise keeps the previous screen's (empty) keys
         self.fit_terminal(self.app.size)
-        self.refresh_view()
+        self.redraw()
+
+    def redraw(self) -> None:
+        """`refresh_view` from outside the screen's own handlers: a state change (or the screen
+        becoming current) can come while the screen is mounted but its widgets are not yet; the
+        screen then draws itself when they are (its on_mount), so nothing is lost by waiting."""
+        with contextlib.suppress(NoMatches):
+            self.refresh_view()
 
     def on_resize(self, event: Any) -> None:
         self.fit_terminal(event.size)

@@ -35,6 +35,19 @@ def check_snapshot(app: App, name: str) -> None:
     assert text == path.read_text(encoding="utf-8"), f"screen differs from {path}:\n{text}"
 
 
+async def expect_snapshot(pilot, name: str, timeout: float = 10.0) -> None:
+    """`check_snapshot` once the screen has drawn what it was told: on a loaded machine a part of it
+    (the footer's keys, say) can come a frame later than the rest. A screen that never matches fails
+    with its text."""
+    path = SNAPSHOTS / f"{name}.txt"
+    deadline = time.monotonic() + timeout
+    if path.exists() and os.environ.get("HIL_SNAPSHOT_UPDATE") != "1":
+        expected = path.read_text(encoding="utf-8")
+        while screen_text(pilot.app) != expected and time.monotonic() < deadline:
+            await pilot.pause(0.05)
+    check_snapshot(pilot.app, name)
+
+
 async def wait_for(pilot, condition: Callable[[], object], timeout: float, what: str) -> None:
     """Let the app run until `condition()` holds (fast-time simulation: seconds, not minutes)."""
     deadline = time.monotonic() + timeout

@@ -310,3 +310,19 @@ def test_a_terminal_below_80x24_says_so_instead_of_a_cut_screen():
             assert "hil needs" not in text and "1 Station" in text
 
     asyncio.run(scenario())
+
+
+def test_a_state_change_before_a_screens_widgets_are_mounted_waits_for_its_mount():
+    """A station event can reach a screen that is mounted while its widgets are not yet (a loaded
+    machine): redrawing it then is a no-op, not a crash of the app; its own mount draws it."""
+    async def scenario():
+        app = offline_app()
+        async with app.run_test(size=SIZE) as pilot:
+            await pilot.pause()
+            station = app.views["station"]
+            await station.query_one("#station-line").remove()  # as before its widgets are mounted
+            with pytest.raises(Exception, match="station-line"):
+                station.refresh_view()
+            station.redraw()
+            app._refresh()  # what a station event does
+    asyncio.run(scenario())

@@ -28,7 +28,7 @@ from hil.store import CampaignRecord, CampaignSummary, ModelRecord, RobotInfo, V
 from hil.tui.app import create_app
 from hil.tui.messages import CampaignLoaded, EngineEvent, HistoryLoaded, SelectionDone, StationChanged
 from hil.tui.state import StationState
-from tests.hil.tui.conftest import check_snapshot
+from tests.hil.tui.conftest import expect_snapshot
 
 T0 = 1_700_000_000.0
 CID = "20231114-221320-abcd"
@@ -111,7 +111,7 @@ def test_station_screen_snapshot():
                 last_point="x 3015.037  y -27.310  z 385.475 mm  (spread 7.0 µm, 5 samples)")
             app.post_message(StationChanged())
             await pilot.pause()
-            check_snapshot(app, "station")
+            await expect_snapshot(pilot, "station")
 
     asyncio.run(scenario())
 
@@ -129,7 +129,7 @@ def test_plan_screen_snapshot():
                       "count": 12, "parameters": 25, "poses": []}
             app.post_message(SelectionDone(report, points, (2.5, 0.0, 0.5), True))
             await pilot.pause()
-            check_snapshot(app, "plan")
+            await expect_snapshot(pilot, "plan")
 
     asyncio.run(scenario())
 
@@ -144,7 +144,7 @@ def test_run_screen_snapshot_with_a_suspension_banner():
             await pilot.press("3")
             await pilot.pause()
             assert app.screen.query_one("#banner").display
-            check_snapshot(app, "run")
+            await expect_snapshot(pilot, "run")
 
     asyncio.run(scenario())
 
@@ -156,7 +156,7 @@ def test_results_screen_snapshot():
             app.post_message(CampaignLoaded(record()))
             await pilot.pause()
             assert app.screen is app.views["results"]
-            check_snapshot(app, "results")
+            await expect_snapshot(pilot, "results")
 
     asyncio.run(scenario())
 
@@ -170,7 +170,7 @@ def test_history_screen_snapshot():
                     summary("20231113-101500-0042", "rejected", T0 - 90000, 1.4e-4)]
             app.post_message(HistoryLoaded(rows, "/var/lib/hil/hil.db"))
             await pilot.pause()
-            check_snapshot(app, "history")
+            await expect_snapshot(pilot, "history")
 
     asyncio.run(scenario())
 
@@ -181,7 +181,7 @@ def test_help_screen_snapshot():
         async with app.run_test(size=SIZE) as pilot:
             await pilot.press("question_mark")
             await pilot.pause()
-            check_snapshot(app, "help")
+            await expect_snapshot(pilot, "help")
             await pilot.press("escape")
             assert app.screen is app.views["station"]
 
