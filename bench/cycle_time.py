@@ -14,6 +14,10 @@ Rows (validation: the same 20 random poses in every row):
 * **method 000 + best tour**: today's 30 poses in that one tour; fixed settle;
 * **time-aware**: `campaign.selection = "time-aware"` (poses and tour together, target: today's predicted
   accuracy) and `robot.settle = "stable"` (measure once the tracker's readings agree);
+* **time-aware, clustered validation**: the same, with `campaign.validation_clusters = K`: the 20
+  validation poses are a two-stage cluster sample (K clusters drawn with probability proportional to
+  their size, 20/K poses drawn in each: every candidate equally likely, so the validation RMS stays an
+  unbiased estimate of the workspace's; its spread is larger, shown as the design effect);
 * **physical limit** of the time-aware tour: its moves at the profile's minimum times plus the tracker's
   measuring time (samples × one reading), nothing else.
 
@@ -26,7 +30,7 @@ and the joint readings (10 RTDE frames at 500 Hz per visit). Fast-time software 
 millisecond is `--speed` simulated ones) is left out of that and shown as "sim clock" beside it. The sim
 campaigns' own validation RMS and truth error are shown too.
 
-Run: python bench/cycle_time.py [--seeds 3] [--draws 4] [--speed 10] [--robots ur5e,ur10e]
+Run: python bench/cycle_time.py [--seeds 3] [--draws 4] [--speed 10] [--robots ur5e,ur10e] [--clusters 5]
 """
 
 from __future__ import annotations
@@ -109,7 +113,7 @@ def truth_error(truth: Geometry, Q: np.ndarray, qv: np.ndarray, config: Any, rng
     return float(np.mean(out))
 
 
-def plan_station(robot: str, seed: int, draws: int, home: np.ndarray) -> dict[str, Any]:
+def plan_station(robot: str, seed: int, draws: int, home: np.ndarray, clusters: int) -> dict[str, Any]:
     """Part A for one station: every method's poses and tour, and their truth errors."""
     rng = np.random.default_rng(7000 + seed)
     truth = random_truth(robot, rng)
@@ -128,6 +132,13 @@ def plan_station(robot: str, seed: int, draws: int, home: np.ndarray) -> dict[st
         CALIBRATION, camp["calibration_poses"], seed=camp["seed"], exclude=val.poses, start=home,
         fixed=val.poses, **base))
     timed_seconds = time.perf_counter() - t0
+    clustered_config = timed_config.with_overrides(campaign__validation_clusters=clusters)
+    clustered_choose = campaign_chooser(clustered_config)
+    val_c = clustered_choose(SelectionRequest(VALIDATION, camp["validation_poses"], seed=camp["seed"] + 1,
+                                              exclude=np.zeros((0, 6)), start=home, **base))
+    timed_c = clustered_choose(SelectionRequest(
+        CALIBRATION, camp["calibration_poses"], seed=camp["seed"], exclude=val_c.poses, start=home,
+        fixed=val_c.poses, **base))
     # the workspace: the same constraints' candidates, another seed, for random poses and held-out ones
     _, cands, _ = design_space(robot, camp["calibration_poses"], candidates=4000, seed=seed + 99,
                                smr=truth.smr, constraints=constraints_of(config), scaling="expected",
@@ -137,9 +148,11 @@ def plan_station(robot: str, seed: int, draws: int, home: np.ndarray) -> dict[st
     qv = cands.q[order[:HELD_OUT]]
     pool = cands.q[order[HELD_OUT:]]
     err = {"today": truth_error(truth, cal.poses, qv, config, rng, draws),
-           "time-aware": truth_error(truth, timed.poses, qv, config, rng, draws)}
+           "time-aware": truth_error(truth, timed.poses, qv, config, rng, draws),
+           "time-aware, clustered validation": truth_error(truth, timed_c.poses, qv, config, rng, draws)}
     random_err = {n: truth_error(truth, pool[:n], qv, config, rng, draws) for n in RANDOM_COUNTS}
     return {"truth": truth, "config": config, "cal": cal, "val": val, "timed": timed, "pool": pool,
+            "val_c": val_c, "timed_c": timed_c, "clustered_config": clustered_config,
             "errors": err, "random": random_err, "timed_seconds": timed_seconds}
 
 
@@ -192,11 +205,12 @@ def main() -> None:
     ap.add_argument("--speed", type=float, default=10.0, help="simulator speed (fast time)")
     ap.add_argument("--robots", default="ur5e,ur10e")
     ap.add_argument("--json", help="write every figure here too")
+    ap.add_argument("--clusters", type=int, default=5, help="validation clusters of the clustered row")
     args = ap.parse_args()
     report: dict[str, Any] = {}
     for robot in args.robots.split(","):
         rows: dict[str, list[dict[str, float]]] = {}
-        acc: dict[str, list[float]] = {"today": [], "time-aware": []}
+        acc: dict[str, list[float]] = {"today": [], "time-aware": [], "time-aware, clustered validation": []}
         rand: dict[int, list[float]] = {n: [] for n in RANDOM_COUNTS}
         stations = []
         failed: dict[str, list[int]] = {}
@@ -211,7 +225,7 @@ def main() -> None:
                 sim = start_station(robot=robot, truth=str(path), speed=args.speed, seed=seed)
                 try:
                     home = np.asarray(sim.info["services"][0]["home"], dtype=float)
-                    st = plan_station(robot, seed, args.draws, home)
+                    st = plan_station(robot, seed, args.draws, home, args.clusters)
                     stations.append(st)
                     for k, v in st["errors"].items():
                         acc[k].append(v)
@@ -239,28 +253,37 @@ def main() -> None:
                         "time-aware": (
                             config.with_overrides(campaign__selection="time-aware", robot__settle="stable"),
                             given_poses(st["timed"].poses, val, st["timed"].info["tour"])),
+                        "time-aware, clustered validation": (
+                            station_config(robot, truth, sim).with_overrides(
+                                campaign__selection="time-aware", robot__settle="stable",
+                                campaign__validation_clusters=args.clusters),
+                            given_poses(st["timed_c"].poses, st["val_c"].poses, st["timed_c"].info["tour"])),
                     }
                     for name, (cfg, choose) in cases.items():
                         try:
                             row = run_row(sim, cfg, choose, home, args.speed, truth, qv)
                         except RuntimeError as exc:  # e.g. too many poses skipped to identify
-                            print(f"{robot} seed {seed} {name:<24} FAILED: {exc}", flush=True)
+                            print(f"{robot} seed {seed} {name:<34} FAILED: {exc}", flush=True)
                             failed.setdefault(name, []).append(seed)
                             continue
-                        row["poses"] = {"random + best tour": n_random}.get(name, len(
-                            st["timed"].poses) if name == "time-aware" else len(cal))
+                        row["poses"] = {"random + best tour": n_random, "time-aware": len(st["timed"].poses),
+                                        "time-aware, clustered validation": len(st["timed_c"].poses)
+                                        }.get(name, len(cal))
                         rows.setdefault(name, []).append(row)
-                        print(f"{robot} seed {seed} {name:<24} robot {row['robot_time']:7.1f} s "
+                        print(f"{robot} seed {seed} {name:<34} robot {row['robot_time']:7.1f} s "
                               f"(moves {row['moves']:.1f}, measuring {row['measuring']:.1f}, settle "
                               f"{row['settle']:.1f}), sim clock {row['sim_clock']:.0f} s, validation "
                               f"{row['validation_rms'] * 1e6:.1f} µm, truth {row['truth_rms'] * 1e6:.1f} µm, "
                               f"{row['visits']} poses measured",
                               flush=True)
-                    tour = np.array([st["timed"].poses[s["index"]] if s["role"] == "selected"
-                                     else val[s["index"]] for s in st["timed"].info["tour"]])
                     dwell = pose_dwell(cases["time-aware"][0])
-                    limit = profile.tour_time(tour, home) + len(tour) * dwell.measure
-                    rows.setdefault("physical limit", []).append({"robot_time": limit})
+                    limits = (("physical limit", st["timed"], val),
+                              ("physical limit, clustered", st["timed_c"], st["val_c"].poses))
+                    for label, chosen, fixed in limits:
+                        tour = np.array([chosen.poses[s["index"]] if s["role"] == "selected"
+                                         else fixed[s["index"]] for s in chosen.info["tour"]])
+                        limit = profile.tour_time(tour, home) + len(tour) * dwell.measure
+                        rows.setdefault(label, []).append({"robot_time": limit})
                 finally:
                     sim.stop()
         today_rms = float(np.sqrt(np.mean(acc["today"])))
@@ -268,6 +291,8 @@ def main() -> None:
                         RANDOM_COUNTS[-1])
         truth_rms = {"today": today_rms, "method 000 + best tour": today_rms,
                      "time-aware": float(np.sqrt(np.mean(acc["time-aware"]))),
+                     "time-aware, clustered validation": float(np.sqrt(np.mean(
+                         acc["time-aware, clustered validation"]))),
                      "random + best tour": float(np.sqrt(np.mean(rand[n_random])))}
         if "today" not in rows:
             print(f"{robot}: today's campaign failed on every station")
@@ -275,16 +300,16 @@ def main() -> None:
         base = float(np.mean([r["robot_time"] for r in rows["today"]]))
         print(f"\n{robot.upper()}: {args.seeds} stations, accuracy from {args.draws} noise draws each "
               f"(truth error on {HELD_OUT} held-out poses); robot time by the simulators' own clocks")
-        print(f"{'row':<24} {'poses':>6} {'truth RMS':>10} {'vs today':>9} {'robot time':>11} {'ratio':>6} "
+        print(f"{'row':<34} {'poses':>6} {'truth RMS':>10} {'vs today':>9} {'robot time':>11} {'ratio':>6} "
               f"{'moves':>7} {'measuring':>9} {'settle':>7} {'sim clock':>9} {'sim val/truth µm':>17} "
               f"{'measured':>8}")
         for name, rs in rows.items():
             t = float(np.mean([r["robot_time"] for r in rs]))
-            if name == "physical limit":
-                print(f"{name:<24} {'':>6} {'':>10} {'':>9} {t:>10.1f}s {t / base:>6.2f}")
+            if name.startswith("physical limit"):
+                print(f"{name:<34} {'':>6} {'':>10} {'':>9} {t:>10.1f}s {t / base:>6.2f}")
                 continue
             tr = truth_rms[name]
-            print(f"{name:<24} {np.mean([r['poses'] for r in rs]):>6.1f} {tr * 1e6:>8.1f}µm "
+            print(f"{name:<34} {np.mean([r['poses'] for r in rs]):>6.1f} {tr * 1e6:>8.1f}µm "
                   f"{tr / today_rms:>9.3f} "
                   f"{t:>10.1f}s {t / base:>6.2f} {np.mean([r['moves'] for r in rs]):>7.1f} "
                   f"{np.mean([r['measuring'] for r in rs]):>9.1f} {np.mean([r['settle'] for r in rs]):>7.1f} "

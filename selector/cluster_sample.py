@@ -6,26 +6,39 @@ unbiased sample of the workspace while the arm visits only a few places:
 
 1. *Partition* the N candidates into K clusters of nearby configurations (k-means on joint angles scaled
    by 1/joint speed, so that distance is roughly travel time).
-2. *First stage*: draw k clusters with probability proportional to size (PPS), **with replacement**.
+2. *First stage*: draw k clusters with probability proportional to size (PPS).
 3. *Second stage*: inside each drawn cluster draw m = count / k poses uniformly, without replacement; a
    cluster drawn r times gives r·m distinct poses (split into r draws of m).
 
-Inclusion probability of a candidate in cluster c: E[r_c]·m / N_c = (k·N_c / N)·m / N_c = count / N, the
-same for every candidate (a *self-weighting* design), so the plain mean of the validation values (e.g.
-squared errors) is an unbiased estimate of the workspace mean. The price is variance: poses of one draw
-are close together, so their errors are correlated; `cluster_standard_error` estimates the standard
-error of that mean honestly (between-draw variance of the draw means / k, the "ultimate cluster"
-estimator of PPS sampling with replacement; e.g. Cochran, *Sampling Techniques*, 3rd ed., §11.9 / Lohr,
-*Sampling: Design and Analysis*, §6.4) and `design_effect` says how many times a simple random sample's
+If E[r_c] = k·N_c / N (PPS), a candidate of cluster c is included with probability
+E[r_c]·m / N_c = k·m / N = count / N, the same for every candidate (a *self-weighting* design), so the
+plain mean of the validation values (e.g. squared errors) is an unbiased estimate of the workspace mean.
+The price is variance: poses of one draw are close together, so their errors are correlated;
+`cluster_standard_error` estimates the standard error of that mean honestly (the between-draw variance of
+the draw means / k, the "ultimate cluster" estimator; Lohr, *Sampling: Design and Analysis*, §6.4-6.5;
+Cochran, *Sampling Techniques*, §11.9) and `design_effect` says how many times a simple random sample's
 variance that is.
 
-Small clusters: self-weighting needs every drawn cluster to hold r·m poses for any multiplicity r ≤ k,
-i.e. at least k·m = count candidates. By default (``small="merge"``) a cluster smaller than that is
-merged into the cluster with the nearest centroid: the partition changes, the inclusion probabilities do
-not (the argument above holds for any partition), so nothing is lost. With ``small="exclude"`` such
-clusters are dropped from the draw instead: the design is then self-weighting over the *remaining*
-candidates only (the excluded ones have inclusion probability 0), a coverage loss reported as
-`ClusterSample.excluded_fraction`.
+Two first stages, both with E[r_c] = k·N_c / N exactly:
+
+* ``"with-replacement"``: k independent PPS draws (Hansen-Hurwitz). A cluster may come up r times and
+  must then hold r·m distinct candidates, for any r ≤ k: every cluster needs at least count = k·m
+  candidates, so small clusters are merged (or excluded) up to `count`. That forces big, loose clusters.
+* ``"systematic"`` (default): PPS systematic sampling over the clusters in random order (Madow): one
+  uniform start, k equally spaced points on the cumulated sizes; a cluster is drawn once per point that
+  falls in it. A cluster smaller than the spacing N/k is drawn at most once, so clusters need only m
+  candidates and can be small and compact: about half the travel time of the with-replacement form on
+  a UR5e's candidates (report of issue 17). There is no unbiased variance estimator for it; the
+  with-replacement one above, applied to it, errs on the safe side (Särndal, Swensson & Wretman,
+  *Model Assisted Survey Sampling*, §3.6: the random-order systematic πps design is close to one with
+  replacement, which over-states the variance by a factor of about 1 / (1 − k/K)).
+
+Small clusters: a cluster below the first stage's need (``count`` or ``m``) is merged into the cluster
+with the nearest centroid by default (``small="merge"``): the partition changes, the inclusion
+probabilities do not (the argument above holds for any partition), so nothing is lost. With
+``small="exclude"`` such clusters are dropped from the draw instead: the design is then self-weighting
+over the *remaining* candidates only (the excluded ones have inclusion probability 0), a coverage loss
+reported as `ClusterSample.excluded_fraction`.
 
 Pure numpy/scipy: nothing here imports `hil`.
 """
@@ -40,14 +53,17 @@ from scipy.cluster.vq import kmeans2
 
 from selector.errors import SelectorError
 
-#: Candidates per cluster of the default partition. 100 is 5x the 20 validation poses of the example
-#: config, so merging rarely triggers, and ~N/100 clusters (200 of 20,000 candidates) make a repeated
-#: first-stage draw rare (birthday bound k²/2K: 6 % for k = 5, K = 200).
-CANDIDATES_PER_CLUSTER = 100
+#: Candidates per cluster of the default partition, in poses per draw (m). 5m leaves room for k-means'
+#: uneven cell sizes above the m a systematic draw needs, while keeping clusters compact: on 20,000 UR5e
+#: candidates (example station, 20 poses in 5 clusters) the ordered tour took 53 s with ~100 candidates
+#: per cluster, 46 s with ~20 (5m), 44 s with ~8 (k-means then takes 5 s), against 86 s at random.
+CANDIDATES_PER_CLUSTER_PER_POSE = 5
 
 #: Clusters per drawn cluster at least, whatever N: with K ≥ 4k the first stage still has room to spread
-#: the k draws over the workspace (and repeats stay uncommon: k²/2K ≤ k/8).
+#: the k draws over the workspace.
 MIN_CLUSTERS_PER_DRAW = 4
+
+FIRST_STAGES = ("systematic", "with-replacement")
 
 
 @dataclass(frozen=True)
@@ -66,21 +82,25 @@ class ClusterSample:
     m: int  # poses per draw
     partition: int  # clusters the candidates were partitioned into (after merging / excluding)
     excluded_fraction: float  # share of candidates in clusters left out of the draw (0 when merging)
+    first_stage: str = "systematic"  # how the clusters were drawn (`FIRST_STAGES`)
 
 
-def default_partition(n: int, clusters: int) -> int:
-    """K for `n` candidates and `clusters` draws: about `CANDIDATES_PER_CLUSTER` candidates per cluster,
-    at least `MIN_CLUSTERS_PER_DRAW` per draw, at most `n`."""
-    return int(min(n, max(MIN_CLUSTERS_PER_DRAW * clusters, round(n / CANDIDATES_PER_CLUSTER))))
+def default_partition(n: int, clusters: int, per_cluster: int) -> int:
+    """K for `n` candidates, `clusters` draws of `per_cluster` poses: about
+    `CANDIDATES_PER_CLUSTER_PER_POSE` × `per_cluster` candidates per cluster, at least
+    `MIN_CLUSTERS_PER_DRAW` clusters per draw, at most `n`."""
+    size = CANDIDATES_PER_CLUSTER_PER_POSE * max(1, per_cluster)
+    return int(min(n, max(MIN_CLUSTERS_PER_DRAW * clusters, round(n / size))))
 
 
 def cluster_sample(q: np.ndarray, count: int, clusters: int, *, scale: np.ndarray, seed: int,
-                   partition: int | None = None, small: str = "merge") -> ClusterSample:
-    """Draw `count` rows of `q` (N, 6) as `clusters` PPS draws of m = count / clusters nearby rows.
+                   partition: int | None = None, small: str = "merge",
+                   first_stage: str = "systematic") -> ClusterSample:
+    """Draw `count` rows of `q` (N, d) as `clusters` PPS draws of m = count / clusters nearby rows.
 
-    `scale` (6,) weights each joint before clustering (1 / joint speed: distance then reads as the time
+    `scale` (d,) weights each joint before clustering (1 / joint speed: distance then reads as the time
     the slowest joint needs); `partition` is K (default `default_partition`); `small` says what happens to
-    clusters with fewer than `count` members ("merge" into the nearest, or "exclude" from the draw).
+    clusters too small for `first_stage` ("merge" into the nearest, or "exclude" from the draw).
     """
     q = np.asarray(q, dtype=float)
     scale = np.asarray(scale, dtype=float)
@@ -95,26 +115,30 @@ def cluster_sample(q: np.ndarray, count: int, clusters: int, *, scale: np.ndarra
                             "(count must be divisible by clusters)")
     if small not in ("merge", "exclude"):
         raise SelectorError(f"cluster sample: small must be 'merge' or 'exclude', got {small!r}")
+    if first_stage not in FIRST_STAGES:
+        raise SelectorError(f"cluster sample: first_stage must be one of {FIRST_STAGES}, got {first_stage!r}")
     n = len(q)
     if n < count:
         raise SelectorError(f"cluster sample: only {n} candidates for {count} poses")
     m = count // clusters
-    K = default_partition(n, clusters) if partition is None else int(partition)
+    K = default_partition(n, clusters, m) if partition is None else int(partition)
     if not 1 <= K <= n:
         raise SelectorError(f"cluster sample: partition must be between 1 and {n} clusters, got {K}")
 
     rng = np.random.default_rng(seed)
     x = q * scale
+    least = m if first_stage == "systematic" else count
     labels = _partition(x, K, rng)
-    labels, excluded = (_merge_small(x, labels, count) if small == "merge"
-                        else _exclude_small(labels, count))
+    labels, excluded = (_merge_small(x, labels, least) if small == "merge"
+                        else _exclude_small(labels, least))
     ids, sizes = np.unique(labels[labels >= 0], return_counts=True)
     if len(ids) == 0:
-        raise SelectorError(f"cluster sample: no cluster of {len(q)} candidates holds {count} poses "
+        raise SelectorError(f"cluster sample: no cluster of {len(q)} candidates holds {least} poses "
                             "(fewer clusters, or small='merge')")
+    drawn = (_systematic(sizes, clusters, rng) if first_stage == "systematic"
+             else rng.choice(len(ids), size=clusters, replace=True, p=sizes / sizes.sum()))
 
-    # first stage: k draws, PPS with replacement; second stage: r·m distinct rows of a cluster drawn r times
-    drawn = rng.choice(len(ids), size=clusters, replace=True, p=sizes / sizes.sum())
+    # second stage: r·m distinct rows of a cluster drawn r times, split into its r draws
     indices = np.empty(count, dtype=int)
     draw = np.empty(count, dtype=int)
     pos = 0
@@ -122,9 +146,10 @@ def cluster_sample(q: np.ndarray, count: int, clusters: int, *, scale: np.ndarra
         draws = np.flatnonzero(drawn == c)
         members = np.flatnonzero(labels == ids[c])
         need = len(draws) * m
-        if need > len(members):  # excluded or merged below `count`, so unreachable: kept as a guard
-            raise SelectorError(f"cluster sample: cluster of {len(members)} candidates drawn "
-                                f"{len(draws)} times cannot give {need} distinct poses")
+        if need > len(members):  # systematic: only with fewer than 2·count candidates in all
+            raise SelectorError(f"cluster sample: a cluster of {len(members)} candidates drawn "
+                                f"{len(draws)} times cannot give {need} distinct poses (too few candidates "
+                                f"for {clusters} clusters of {m})")
         picked = rng.choice(members, size=need, replace=False)
         indices[pos:pos + need] = picked
         draw[pos:pos + need] = np.repeat(draws, m)
@@ -132,7 +157,20 @@ def cluster_sample(q: np.ndarray, count: int, clusters: int, *, scale: np.ndarra
     order = np.argsort(draw, kind="stable")
     indices, draw = indices[order], draw[order]
     return ClusterSample(indices=indices, cluster=labels[indices].copy(), draw=draw, k=int(clusters),
-                         m=int(m), partition=len(ids), excluded_fraction=float(excluded))
+                         m=int(m), partition=len(ids), excluded_fraction=float(excluded),
+                         first_stage=first_stage)
+
+
+def _systematic(sizes: np.ndarray, k: int, rng: np.random.Generator) -> np.ndarray:
+    """k PPS systematic draws (cluster positions in `sizes`) over the clusters in random order: cluster c
+    is drawn once per point u + j·N/k (u uniform in [0, N/k)) inside its stretch of the cumulated sizes,
+    so E[draws of c] = k·N_c/N exactly and a cluster smaller than N/k is drawn at most once. A cluster
+    of N_c ≥ N/k is drawn r ≤ N_c·k/N + 1 times, and r·m ≤ N_c holds whenever N ≥ 2·count."""
+    order = rng.permutation(len(sizes))
+    ends = np.cumsum(sizes[order])
+    step = ends[-1] / k
+    points = rng.uniform(0.0, step) + step * np.arange(k)
+    return order[np.minimum(np.searchsorted(ends, points, side="right"), len(sizes) - 1)]
 
 
 def _partition(x: np.ndarray, K: int, rng: np.random.Generator) -> np.ndarray:
@@ -166,16 +204,26 @@ def _plus_plus(x: np.ndarray, K: int, rng: np.random.Generator) -> np.ndarray:
 def _merge_small(x: np.ndarray, labels: np.ndarray, least: int) -> tuple[np.ndarray, float]:
     """Merge, smallest first, every cluster with fewer than `least` rows into the cluster whose centroid
     is nearest its own, until none is left (one cluster of everything at worst). Excludes nothing."""
-    labels = labels.copy()
-    while True:
-        ids, sizes = np.unique(labels, return_counts=True)
-        if len(ids) == 1 or sizes.min() >= least:
-            return labels, 0.0
-        small = ids[np.argmin(sizes)]
-        centroids = np.array([x[labels == c].mean(axis=0) for c in ids])
-        d = np.linalg.norm(centroids - centroids[ids == small][0], axis=1)
-        d[ids == small] = np.inf
-        labels[labels == small] = ids[int(np.argmin(d))]
+    ids, labels = np.unique(labels, return_inverse=True)
+    sizes = np.bincount(labels).astype(float)
+    sums = np.zeros((len(ids), x.shape[1]))
+    np.add.at(sums, labels, x)
+    target = np.arange(len(ids))  # where each original cluster's rows end up
+    alive = sizes > 0
+    while alive.sum() > 1:
+        live = np.flatnonzero(alive)
+        small = live[np.argmin(sizes[live])]
+        if sizes[small] >= least:
+            break
+        centroids = sums[live] / sizes[live, None]
+        d = np.linalg.norm(centroids - sums[small] / sizes[small], axis=1)
+        d[live == small] = np.inf
+        into = live[int(np.argmin(d))]
+        sizes[into] += sizes[small]
+        sums[into] += sums[small]
+        sizes[small], alive[small] = 0.0, False
+        target[target == small] = into
+    return target[labels], 0.0
 
 
 def _exclude_small(labels: np.ndarray, least: int) -> tuple[np.ndarray, float]:
@@ -207,8 +255,10 @@ def cluster_standard_error(values: np.ndarray, draws: np.ndarray) -> float:
     `draws` is the first-stage draw of each value (`ClusterSample.draw`), not its cluster: a cluster
     drawn twice contributes two draw means, as the with-replacement estimator requires. This single
     term estimates both stages' variance (the second stage's is inside the spread of the draw means).
-    When a cluster is drawn twice its two subsamples are taken jointly without replacement, which makes
-    them slightly negatively correlated: the estimate is then a little conservative, never optimistic.
+    Exact in expectation for the with-replacement first stage with independent subsamples; here a
+    cluster drawn twice gives its two subsamples jointly without replacement (slightly negatively
+    correlated), and the systematic first stage draws without replacement: both make the estimate a
+    little conservative, never optimistic (module docstring).
     """
     means = _draw_means(values, draws)
     return float(np.sqrt(np.var(means, ddof=1) / len(means)))

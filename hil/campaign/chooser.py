@@ -18,7 +18,8 @@ from hil.calibration.timed_selection import select_timed
 from hil.campaign.plan import Choice, SelectionRequest
 from hil.errors import InputError
 from selector.candidates import Constraints, generate_candidates
-from selector.motion_time import Dwell
+from selector.cluster_sample import cluster_sample
+from selector.motion_time import Dwell, MotionProfile
 from selector.order import order_poses
 
 #: Seconds per pose for reading the joints and the controller's steady check (RTDE at 500 Hz: 10
@@ -61,7 +62,7 @@ def campaign_chooser(config: Any) -> Any:
             keep_in_lower=tuple(request.keep_in[0]), keep_in_upper=tuple(request.keep_in[1]),
             floor=float(request.keep_in[0][2]), joint_lower=CAMPAIGN_LOWER, joint_upper=CAMPAIGN_UPPER)
         if request.role != CALIBRATION:
-            return _random_poses(request, constraints)
+            return _validation_poses(config, request, constraints)
         if config.campaign["selection"] == TIME_AWARE:
             return _time_aware(config, request, constraints)
         report = select_poses(
@@ -112,14 +113,16 @@ def _time_aware(config: Any, request: SelectionRequest, constraints: Constraints
     return Choice(np.array(report["poses"]), info)
 
 
-def _random_poses(request: Any, constraints: Constraints) -> Any:
-    """Validation poses: a random sample of the constrained candidates, in visiting order.
+def _validation_poses(config: Any, request: Any, constraints: Constraints) -> Any:
+    """Validation poses as configured: a simple random sample (``campaign.validation_clusters = 0``) or a
+    two-stage cluster sample of the same candidates (`_clustered_poses`)."""
+    if int(config.campaign["validation_clusters"]) > 0:
+        return _clustered_poses(config, request, constraints)
+    return _random_poses(request, constraints)
 
-    No minimum count (validation identifies nothing) and no optimisation: validation should sample
-    the workspace the robot will work in, not the poses that suit the fit.
-    """
-    from hil.campaign.plan import Choice
 
+def _validation_candidates(request: Any, constraints: Constraints) -> tuple[SelectionModel, Any]:
+    """The selection model and the constrained candidates validation poses are drawn from."""
     try:
         model = SelectionModel(request.model.robot, request.model.smr, constraints.tracker)
         cands = generate_candidates(model, request.candidates, constraints, seed=request.seed)
@@ -128,8 +131,48 @@ def _random_poses(request: Any, constraints: Constraints) -> Any:
     if len(cands) < request.count:
         raise InputError(f"only {len(cands)} candidate poses satisfy the constraints, "
                          f"{request.count} validation poses asked for")
+    return model, cands
+
+
+def _random_poses(request: Any, constraints: Constraints) -> Any:
+    """Validation poses: a random sample of the constrained candidates, in visiting order.
+
+    No minimum count (validation identifies nothing) and no optimisation: validation should sample
+    the workspace the robot will work in, not the poses that suit the fit.
+    """
+    from hil.campaign.plan import Choice
+
+    model, cands = _validation_candidates(request, constraints)
     rng = np.random.default_rng(request.seed)
     Q = cands.q[rng.choice(len(cands), request.count, replace=False)]
     perm, ordered = order_poses(Q, model.max_joint_speed, request.start)
     return Choice(Q[perm], {"method": "random", "candidates": {"found": len(cands)},
                             "travel_time": {"ordered": ordered}})
+
+
+def _clustered_poses(config: Any, request: Any, constraints: Constraints) -> Any:
+    """Validation poses as a two-stage cluster sample of the constrained candidates, in visiting order.
+
+    Still an unbiased sample of the workspace (every candidate equally likely, `selector.cluster_sample`)
+    but in ``campaign.validation_clusters`` groups of nearby poses, so the arm travels far less between
+    them. Candidates and seed as `_random_poses`; joints weighted by 1 / their speed in the station's
+    movej (`MotionProfile.joint_speeds`), so that "nearby" means "quick to reach". The info's ``labels``
+    are the first-stage draw of each pose, in visiting order: the standard error of the validation
+    mean square needs them (`selector.cluster_sample.cluster_standard_error`).
+    """
+    from hil.campaign.plan import Choice
+
+    model, cands = _validation_candidates(request, constraints)
+    speeds = MotionProfile(float(config.robot["speed"]), float(config.robot["acceleration"]),
+                           tuple(float(v) for v in model.max_joint_speed)).joint_speeds
+    try:
+        sample = cluster_sample(cands.q, request.count, int(config.campaign["validation_clusters"]),
+                                scale=1.0 / speeds, seed=request.seed)
+    except selector.SelectorError as exc:
+        raise InputError(f"campaign.validation_clusters: {exc}") from None
+    Q = cands.q[sample.indices]
+    perm, ordered = order_poses(Q, model.max_joint_speed, request.start)
+    return Choice(Q[perm], {"method": "clustered", "clusters": sample.k, "per_cluster": sample.m,
+                            "partition": sample.partition, "excluded_fraction": sample.excluded_fraction,
+                            "labels": [int(d) for d in sample.draw[perm]],
+                            "candidates": {"found": len(cands)}, "travel_time": {"ordered": ordered}})

@@ -288,6 +288,12 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # the fewest calibration poses depend on the robot (checked below, with robot.type)
         "calibration_poses": Key("int", 30, _within(1, MAX_POSES)),
         "validation_poses": Key("int", 20, _within(1, MAX_POSES)),
+        # 0: validation poses are a simple random sample of the candidates; k > 0: a two-stage cluster
+        # sample (selector.cluster_sample), k clusters of nearby poses drawn PPS, validation_poses / k
+        # in each: still an unbiased sample of the workspace, in less robot time (checked below: k must
+        # divide validation_poses)
+        "validation_clusters": Key("int", 0, _within(0, MAX_POSES),
+                                   "clustered validation: clusters drawn (0: simple random sample)"),
         # the bootstrap has 8 arm moves (hil.campaign.plan._BOOTSTRAP_DELTAS) and makes at least 4:
         # other values were silently clamped
         "bootstrap_poses": Key("int", 6, _within(4, 8), "poses measured to locate the tracker"),
@@ -522,6 +528,13 @@ def parse_config(data: dict[str, Any], source: str = "<config>") -> StationConfi
         raise InputError(f"{source}: warmup.max_time: {warmup['max_time']:g} s is shorter than one "
                          f"warmup.interval ({warmup['interval']:g} s): the warm-up could not check the arm "
                          "once")
+    val, clusters = values["campaign"]["validation_poses"], values["campaign"]["validation_clusters"]
+    if clusters > val:
+        raise InputError(f"{source}: campaign.validation_clusters: {clusters} clusters for "
+                         f"campaign.validation_poses = {val} poses: at most one cluster per pose")
+    if clusters and val % clusters:
+        raise InputError(f"{source}: campaign.validation_clusters: {clusters} does not divide "
+                         f"campaign.validation_poses ({val}) into clusters of equal size")
     cal, robot = values["campaign"]["calibration_poses"], values["robot"]["type"]
     compliance = values["campaign"]["compliance"]
     if 3 * cal < _ALL_PARAMETERS + 6 * compliance + 3:  # else enough for any arm, known without kinematics

@@ -1040,6 +1040,8 @@ CONFIG_VALUES: tuple[tuple[str, Any], ...] = (
     ("campaign.calibration_poses", 0), ("campaign.calibration_poses", 3),
     ("campaign.calibration_poses", 100_000_000), ("campaign.calibration_poses", "many"),
     ("campaign.validation_poses", 0), ("campaign.validation_poses", 100_000_000),
+    ("campaign.validation_clusters", -1), ("campaign.validation_clusters", 3),
+    ("campaign.validation_clusters", 40), ("campaign.validation_clusters", "x"),
     ("campaign.bootstrap_poses", 0), ("campaign.bootstrap_poses", 100_000_000),
     ("campaign.samples", 0), ("campaign.samples", 1_000_000_000),
     ("campaign.stability", 0), ("campaign.stability", -1), ("campaign.stability", 10.0),
