@@ -218,7 +218,7 @@ def test_link_faults_are_typed_then_resync(
     sim: tuple[GeoComSimulator, StaticTarget], fault: str, error: type[Exception]
 ) -> None:
     s, _ = sim
-    with tracker(str(s.pty_path), timeout=0.15) as tr:
+    with tracker(str(s.pty_path), timeout=1.0) as tr:
         tr.commands.do_measure(MeasureProgram.RTRK_DIST)
         getattr(s.faults, fault)()
         with pytest.raises(error):
@@ -228,7 +228,7 @@ def test_link_faults_are_typed_then_resync(
 
 def test_measure_point_retries_once_after_a_link_fault(sim: tuple[GeoComSimulator, StaticTarget]) -> None:
     s, _ = sim
-    with tracker(str(s.pty_path), timeout=0.15) as tr:
+    with tracker(str(s.pty_path), timeout=1.0) as tr:
         s.faults.garble_next_reply()
         np.testing.assert_allclose(tr.measure_point(samples=2).position, TRUE, atol=1e-9)
         s.faults.garble_next_reply()

@@ -260,11 +260,12 @@ def test_garbage_on_the_line_resynchronises_by_reconnecting(
 
 
 def test_a_stalled_server_times_out_and_the_late_answer_is_never_paired(sim: EmsconSimulator) -> None:
-    with opened(sim.url, timeout=0.3, link_retries=0) as tr:
-        sim.stall(0.6)
+    # a timeout that a loaded machine's scheduling does not reach, a stall well past it
+    with opened(sim.url, timeout=1.0, link_retries=0) as tr:
+        sim.stall(1.6)
         with pytest.raises(LinkError, match="no answer"):
             tr.measure_point(1)
-        time.sleep(0.5)
+        time.sleep(1.0)
         # the stalled command's late answer is on the old connection: the driver reconnects first
         p = tr.measure_point(1)
         assert np.linalg.norm(p.xyz - TRUTH) < 100e-6 and p.relocks == 0
