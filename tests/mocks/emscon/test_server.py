@@ -182,15 +182,17 @@ def test_beam_lost_during_a_stationary_measurement(client: Client, target: Stati
 def test_continuous_stream_timestamps_batches_and_stop(client: Client) -> None:
     start_up(client, mode=1)
     client.ok(C.SET_CONTINUOUS_TIME_MODE_PARAMS, 5, 0, 0, 0)  # 200 Hz on the tracker's clock
+    t0 = time.monotonic()
     client.ok(C.START_MEASUREMENT)
     packets = [r for r in client.receive(0.5) if isinstance(r, MultiMeasResult)]
     before, answer = client.call(C.STOP_MEASUREMENT)
+    wall = time.monotonic() - t0  # 0.5 s, more when a loaded machine answers the stop late
     assert answer.status == OK
     packets += [r for r in before if isinstance(r, MultiMeasResult)]
     samples = [s for p in packets for s in p.samples]
     times = np.array([s.seconds for s in samples])
-    # 0.5 s of wall time = 10 s simulated = 2000 samples, in packets about 0.1 s of wall time apart
-    assert 1500 < len(samples) < 2600 and 3 <= len(packets) <= 12
+    # a wall second = 20 s simulated = 4000 samples, in packets about 0.1 s of wall time apart
+    assert 1500 < len(samples) <= 4000 * wall + 200 and 3 <= len(packets) <= wall / 0.1 + 3
     np.testing.assert_allclose(np.diff(times), 0.005, atol=2e-6)
     assert all(0 <= s.time2 < 1_000_000 for s in samples)
     assert np.max(np.abs(np.array([s.position for s in samples]) - TRUE)) < 1e-4
