@@ -39,8 +39,9 @@ def test_connect_measure_plan_run_with_a_protective_stop_then_results_export_his
             st = app.session.station
             await wait_for(pilot, lambda: st.phase == "connected" and st.lock == "locked in", 30,
                            "the station to connect")
-            text = screen_text(app)
-            assert "UR5e" in text and "AT960" in text and "normal" in text
+            # the state first, the screen a frame later (later still on a loaded machine)
+            await wait_for(pilot, lambda: all(w in screen_text(app) for w in ("UR5e", "AT960", "normal")), 10,
+                           "the station drawn")
 
             # measure now
             await pilot.press("m")
@@ -154,7 +155,7 @@ def test_the_same_job_through_an_emscon_tracker_with_a_blocked_beam(tmp_path):
             await wait_for(pilot, lambda: st.phase == "connected" and st.lock == "locked in", 30,
                            "the station to connect")
             assert app.session.config.tracker["protocol"] == "emscon"
-            assert "AT960" in screen_text(app)
+            await wait_for(pilot, lambda: "AT960" in screen_text(app), 10, "the tracker drawn")
             await pilot.press("m")
             await wait_for(pilot, lambda: st.last_point.startswith("x "), 20, "a measured point")
             await pilot.press("3", "g")
