@@ -46,7 +46,7 @@ def test_connect_measure_plan_run_with_a_protective_stop_then_results_export_his
             # measure now
             await pilot.press("m")
             await wait_for(pilot, lambda: st.last_point.startswith("x "), 20, "a measured point")
-            assert "spread" in screen_text(app)
+            await wait_for(pilot, lambda: "spread" in screen_text(app), 10, "the point drawn")
 
             # plan: the selector in a worker; the UI keeps answering meanwhile
             await pilot.press("2", "s")
@@ -65,8 +65,8 @@ def test_connect_measure_plan_run_with_a_protective_stop_then_results_export_his
             await wait_for(pilot, lambda: run.suspended is not None, 30, "the suspension")
             assert run.suspended.kind == "protective_stop"
             banner = app.screen.query_one("#banner")
-            await pilot.pause()
-            assert banner.display and "teach pendant" in screen_text(app)
+            await wait_for(pilot, lambda: banner.display and "teach pendant" in screen_text(app), 10,
+                           "the banner drawn")
             inject_later(app, "clear")
             await wait_for(pilot, lambda: run.suspended is None and run.last_resumed is not None, 30,
                            "the run to resume")
@@ -120,10 +120,10 @@ def test_pause_then_quit_mid_run_asks_and_leaves_the_campaign_resumable(tmp_path
             await wait_for(pilot, lambda: run.measured >= 3, 90, "a few points")
             await pilot.press("p")  # pause: the questions below take their time, the run waits
             await wait_for(pilot, lambda: run.state == "paused", 30, "the pause")
-            assert "PAUSED" in screen_text(app)
+            await wait_for(pilot, lambda: "PAUSED" in screen_text(app), 10, "the pause drawn")
             await pilot.press("q")
             await wait_for(pilot, lambda: isinstance(app.screen, Confirm), 5, "the question")
-            assert "Quit?" in screen_text(app)
+            await wait_for(pilot, lambda: "Quit?" in screen_text(app), 10, "the question drawn")
             await pilot.press("n")  # changed my mind: the run goes on
             await wait_for(pilot, lambda: not isinstance(app.screen, Confirm), 5, "the answer")
             assert app.session.run_active
@@ -164,8 +164,7 @@ def test_the_same_job_through_an_emscon_tracker_with_a_blocked_beam(tmp_path):
             inject_later(app, "block_beam", on=True, reason="a forklift")
             await wait_for(pilot, lambda: run.suspended is not None, 30, "the suspension")
             assert run.suspended.kind == "beam_lost"
-            await pilot.pause()
-            assert "line of sight" in screen_text(app)
+            await wait_for(pilot, lambda: "line of sight" in screen_text(app), 10, "the suspension drawn")
             inject_later(app, "block_beam", on=False)
             await wait_for(pilot, lambda: run.finished is not None, 120, "the end of the campaign")
             assert run.finished.status == "accepted", run.finished.detail
