@@ -215,18 +215,19 @@ def test_a_beam_lost_mid_measurement_is_target_lost(target: StaticTarget, sim: E
 
 # ------------------------------------------------------------------------------ readiness
 def test_a_cold_laser_is_not_ready_until_it_warms(target: StaticTarget) -> None:
-    s = simulator(target, warmup_s=4.0)  # 4 simulated seconds = 0.2 s of wall time
+    # 40 simulated seconds = 2 s of wall time: longer than a loaded machine takes to connect
+    s = simulator(target, warmup_s=40.0)
     try:
         with pytest.raises(NotReady, match="warming up"):
             driver(s.url).open()
         _wait(lambda: not s.connected)
-        with driver(s.url, warmup_timeout=5.0) as tr:  # waits for it
+        with driver(s.url, warmup_timeout=10.0) as tr:  # waits for it
             assert tr.ready() and tr.measure_point(1).samples == 1
-            s.laser_cold(10.0)
+            s.laser_cold(40.0)
             with pytest.raises(NotReady, match="ES_RS_SensorNotWarmedUp"):
                 tr.measure_point(1)
             assert not tr.ready()
-            assert _wait(tr.ready, 3.0)
+            assert _wait(tr.ready, 6.0)
             assert tr.measure_point(1).samples == 1
     finally:
         s.stop()
