@@ -29,9 +29,10 @@ def limit_blas_threads() -> None:
     loaded library's setting.
     """
     global _limits
+    ours = "OPENBLAS_NUM_THREADS" not in os.environ  # a setting of the user's: OpenBLAS reads it itself
     for name in _VARIABLES:
         os.environ.setdefault(name, "1")
-    if _limits is None and "numpy" in sys.modules:
+    if ours and _limits is None and "numpy" in sys.modules:
         from threadpoolctl import threadpool_limits
 
-        _limits = threadpool_limits(limits=int(os.environ["OPENBLAS_NUM_THREADS"]), user_api="blas")
+        _limits = threadpool_limits(limits=1, user_api="blas")
