@@ -21,9 +21,12 @@ re-locks with ES_C_FindReflector at the last measured distance a bounded number 
 Paths: `stream` switches to continuous-time mode (ES_C_SetContinuousTimeModeParams: the sample
 separation in ms, no point limit), starts, yields the samples of each MultiMeasResultT and stops and
 returns to stationary mode when the caller stops iterating. The tracker stamps each sample on its own
-clock (``lTime1`` s, ``lTime2`` µs); the driver maps that clock onto the caller's by one offset,
-(arrival − tracker time) of the newest sample in the first packet, so the samples keep the tracker's
-exact spacing and are late by that packet's latency at most (a few ms on a LAN).
+clock (``lTime1`` s, ``lTime2`` µs); the driver maps that clock onto the caller's by one offset, the
+smallest (arrival − tracker time of its newest sample) of the packets so far: the least-delayed
+packet bounds the true offset best (the minimum-delay filter of NTP-style clock estimation), a packet
+that waited behind a stalled reader never sets it. The samples of a packet keep the tracker's exact
+spacing; the offset can only fall, so a gap between packets is at most one separation, and no sample
+is mapped later than the packet that carried it arrived.
 
 Links: every command waits at most ``timeout``. A timeout or an undecodable packet leaves the
 connection out of step (no transaction ids in TPI), so the next command reconnects and repeats the
@@ -408,8 +411,9 @@ class EmsconTracker:
                 while client.multis:
                     batch = client.multis.popleft()
                     arrival = clock()
-                    if batch.samples and offset is None:  # fixed for the stream: spacing stays exact
-                        offset = arrival - max(s.seconds for s in batch.samples)
+                    if batch.samples:  # the least-delayed packet so far (module docstring)
+                        delay = arrival - max(s.seconds for s in batch.samples)
+                        offset = delay if offset is None else min(offset, delay)
                     for s in batch.samples:
                         if max_samples is not None and count >= max_samples:
                             break

@@ -21,11 +21,16 @@ def config(sim: SimProcess) -> RobotConfig:
 
 @pytest.mark.parametrize("kind", [URRobot, IsolatedURRobot])
 def test_start_returns_with_the_arm_on_its_way_and_wait_sees_it_arrive(sim: SimProcess, kind) -> None:
-    with kind(config(sim)) as robot:
+    slow_ok = RobotConfig(host=sim.address, speed=1.0, acceleration=2.0, min_speed_fraction=0.05)
+    with kind(slow_ok) as robot:
         robot.move_to(Q_A)
+        # the slider at 5 % makes the move last ~4 s of wall time, so that "returned before the arm got
+        # there" does not depend on how fast a loaded machine answers the state query below
+        sim.inject("speed_slider", fraction=0.05)
         target = robot.start_move(Q_FAR)
         assert np.allclose(target, Q_FAR)
         assert sim.state()["moving"]  # returned before the arm got there
+        sim.inject("speed_slider", fraction=1.0)
         time.sleep(0.05)  # something else runs meanwhile (the engine's commit)
         reading = robot.wait_move(samples=3)
         assert reading.samples == 3 and np.allclose(reading.q, Q_FAR, atol=1e-4)
