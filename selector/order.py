@@ -70,36 +70,44 @@ def _two_opt(D: np.ndarray, path: np.ndarray, fixed_first: bool) -> np.ndarray:
 def _or_opt(D: np.ndarray, path: np.ndarray, fixed_first: bool) -> tuple[np.ndarray, bool]:
     """The best move of a run of 1–3 poses to another place (either direction), if it improves.
 
-    Every insertion point of a run is scored at once from edge differences (no path is rebuilt).
+    Every run and every insertion point of it is scored at once from edge differences (no path is
+    rebuilt): for a run at s of length L, the rest of the path is path[:s] + path[s + L:], and its
+    insertion point k sits between rest[k − 1] and rest[k].
     """
     n = len(path)
     first = 1 if fixed_first else 0
     best_delta, best_path = -1e-12, None
+    pad = np.concatenate([path, [-1]])  # index −1 (and n): no node there
+
+    def at(i: np.ndarray) -> np.ndarray:
+        return np.where((i >= 0) & (i < n), pad[np.clip(i, 0, n)], -1)
+
+    def edge(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        return np.where((u >= 0) & (v >= 0), D[np.maximum(u, 0), np.maximum(v, 0)], 0.0)
+
     for length in (1, 2, 3):
-        for s in range(first, n - length + 1):
-            if n - length < 1:
-                break
-            run = path[s:s + length]
-            rest = np.concatenate([path[:s], path[s + length:]])
-            prev = path[s - 1] if s > 0 else -1
-            nxt = path[s + length] if s + length < n else -1
-            removed = ((D[prev, run[0]] if prev >= 0 else 0.0) + (D[run[-1], nxt] if nxt >= 0 else 0.0)
-                       - (D[prev, nxt] if prev >= 0 and nxt >= 0 else 0.0))
-            pos = np.arange(first, len(rest) + 1)
-            left = np.where(pos > 0, rest[np.maximum(pos - 1, 0)], -1)
-            right = np.where(pos < len(rest), rest[np.minimum(pos, len(rest) - 1)], -1)
-            lv, rv = np.maximum(left, 0), np.maximum(right, 0)
-            joined = np.where((left >= 0) & (right >= 0), D[lv, rv], 0.0)
-            for seg in (run, run[::-1]):
-                added = (np.where(left >= 0, D[lv, seg[0]], 0.0) + np.where(right >= 0, D[seg[-1], rv], 0.0)
-                         - joined)
-                delta = added - removed
-                delta[pos == s] = np.inf  # back where it was
-                k = int(np.argmin(delta))
-                if delta[k] < best_delta:
-                    best_delta = float(delta[k])
-                    p = int(pos[k])
-                    best_path = np.concatenate([rest[:p], seg, rest[p:]])
+        if n - length < 1 or n - length + 1 <= first:
+            break
+        s = np.arange(first, n - length + 1)[:, None]  # run starts
+        k = np.arange(first, n - length + 1)[None, :]  # insertion points in the rest
+        prev, nxt = at(s - 1), at(s + length)
+        removed = edge(prev, path[s]) + edge(path[s + length - 1], nxt) - edge(prev, nxt)
+        left = at(np.where(k - 1 < s, k - 1, k - 1 + length))
+        right = at(np.where(k < s, k, k + length))
+        joined = edge(left, right)
+        delta = np.empty((s.shape[0], 2, k.shape[1]))
+        for o, (head, tail) in enumerate(((path[s], path[s + length - 1]),
+                                          (path[s + length - 1], path[s]))):
+            delta[:, o, :] = edge(left, head) + edge(tail, right) - joined - removed
+        delta[np.broadcast_to((k == s)[:, None, :], delta.shape)] = np.inf  # back where it was
+        m = int(np.argmin(delta))
+        if delta.flat[m] < best_delta:
+            best_delta = float(delta.flat[m])
+            i, o, j = np.unravel_index(m, delta.shape)
+            start, pos = int(s[i, 0]), int(k[0, j])
+            run = path[start:start + length]
+            rest = np.concatenate([path[:start], path[start + length:]])
+            best_path = np.concatenate([rest[:pos], run if o == 0 else run[::-1], rest[pos:]])
     return (path, False) if best_path is None else (best_path, True)
 
 

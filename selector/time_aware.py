@@ -122,28 +122,76 @@ class _Design:
         return np.where(np.isfinite(out) & (out >= 0), out, np.inf)
 
 
-def _insertion(D_pc: np.ndarray, D_path: np.ndarray, fixed_start: bool) -> tuple[np.ndarray, np.ndarray]:
-    """Cheapest insertion of each candidate into a path: (added move time, position to insert at).
+class _Insertions:
+    """The cheapest insertion of every candidate into a path, kept up to date as poses are inserted.
 
-    `D_pc` (L, k): move times between the path's nodes (the start first if `fixed_start`) and the
-    candidates; `D_path` (L−1,): the path's legs. Position p means "before path node p" (L: at the end).
+    The path is framed by a head (the start, or a virtual node 0 s from everything when the tour may
+    begin anywhere) and a virtual tail (0 s from everything: appending costs the move from the last
+    node), so every insertion is "into a leg (u, v)", costing t(u, x) + t(x, v) − t(u, v). A full
+    computation is (legs × candidates); inserting a pose replaces one leg by two, so only those two are
+    new for every candidate, and only the candidates whose best leg was the replaced one need all legs
+    again: a greedy fill of k poses costs about k × candidates instead of k × legs × candidates.
     """
-    L, k = D_pc.shape
-    cols = np.arange(k)
-    cost = D_pc[-1].copy()  # append at the end
-    pos = np.full(k, L)
-    if L >= 2:
-        mid = D_pc[:-1] + D_pc[1:] - D_path[:, None]
+
+    HEAD = -(10**9)  # the key of the head (node keys are candidate indices ≥ 0 and fixed poses < 0)
+
+    def __init__(self, tour: _Tour, nodes: np.ndarray) -> None:
+        self.tour = tour
+        self.keys = [self.HEAD] + [int(n) for n in nodes]  # the left ends of the legs, in path order
+        self.rows = [tour.row(None)] + [tour.row(int(n)) for n in nodes] + [tour.zero_row()]
+        # leg i runs from path entry i to i + 1; a leg from or to a virtual end costs nothing
+        q = [self._q(i) for i in range(len(self.rows))]
+        self.legs = [self._time(q[i], q[i + 1]) for i in range(len(q) - 1)]
+        self.cost, self.left = self._over(np.arange(len(tour.Q)))
+
+    def _over(self, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(cheapest cost, the key of that leg's left end) over every leg, for candidates `cols`."""
+        R = np.stack([r[cols] for r in self.rows])
+        mid = R[:-1]
+        mid += R[1:]
+        mid -= np.asarray(self.legs)[:, None]
         j = np.argmin(mid, axis=0)
-        best = mid[j, cols]
-        better = best < cost
-        cost = np.where(better, best, cost)
-        pos = np.where(better, j + 1, pos)
-    if not fixed_start:
-        better = D_pc[0] < cost
-        cost = np.where(better, D_pc[0], cost)
-        pos = np.where(better, 0, pos)
-    return cost, pos
+        return mid[j, np.arange(len(cols))], np.asarray(self.keys, dtype=np.int64)[j]
+
+    def position(self, candidate: int) -> int:
+        """Where `candidate` goes in the nodes array: right after the node its cheapest leg starts at
+        (the head's leg: first)."""
+        return self.keys.index(int(self.left[candidate]))
+
+    def _q(self, i: int) -> np.ndarray | None:
+        """The configuration of path entry `i` (None: the virtual head or tail)."""
+        if i == 0:
+            return self.tour.start
+        if i == len(self.rows) - 1:
+            return None
+        return self.tour.q(np.array([self.keys[i]]))[0]
+
+    def _time(self, a: np.ndarray | None, b: np.ndarray | None) -> float:
+        if a is None or b is None:
+            return 0.0
+        return float(self.tour.profile.move_times(a[None], b[None])[0])
+
+    def insert(self, node: int, position: int) -> None:
+        """`node` inserted at `position` of the nodes array, i.e. into leg `position` of the path."""
+        i = position
+        row = self.tour.row(node)
+        u, v = self.rows[i], self.rows[i + 1]
+        q_c = self.tour.q(np.array([node]))[0]
+        t_uc, t_cv = self._time(self._q(i), q_c), self._time(q_c, self._q(i + 1))
+        old_left = self.keys[i]
+        self.keys.insert(i + 1, node)
+        self.rows.insert(i + 1, row)
+        self.legs[i:i + 1] = [t_uc, t_cv]
+        stale = self.left == old_left  # their best leg is gone: all legs again
+        a = u + row - t_uc
+        b = row + v - t_cv
+        new = np.minimum(a, b)
+        better = new < self.cost
+        self.cost = np.where(better, new, self.cost)
+        self.left = np.where(better, np.where(a <= b, old_left, node), self.left)
+        cols = np.flatnonzero(stale)
+        if len(cols):
+            self.cost[cols], self.left[cols] = self._over(cols)
 
 
 class _Tour:
@@ -157,6 +205,7 @@ class _Tour:
         # first), computed once: a tour changes a few nodes at a time
         self._column: dict[int, int] = {}
         self._times = np.empty((64, len(Q)))
+        self._zero: np.ndarray | None = None
 
     def _col(self, node: int | None) -> int:
         key = -(10**9) if node is None else int(node)
@@ -169,10 +218,18 @@ class _Tour:
             self._column[key] = j
         return self._column[key]
 
-    def candidate_matrix(self, nodes: np.ndarray) -> np.ndarray:
-        """(L, N) move times between the path's nodes (the start first, if any) and every candidate."""
-        rows = ([self._col(None)] if self.start is not None else []) + [self._col(n) for n in nodes]
-        return self._times[rows]
+    def row(self, node: int | None) -> np.ndarray:
+        """(N,) move times between a node (None: the start; none given: a virtual head, 0 s from
+        every candidate) and every candidate."""
+        if node is None and self.start is None:
+            return self.zero_row()
+        j = self._col(node)  # first: it may grow the table
+        return self._times[j]
+
+    def zero_row(self) -> np.ndarray:
+        if self._zero is None:
+            self._zero = np.zeros(len(self.Q))
+        return self._zero
 
     def q(self, nodes: np.ndarray) -> np.ndarray:
         nodes = np.asarray(nodes, dtype=int)
@@ -246,18 +303,12 @@ def time_aware_select(G: np.ndarray, Q: np.ndarray, profile: MotionProfile, dwel
         nodes = np.asarray(nodes, dtype=int)
         in_set = np.zeros(len(Q), dtype=bool)
         in_set[nodes[nodes >= 0]] = True
+        insertions = _Insertions(tour, nodes)
         while True:
             chosen = nodes[nodes >= 0]
             if len(chosen) >= max_count:
                 return nodes
-            pq = tour.path_q(nodes)
-            if len(pq):
-                D_pc = tour.candidate_matrix(nodes)
-                D_path = profile.move_times(pq[:-1], pq[1:]) if len(pq) > 1 else np.zeros(0)
-                added, pos = _insertion(D_pc, D_path, tour.start is not None)
-            else:
-                added, pos = np.zeros(len(Q)), np.zeros(len(Q), dtype=int)
-            cost = added + dwell
+            cost = insertions.cost + dwell
             ok = ~in_set
             if budget is not None:
                 ok &= total(nodes) + cost <= budget + 1e-9
@@ -279,8 +330,9 @@ def time_aware_select(G: np.ndarray, Q: np.ndarray, profile: MotionProfile, dwel
             else:
                 k = int(np.argmax(ratio))
             c = int(idx[k])
-            p = int(pos[c]) - (1 if tour.start is not None else 0)
-            nodes = np.insert(nodes, max(p, 0), c)
+            at = insertions.position(c)
+            nodes = np.insert(nodes, at, c)
+            insertions.insert(c, at)
             in_set[c] = True
 
     def objective(nodes: np.ndarray) -> tuple[float, float]:

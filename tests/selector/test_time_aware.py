@@ -104,3 +104,50 @@ def test_bad_requests_are_refused(station: tuple) -> None:
         time_aware_select(G, Q, PROFILE, DWELL, budget=-1.0)
     with pytest.raises(SelectorError, match="fixed poses alone"):
         time_aware_select(G, Q, PROFILE, DWELL, budget=20.0, fixed=Q[:8], start=START)
+
+
+@pytest.mark.parametrize("with_start", [False, True])
+def test_kept_insertion_costs_equal_trying_every_place(with_start: bool) -> None:
+    """The greedy's insertion costs, updated pose by pose, equal the cheapest of all places tried on
+    the tour itself (the start fixed or not, fixed poses in the path)."""
+    from selector.time_aware import _Insertions, _Tour
+
+    rng = np.random.default_rng(5)
+    Q = rng.uniform(-2.0, 2.0, (300, 6))
+    tour = _Tour(Q, rng.uniform(-2.0, 2.0, (3, 6)), MotionProfile(0.5, 1.0, (3.14,) * 6),
+                 rng.uniform(-2.0, 2.0, 6) if with_start else None)
+    nodes = np.array([-1, -2, -3])
+    kept = _Insertions(tour, nodes)
+    for c in rng.choice(300, 25, replace=False):
+        at = kept.position(int(c))
+        nodes = np.insert(nodes, at, int(c))
+        kept.insert(int(c), at)
+        base = tour.move_time(nodes)
+        for x in rng.choice(np.setdiff1d(np.arange(300), nodes), 4, replace=False):
+            tried = [tour.move_time(np.insert(nodes, p, x)) - base for p in range(len(nodes) + 1)]
+            assert kept.cost[x] == pytest.approx(min(tried), abs=1e-9)
+            assert tried[kept.position(int(x))] == pytest.approx(min(tried), abs=1e-9)
+
+
+def test_or_opt_finds_the_best_single_run_move() -> None:
+    """Or-opt (all runs and places scored at once) takes the best move of a run of 1-3 poses, as
+    trying each one on the path finds it."""
+    from selector.order import _or_opt, _path_cost
+
+    rng = np.random.default_rng(11)
+    for _ in range(40):
+        n = int(rng.integers(4, 14))
+        D = rng.uniform(0.0, 5.0, (n, n))
+        D = D + D.T
+        path, fixed = rng.permutation(n), bool(rng.integers(0, 2))
+        out, moved = _or_opt(D, path, fixed)
+        best = _path_cost(D, path)
+        first = 1 if fixed else 0
+        for length in (1, 2, 3):
+            for s in range(first, n - length + 1):
+                run, rest = path[s:s + length], np.concatenate([path[:s], path[s + length:]])
+                for p in range(first, len(rest) + 1):
+                    for seg in (run, run[::-1]):
+                        best = min(best, _path_cost(D, np.concatenate([rest[:p], seg, rest[p:]])))
+        assert moved == (best < _path_cost(D, path) - 1e-12)
+        assert _path_cost(D, out) == pytest.approx(best, abs=1e-9)
