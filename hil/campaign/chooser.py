@@ -106,10 +106,11 @@ def _time_aware(config: Any, request: SelectionRequest, constraints: Constraints
         acceleration=config.robot["acceleration"], dwell=pose_dwell(config), budget=budget,
         fixed=request.fixed, start=request.start, candidates=request.candidates, index=request.index,
         seed=request.seed, smr=request.model.smr, constraints=constraints,
-        compliance=bool(camp["compliance"]), payload=config.payload, gravity=config.gravity)
+        compliance=bool(camp["compliance"]), payload=config.payload, gravity=config.gravity,
+        time_limit=float(camp["search_time"]))
     info = {k: report[k] for k in ("index", "value", "o1", "method", "form", "seconds", "travel_time",
                                    "candidates", "parameters", "predicted", "seed_method", "motion",
-                                   "dwell", "budget", "tour")}
+                                   "dwell", "budget", "tour", "details")}
     return Choice(np.array(report["poses"]), info)
 
 

@@ -62,6 +62,8 @@ from hil.files.outputs import atomic_write_text, check_output
 STOP_MARGIN = finite_float(0, 1, lo_open=True)
 #: --time-budget: robot seconds (campaign.time_budget's range, without its 0 = "no budget")
 TIME_BUDGET = finite_float(0, 86_400, "s", lo_open=True)
+#: --search-time: seconds (campaign.search_time's range)
+SEARCH_TIME = finite_float(0, 3600, "s", lo_open=True)
 #: --selection: campaign.selection's values (hil.station.config.SELECTIONS)
 SELECTIONS = ("tabu", "time-aware")
 
@@ -99,6 +101,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--time-budget", type=TIME_BUDGET, metavar="SECONDS",
                    help="time-aware: the most accurate tour within this much robot time; overrides "
                         "campaign.time_budget")
+    p.add_argument("--search-time", type=SEARCH_TIME, metavar="SECONDS",
+                   help="time-aware: seconds the search improves the tour before the first move; "
+                        "overrides campaign.search_time")
     p.add_argument("--no-warmup", action="store_true",
                    help="measure without warming the arm up first (it has been running already); "
                         "overrides warmup.enabled, the drift watch stays as configured")
@@ -162,16 +167,18 @@ def _check_stop_margin(args: argparse.Namespace) -> None:
 
 
 def _check_time_budget(args: argparse.Namespace) -> None:
-    """--time-budget without the time-aware selection (--selection time-aware, or the configuration's
-    campaign.selection) would be silently ignored: refused before the station starts."""
-    if args.time_budget is None or args.selection == "time-aware":
+    """--time-budget or --search-time without the time-aware selection (--selection time-aware, or the
+    configuration's campaign.selection) would be silently ignored: refused before the station starts."""
+    given = [o for o, v in (("--time-budget", args.time_budget), ("--search-time", args.search_time))
+             if v is not None]
+    if not given or args.selection == "time-aware":
         return
     from hil.station.config import load_config
 
     configured = args.config and load_config(args.config).campaign["selection"] == "time-aware"
     if args.selection is None and configured:
         return
-    raise InputError("--time-budget goes with --selection time-aware (or campaign.selection = "
+    raise InputError(f"{given[0]} goes with --selection time-aware (or campaign.selection = "
                      "\"time-aware\" in --config)")
 
 

@@ -45,6 +45,8 @@ def config_overrides(args: argparse.Namespace) -> dict[str, Any]:
         out["campaign__selection"] = args.selection
     if getattr(args, "time_budget", None) is not None:
         out["campaign__time_budget"] = args.time_budget
+    if getattr(args, "search_time", None) is not None:
+        out["campaign__search_time"] = args.search_time
     return out
 
 

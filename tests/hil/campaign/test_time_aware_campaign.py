@@ -22,7 +22,8 @@ ROOT = Path(__file__).resolve().parents[3]
 def cli(tmp: Path, *extra: str) -> list[str]:
     return [sys.executable, "-m", "hil", "calibrate", "--sim", "--speed", "40", "--seed", "5",
             "--truth", str(tmp / "truth.json"), "--poses", "14", "--validation", "6", "--candidates", "2000",
-            "--db", str(tmp / "hil.db"), "--no-warmup", "--selection", "time-aware", *extra]
+            "--db", str(tmp / "hil.db"), "--no-warmup", "--selection", "time-aware",
+            "--search-time", "2", *extra]
 
 
 def write_truth(tmp: Path) -> None:

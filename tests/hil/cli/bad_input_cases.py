@@ -487,6 +487,9 @@ def _cases() -> list[Case]:
     numbers("calibrate", [*cal, "--selection", "time-aware"], "--time-budget",
             ("0", "-1", "nan", "inf", "1e308", "abc"))
     add("calibrate", "--time-budget-without-time-aware", [*cal, "--time-budget", "300"], ["--time-budget"])
+    numbers("calibrate", [*cal, "--selection", "time-aware"], "--search-time",
+            ("0", "-1", "nan", "inf", "1e308", "abc"))
+    add("calibrate", "--search-time-without-time-aware", [*cal, "--search-time", "5"], ["--search-time"])
     add("calibrate", "--robot=ur99", [*cal, "--robot", "ur99"], ["ur99"])
     add("calibrate", "--robot=empty", [*cal, "--robot", ""], ["--robot"])
     add("calibrate", "--tracker-protocol=foo", [*cal, "--tracker-protocol", "foo"], ["--tracker-protocol"])
@@ -1052,6 +1055,8 @@ CONFIG_VALUES: tuple[tuple[str, Any], ...] = (
     ("campaign.selection", "fastest"), ("campaign.selection", 5),
     ("campaign.time_budget", -1), ("campaign.time_budget", 1e12), ("campaign.time_budget", "x"),
     ("campaign.time_budget", Raw("nan")),
+    ("campaign.search_time", 0), ("campaign.search_time", -1), ("campaign.search_time", 1e6),
+    ("campaign.search_time", "x"), ("campaign.search_time", Raw("nan")),
     ("campaign.stop_early", "yes"), ("campaign.stop_early", 1),
     ("campaign.stop_margin", 0), ("campaign.stop_margin", -0.5), ("campaign.stop_margin", 1.5),
     ("campaign.stop_margin", "x"), ("campaign.stop_margin", Raw("nan")),
