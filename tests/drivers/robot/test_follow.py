@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import os
 import signal
-import threading
 import time
 from collections.abc import Iterator
 from typing import Any
@@ -29,7 +28,7 @@ from drivers.robot import (
 )
 from drivers.robot.isolated import IsolatedURRobot
 from mocks.ur.process import SimProcess
-from tests.drivers.robot.test_ur_driver import Q_A, assert_arm_stopped, config, inject_later
+from tests.drivers.robot.test_ur_driver import Q_A, assert_arm_stopped, config, once_moving
 
 DQ = np.array([0.3, -0.1, 0.15, 0.0, 0.2, -0.25])
 
@@ -62,14 +61,18 @@ def iso(sim: SimProcess) -> Iterator[IsolatedURRobot]:
 
 
 def assert_on_period(times: np.ndarray, period: float) -> None:
-    """The send times keep `period`: their median spacing within 10 % of it.
+    """The send times keep `period`: the 10th percentile of their spacing within 10 % of it.
 
-    The median, not the mean or the maximum: a wrong rate moves it, while the scheduler stalls of a
-    loaded 2-core CI machine (tens of ms, a few per run) do not. Those stalls are the OS's, not the
-    driver's; the real servo loop runs in its own process on the station PC.
+    A low percentile, not the mean, the median or the maximum: a loop that waits for its period is
+    hardly ever faster than it, and keeps it whenever the OS runs it in time, so a wrong rate (no wait, or
+    another controller's period) moves the low percentile, while a loaded 2-core CI machine, which
+    delays many periods by a few ms (moving even the median, as seen with 3 workers and 2 busy
+    processes) and stalls some by tens of ms, does not. Those delays are the OS's, not the driver's;
+    the real servo loop runs in its own process on the station PC.
     """
     d = np.diff(times)
-    assert abs(np.median(d) - period) < 0.1 * period, f"median period {np.median(d) * 1e3:.3f} ms"
+    low = np.percentile(d, 10)
+    assert abs(low - period) < 0.1 * period, f"10th percentile period {low * 1e3:.3f} ms"
 
 
 def test_follow_streams_the_trajectory_and_ends_at_its_last_sample(arm: Any) -> None:
@@ -81,7 +84,7 @@ def test_follow_streams_the_trajectory_and_ends_at_its_last_sample(arm: Any) -> 
     # one clock for the whole system: the child's send times fall inside this process's call
     assert before < res.times[0] and res.times[-1] < res.hold_end <= after
     assert res.period_count == 400 + 50 - 1
-    # the loop keeps the controller's 2 ms period (see assert_on_period for why the median)
+    # the loop keeps the controller's 2 ms period (see assert_on_period for why a low percentile)
     assert_on_period(res.times, 0.002)
     assert np.allclose(arm.read_joints(5).q, traj[-1], atol=1e-3)
     print(f"\n{type(arm).__name__}: {res.period_count} periods, mean {res.period_mean * 1e3:.3f} ms, "
@@ -125,11 +128,15 @@ def test_a_first_sample_away_from_the_arm_is_refused(arm: Any, sim: SimProcess) 
 
 def test_stop_from_another_thread_aborts_the_stream(arm: Any, sim: SimProcess) -> None:
     traj = ramp(Q_A, DQ, 2000)  # 4 s
-    threading.Timer(0.3, arm.stop).start()
-    t0 = time.monotonic()
-    with pytest.raises(MotionAborted):
+    stopped_at: list[float] = []
+
+    def stop() -> None:  # once the stream is under way: a stop sent before `follow` began is cleared
+        stopped_at.append(time.monotonic())
+        arm.stop()
+
+    with once_moving(sim, stop, real_time=False), pytest.raises(MotionAborted):
         arm.follow(traj, lookahead=0.05, gain=1000)
-    assert time.monotonic() - t0 < 2.0
+    assert time.monotonic() - stopped_at[0] < 2.0  # the stream ended at the stop, not at its end
     assert_arm_stopped(sim)
     assert not np.allclose(sim.state()["q"], traj[-1], atol=1e-2)
     q = arm.read_joints(1).q  # the driver still works: stream again from where the arm stopped
@@ -150,8 +157,8 @@ def _reconnect(robot: IsolatedURRobot, within: float = 20.0) -> None:
 def test_dropped_link_mid_stream_is_a_typed_error_and_this_process_survives(
         iso: IsolatedURRobot, sim: SimProcess) -> None:
     traj = ramp(Q_A, DQ, 2000)
-    inject_later(sim, 0.3, "drop_connection", refuse_s=1.0)
-    with pytest.raises(ConnectionLost):
+    drop = once_moving(sim, lambda: sim.inject("drop_connection", refuse_s=1.0), real_time=False)
+    with drop, pytest.raises(ConnectionLost):
         iso.follow(traj, lookahead=0.05, gain=1000)
     assert_arm_stopped(sim)
     _reconnect(iso)
@@ -163,8 +170,8 @@ def test_dropped_link_mid_stream_is_a_typed_error_and_this_process_survives(
 def test_client_crash_mid_stream_is_connection_lost(iso: IsolatedURRobot, sim: SimProcess) -> None:
     """What ur_rtde's segfault on a dropped link looks like from the parent: the child dies."""
     pid = iso._proc.pid
-    threading.Timer(0.3, lambda: os.kill(pid, signal.SIGSEGV)).start()
-    with pytest.raises(ConnectionLost, match="process died"):
+    crash = once_moving(sim, lambda: os.kill(pid, signal.SIGSEGV), real_time=False)  # mid-stream
+    with crash, pytest.raises(ConnectionLost, match="process died"):
         iso.follow(ramp(Q_A, DQ, 2000))
     # nothing commands the controller now: its servo holds the last target it received
     end = time.monotonic() + 3.0
@@ -184,11 +191,13 @@ def test_a_stream_outliving_its_timeout_is_stopped_and_its_client_replaced(
     monkeypatch.setattr(isolated, "_SLOWER", 0.05)
     monkeypatch.setattr(isolated, "_MARGIN", 0.5 - iso.config.connect_timeout)  # about 0.7 s for 4 s
     first = iso._proc
-    t0 = time.monotonic()
+    traj = ramp(Q_A, DQ, 2000)  # 4 s
     with pytest.raises(ConnectionLost, match="did not answer follow"):
-        iso.follow(ramp(Q_A, DQ, 2000))
-    assert time.monotonic() - t0 < 4.0
+        iso.follow(traj)
     assert_arm_stopped(sim)
+    # stopped by the time-out, well before the stream's end (not "took less than 4 s": a loaded
+    # machine takes seconds to stop and replace the client, and runs the stream slower too)
+    assert not np.allclose(sim.state()["q"], traj[-1], atol=1e-2)
     assert not first.is_alive()
     monkeypatch.undo()
     with pytest.raises(ConnectionLost, match="not connected"):

@@ -6,7 +6,8 @@ import os
 import signal
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import replace
 
 import numpy as np
@@ -52,14 +53,39 @@ def robot(sim: SimProcess) -> Iterator[URRobot]:
         rob.close()
 
 
-def inject_later(sim: SimProcess, delay: float, fault: str, **args: object) -> threading.Timer:
-    t = threading.Timer(delay, lambda: sim.inject(fault, **args))
-    t.start()
-    return t
+@contextmanager
+def once_moving(sim: SimProcess, action: Callable[[], object], *, real_time: bool = True) -> Iterator[None]:
+    """Within the block, run `action` from another thread as soon as the simulated arm is seen moving.
+
+    Not after a fixed delay: at the fixture's 10x a move lasts ~0.2 s of wall time, less than a loaded
+    machine's stall, so a timer can fire before the move was sent (a stop then is lost: `start_move`
+    clears it) or after the arm arrived. `real_time` puts the simulator at 1x for the rest of the test
+    (a move then lasts seconds), so that a stall between seeing the move and acting on it still lands
+    mid-move; a `follow` stream keeps wall time anyway and needs no slowing. Fails when the arm was not
+    seen moving within 10 s.
+    """
+    if real_time:
+        sim.inject("set_speed", speed=1.0)
+    seen = threading.Event()
+
+    def watch() -> None:
+        deadline = time.monotonic() + 10.0
+        while time.monotonic() < deadline:
+            if sim.state()["moving"]:
+                seen.set()
+                action()
+                return
+            time.sleep(0.005)
+
+    watcher = threading.Thread(target=watch, daemon=True)
+    watcher.start()
+    yield
+    watcher.join(15.0)
+    assert seen.is_set(), "the arm was never seen moving"
 
 
 def assert_arm_stopped(sim: SimProcess) -> None:
-    end = time.monotonic() + 3.0
+    end = time.monotonic() + 10.0  # a generous deadline: a loaded machine answers the queries late
     while sim.state()["moving"]:
         assert time.monotonic() < end, "the arm is still moving"
         time.sleep(0.01)
@@ -116,8 +142,10 @@ def test_a_cb3_controller_runs_at_125_hz_and_follows_a_trajectory() -> None:
             q0 = np.asarray(rob.read_joints(1).q)
             traj = q0 + np.linspace(0.0, 0.05, 125)[:, None] * np.array([1.0, 0, 0, 0, 0, 1.0])
             res = rob.follow(traj, settle=0.1)
-            d = np.diff(res.times)  # the median: a loaded machine's occasional stall is not the rate
-            assert abs(np.median(d) - 1 / 125) < 1e-3
+            # a low percentile: a loaded machine delays many periods, hardly ever shortens one (see
+            # tests/drivers/robot/test_follow.py assert_on_period)
+            d = np.diff(res.times)
+            assert abs(np.percentile(d, 10) - 1 / 125) < 1e-3
             assert np.allclose(rob.read_joints(5).q, traj[-1], atol=1e-3)
     finally:
         cb3.stop()
@@ -152,16 +180,14 @@ def test_keep_in_zone_is_checked_along_the_path(sim: SimProcess) -> None:
 
 
 def test_protective_stop_mid_move(robot: URRobot, sim: SimProcess) -> None:
-    inject_later(sim, 0.05, "protective_stop")
-    with pytest.raises(ProtectiveStop):
+    with once_moving(sim, lambda: sim.inject("protective_stop")), pytest.raises(ProtectiveStop):
         robot.move_to(Q_FAR)
     assert_arm_stopped(sim)
     assert not np.allclose(sim.state()["q"], Q_FAR, atol=1e-3)
 
 
 def test_emergency_stop_mid_move(robot: URRobot, sim: SimProcess) -> None:
-    inject_later(sim, 0.05, "emergency_stop")
-    with pytest.raises(EmergencyStop):
+    with once_moving(sim, lambda: sim.inject("emergency_stop")), pytest.raises(EmergencyStop):
         robot.move_to(Q_FAR)
     assert_arm_stopped(sim)
 
@@ -172,8 +198,8 @@ def test_dropped_connection_mid_move(sim: SimProcess) -> None:
     robot = IsolatedURRobot(config(sim))
     robot.open()
     try:
-        inject_later(sim, 0.05, "drop_connection", refuse_s=1.0)
-        with pytest.raises(ConnectionLost):
+        drop = once_moving(sim, lambda: sim.inject("drop_connection", refuse_s=1.0))
+        with drop, pytest.raises(ConnectionLost):
             robot.move_to(Q_FAR)
         assert_arm_stopped(sim)
         deadline = time.monotonic() + 20
@@ -203,8 +229,7 @@ def test_isolated_client_survives_the_death_of_its_process(sim: SimProcess) -> N
             robot.read_joints(3)
         robot.reconnect()
         assert robot._proc is not first and robot.read_joints(3).samples == 3
-        threading.Timer(0.1, robot.stop).start()  # stop from another thread mid-move
-        with pytest.raises(MotionAborted):
+        with once_moving(sim, robot.stop), pytest.raises(MotionAborted):  # from another thread mid-move
             robot.move_to(Q_FAR)
         assert_arm_stopped(sim)
     finally:
@@ -224,16 +249,10 @@ def test_isolated_client_ignores_the_terminals_signals_and_ctrl_c_mid_call_stops
         def interrupt(*_: object) -> None:
             raise KeyboardInterrupt
 
-        def when_moving() -> None:
-            end = time.monotonic() + 5.0
-            while not sim.state()["moving"] and time.monotonic() < end:
-                time.sleep(0.005)
-            os.kill(os.getpid(), signal.SIGUSR1)
-
         previous = signal.signal(signal.SIGUSR1, interrupt)  # stands for Ctrl-C in this process
         try:
-            threading.Thread(target=when_moving).start()
-            with pytest.raises(KeyboardInterrupt):
+            ctrl_c = once_moving(sim, lambda: os.kill(os.getpid(), signal.SIGUSR1))
+            with ctrl_c, pytest.raises(KeyboardInterrupt):
                 robot.move_to(Q_FAR)
         finally:
             signal.signal(signal.SIGUSR1, previous)
@@ -247,8 +266,7 @@ def test_isolated_client_ignores_the_terminals_signals_and_ctrl_c_mid_call_stops
 
 
 def test_program_stopped_mid_move(robot: URRobot, sim: SimProcess) -> None:
-    inject_later(sim, 0.05, "stop_program")
-    with pytest.raises(ProgramStopped):
+    with once_moving(sim, lambda: sim.inject("stop_program")), pytest.raises(ProgramStopped):
         robot.move_to(Q_FAR)
     assert_arm_stopped(sim)
 
@@ -259,15 +277,24 @@ def test_speed_slider_below_100_percent(robot: URRobot, sim: SimProcess) -> None
         robot.move_to(Q_FAR)
     assert not sim.state()["moving"]
     sim.inject("speed_slider", fraction=1.0)
-    inject_later(sim, 0.05, "speed_slider", fraction=0.3)
-    with pytest.raises(SpeedSliderReduced):
+    # the driver reads the slider from its RTDE stream: wait for a frame that says 100 %, or the move
+    # below is refused before moving (for the old 50 %) instead of being stopped mid-move
+    deadline = time.monotonic() + 10.0
+    while True:
+        try:
+            robot.check_status()
+            break
+        except SpeedSliderReduced:
+            assert time.monotonic() < deadline, "the driver never saw the slider back at 100 %"
+            time.sleep(0.01)
+    slider = once_moving(sim, lambda: sim.inject("speed_slider", fraction=0.3))
+    with slider, pytest.raises(SpeedSliderReduced):
         robot.move_to(Q_A)
     assert_arm_stopped(sim)  # the driver stopped it itself
 
 
 def test_stop_from_another_thread_aborts_the_move(robot: URRobot, sim: SimProcess) -> None:
-    threading.Timer(0.05, robot.stop).start()
-    with pytest.raises(MotionAborted):
+    with once_moving(sim, robot.stop), pytest.raises(MotionAborted):
         robot.move_to(Q_FAR)
     assert_arm_stopped(sim)
 
@@ -327,6 +354,8 @@ def test_servo_stream_follows_a_trajectory(robot: URRobot, sim: SimProcess) -> N
         for q in traj:
             stream.step(q)
     assert len(stream.periods) == 250
-    assert 0.0015 < float(np.median(stream.periods)) < 0.003
+    # a low percentile: a loaded machine delays many periods, hardly ever shortens one (see
+    # tests/drivers/robot/test_follow.py assert_on_period)
+    assert 0.0015 < float(np.percentile(stream.periods, 10)) < 0.003
     time.sleep(0.1)
     assert np.allclose(robot.read_joints(5).q, traj[-1], atol=5e-3)

@@ -192,9 +192,11 @@ def test_abort_from_another_thread_stops_the_arm():
     original = st.arm.move_to
 
     def slow_move(q, **kw):
-        if st.arm.moves == 6:
-            threading.Thread(target=st.engine.request_abort).start()
-            threading.Event().wait(0.05)
+        if st.arm.moves == 6:  # the request made from another thread during this move; waited for, as a
+            # loaded machine may not run that thread before the fake arm has finished every pose
+            abort = threading.Thread(target=st.engine.request_abort)
+            abort.start()
+            abort.join(10)
         return original(q, **kw)
 
     st.arm.move_to = slow_move
@@ -289,6 +291,9 @@ def test_pause_and_resume_between_poses():
         if isinstance(event, PointMeasured) and event.index == 2 and not done:
             done.append(1)
             st.engine.request_pause()
+        # the resume once the engine is paused, not after a fixed delay: a resume that came before the
+        # engine looked at its pause request (a loaded machine) would cancel the pause unseen
+        if isinstance(event, StateChanged) and event.state == "paused":
             threading.Timer(0.1, st.engine.request_resume).start()
 
     st.engine.bus.subscribe(pause_then_resume)

@@ -152,7 +152,13 @@ def test_stall_stops_the_state_and_drop_connection_closes_the_link(controller: S
     with socket.create_connection((host, port), timeout=1.0) as s:
         stream = PrimaryStream()
         got: list[PrimaryMessage] = []
-        deadline = time.monotonic() + 0.5
+        deadline = time.monotonic() + 10.0  # the version message comes first, however loaded the machine
+        while not got:
+            assert time.monotonic() < deadline, "no version message"
+            s.settimeout(0.1)
+            with contextlib.suppress(TimeoutError):
+                got.extend(stream.feed(s.recv(4096)))
+        deadline = time.monotonic() + 0.5  # ... then nothing: 5 state messages' time (10 Hz)
         while time.monotonic() < deadline:
             s.settimeout(0.1)
             with contextlib.suppress(TimeoutError):
