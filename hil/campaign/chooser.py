@@ -76,6 +76,10 @@ def campaign_chooser(config: Any) -> Any:
 
     # the same line-of-sight and acceptance tests, asked again during the run (`plan._SightCheck`)
     choose.hidden = hidden_reason  # type: ignore[attr-defined]
+    if config.campaign["plan_cache"]:  # the same question on every robot of a line: chosen once
+        from hil.campaign.plan_cache import cached_chooser
+
+        return cached_chooser(choose, config, config.campaign["plan_cache"])
     return choose
 
 

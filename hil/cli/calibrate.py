@@ -104,6 +104,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--search-time", type=SEARCH_TIME, metavar="SECONDS",
                    help="time-aware: seconds the search improves the tour before the first move; "
                         "overrides campaign.search_time")
+    p.add_argument("--plan-cache", metavar="DIR",
+                   help="keep the chosen poses in DIR and reuse them in every later campaign asking the "
+                        "same (an end-of-line cell: chosen once per station layout); overrides "
+                        "campaign.plan_cache")
     p.add_argument("--no-warmup", action="store_true",
                    help="measure without warming the arm up first (it has been running already); "
                         "overrides warmup.enabled, the drift watch stays as configured")
@@ -132,6 +136,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--verify-cycles goes with --verify")
     _check_stop_margin(args)
     _check_time_budget(args)
+    _check_plan_cache(args)
     with interruptible():  # Ctrl-C, SIGTERM, SIGHUP: the arm stops, the campaign stays resumable
         return _run(args)
 
@@ -182,6 +187,19 @@ def _check_time_budget(args: argparse.Namespace) -> None:
                      "\"time-aware\" in --config)")
 
 
+def _check_plan_cache(args: argparse.Namespace) -> None:
+    """A plan cache directory that cannot be made is refused before the station starts."""
+    path = args.plan_cache
+    if path is None and args.config:
+        from hil.station.config import load_config
+
+        path = load_config(args.config).campaign["plan_cache"]
+    if path:
+        from hil.campaign.plan_cache import cache_directory
+
+        cache_directory(path)
+
+
 def _check_outputs(args: argparse.Namespace) -> None:
     """Refuse --out/--report paths that are the store, an input, a directory or each other, before
     the station starts: the result is written by a rename, which would replace that file."""
@@ -225,6 +243,7 @@ def _run(args: argparse.Namespace) -> int:
         path = resolve_location(args.db, config)  # a file, or a PostgreSQL server (opened now: reachable?)
         store: Store | None = (Store.open(path, config=config) if not isinstance(path, Path) or path.exists()
                                else None)
+        choose = campaign_chooser(config)
         guards = contextlib.ExitStack()  # the arm's address lock, then the campaign's lease
         devices, verified = None, 0  # verified: the exit code the verification asks for (0: done)
         try:
@@ -266,7 +285,7 @@ def _run(args: argparse.Namespace) -> int:
             if args.json:
                 bus.subscribe(JsonLines())
             started = time.time()
-            outcome = run_campaign(config, campaign_chooser(config), bus=bus, campaign=campaign,
+            outcome = run_campaign(config, choose, bus=bus, campaign=campaign,
                                    resume=resume, devices=devices, clock=RealClock(args.speed),
                                    validation_cycles=args.cycles, lease=lease,
                                    close_devices=not args.verify)  # --verify: the same devices go on

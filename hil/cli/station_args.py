@@ -47,6 +47,8 @@ def config_overrides(args: argparse.Namespace) -> dict[str, Any]:
         out["campaign__time_budget"] = args.time_budget
     if getattr(args, "search_time", None) is not None:
         out["campaign__search_time"] = args.search_time
+    if getattr(args, "plan_cache", None) is not None:
+        out["campaign__plan_cache"] = args.plan_cache
     return out
 
 

@@ -57,6 +57,15 @@ def _angle(v: Any) -> str | None:
     return None if 0 < v < 90 else f"must be between 0 and 90 degrees, got {v}"
 
 
+def _plan_cache(value: Any) -> str | None:
+    """A directory path, or "" (off); whether it can be created is checked when the campaign starts."""
+    if not isinstance(value, str):
+        return f"must be a directory path (a string), got {value!r}"
+    if "\x00" in value or (value and not value.strip()):
+        return f"must be a directory path or \"\" (off), got {value!r}"
+    return None
+
+
 def _within(lo: float, hi: float, unit: str = "", *, lo_open: bool = False,
             hi_open: bool = False) -> Callable[[Any], str | None]:
     """A check that a number lies in its physical range; the error shows the range with its unit
@@ -319,6 +328,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # ~1 % from 10 to 20 s; an hour is a value in the wrong unit
         "search_time": Key("float", 10.0, _within(0, 3600, "s", lo_open=True),
                            "time-aware: seconds the search improves the tour before the first move"),
+        # an end-of-line cell asks the same question robot after robot (hil.campaign.plan_cache): the
+        # first campaign's poses are kept there and reused, so the search is paid once per layout
+        "plan_cache": Key("str", "", _plan_cache, "directory keeping pose choices for reuse by later "
+                                                  "campaigns asking the same question (\"\": off)"),
         "candidates": Key("int", 20000, _within(1, MAX_CANDIDATES), "candidate poses for the selector"),
         # numpy's generators take non-negative seeds (-1 was exit 70 in the simulator); 32 bits suffice
         "seed": Key("int", 1, _within(0, 2**32 - 1)),

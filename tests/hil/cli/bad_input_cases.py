@@ -490,6 +490,8 @@ def _cases() -> list[Case]:
     numbers("calibrate", [*cal, "--selection", "time-aware"], "--search-time",
             ("0", "-1", "nan", "inf", "1e308", "abc"))
     add("calibrate", "--search-time-without-time-aware", [*cal, "--search-time", "5"], ["--search-time"])
+    add("calibrate", "--plan-cache=a-file", [*cal, "--plan-cache", f"{d}/afile"], ["plan_cache", "afile"],
+        files={"afile": "not a directory"})
     add("calibrate", "--robot=ur99", [*cal, "--robot", "ur99"], ["ur99"])
     add("calibrate", "--robot=empty", [*cal, "--robot", ""], ["--robot"])
     add("calibrate", "--tracker-protocol=foo", [*cal, "--tracker-protocol", "foo"], ["--tracker-protocol"])
@@ -1057,6 +1059,7 @@ CONFIG_VALUES: tuple[tuple[str, Any], ...] = (
     ("campaign.time_budget", Raw("nan")),
     ("campaign.search_time", 0), ("campaign.search_time", -1), ("campaign.search_time", 1e6),
     ("campaign.search_time", "x"), ("campaign.search_time", Raw("nan")),
+    ("campaign.plan_cache", 5), ("campaign.plan_cache", "   "),
     ("campaign.stop_early", "yes"), ("campaign.stop_early", 1),
     ("campaign.stop_margin", 0), ("campaign.stop_margin", -0.5), ("campaign.stop_margin", 1.5),
     ("campaign.stop_margin", "x"), ("campaign.stop_margin", Raw("nan")),
