@@ -12,7 +12,10 @@ by an outer loop of random restarts around a tabu search, with redundant-pose re
 * `bound` — the D-optimal approximate-design bound (multiplicative algorithm with a duality certificate);
 * `candidates` / `arm` — feasible configurations under joint, workspace, visibility, singularity and
   self-collision constraints;
-* `order` — the visiting order that minimises travel time.
+* `order` — the visiting order that minimises travel time;
+* `motion_time` — a move's time under the driver's movej profile; `time_aware` — poses and their tour
+  chosen together for the least robot time at a target accuracy (or the best accuracy in a budget);
+* `cluster_sample` — validation poses as a two-stage cluster sample (unbiased, far less travel).
 
 Nothing here does I/O or imports `hil`: the kinematic model arrives as an argument satisfying
 `selector.model.PoseModel`. Modules import each other one way (errors, indices, information, design,
@@ -21,27 +24,37 @@ then the methods, then search); none imports this package's face.
 
 from selector.bound import Bound, d_optimal_bound
 from selector.candidates import CandidateSet, Constraints, generate_candidates
+from selector.cluster_sample import ClusterSample, cluster_sample, cluster_standard_error, design_effect
 from selector.design import Selection, minimum_poses
 from selector.errors import CountError, NoCandidatesError, SelectorError, UnknownIndexError
 from selector.exchange import exchange_select
 from selector.indices import INDEX_NAMES, observability, parse_index
+from selector.motion_time import Dwell, MotionProfile
 from selector.order import order_poses, travel_time
 from selector.random_selection import random_select
 from selector.search import select
 from selector.tabu import TabuSettings, tabu_select
+from selector.time_aware import TimedSelection, time_aware_select
 
 __all__ = [
     "INDEX_NAMES",
     "Bound",
     "CandidateSet",
+    "ClusterSample",
     "Constraints",
     "CountError",
+    "Dwell",
+    "MotionProfile",
     "NoCandidatesError",
     "Selection",
     "SelectorError",
     "TabuSettings",
+    "TimedSelection",
     "UnknownIndexError",
+    "cluster_sample",
+    "cluster_standard_error",
     "d_optimal_bound",
+    "design_effect",
     "exchange_select",
     "generate_candidates",
     "minimum_poses",
@@ -51,5 +64,6 @@ __all__ = [
     "random_select",
     "select",
     "tabu_select",
+    "time_aware_select",
     "travel_time",
 ]
