@@ -62,6 +62,7 @@ from hil.calibration.identification import (
 )
 from hil.calibration.measurements import Measurements
 from hil.calibration.model_file import model_document
+from hil.calibration.validation_precision import campaign_validation_precision
 from hil.campaign.controller import controller_calibration, controller_validation
 from hil.campaign.events import (
     BootstrapPlanned,
@@ -172,6 +173,8 @@ class CampaignResult:
     drift: dict[str, Any] | None = None
     # the stopping rule (`EarlyStop.summary`: stopped or not, why, the prediction); None when it is off
     stopping: dict[str, Any] | None = None
+    # the validation RMS's standard error under the validation design (`validation_precision`)
+    validation_precision: dict[str, Any] | None = None
 
 
 def _tour_plan(first: int, cal: Choice, val: Choice) -> list[tuple[int, str, np.ndarray]]:
@@ -401,6 +404,11 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
             cal = choose(SelectionRequest(CALIBRATION, camp["calibration_poses"], seed=camp["seed"],
                                           exclude=val.poses, start=here, fixed=val.poses, **base))
             planned = _tour_plan(first, cal, val)
+            # validation pose k of each planned validation entry: the tour's fixed stops carry it
+            tour = cal.info.get("tour")  # none: validation poses after the calibration, in order
+            fixed = (range(len(val.poses)) if tour is None
+                     else [int(s["index"]) for s in tour if s["role"] != "selected"])
+            pose_of = dict(zip([i for i, r, _ in planned if r == VALIDATION], fixed, strict=True))
         else:
             cal = choose(SelectionRequest(CALIBRATION, camp["calibration_poses"], seed=camp["seed"],
                                           exclude=np.zeros((0, 6)), **base))
@@ -408,10 +416,15 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
                                           exclude=cal.poses, start=cal.poses[-1], **base))
             planned = [(first + i, CALIBRATION, q) for i, q in enumerate(cal.poses)]
             n = first + len(planned)
+            pose_of = {}
             for cycle in range(validation_cycles):
                 planned += [(n + cycle * len(val.poses) + i, VALIDATION, q)
                             for i, q in enumerate(val.poses)]
-        selection = {"calibration": cal.info, "validation": val.info}
+                pose_of.update({n + cycle * len(val.poses) + i: i for i in range(len(val.poses))})
+        # stored with the plan: a resumed run maps its validation records to their poses alike
+        # (`campaign_validation_precision`)
+        selection = {"calibration": cal.info, "validation": {
+            **val.info, "pose_of_index": {str(i): int(k) for i, k in pose_of.items()}}}
     else:
         planned = resume.poses
     reference = resume.reference
@@ -500,6 +513,13 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     held_out = measurements_of(val_records, f"campaign {campaign} validation")
     before = validate(fit.baseline, held_out)
     after = validate(fit.geometry, held_out)
+    try:  # how precise that RMS is, under the design that chose the poses (the plan's selection info)
+        precision = campaign_validation_precision(after.errors, [r.index for r in val_records],
+                                                  selection.get("validation"))
+    except (ValueError, TypeError, KeyError) as exc:  # a malformed stored plan: said, never a failure
+        precision = None
+        yield Emit(Message(campaign=campaign, level="warning",
+                           text=f"the validation RMS's standard error could not be estimated: {exc}"))
     passed = after.rms <= camp["acceptance"]
     iso = iso9283(val_records, fit.geometry)
     theirs = None
@@ -515,4 +535,4 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     doc = model_document(fit, after.as_dict(), controller=controller)
     drift = watch.summary() if config.warmup["enabled"] or config.drift["every"] or watch.points else None
     return CampaignResult(fit, before, after, passed, list(records.values()), tracker, selection,
-                          iso, doc, theirs, drift, stop.summary())
+                          iso, doc, theirs, drift, stop.summary(), precision)

@@ -201,6 +201,10 @@ class ReportData:
     # the stopping rule (`hil.campaign.plan.CampaignResult.stopping`: stopped, reason, predicted_rms,
     # target, poses_used, poses_left, ...); None when it was off
     stopping: Mapping[str, Any] | None = None
+    # the validation RMS's standard error under the validation design
+    # (`hil.calibration.validation_precision`: design, poses, clusters, rms_standard_error,
+    # design_effect); None when not known (an offline identification, an older result)
+    validation_precision: Mapping[str, Any] | None = None
 
     @property
     def drift_flagged(self) -> bool:
@@ -269,6 +273,7 @@ def report_data_from(
     verification: Mapping[str, Any] | None = None,
     drift: Mapping[str, Any] | None = None,
     stopping: Mapping[str, Any] | None = None,
+    validation_precision: Mapping[str, Any] | None = None,
 ) -> ReportData:
     """Assemble a `ReportData` from what the campaign engine has at the end of a run.
 
@@ -289,7 +294,9 @@ def report_data_from(
     * ``verification``: the pose test run after the calibration (``hil calibrate --verify``), its
       document as the result embeds it under ``verification``;
     * ``drift``: the warm-up and drift watch (`hil.campaign.plan.CampaignResult.drift`);
-    * ``stopping``: the stopping rule's record (`hil.campaign.plan.CampaignResult.stopping`).
+    * ``stopping``: the stopping rule's record (`hil.campaign.plan.CampaignResult.stopping`);
+    * ``validation_precision``: the validation RMS's standard error under the validation design
+      (`hil.campaign.plan.CampaignResult.validation_precision`).
     """
     from hil.calibration.model_file import model_document, software_versions, tracker_pose
 
@@ -370,6 +377,7 @@ def report_data_from(
         verification=dict(verification) if verification is not None else None,
         drift=dict(drift) if drift is not None else None,
         stopping=dict(stopping) if stopping is not None else None,
+        validation_precision=dict(validation_precision) if validation_precision is not None else None,
     )
 
 
@@ -510,7 +518,25 @@ def _from_result(doc: Mapping[str, Any], source: str) -> ReportData:
         verification=_verification(doc.get("verification"), source),
         drift=_drift(doc.get("drift"), source),
         stopping=_stopping(doc.get("stopping"), source),
+        validation_precision=_precision(validation.get("precision"), source),
     )
+
+
+def _precision(block: Any, source: str) -> Mapping[str, Any] | None:
+    """The result's ``validation.precision`` block, checked as far as the report reads it: a design
+    name, the standard error (m) and the design effect numbers or null, the counts whole numbers."""
+    if block is None:
+        return None
+    if not isinstance(block, Mapping) or not isinstance(block.get("design"), str):
+        raise InputError(f"{source}: field 'validation.precision' must be an object with a 'design'")
+    for key in ("rms_standard_error", "design_effect"):
+        if block.get(key) is not None and not _is_number(block.get(key)):
+            raise InputError(f"{source}: field 'validation.precision.{key}' must be a number or null")
+    for key in ("poses", "clusters"):
+        value = block.get(key)
+        if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 0):
+            raise InputError(f"{source}: field 'validation.precision.{key}' must be a whole number")
+    return dict(block)
 
 
 def _stopping(block: Any, source: str) -> Mapping[str, Any] | None:

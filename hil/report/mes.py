@@ -61,7 +61,11 @@ def mes_result(data: ReportData) -> dict[str, Any]:
       where S is ``{"count", "mean", "rms", "max"}``; *before* is the nominal arm (only the tracker
       pose and SMR fitted), *after* the calibrated model, both on held-out poses; plus
       ``"controller": S`` when the controller reported its own kinematic model (that model, the
-      tracker pose and SMR fitted for it, on the same poses; its deltas are ``model.controller``)
+      tracker pose and SMR fitted for it, on the same poses; its deltas are ``model.controller``);
+      plus, for a campaign, ``"precision": {"design": "simple random" | "clustered", "poses": n,
+      "clusters": k | null, "rms_standard_error": m | null, "design_effect": float | null}``: the
+      standard error of *after*'s RMS under the design that chose the validation poses
+      (`hil.calibration.validation_precision`)
     * ``fit``: ``{"rms", "max", "sigma", "initial_rms", "iterations", "condition", "poses", "used",
       "rejected_lines"}`` (a summary; the full block is in ``model.fit``)
     * ``observability``: ``{"index", "value", "bound", "percent", "method"}`` or null
@@ -155,6 +159,8 @@ def mes_result(data: ReportData) -> dict[str, Any]:
     if theirs is not None:  # added only when known: readers of older results see the same keys
         doc["validation"]["controller"] = _plain(theirs.as_dict())
         doc["per_pose"]["validation"]["controller"] = _per_pose(theirs)
+    if data.validation_precision is not None:  # likewise only when known (a campaign's)
+        doc["validation"]["precision"] = _plain(dict(data.validation_precision))
     if data.verification is not None:  # likewise only with --verify
         doc["verification"] = _plain(dict(data.verification))
     if data.drift is not None:  # likewise only with a warm-up or a drift watch

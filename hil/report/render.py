@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from hil import __version__
+from hil.calibration.validation_precision import describe_precision
 from hil.files.outputs import atomic_write_text
 from hil.report.data import ErrorSet, ReportData
 from hil.report.html import CSS, esc, fmt_mm, fmt_num
@@ -70,9 +71,16 @@ def _header(d: ReportData, generated: str) -> str:
 <p class="sub">{esc(when)}</p></div>
 <div class="verdict {verdict.lower()}"><div class="big">{verdict}</div>
 <div>validation RMS {esc(fmt_mm(d.validation_after.rms))} {cmp} acceptance {esc(fmt_mm(d.accept_rms))}</div>
-{_drift_flag(d)}</div></header>
+{_precision(d)}{_drift_flag(d)}</div></header>
 {_stopping(d)}
 <p class="generated">Generated {esc(generated)} by hil {esc(__version__)}.</p>"""
+
+
+def _precision(d: ReportData) -> str:
+    """The verdict box's line under the validation RMS: how precise that RMS is, under the design
+    that chose the validation poses (none when the result does not say)."""
+    text = describe_precision(d.validation_precision)
+    return "" if text is None else f'<div class="precision">{esc(text)}</div>\n'
 
 
 def _drift_flag(d: ReportData) -> str:

@@ -45,7 +45,7 @@ def report_data(outcome: Any, config: StationConfig, events: list[Event], starte
         observability=obs, times=outcome.timing, events=events,
         hashes={"measurements": digest}, model=r.model, line_kind="pose",
         validation_controller=r.controller, verification=verification, drift=r.drift,
-        stopping=r.stopping)
+        stopping=r.stopping, validation_precision=r.validation_precision)
 
 
 def result_document(outcome: Any, config: StationConfig, events: list[Event], started: float,

@@ -18,12 +18,21 @@ from textual.binding import Binding, BindingType
 from textual.containers import Horizontal
 from textual.widgets import DataTable, Footer, Static
 
+from hil.calibration.validation_precision import describe_precision
 from hil.tui.screens.base import HilScreen
 from hil.tui.widgets.nav import NavBar
 
 
 def _mm(v: Any) -> str:
     return "-" if v is None or not math.isfinite(float(v)) else f"{float(v) * 1e3:.4f}"
+
+
+def _precision(result: Any) -> dict[str, Any] | None:
+    """The stored result document's ``validation.precision`` block (the validation RMS's standard
+    error, `hil.calibration.validation_precision`), if it has one."""
+    validation = result.get("validation") if isinstance(result, dict) else None
+    block = validation.get("precision") if isinstance(validation, dict) else None
+    return block if isinstance(block, dict) else None
 
 
 def parameter_cells(p: dict[str, Any]) -> tuple[str, str, str, str]:
@@ -117,6 +126,9 @@ class ResultsScreen(HilScreen):
         if v is not None and accept is not None:
             line.append(f"  RMS {_mm(v.after.get('rms'))} mm {'≤' if v.passed else '>'} "
                         f"{_mm(accept)} mm")
+        precision = describe_precision(_precision(rec.result))
+        if v is not None and precision is not None:
+            line.append(f"\n validation RMS {precision}", "dim")
         if rec.detail and v is None:
             line.append(f"\n{rec.detail}", "dim")
         verdict.update(line)
