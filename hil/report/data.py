@@ -128,13 +128,28 @@ class Observability:
     index: str  # O1..O5
     value: float
     bound: float | None = None  # relaxation upper bound for this pose count, if known
-    method: str = ""  # tabu, exchange, random, ...
+    method: str = ""  # tabu, exchange, random, time-aware, ...
+    # the time-aware selection's prediction beside method 000's (`tour_summary`); None for other methods
+    tour: dict[str, Any] | None = None
 
     @property
     def percent(self) -> float | None:
         if self.bound is None or not self.bound or not math.isfinite(self.bound):
             return None
         return 100.0 * self.value / self.bound
+
+
+def tour_summary(selection: Mapping[str, Any]) -> dict[str, Any] | None:
+    """What the time-aware selection predicted for its tour and for method 000's poses (reported beside
+    it), and whether the plan came from the plan cache: the report's line on what the tour bought."""
+    pred, seed = selection.get("predicted"), selection.get("seed_method")
+    if not isinstance(pred, Mapping) or not isinstance(seed, Mapping):
+        return None
+    cache = selection.get("plan_cache")
+    return {"poses": pred.get("poses"), "robot_time": pred.get("robot_time"),
+            "relative_error": pred.get("relative_error"), "seed_poses": seed.get("poses"),
+            "seed_robot_time": seed.get("robot_time"),
+            "reused": cache.get("reused") if isinstance(cache, Mapping) else None}
 
 
 @dataclass(frozen=True)
@@ -465,7 +480,8 @@ def _from_result(doc: Mapping[str, Any], source: str) -> ReportData:
         observability = Observability(str(obs["index"]), _num(obs.get("value"), "observability.value"),
                                       None if obs.get("bound") is None
                                       else _num(obs["bound"], "observability.bound"),
-                                      str(obs.get("method", "")))
+                                      str(obs.get("method", "")),
+                                      dict(obs["tour"]) if isinstance(obs.get("tour"), Mapping) else None)
     hashes = dict(doc.get("hashes") or {})
     if not hashes and isinstance(model.get("input"), Mapping) and model["input"].get("sha256"):
         hashes = {"calibration measurements": str(model["input"]["sha256"])}

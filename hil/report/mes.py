@@ -68,7 +68,9 @@ def mes_result(data: ReportData) -> dict[str, Any]:
       (`hil.calibration.validation_precision`)
     * ``fit``: ``{"rms", "max", "sigma", "initial_rms", "iterations", "condition", "poses", "used",
       "rejected_lines"}`` (a summary; the full block is in ``model.fit``)
-    * ``observability``: ``{"index", "value", "bound", "percent", "method"}`` or null
+    * ``observability``: ``{"index", "value", "bound", "percent", "method"[, "tour"]}`` or null; ``tour``
+      (time-aware selection only): ``{"poses", "robot_time": s, "relative_error", "seed_poses",
+      "seed_robot_time": s, "reused": bool | null}``, the tour's prediction beside method 000's
     * ``times``: ``{"motion", "settle", "measure", "compute", ...}`` seconds per phase, plus
       ``total`` (the run's wall time, not a phase) and ``retries`` (a count of retried pose visits),
       or null
@@ -128,7 +130,7 @@ def mes_result(data: ReportData) -> dict[str, Any]:
         },
         "observability": None if obs is None else {
             "index": obs.index, "value": obs.value, "bound": obs.bound, "percent": obs.percent,
-            "method": obs.method,
+            "method": obs.method, **({"tour": dict(obs.tour)} if obs.tour else {}),
         },
         "times": dict(data.times) if data.times else None,
         "suspensions": [{"kind": s.kind, "message": s.message, "waited": s.waited, "t": s.t}

@@ -158,6 +158,12 @@ def _summary(d: ReportData) -> str:
         o = d.observability
         pct = f"{o.percent:.1f} % of bound" if o.percent is not None else "bound unknown"
         tiles.append((f"Observability {esc(o.index)}", f"<b>{fmt_num(o.value)}</b>", pct))
+        tour = o.tour or {}
+        if _finite(tour.get("robot_time")) and _finite(tour.get("seed_robot_time")):
+            tiles.append(("Robot time (predicted)",
+                          f"<b>{tour['robot_time']:.0f} s</b> vs {tour['seed_robot_time']:.0f} s",
+                          esc(f"time-aware tour vs method 000's {tour.get('seed_poses')} poses"
+                              + ("; plan reused" if tour.get("reused") else ""))))
     cells = "".join(f'<div class="tile"><div class="label">{label}</div><div class="value">{value}</div>'
                     f'<div class="note">{note}</div></div>' for label, value, note in tiles)
     return f'<div class="tiles">{cells}</div>'
@@ -378,6 +384,17 @@ def _observability(d: ReportData) -> str:
                                    f'style="width: {width:.1f}%"></span></span>'))
     if o.method:
         rows.append(("selection method", esc(o.method)))
+    tour = o.tour or {}
+    if _finite(tour.get("robot_time")) and _finite(tour.get("seed_robot_time")):
+        rel = tour.get("relative_error")
+        rows.append(("time-aware tour", esc(
+            f"{tour.get('poses')} poses, {tour['robot_time']:.1f} s of robot time predicted"
+            + (f", predicted error {rel:.3f} x method 000's" if _finite(rel) else ""))))
+        rows.append(("method 000, reported beside", esc(
+            f"{tour.get('seed_poses')} poses in their best tour, {tour['seed_robot_time']:.1f} s")))
+    if tour.get("reused") is not None:
+        rows.append(("plan cache", "reused: chosen by an earlier campaign asking the same"
+                     if tour["reused"] else "chosen now and kept for the next campaign"))
     return _kv(rows)
 
 

@@ -20,7 +20,7 @@ def report_data(outcome: Any, config: StationConfig, events: list[Event], starte
     """The report's data of a finished campaign; `verification`: its pose test (``--verify``)."""
     from hil.campaign.plan import BOOTSTRAP, CALIBRATION, VALIDATION, measurements_of
     from hil.report import RobotInfo, report_data_from
-    from hil.report.data import Observability
+    from hil.report.data import Observability, tour_summary
 
     r = outcome.result
     by_role: dict[str, list[Any]] = {BOOTSTRAP: [], CALIBRATION: [], VALIDATION: []}
@@ -28,7 +28,8 @@ def report_data(outcome: Any, config: StationConfig, events: list[Event], starte
         by_role[rec.role].append(rec)
     fitted = by_role[BOOTSTRAP] + by_role[CALIBRATION]
     sel = r.selection.get("calibration") or {}
-    obs = (Observability(sel.get("index", "O1"), float(sel["value"]), sel.get("bound"), sel.get("method", ""))
+    obs = (Observability(sel.get("index", "O1"), float(sel["value"]), sel.get("bound"), sel.get("method", ""),
+                         tour_summary(sel))
            if sel.get("value") is not None else None)
     iso = ({"AP (worst pose)": r.iso9283["AP_max"], "RP (worst pose)": r.iso9283["RP_max"]}
            if r.iso9283 else None)

@@ -66,6 +66,25 @@ def test_the_start_pose_counts_to_a_hundredth_of_a_radian() -> None:
     assert request_key(config, _request(config, 4, start=start)) != key  # another seed
 
 
+def test_a_bootstrapped_tracker_a_millimetre_away_asks_the_same_question() -> None:
+    import pinocchio as pin
+
+    config = _config(0)
+    base = _request(config, 3)
+    key = request_key(config, base)
+
+    def moved(by: float) -> Any:
+        model = base.model.copy()
+        model.tracker = pin.SE3(base.model.tracker.rotation,
+                                base.model.tracker.translation + np.array([by, 0.0, 0.0]))
+        return SelectionRequest(base.role, base.count, model=model, keep_in=base.keep_in,
+                                acceptance_angle=base.acceptance_angle, index=base.index,
+                                candidates=base.candidates, seed=base.seed, exclude=base.exclude)
+
+    assert request_key(config, moved(0.001)) == key
+    assert request_key(config, moved(0.05)) != key
+
+
 def test_an_unreadable_entry_is_chosen_again_and_rewritten(tmp_path: Path) -> None:
     config = _config(0)
     inner, asked = _counting(np.zeros((4, 6)))
