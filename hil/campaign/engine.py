@@ -39,7 +39,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -137,10 +137,24 @@ class UnsafePathError(HilError):
     """No safe way to a (safe) target from where the arm is: the pose is skipped."""
 
 
-def _transit(q: np.ndarray) -> np.ndarray:
-    """The upright posture above `q`'s base angle, wrist angles kept."""
+#: Detour postures (shoulder q2, elbow q3) tried in order when neither the straight path nor the home
+#: pose is safe: the upright posture first (a floor-mounted arm's highest), then folded ones. A UR10e
+#: stands about 1.5 m tall upright, above a 1.2 m keep-in box, where its straight paths between widely
+#: spread poses also sweep outside: with the upright detour alone the example station skipped 15-26 of
+#: a 50-pose campaign's poses on UR10e arms (bench/cycle_time.py stations), with these 1-3. The elbow
+#: stays within ±2.4 rad, and every folded posture is checked for self-collision (the selector's
+#: capsules) before it is used.
+TRANSIT_POSTURES: tuple[tuple[float, float], ...] = (
+    (-np.pi / 2, 0.0),
+    *((q2, sign * q3) for q3 in (2.4, 2.0, 1.5, 0.8) for sign in (1.0, -1.0)
+      for q2 in (-np.pi / 2, -2.2, -1.0, -2.8, -0.4)),
+)
+
+
+def _transit(q: np.ndarray, shoulder: float = -np.pi / 2, elbow: float = 0.0) -> np.ndarray:
+    """A transit posture above `q`'s base angle (the upright one by default), wrist angles kept."""
     out = np.array(q, dtype=float)
-    out[1], out[2] = -np.pi / 2, 0.0
+    out[1], out[2] = shoulder, elbow
     return out
 
 
@@ -258,6 +272,7 @@ class Engine:
         self._extend = 0  # request_extend: pending "wait longer" requests for the current suspension
         self._poke = threading.Event()  # wakes a suspension's wait for any request
         self._last_q: np.ndarray | None = None
+        self._shape: Any = None  # the arm's capsules for `_collides`, made on first use
         self._t0: float | None = None  # the clock when the run started (`ReadConditions`)
         self.current: Acquire | None = None
         self.records: list[PoseRecord] = []
@@ -570,11 +585,7 @@ class Engine:
         if self._last_q is None:
             return [q]
         here = self._last_q
-        routes = [[q]]
-        if self.home is not None:
-            routes.append([np.asarray(self.home, dtype=float), q])
-        routes.append([_transit(here), _transit(q), q])
-        for route in routes:
+        for route in self._routes(here, q):
             try:
                 start = here
                 for target in route:
@@ -585,7 +596,34 @@ class Engine:
                 continue
         raise UnsafePathError(f"no safe path from {np.round(here, 3).tolist()} to "
                               f"{np.round(q, 3).tolist()} inside the keep-in box (direct, via home, via "
-                              "the upright posture)")
+                              f"{len(TRANSIT_POSTURES)} upright and folded postures)")
+
+    def _routes(self, here: np.ndarray, q: np.ndarray) -> Iterator[list[np.ndarray]]:
+        """The routes `_route` tries, in order, made as they are needed (most legs go straight)."""
+        yield [q]
+        if self.home is not None:
+            yield [np.asarray(self.home, dtype=float), q]
+        for k, (shoulder, elbow) in enumerate(TRANSIT_POSTURES):
+            a, b = _transit(here, shoulder, elbow), _transit(q, shoulder, elbow)
+            if k and self._collides(np.linspace(a, b, 5)):  # the upright posture cannot fold onto itself
+                continue
+            yield [a, b, q]
+
+    def _collides(self, q: np.ndarray) -> bool:
+        """Whether any of configurations `q` (n, 6) brings two non-adjacent links of the arm together
+        (the selector's capsules and margin, `selector.candidates`)."""
+        from hil.calibration.selection import SelectionModel
+        from selector.candidates import CONSTRAINT_NAMES, Constraints, evaluate
+
+        if self._shape is None:
+            smr = None if self.check_model is None else np.asarray(self.check_model.smr, dtype=float)
+            # an SMR at the flange centre (a model without one) would leave the SMR's parameters
+            # unobservable, which the model's set-up refuses: the capsules do not care
+            smr = (0.0, 0.0, 0.045) if smr is None or np.linalg.norm(smr) < 1e-3 else tuple(smr)
+            self._shape = SelectionModel(self.spec.name, smr)
+        others = frozenset(CONSTRAINT_NAMES) - {"self-collision"}
+        passes, _ = evaluate(self._shape, q, Constraints(disabled=others))
+        return not bool(np.all(passes["self-collision"]))
 
     def _acquire(self, group: Acquire) -> PoseRecord | Skipped:
         """Run one pose visit; after a suspension, run it again from its first step.
