@@ -575,25 +575,32 @@ class Engine:
         """Targets to move through to reach `q` safely.
 
         The target itself must be safe (joint limits, keep-in box), else InputError: the plan is wrong.
-        If the straight joint-space path from where the arm is leaves the box, two detours are tried:
-        through the home pose, then through the upright transit posture (q2 = −π/2, q3 = 0, a
-        floor-mounted arm's highest) above the current and the target base angles. If every leg of
-        none of them is safe, `UnsafePathError`: the pose is skipped, never approached. Nothing is
-        ever clamped.
+        If the straight joint-space path from where the arm is leaves the box, detours are tried:
+        through the home pose, and through each of `TRANSIT_POSTURES` (the upright posture, q2 = −π/2,
+        q3 = 0, a floor-mounted arm's highest, then folded ones) above the current and the target base
+        angles; of the safe ones the quickest is taken (the least leading-joint travel summed over its
+        legs). If every leg of none of them is safe, `UnsafePathError`: the pose is skipped, never
+        approached. Nothing is ever clamped.
         """
         check_target(q, self.spec, self.keep_in, self.check_model)
         if self._last_q is None:
             return [q]
         here = self._last_q
+        safe: list[list[np.ndarray]] = []
         for route in self._routes(here, q):
             try:
                 start = here
                 for target in route:
                     check_target(target, self.spec, self.keep_in, self.check_model, start)
                     start = target
-                return route
             except HilError:
                 continue
+            if len(route) == 1:  # straight there: nothing is quicker
+                return route
+            safe.append(route)
+        if safe:  # the quickest detour: moveJ time grows with the leading joint's travel on each leg
+            return min(safe, key=lambda r: sum(float(np.max(np.abs(b - a)))
+                                               for a, b in zip([here, *r[:-1]], r, strict=True)))
         raise UnsafePathError(f"no safe path from {np.round(here, 3).tolist()} to "
                               f"{np.round(q, 3).tolist()} inside the keep-in box (direct, via home, via "
                               f"{len(TRANSIT_POSTURES)} upright and folded postures)")

@@ -93,3 +93,21 @@ def test_a_posture_that_folds_the_arm_onto_itself_is_never_used(hard_legs, monke
         except UnsafePathError:
             continue
         assert not np.isclose(route[0][2], 3.1)
+
+
+def test_of_the_safe_detours_the_quickest_is_taken(hard_legs) -> None:
+    engine = _engine()
+
+    def travel(start: np.ndarray, route: list[np.ndarray]) -> float:
+        return sum(float(np.max(np.abs(b - a))) for a, b in zip([start, *route[:-1]], route, strict=True))
+
+    for a, b in hard_legs:
+        engine._last_q = a
+        try:
+            route = engine._route(b)
+        except UnsafePathError:
+            continue
+        others = [[_transit(a, s, e), _transit(b, s, e), b] for s, e in TRANSIT_POSTURES]
+        safe = [r for r in others if _safe(a, r[0]) and _safe(r[0], r[1]) and _safe(r[1], r[2])
+                and not engine._collides(np.linspace(r[0], r[1], 5))]
+        assert travel(a, route) <= min(travel(a, r) for r in safe) + 1e-12
