@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from hil.campaign.events import jsonable
 from hil.errors import InputError
 from hil.files.outputs import atomic_write_text
 
@@ -129,7 +130,7 @@ def cached_chooser(choose: Any, config: Any, directory: str | Path) -> Any:
                 log.warning("plan cache entry %s unreadable (%s): choosing again", path, exc)
         choice = choose(request)
         doc = {"format": FORMAT, "key": key, "role": request.role,
-               "poses": np.asarray(choice.poses, dtype=float).tolist(), "info": _plain(choice.info)}
+               "poses": np.asarray(choice.poses, dtype=float).tolist(), "info": jsonable(choice.info)}
         try:
             atomic_write_text(path, json.dumps(doc))
         except OSError as exc:  # the campaign goes on; only the next one will choose again
@@ -138,16 +139,3 @@ def cached_chooser(choose: Any, config: Any, directory: str | Path) -> Any:
 
     cached.hidden = getattr(choose, "hidden", None)  # type: ignore[attr-defined]
     return cached
-
-
-def _plain(value: Any) -> Any:
-    """JSON-ready: numpy arrays and scalars as lists and numbers."""
-    if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_plain(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    return value

@@ -51,6 +51,18 @@ def hard_legs() -> list[tuple[np.ndarray, np.ndarray]]:
     return legs
 
 
+def _routed(engine: Engine, legs: list) -> list[tuple[np.ndarray, np.ndarray, list[np.ndarray]]]:
+    """(start, target, route) of every leg the engine finds a route for."""
+    out = []
+    for a, b in legs:
+        engine._last_q = a
+        try:
+            out.append((a, b, engine._route(b)))
+        except UnsafePathError:
+            continue
+    return out
+
+
 def _engine() -> Engine:
     arm = FakeArm(np.zeros(6))
     return Engine(arm, FakeTracker(arm, MODEL), "c1", SPEC, keep_in=BOX, check_model=MODEL)
@@ -60,14 +72,8 @@ def test_a_folded_posture_reaches_what_the_upright_one_cannot(hard_legs) -> None
     engine = _engine()
     shape = SelectionModel("ur10e")
     others = frozenset(CONSTRAINT_NAMES) - {"self-collision"}
-    routed = 0
-    for a, b in hard_legs:
-        engine._last_q = a
-        try:
-            route = engine._route(b)
-        except UnsafePathError:
-            continue
-        routed += 1
+    routed = _routed(engine, hard_legs)
+    for a, b, route in routed:
         assert len(route) == 3 and np.array_equal(route[-1], b)
         start = a
         for target in route:  # every leg inside the box, checked independently of the engine
@@ -76,7 +82,7 @@ def test_a_folded_posture_reaches_what_the_upright_one_cannot(hard_legs) -> None
         passes, _ = evaluate(shape, np.linspace(route[0], route[1], 5), Constraints(disabled=others))
         assert passes["self-collision"].all()
         assert (route[0][1], route[0][2]) in TRANSIT_POSTURES[1:]
-    assert routed >= 0.7 * len(hard_legs)
+    assert len(routed) >= 0.7 * len(hard_legs)
 
 
 def test_a_posture_that_folds_the_arm_onto_itself_is_never_used(hard_legs, monkeypatch) -> None:
@@ -86,12 +92,7 @@ def test_a_posture_that_folds_the_arm_onto_itself_is_never_used(hard_legs, monke
     monkeypatch.setattr(engine_module, "TRANSIT_POSTURES", (TRANSIT_POSTURES[0], (-np.pi / 2, 3.1),
                                                             *TRANSIT_POSTURES[1:]))
     engine = _engine()
-    for a, b in hard_legs:
-        engine._last_q = a
-        try:
-            route = engine._route(b)
-        except UnsafePathError:
-            continue
+    for _, _, route in _routed(engine, hard_legs):
         assert not np.isclose(route[0][2], 3.1)
 
 
@@ -101,12 +102,7 @@ def test_of_the_safe_detours_the_quickest_is_taken(hard_legs) -> None:
     def travel(start: np.ndarray, route: list[np.ndarray]) -> float:
         return sum(float(np.max(np.abs(b - a))) for a, b in zip([start, *route[:-1]], route, strict=True))
 
-    for a, b in hard_legs:
-        engine._last_q = a
-        try:
-            route = engine._route(b)
-        except UnsafePathError:
-            continue
+    for a, b, route in _routed(engine, hard_legs):
         others = [[_transit(a, s, e), _transit(b, s, e), b] for s, e in TRANSIT_POSTURES]
         safe = [r for r in others if _safe(a, r[0]) and _safe(r[0], r[1]) and _safe(r[1], r[2])
                 and not engine._collides(np.linspace(r[0], r[1], 5))]
