@@ -29,7 +29,7 @@ sys.path.insert(0, str(ROOT))
 
 from hil.campaign.events import PointMeasured, PoseStarted  # noqa: E402
 from hil.station.config import default_config  # noqa: E402
-from hil.store import RobotInfo, Store  # noqa: E402
+from hil.store import RobotIdentity, Store  # noqa: E402
 
 
 def _station(location: str, name: str, points: int, start: multiprocessing.synchronize.Event | None,
@@ -39,7 +39,7 @@ def _station(location: str, name: str, points: int, start: multiprocessing.synch
     config["station"]["name"] = name
     latencies = []
     with Store.open(location) as store:
-        lease = store.claim_new(config, RobotInfo("ur5e", f"bench-{name}"), heartbeat=False)
+        lease = store.claim_new(config, RobotIdentity("ur5e", f"bench-{name}"), heartbeat=False)
         cid = lease.campaign
         if start is not None:
             start.wait(60)

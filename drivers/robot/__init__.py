@@ -22,11 +22,20 @@ from drivers.robot.errors import (
     UnsupportedVersion,
 )
 from drivers.robot.kinematics_info import KinematicsInfo, read_kinematics_info
-from drivers.robot.model import FollowResult, JointReading, KeepInZone, Robot, RobotConfig, RobotInfo
+from drivers.robot.model import (
+    ControllerInfo,
+    FollowResult,
+    JointReading,
+    KeepInZone,
+    Robot,
+    RobotConfig,
+    RobotIdentity,
+)
 from drivers.robot.ur import ServoStream, URRobot
 
 __all__ = [
     "ConnectionLost",
+    "ControllerInfo",
     "EmergencyStop",
     "FollowResult",
     "JointLimitViolation",
@@ -44,7 +53,7 @@ __all__ = [
     "RobotConfig",
     "RobotConnectionError",
     "RobotError",
-    "RobotInfo",
+    "RobotIdentity",
     "RobotNotReady",
     "RobotUnreachable",
     "SafetyStop",

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from drivers.robot.errors import ConnectionLost, RobotError
-from drivers.robot.model import FollowResult, JointReading, RobotConfig, RobotInfo
+from drivers.robot.model import ControllerInfo, FollowResult, JointReading, RobotConfig
 from drivers.robot.trajectory import check_trajectory, keep_in_checkpoints
 
 _START_TIMEOUT = 30.0  # seconds for the child to import ur_rtde and answer
@@ -170,7 +170,7 @@ class IsolatedURRobot:
 
     def __init__(self, config: RobotConfig) -> None:
         self.config = config
-        self.info: RobotInfo | None = None
+        self.info: ControllerInfo | None = None
         self._proc: Any = None
         self._cmd: Connection | None = None
         self._stop: Connection | None = None
@@ -230,12 +230,12 @@ class IsolatedURRobot:
         return value
 
     # --- the Robot protocol --------------------------------------------------------------------
-    def open(self) -> RobotInfo:
+    def open(self) -> ControllerInfo:
         """Start the client process and connect (the URRobot pre-flight checks apply)."""
         if self._proc is None:
             self._start()
         try:
-            # connect_timeout twice: the RTDE connect, then the primary interface (RobotInfo.kinematics)
+            # connect_timeout twice: the RTDE connect, then the primary interface (ControllerInfo.kinematics)
             self.info = self._call("open", timeout=_START_TIMEOUT + 2 * self.config.connect_timeout)
         except BaseException:
             self._kill()
@@ -248,7 +248,7 @@ class IsolatedURRobot:
                 self._call("close", timeout=self.config.connect_timeout + _MARGIN)
         self._kill()
 
-    def reconnect(self) -> RobotInfo:
+    def reconnect(self) -> ControllerInfo:
         """Recover the link; a dead (or unresponsive) client process is replaced by a new one."""
         if self._proc is not None and self._proc.is_alive():
             try:

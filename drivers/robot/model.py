@@ -8,8 +8,9 @@ tests can substitute any object with the same methods.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Protocol, runtime_checkable
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -19,8 +20,8 @@ TWO_PI = 2 * math.pi
 
 
 @dataclass(frozen=True)
-class RobotInfo:
-    """What the controller says about itself at connect."""
+class ControllerInfo:
+    """What the controller says about itself at connect (`Robot.info`)."""
 
     model: str  # e.g. "UR5e"
     serial: str
@@ -30,6 +31,41 @@ class RobotInfo:
     rate_hz: float
     # the controller's own kinematic model (primary interface); None when that port did not answer
     kinematics: KinematicsInfo | None = None
+
+
+@dataclass(frozen=True)
+class RobotIdentity:
+    """Which arm: the one robot identity the drivers, the store and the reports share.
+
+    ``type`` is the catalog name the arm is driven as (``ur5e``); ``serial``, ``model`` and
+    ``software`` are what its controller says of itself (``model`` in the controller's spelling,
+    ``UR5e``; "" when unknown). ``serial`` identifies the arm across campaigns.
+    """
+
+    type: str
+    serial: str = ""
+    model: str = ""
+    software: str = ""
+
+    @classmethod
+    def of(cls, type: str, info: ControllerInfo | None) -> RobotIdentity:
+        """The arm of catalog `type` as its controller reported itself (`info`; None: nothing known)."""
+        if info is None:
+            return cls(type)
+        return cls(type, info.serial, info.model, info.software_version)
+
+    @classmethod
+    def coerce(cls, value: RobotIdentity | Mapping[str, Any] | str) -> RobotIdentity:
+        """A RobotIdentity, a mapping with these keys (others ignored), or just a type name."""
+        if isinstance(value, RobotIdentity):
+            return value
+        if isinstance(value, str):
+            return cls(type=value)
+        names = {f.name for f in fields(cls)}
+        return cls(**{k: str(v) for k, v in value.items() if k in names and v is not None})
+
+    def as_dict(self) -> dict[str, str]:
+        return {"type": self.type, "serial": self.serial, "model": self.model, "software": self.software}
 
 
 @dataclass(frozen=True)
@@ -113,9 +149,9 @@ class RobotConfig:
 class Robot(Protocol):
     """What the orchestrator needs from an arm."""
 
-    info: RobotInfo | None
+    info: ControllerInfo | None
 
-    def open(self) -> RobotInfo: ...
+    def open(self) -> ControllerInfo: ...
 
     def close(self) -> None: ...
 

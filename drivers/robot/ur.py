@@ -6,7 +6,7 @@ Design choices, and why:
   have no timeout) it runs bounded pre-flight checks (`drivers.robot.probe`) and turns every refusal
   into a typed error: unreachable, unsupported version, local control, protective/emergency stop,
   not running. Once connected it reads the controller's own kinematic model (KinematicsInfo, primary
-  interface, `drivers.robot.kinematics_info`) into `RobotInfo.kinematics`; a primary port that does
+  interface, `drivers.robot.kinematics_info`) into `ControllerInfo.kinematics`; a primary port that does
   not answer leaves it None with a warning, as nothing in a campaign's motion depends on it.
 * Targets are validated before any motion and refused — never clamped — outside the joint limits or
   when the TCP would leave the keep-in zone (checked at points along the joint-space path with the
@@ -55,7 +55,7 @@ from drivers.robot.errors import (
     UnsupportedVersion,
 )
 from drivers.robot.kinematics_info import KinematicsInfo, read_kinematics_info
-from drivers.robot.model import FollowResult, JointReading, RobotConfig, RobotInfo
+from drivers.robot.model import ControllerInfo, FollowResult, JointReading, RobotConfig
 from drivers.robot.probe import DashboardLine, rtde_version
 from drivers.robot.trajectory import check_trajectory, keep_in_checkpoints
 
@@ -78,7 +78,7 @@ class URRobot:
 
     def __init__(self, config: RobotConfig) -> None:
         self.config = config
-        self.info: RobotInfo | None = None
+        self.info: ControllerInfo | None = None
         self._c: Any = None  # rtde_control.RTDEControlInterface
         self._r: Any = None  # rtde_receive.RTDEReceiveInterface
         self._cmd_lock = threading.Lock()
@@ -86,7 +86,7 @@ class URRobot:
         self._moving: tuple[np.ndarray, float] | None = None  # start_move's target, and when it was sent
 
     # ------------------------------------------------------------------ connection
-    def open(self) -> RobotInfo:
+    def open(self) -> ControllerInfo:
         """Connect: pre-flight checks, then the ur_rtde receive and control interfaces."""
         cfg = self.config
         version = rtde_version(cfg.host, cfg.connect_timeout)
@@ -119,7 +119,7 @@ class URRobot:
             self.close()
             raise
         rate = 500.0 if series == "e" else 125.0
-        self.info = RobotInfo(model=model, serial=status.serial,
+        self.info = ControllerInfo(model=model, serial=status.serial,
                               software_version=status.polyscope_version or ".".join(map(str, version)),
                               version=version, series=series, rate_hz=rate, kinematics=self._kinematics())
         log.info("connected to %s %s (serial %s, software %s)", cfg.host, model, status.serial,
@@ -186,7 +186,7 @@ class URRobot:
                 except RuntimeError as exc:
                     log.debug("closing the receive interface: %s", exc)
 
-    def reconnect(self) -> RobotInfo:
+    def reconnect(self) -> ControllerInfo:
         """Recover after a dropped link or a stopped program, without tearing the interfaces down.
 
         ur_rtde's control interface reconnects by itself from a background thread when the link

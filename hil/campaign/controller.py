@@ -49,7 +49,7 @@ def _six(value: Any) -> list[float] | None:
 def controller_record(robot: str, kinematics: Any) -> dict[str, Any] | None:
     """The controller's model as kept with a campaign, or None when it did not report a usable one.
 
-    `kinematics` is the driver's KinematicsInfo (``RobotInfo.kinematics``: ``checksum``, ``dh_theta``
+    `kinematics` is the driver's KinematicsInfo (``ControllerInfo.kinematics``: ``checksum``, ``dh_theta``
     … ``dh_alpha``, ``calibration_status``) or its ``as_dict()``. The record is one flat JSON object:
     those fields as the controller sent them, plus the deltas to `robot`'s nominal DH (the
     ``controller`` block of DESIGN.md), so any reader finds the block it knows in it. The deltas are

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from drivers.robot.model import RobotIdentity
 from hil.arm.kinematics import Kinematics
 from hil.calibration.identification import Correlation, ErrorStats, FitResult, RejectedPose
 from hil.calibration.measurements import Measurements
@@ -163,21 +164,12 @@ class Suspension:
 
 
 @dataclass(frozen=True)
-class RobotInfo:
-    """The arm as the controller reports it."""
-
-    model: str  # catalog type, e.g. "ur5e"
-    serial: str = ""
-    software: str = ""  # controller software version
-
-
-@dataclass(frozen=True)
 class ReportData:
     """Everything one campaign report shows. Built by `report_data_from` or from a result file."""
 
     campaign: str
     station: str
-    robot: RobotInfo
+    robot: RobotIdentity
     accept_rms: float  # acceptance threshold on the validation RMS (m)
     passed: bool
     validation_before: ErrorSet  # nominal arm (tracker + SMR fitted) on the validation poses
@@ -271,7 +263,7 @@ def report_data_from(
     config: StationConfig | Mapping[str, Any],
     *,
     campaign: str,
-    robot: RobotInfo | None = None,
+    robot: RobotIdentity | None = None,
     started: float | str | _dt.datetime | None = None,
     finished: float | str | _dt.datetime | None = None,
     accept_rms: float | None = None,
@@ -326,7 +318,7 @@ def report_data_from(
             raise InputError("report: no acceptance threshold (config campaign.acceptance)") from None
     station = str(cfg.get("station", {}).get("name", "")) if isinstance(cfg.get("station"), Mapping) else ""
     if robot is None:
-        robot = RobotInfo(fit.robot)
+        robot = RobotIdentity(fit.robot)
 
     cal_before = cal_after = None
     lines = None
@@ -495,8 +487,8 @@ def _from_result(doc: Mapping[str, Any], source: str) -> ReportData:
     return ReportData(
         campaign=str(doc.get("campaign") or ""),
         station=station,
-        robot=RobotInfo(robot_model, str(doc.get("robot_serial") or ""),
-                        str(doc.get("robot_software") or "")),
+        robot=RobotIdentity(robot_model, str(doc.get("robot_serial") or ""),
+                            software=str(doc.get("robot_software") or "")),
         accept_rms=accept,
         passed=passed,
         validation_before=_error_set(need(validation, "before", "validation."), pv.get("before"),

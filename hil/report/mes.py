@@ -110,7 +110,7 @@ def mes_result(data: ReportData) -> dict[str, Any]:
         "format": RESULT_FORMAT,
         "campaign": data.campaign,
         "station": data.station,
-        "robot": data.robot.model,
+        "robot": data.robot.type,
         "robot_serial": data.robot.serial,
         "robot_software": data.robot.software,
         "passed": bool(data.passed),

@@ -63,7 +63,7 @@ def _config_value(v: Any) -> str:
 def _header(d: ReportData, generated: str) -> str:
     verdict = "PASS" if d.passed else "FAIL"
     cmp = "≤" if d.passed else ">"
-    robot = " ".join(x for x in (d.robot.model.upper(), d.robot.serial and f"serial {d.robot.serial}") if x)
+    robot = " ".join(x for x in (d.robot.type.upper(), d.robot.serial and f"serial {d.robot.serial}") if x)
     when = " → ".join(x for x in (d.started, d.finished) if x) or "—"
     return f"""<header>
 <div class="title"><h1>Kinematic calibration report</h1>
@@ -502,7 +502,7 @@ def _controller(block: Mapping[str, Any], robot: str) -> str:
 
 
 def _provenance(d: ReportData) -> str:
-    robot = [("model", esc(d.robot.model or "—")), ("serial number", esc(d.robot.serial or "—")),
+    robot = [("model", esc(d.robot.type or "—")), ("serial number", esc(d.robot.serial or "—")),
              ("controller software", esc(d.robot.software or "—"))]
     software = [(esc(k), esc(v)) for k, v in d.software.items()]
     hashes = [(esc(k), f"<code>{esc(v)}</code>") for k, v in d.hashes.items()]
@@ -521,7 +521,7 @@ def render_html(data: ReportData, *, generated: str | None = None) -> str:
     """
     if generated is None:
         generated = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
-    title = f"Calibration {data.robot.model} {data.robot.serial} {data.campaign}".strip()
+    title = f"Calibration {data.robot.type} {data.robot.serial} {data.campaign}".strip()
     sections = [
         _section("validation", "Validation on held-out poses", _validation(data)),
         *([_section("verification", "ISO 9283 pose test of the calibrated model",
@@ -533,7 +533,7 @@ def render_html(data: ReportData, *, generated: str | None = None) -> str:
         _section("rejected", "Rejected poses", _rejected(data)),
         _section("observability", "Observability of the pose set", _observability(data)),
         *([_section("controller", "The controller's own kinematic model",
-                    _controller(data.controller, str((data.model or {}).get("robot") or data.robot.model)))]
+                    _controller(data.controller, str((data.model or {}).get("robot") or data.robot.type)))]
           if data.controller is not None else []),
         _section("campaign", "Campaign", _campaign(data)),
         _section("config", "Station configuration", _config(data.config)),

@@ -19,7 +19,7 @@ def report_data(outcome: Any, config: StationConfig, events: list[Event], starte
                 verification: dict[str, Any] | None = None) -> Any:
     """The report's data of a finished campaign; `verification`: its pose test (``--verify``)."""
     from hil.campaign.plan import BOOTSTRAP, CALIBRATION, VALIDATION, measurements_of
-    from hil.report import RobotInfo, report_data_from
+    from hil.report import RobotIdentity, report_data_from
     from hil.report.data import Observability, tour_summary
 
     r = outcome.result
@@ -40,8 +40,8 @@ def report_data(outcome: Any, config: StationConfig, events: list[Event], starte
     digest = measurements_sha256(np.vstack([cal.q, val.q]), np.vstack([cal.p, val.p]))
     return report_data_from(
         r.fit, r.before, r.after, config, campaign=outcome.campaign,
-        robot=RobotInfo(config.robot["type"], outcome.robot_info.get("serial", ""),
-                        outcome.robot_info.get("software", "")),
+        robot=RobotIdentity(config.robot["type"], outcome.robot_info.get("serial", ""),
+                            outcome.robot_info.get("model", ""), outcome.robot_info.get("software", "")),
         started=started, finished=time.time(), calibration=cal, validation=val, iso9283=iso,
         observability=obs, times=outcome.timing, events=events,
         hashes={"measurements": digest}, model=r.model, line_kind="pose",

@@ -3,7 +3,7 @@
 A campaign, a MOVEB run and the simulated station each hear the robot type from several places: the
 configuration's ``robot.type``, ``--robot``, a model or truth file's ``"robot"``, and — once connected —
 the controller itself (the dashboard's ``get robot model``, as the driver spells it in
-`drivers.robot.model.RobotInfo.model`: ``UR5e`` for an e-Series arm, ``UR5`` for a CB3, ``UR20``).
+`drivers.robot.model.ControllerInfo.model`: ``UR5e`` for an e-Series arm, ``UR5`` for a CB3, ``UR20``).
 Kinematics, joint limits and keep-in checks all follow the robot type, so a disagreement is refused
 before anything moves: a UR10e model driving a UR5e would plan every pose with the wrong arm.
 

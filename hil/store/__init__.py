@@ -26,7 +26,7 @@ from hil.store.records import (
     Measurement,
     ModelRecord,
     PlannedPose,
-    RobotInfo,
+    RobotIdentity,
     ValidationRecord,
 )
 
@@ -43,7 +43,7 @@ __all__ = [
     "Measurement",
     "ModelRecord",
     "PlannedPose",
-    "RobotInfo",
+    "RobotIdentity",
     "Store",
     "StoreError",
     "UnknownCampaignError",

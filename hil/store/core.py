@@ -88,7 +88,7 @@ from hil.store.records import (
     Measurement,
     ModelRecord,
     PlannedPose,
-    RobotInfo,
+    RobotIdentity,
     ValidationRecord,
 )
 from hil.store.sqlite_errors import CorruptStoreError, StoreError, StoreUnavailable, check_intact
@@ -536,7 +536,7 @@ class Store:
         return self._transact(what, fn)
 
     # --- campaigns ----------------------------------------------------------------------------
-    def create_campaign(self, config: Any, robot: RobotInfo | Mapping[str, Any] | str | None = None,
+    def create_campaign(self, config: Any, robot: RobotIdentity | Mapping[str, Any] | str | None = None,
                         plan: Mapping[str, Any] | None = None, *, now: float | None = None) -> str:
         """Start a campaign record (status ``created``) and return its id.
 
@@ -551,12 +551,12 @@ class Store:
                            lambda conn: self._create(conn, config, robot, plan, now, cid))
 
     def _create(self, conn: Connection, config: Any,
-                robot: RobotInfo | Mapping[str, Any] | str | None, plan: Mapping[str, Any] | None,
+                robot: RobotIdentity | Mapping[str, Any] | str | None, plan: Mapping[str, Any] | None,
                 now: float, cid: str) -> str:
         """Insert the campaign `cid` (a retry after a lost link finds it there and returns it)."""
         values = config.as_dict() if hasattr(config, "as_dict") else dict(config)
         station = str((values.get("station") or {}).get("name") or "station")
-        info = RobotInfo.coerce(robot if robot is not None
+        info = RobotIdentity.coerce(robot if robot is not None
                                 else str((values.get("robot") or {}).get("type") or ""))
         c = tb.campaigns
         if conn.execute(select(c.c.config_hash).where(c.c.id == cid)).first() is not None:
@@ -694,13 +694,13 @@ class Store:
         names = self._write(f"claim campaign {campaign}", body)
         return Lease(self, campaign, token, names, ttl=ttl, heartbeat=heartbeat)
 
-    def claim_new(self, config: Any, robot: RobotInfo | Mapping[str, Any] | str | None = None,
+    def claim_new(self, config: Any, robot: RobotIdentity | Mapping[str, Any] | str | None = None,
                   plan: Mapping[str, Any] | None = None, *, ttl: float = LEASE_TTL,
                   heartbeat: bool = True) -> Lease:
         """`create_campaign` and `claim` in one transaction: a robot driven by another live campaign
         refuses (LeaseRefused) and leaves no empty campaign behind. ``lease.campaign`` is the new id."""
         token, now = secrets.token_hex(16), time.time()
-        serial = RobotInfo.coerce(robot).serial if robot is not None else ""
+        serial = RobotIdentity.coerce(robot).serial if robot is not None else ""
         cid = new_campaign_id(now)
         made: dict[str, str] = {}
 
@@ -869,7 +869,7 @@ class Store:
             detail = "its process ended before the run did (killed, or the machine went down)"
         return CampaignRecord(
             summary=summary,
-            robot=RobotInfo(type=rtype, serial=serial or "", model=model or "", software=rsoft or ""),
+            robot=RobotIdentity(type=rtype, serial=serial or "", model=model or "", software=rsoft or ""),
             config=json.loads(config), config_hash=chash, plan=_loads(plan), detail=detail,
             result=_loads(result), software=software, poses=poses, measurements=measurements,
             models=models, validations=validations, event_counts=counts, controller=_loads(controller))

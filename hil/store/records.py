@@ -11,6 +11,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from drivers.robot.model import RobotIdentity
+
 ROLES: tuple[str, ...] = ("bootstrap", "calibration", "validation")
 
 #: What a campaign is: a calibration identifies a model; a verification (``hil verify``, ISO 9283)
@@ -41,26 +43,6 @@ def _plain(value: Any) -> Any:
 class _AsDict:
     def as_dict(self) -> dict[str, Any]:
         return _plain(self)  # type: ignore[no-any-return]
-
-
-@dataclass(frozen=True)
-class RobotInfo(_AsDict):
-    """The arm a campaign calibrates. ``serial`` identifies it across campaigns ("" = unknown)."""
-
-    type: str  # catalog name: ur5e, ...
-    serial: str = ""
-    model: str = ""  # as the controller reports it
-    software: str = ""  # controller software version
-
-    @classmethod
-    def coerce(cls, info: RobotInfo | Mapping[str, Any] | str) -> RobotInfo:
-        """Accept a RobotInfo, a mapping with these keys (others ignored), or just a type name."""
-        if isinstance(info, RobotInfo):
-            return info
-        if isinstance(info, str):
-            return cls(type=info)
-        names = {f.name for f in dataclasses.fields(cls)}
-        return cls(**{k: str(v) for k, v in info.items() if k in names and v is not None})
 
 
 @dataclass(frozen=True)
@@ -137,7 +119,7 @@ class CampaignRecord(_AsDict):
     """Everything about one campaign except the raw samples and the full event log."""
 
     summary: CampaignSummary
-    robot: RobotInfo
+    robot: RobotIdentity
     config: dict[str, Any]
     config_hash: str
     plan: dict[str, Any] | None

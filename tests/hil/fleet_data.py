@@ -27,7 +27,7 @@ from hil.calibration.measurements import Measurements
 from hil.calibration.model_file import model_document
 from hil.calibration.synthetic import Noise, measure, random_configurations, random_truth
 from hil.station.config import default_config
-from hil.store import RobotInfo, Store
+from hil.store import RobotIdentity, Store
 
 DAY = 86400.0
 T0 = 1.7e9  # 2023-11-14
@@ -80,7 +80,8 @@ def _calibrate(store: Store, rng: np.random.Generator, truth, serial: str, robot
     held_out = Measurements.from_arrays(q_val, p_val)
     before, after = validate(fit.baseline, held_out), validate(fit.geometry, held_out)
     passed = after.rms <= ACCEPT
-    cid = store.create_campaign(_config(station, robot), RobotInfo(robot, serial, robot.upper(), "5.15.0"),
+    cid = store.create_campaign(_config(station, robot),
+                                RobotIdentity(robot, serial, robot.upper(), "5.15.0"),
                                 {"method": "tabu", "index": "O1"}, now=t)
     store.save_model(cid, model_document(fit, after.as_dict()))
     store.save_validation(cid, before.as_dict(), after.as_dict(), passed)
@@ -110,7 +111,7 @@ def build_fleet(path: Path | str, server: Any = None) -> Fleet:
                 ids.append(_calibrate(store, rng, truth, serial, robot, station, t, noise))
                 fleet.stations[ids[-1]] = station
         fleet.rejected = fleet.campaigns[REJECTING][-1]
-        fleet.anonymous = store.create_campaign(_config(STATIONS[0], "ur5e"), RobotInfo("ur5e"),
+        fleet.anonymous = store.create_campaign(_config(STATIONS[0], "ur5e"), RobotIdentity("ur5e"),
                                                 now=T0 + 70 * DAY)
     return fleet
 

@@ -15,6 +15,7 @@ import pytest
 
 from drivers.robot import (
     ConnectionLost,
+    ControllerInfo,
     EmergencyStop,
     JointLimitViolation,
     KeepInZone,
@@ -24,7 +25,6 @@ from drivers.robot import (
     ProgramStopped,
     ProtectiveStop,
     RobotConfig,
-    RobotInfo,
     RobotUnreachable,
     SpeedSliderReduced,
     UnsupportedVersion,
@@ -104,7 +104,7 @@ def test_open_reads_identity(robot: URRobot) -> None:
     assert robot.info.software_version.startswith("5.15.0") and robot.info.rate_hz == 500.0
 
 
-def same_model(info: RobotInfo, block: dict[str, list[float]]) -> bool:
+def same_model(info: ControllerInfo, block: dict[str, list[float]]) -> bool:
     """`info.kinematics` (full DH values) describes the controller block (deltas) `block`."""
     from hil.arm.controller_model import DELTA_KEYS, ControllerCalibration
 

@@ -154,10 +154,9 @@ def build_fixtures(out: Path) -> Path:
     from hil.calibration.measurements import Measurements, read_measurements
     from hil.campaign.events import ModelIdentified, PointMeasured, RunFinished, RunStarted, ValidationDone
     from hil.cli import main
-    from hil.report import RobotInfo as ReportRobot
     from hil.report import mes_result, report_data_from
     from hil.station.config import default_config
-    from hil.store import RobotInfo, Store
+    from hil.store import RobotIdentity, Store
 
     out.mkdir(parents=True, exist_ok=True)
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
@@ -175,14 +174,15 @@ def build_fixtures(out: Path) -> Path:
     fit = identify(Measurements.from_arrays(cal.q, cal.p, "cal.csv"), "ur5e")
     vm = Measurements.from_arrays(val.q, val.p, "val.csv")
     data = report_data_from(fit, validate(fit.baseline, vm), validate(fit.geometry, vm), default_config(),
-                            campaign="C-0001", robot=ReportRobot("ur5e", "20235500001", "5.15"),
+                            campaign="C-0001", robot=RobotIdentity("ur5e", "20235500001", software="5.15"),
                             started=1.7e9, finished=1.7e9 + 600, accept_rms=1e-4, calibration=cal,
                             validation=vm)
     (out / "result.json").write_text(json.dumps(mes_result(data), indent=2) + "\n")
 
     model = json.loads((out / "model.json").read_text())
     with Store.open(out / "store.db") as s:
-        cid = s.create_campaign(default_config().as_dict(), RobotInfo("ur5e", "20235500001", "UR5e", "5.15"),
+        cid = s.create_campaign(default_config().as_dict(),
+                                RobotIdentity("ur5e", "20235500001", "UR5e", "5.15"),
                                 {"method": "tabu"}, now=1.7e9)
         s.save_plan(cid, [(i, "calibration" if i < 30 else "validation", [float(v) for v in q])
                           for i, q in enumerate(np.vstack([cal.q, val.q]))])

@@ -18,7 +18,7 @@ from hil.calibration.model_file import MODEL_FORMAT, load_geometry
 from hil.campaign.events import ModelIdentified, PointMeasured, RunFinished, RunStarted, ValidationDone
 from hil.cli import main
 from hil.station.config import default_config
-from hil.store import SCHEMA_VERSION, RobotInfo, Store
+from hil.store import SCHEMA_VERSION, RobotIdentity, Store
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -37,11 +37,11 @@ def db(tmp_path) -> Path:
     config = default_config().as_dict()
     config["station"]["name"] = "eol-cell-3"
     with Store.open(path) as s:
-        old = s.create_campaign(config, RobotInfo("ur5e", "2023550001", "UR5e", "5.15"), now=1.7e9)
+        old = s.create_campaign(config, RobotIdentity("ur5e", "2023550001", "UR5e", "5.15"), now=1.7e9)
         s.save_plan(old, [(i, "calibration", [0.1 * i] * 6) for i in range(4)])
         s.record_measurement(old, 0, "calibration", [0.0] * 6, [1, 2, 3], t=1.7e9 + 1)
         s.set_status(old, "running")
-        cid = s.create_campaign(config, RobotInfo("ur5e", "2023550002"), {"method": "tabu"},
+        cid = s.create_campaign(config, RobotIdentity("ur5e", "2023550002"), {"method": "tabu"},
                                 now=1.7e9 + 100)
         s.save_plan(cid, [(i, "calibration" if i < 3 else "validation", [0.1 * i] * 6)
                           for i in range(5)])
@@ -114,7 +114,8 @@ def test_a_campaign_whose_process_died_is_interrupted_and_resumable(db, capsys, 
     gone.wait()
     monkeypatch.setattr("hil.store.core.this_process", lambda: {**owner.this_process(), "pid": gone.pid})
     with Store.open(db) as s:
-        cid = s.create_campaign(default_config().as_dict(), RobotInfo("ur5e", "2023550003"), now=1.7e9 + 200)
+        cid = s.create_campaign(default_config().as_dict(), RobotIdentity("ur5e", "2023550003"),
+                                now=1.7e9 + 200)
         s.save_plan(cid, [(i, "calibration", [0.1 * i] * 6) for i in range(4)])
         s.record_event(RunStarted(campaign=cid, robot="ur5e", station="station", poses=4))
         s.record_event(PointMeasured(campaign=cid, index=0, role="calibration", q=[0.0] * 6,

@@ -36,14 +36,14 @@ def _store(path: Path) -> None:
     from hil.arm.geometry import Geometry
     from hil.campaign.events import ModelIdentified, PointMeasured, RunFinished, RunStarted
     from hil.station.config import default_config
-    from hil.store import RobotInfo, Store
+    from hil.store import RobotIdentity, Store
 
     model = {"format": MODEL_FORMAT, **Geometry.nominal("ur5e").to_dict(),
              "parameters": [{"name": "p", "value": 0.0, "std": 1e-6}] * 27,
              "fit": {"rms": 18e-6, "max": 45e-6, "iterations": 6, "rejected": []},
              "input": {"file": "campaign", "sha256": "0" * 64}}
     with Store.open(path) as s:
-        cid = s.create_campaign(default_config().as_dict(), RobotInfo("ur5e", "2023550002"), now=1.7e9)
+        cid = s.create_campaign(default_config().as_dict(), RobotIdentity("ur5e", "2023550002"), now=1.7e9)
         s.save_plan(cid, [(i, "calibration", [0.1 * i] * 6) for i in range(3)])
         s.record_event(RunStarted(campaign=cid, robot="ur5e", station="cell", poses=3))
         for i in range(3):

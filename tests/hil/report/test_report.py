@@ -20,7 +20,7 @@ from hil.campaign.events import Message, PoseSkipped, Resumed, Suspended
 from hil.cli import main
 from hil.report import (
     Observability,
-    RobotInfo,
+    RobotIdentity,
     mes_result,
     render_html,
     report_data_from,
@@ -58,7 +58,7 @@ def build(campaign, accept=1e-4, station="Cell 4", **kw):
               Resumed(campaign="c", kind="beam_lost", waited=3.5),
               PoseSkipped(campaign="c", index=3, role="calibration", reason="unreachable <x>"),
               Message(campaign="c", level="info", text="not shown")]
-    args = dict(campaign="C-0042", robot=RobotInfo("ur5e", "2023<5500>123", "5.15"),
+    args = dict(campaign="C-0042", robot=RobotIdentity("ur5e", "2023<5500>123", software="5.15"),
                 started=1.7e9, finished=1.7e9 + 600, accept_rms=accept, calibration=cal,
                 validation=val, iso9283={"AP": 3e-5, "RP": 1e-5},
                 observability=Observability("O1", 0.97, 1.0, "tabu"),

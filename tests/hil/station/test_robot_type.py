@@ -1,7 +1,7 @@
 """The robot type every source names must agree, the controller's word included (issue 19).
 
 * `agreed_robot` names each source in one line, whichever side it is on.
-* The controller's spelling (the driver's `RobotInfo.model`: ``UR5e`` e-Series, ``UR5`` CB3, ``UR20``)
+* The controller's spelling (the driver's `RobotIdentity.model`: ``UR5e`` e-Series, ``UR5`` CB3, ``UR20``)
   maps onto the catalog, so a UR5e configured against a CB3 UR5 is a mismatch, not a match.
 * `simulated_station` refuses a robot its truth contradicts instead of silently simulating the truth's.
 * A simulated CB3 controller reports what it simulates, read through the real driver.

@@ -18,12 +18,12 @@ import pytest
 
 from hil.errors import InputError
 from hil.station.config import default_config
-from hil.store import LeaseRefused, RobotInfo, Store, address_lock
+from hil.store import LeaseRefused, RobotIdentity, Store, address_lock
 from hil.store.owner import this_process
 from tests.hil.store.raw import raw, raw_write
 
 ROOT = Path(__file__).resolve().parents[3]
-ROBOT = RobotInfo(type="ur5e", serial="20235500123", model="UR5e", software="5.15.0")
+ROBOT = RobotIdentity(type="ur5e", serial="20235500123", model="UR5e", software="5.15.0")
 
 
 def cfg(name: str = "cell-1") -> dict:
@@ -82,7 +82,7 @@ def test_one_arm_one_campaign_even_for_two_configs_and_a_refusal_leaves_nothing_
     assert set(leases(db)) == {f"campaign:{first.campaign}", f"robot:{ROBOT.serial}"}
     # another arm is free; an arm of unknown serial takes no robot lease (the address lock covers it)
     store.claim(other, "another-arm").release()
-    store.claim_new(cfg("cell-3"), RobotInfo(type="ur5e")).release()
+    store.claim_new(cfg("cell-3"), RobotIdentity(type="ur5e")).release()
     first.release()
     store.claim(other, ROBOT.serial).release()
 

@@ -16,13 +16,13 @@ from alembic import command
 from sqlalchemy import create_engine
 
 from hil.campaign.events import ControllerModel, RunStarted, ValidationDone
-from hil.store import SCHEMA_VERSION, RobotInfo, Store
+from hil.store import SCHEMA_VERSION, RobotIdentity, Store
 from hil.store import migrate as migrate_mod
 from hil.store.fleet import robot_history
 from tests.hil.store.raw import raw
 from tests.hil.store.test_engines import cfg, count
 
-ROBOT = RobotInfo(type="ur5e", serial="20235500777", model="UR5e", software="5.15.0")
+ROBOT = RobotIdentity(type="ur5e", serial="20235500777", model="UR5e", software="5.15.0")
 # what `controller_record` makes of a KinematicsInfo: the package's fields and the derived deltas
 RECORD = {"checksum": [1, 2, 3, 4, 5, 4294967295],
           "dh_theta": [1e-4, 0.0, 0.0, 0.0, 0.0, -2e-4], "dh_a": [0.0, -0.4251, -0.3922, 0.0, 0.0, 0.0],

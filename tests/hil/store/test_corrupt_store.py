@@ -15,7 +15,7 @@ import pytest
 from hil.cli import main
 from hil.errors import InputError
 from hil.station.config import default_config
-from hil.store import RobotInfo, Store, StoreError
+from hil.store import RobotIdentity, Store, StoreError
 
 
 def make_store(path: Path) -> Path:
@@ -23,7 +23,7 @@ def make_store(path: Path) -> Path:
     config = default_config().as_dict()
     with Store.open(path) as store:
         for k in range(3):
-            cid = store.create_campaign(config, RobotInfo("ur5e", f"20235500{k}"), now=1.7e9 + k)
+            cid = store.create_campaign(config, RobotIdentity("ur5e", f"20235500{k}"), now=1.7e9 + k)
             store.save_plan(cid, [(i, "calibration", [0.01 * i] * 6) for i in range(40)])
             for i in range(40):
                 store.record_measurement(cid, i, "calibration", [0.01 * i] * 6, [1.0, 2.0, 0.001 * i],

@@ -44,7 +44,7 @@ from hil.station.config import default_config
 from hil.store import (
     SCHEMA_VERSION,
     PlannedPose,
-    RobotInfo,
+    RobotIdentity,
     Store,
     StoreError,
     UnknownCampaignError,
@@ -57,7 +57,7 @@ from tests.hil.store.legacy_schema import make_legacy
 from tests.hil.store.raw import Raw, raw
 
 ROOT = Path(__file__).resolve().parents[3]
-ROBOT = RobotInfo(type="ur5e", serial="20235500123", model="UR5e", software="5.15.0")
+ROBOT = RobotIdentity(type="ur5e", serial="20235500123", model="UR5e", software="5.15.0")
 T0 = 1_700_000_000.0  # 2023-11-14: campaign ids of T0 + a few seconds share their date in any zone
 # floats a lossy text round trip would change: 0.1 + 0.2, a third, the next double after 1, -0.0, the
 # smallest subnormal, the largest double
@@ -138,7 +138,7 @@ def test_a_campaign_is_recorded_and_read_back_bit_exactly(location):
     with Store.open(location) as s:
         cid = s.create_campaign(cfg(), ROBOT, selection)
         # the same arm under another configuration: one robot row, following its controller
-        other = s.create_campaign(cfg("cell-2"), RobotInfo("ur5e", ROBOT.serial, "UR5e", "5.16.0"))
+        other = s.create_campaign(cfg("cell-2"), RobotIdentity("ur5e", ROBOT.serial, "UR5e", "5.16.0"))
         unknown = s.create_campaign(cfg("cell-3"))  # serial unknown: no robot row
         s.save_plan(cid, plan())
         mid = s.record_measurement(cid, 0, "calibration", AWKWARD_Q, p0, q_spread=[1e-6 / 3] * 6,
@@ -154,8 +154,8 @@ def test_a_campaign_is_recorded_and_read_back_bit_exactly(location):
         rec = s.campaign(cid)
         assert rec.config == cfg() and rec.config_hash == config_hash(cfg())
         assert rec.plan == selection and bits(rec.plan["third"]) == bits(1 / 3)
-        assert rec.robot == RobotInfo("ur5e", ROBOT.serial, "UR5e", "5.16.0")  # updated by `other`
-        assert s.campaign(other).robot == rec.robot and s.campaign(unknown).robot == RobotInfo("ur5e")
+        assert rec.robot == RobotIdentity("ur5e", ROBOT.serial, "UR5e", "5.16.0")  # updated by `other`
+        assert s.campaign(other).robot == rec.robot and s.campaign(unknown).robot == RobotIdentity("ur5e")
         assert count(s, "SELECT count(*) FROM robots") == 1
         assert count(s, "SELECT count(*) FROM stations") == 3
         summary = rec.summary
@@ -375,8 +375,8 @@ def test_listing_id_resolution_and_resume(store):
     # resume: by serial, or without one by the robot's address; never a finished campaign
     s1, s2 = "2023550001", "2023550002"
     base = cfg("r", "10.0.0.1")
-    arm1 = store.create_campaign(base, RobotInfo("ur5e", s1), now=T0 + 200)
-    arm2 = store.create_campaign(base, RobotInfo("ur5e", s2), now=T0 + 201)
+    arm1 = store.create_campaign(base, RobotIdentity("ur5e", s1), now=T0 + 200)
+    arm2 = store.create_campaign(base, RobotIdentity("ur5e", s2), now=T0 + 201)
     at7 = store.create_campaign(cfg("r", "10.0.0.7"), now=T0 + 202)
     at8 = store.create_campaign(cfg("r", "10.0.0.8"), now=T0 + 203)
     assert store.find_resumable(base, s1) == arm1
@@ -551,7 +551,7 @@ import json, os, sys, time
 import numpy as np
 from hil.campaign.events import PointMeasured, PoseStarted, RunFinished, RunStarted
 from hil.station.config import default_config
-from hil.store import RobotInfo, Store
+from hil.store import RobotIdentity, Store
 
 location, k, n, every, go = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]), sys.argv[5]
 name, serial = f"station-{k}", f"2023550{k:03d}"
@@ -565,7 +565,7 @@ while not os.path.exists(go):
         sys.exit("never told to go")
     time.sleep(0.002)
 began = time.time()
-lease = store.claim_new(config, RobotInfo("ur5e", serial, "UR5e", "5.15.0"), {"station": k})
+lease = store.claim_new(config, RobotIdentity("ur5e", serial, "UR5e", "5.15.0"), {"station": k})
 cid = lease.campaign
 store.record_event(RunStarted(campaign=cid, robot="ur5e", station=name, poses=n))
 ids = {}
@@ -761,7 +761,7 @@ def test_a_write_whose_commit_landed_but_whose_answer_was_lost_is_not_repeated(p
             return result
 
         cid = once(lambda: store.create_campaign(cfg(), ROBOT))
-        lease = once(lambda: store.claim_new(cfg("cell-2"), RobotInfo("ur5e", "2023550077"),
+        lease = once(lambda: store.claim_new(cfg("cell-2"), RobotIdentity("ur5e", "2023550077"),
                                              heartbeat=False))
         once(lambda: store.save_plan(cid, plan(2, 0)))
         mid = once(lambda: _measure(store, cid, 0))

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from hil.store import RobotInfo, Store
+from hil.store import RobotIdentity, Store
 from hil.store.fleet import current_model, fleet, robot_history
 from tests.hil.fleet_data import STEADY, _config
 
@@ -15,7 +15,7 @@ RESULT = {"format": "hil-verification/1", "cycles": 30,
 
 def _verify(location: Path | str, status: str = "accepted") -> str:
     with Store(location) as store:
-        cid = store.create_campaign(_config("eol-cell-1", "ur5e"), RobotInfo("ur5e", STEADY),
+        cid = store.create_campaign(_config("eol-cell-1", "ur5e"), RobotIdentity("ur5e", STEADY),
                                     plan={"kind": "verification", "cycles": 30})
         store.set_status(cid, status, result=RESULT)
     return cid
@@ -47,7 +47,7 @@ def test_a_verification_is_listed_as_one_and_not_as_a_calibration(fleet_store_lo
 
 def test_an_unfinished_verification_has_no_figures(fleet_store_location: Path | str) -> None:
     with Store(fleet_store_location) as store:
-        cid = store.create_campaign(_config("eol-cell-1", "ur5e"), RobotInfo("ur5e", STEADY),
+        cid = store.create_campaign(_config("eol-cell-1", "ur5e"), RobotIdentity("ur5e", STEADY),
                                     plan={"kind": "verification"})
         history = robot_history(store, STEADY)
     assert [(v.id, v.ap_max, v.rp_max) for v in history.verifications] == [(cid, {}, {})]

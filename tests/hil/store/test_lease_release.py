@@ -18,12 +18,12 @@ import textwrap
 from pathlib import Path
 
 from hil.station.config import default_config
-from hil.store import RobotInfo, Store
+from hil.store import RobotIdentity, Store
 from tests.hil.campaign.full_disk import FullDisk
 from tests.hil.store.raw import raw
 
 ROOT = Path(__file__).resolve().parents[3]
-ROBOT = RobotInfo(type="ur5e", serial="20235500777", model="UR5e", software="5.15.0")
+ROBOT = RobotIdentity(type="ur5e", serial="20235500777", model="UR5e", software="5.15.0")
 
 
 def held(db: Path) -> dict[str, int]:
@@ -58,12 +58,12 @@ OWNER = textwrap.dedent("""
 
     import pytest
     from hil.station.config import default_config
-    from hil.store import RobotInfo, Store
+    from hil.store import RobotIdentity, Store
     from tests.hil.campaign.full_disk import FullDisk
 
     disk = FullDisk(pytest.MonkeyPatch())
     store = Store.open(sys.argv[1])
-    lease = store.claim_new(default_config().as_dict(), RobotInfo(type="ur5e", serial=sys.argv[2]))
+    lease = store.claim_new(default_config().as_dict(), RobotIdentity(type="ur5e", serial=sys.argv[2]))
     print(lease.campaign, os.getpid(), flush=True)
     disk.full = True
     lease.release()

@@ -9,10 +9,10 @@ import sqlite3
 import pytest
 
 from hil.station.config import default_config
-from hil.store import RobotInfo, Store, measurement_hash
+from hil.store import RobotIdentity, Store, measurement_hash
 from tests.hil.store.legacy_schema import make_legacy
 
-ROBOT = RobotInfo(type="ur5e", serial="20235500123", model="UR5e", software="5.15.0")
+ROBOT = RobotIdentity(type="ur5e", serial="20235500123", model="UR5e", software="5.15.0")
 
 
 def cfg(**overrides) -> dict:
@@ -62,7 +62,7 @@ def test_what_changes_the_measurement_starts_anew(tmp_path, change):
 
 def test_without_a_serial_the_robot_address_tells_the_arm(tmp_path):
     with Store.open(tmp_path / "hil.db") as store:
-        cid = store.create_campaign(cfg(), RobotInfo(type="ur5e"))
+        cid = store.create_campaign(cfg(), RobotIdentity(type="ur5e"))
         assert store.find_resumable(cfg(tracker__url="/dev/ttyUSB1")) == cid
         assert store.find_resumable(cfg(robot__address="192.168.0.11")) is None  # maybe another arm
 

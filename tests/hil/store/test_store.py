@@ -37,7 +37,7 @@ from hil.station.config import default_config, load_config
 from hil.store import (
     SCHEMA_VERSION,
     PlannedPose,
-    RobotInfo,
+    RobotIdentity,
     Store,
     StoreError,
     UnknownCampaignError,
@@ -50,7 +50,7 @@ from tests.hil.store.legacy_schema import make_legacy
 from tests.hil.store.raw import Raw, raw
 
 ROOT = Path(__file__).resolve().parents[3]
-ROBOT = RobotInfo(type="ur5e", serial="20235500123", model="UR5e", software="5.15.0")
+ROBOT = RobotIdentity(type="ur5e", serial="20235500123", model="UR5e", software="5.15.0")
 
 
 def cfg(name: str = "cell-1", **overrides):
@@ -234,14 +234,14 @@ def test_campaign_record_and_reload(db):
 
 def test_robot_rows_are_shared_by_serial(store):
     a = store.create_campaign(cfg(), ROBOT)
-    b = store.create_campaign(cfg(), RobotInfo("ur5e", ROBOT.serial, "UR5e", "5.16.0"))
+    b = store.create_campaign(cfg(), RobotIdentity("ur5e", ROBOT.serial, "UR5e", "5.16.0"))
     c = store.create_campaign(cfg(), {"type": "ur10e", "extra": "ignored"})
     d = store.create_campaign(cfg())  # robot type from the config, serial unknown
     conn = raw(store)
     assert conn.execute("SELECT count(*) FROM robots").fetchone()[0] == 1
     assert store.campaign(a).robot.software == "5.16.0"  # the robot row follows its controller
     assert store.campaign(b).robot.serial == ROBOT.serial
-    assert store.campaign(c).robot == RobotInfo("ur10e")
+    assert store.campaign(c).robot == RobotIdentity("ur10e")
     assert store.campaign(d).robot.type == "ur5e"
     assert len({a, b, c, d}) == 4
 

@@ -22,7 +22,7 @@ from hil.campaign.events import RunStarted
 from hil.cli import main
 from hil.errors import InputError
 from hil.station.config import default_config
-from hil.store import SCHEMA_VERSION, RobotInfo, Store, StoreError
+from hil.store import SCHEMA_VERSION, RobotIdentity, Store, StoreError
 from tests.hil.store.legacy_schema import make_legacy
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -31,7 +31,7 @@ NOBODY = 65534
 
 def _store_with_a_campaign(path: Path) -> str:
     with Store.open(path) as s:
-        cid = s.create_campaign(default_config().as_dict(), RobotInfo("ur5e", "2023550001"))
+        cid = s.create_campaign(default_config().as_dict(), RobotIdentity("ur5e", "2023550001"))
         s.save_plan(cid, [(i, "calibration", [0.1 * i] * 6) for i in range(3)])
         s.record_event(RunStarted(campaign=cid, robot="ur5e", station="cell", poses=3))
         s.record_measurement(cid, 0, "calibration", [0.0] * 6, [1.0, 2.0, 3.0], t=1.7e9)

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from drivers.robot.errors import EmergencyStop, MotionAborted
-from drivers.robot.model import RobotInfo
+from drivers.robot.model import ControllerInfo
 from drivers.tracker.errors import TargetLost
 from hil.calibration.synthetic import random_truth
 from hil.campaign.plan import Choice
@@ -34,8 +34,8 @@ class Arm(FakeArm):
 
     hold_move: int | None = None
     estop_move: int | None = None
-    info: RobotInfo = field(default_factory=lambda: RobotInfo("UR5e", SERIAL, "5.15.0", (5, 15, 0, 0), "e",
-                                                              500.0))
+    info: ControllerInfo = field(
+        default_factory=lambda: ControllerInfo("UR5e", SERIAL, "5.15.0", (5, 15, 0, 0), "e", 500.0))
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -65,7 +65,7 @@ class Arm(FakeArm):
     def check_status(self) -> None:
         pass
 
-    def reconnect(self) -> RobotInfo:
+    def reconnect(self) -> ControllerInfo:
         return self.info
 
     def close(self) -> None:

@@ -7,7 +7,7 @@ from __future__ import annotations
 import asyncio
 import os
 
-from hil.store import RobotInfo
+from hil.store import RobotIdentity
 from tests.hil.tui.conftest import press_to_close, wait_for
 from tests.hil.tui.fake_station import SERIAL, FakeStation
 
@@ -29,7 +29,7 @@ def notices(app) -> list[str]:
 def test_a_run_on_an_arm_another_process_drives_is_refused_then_starts_once_it_is_free(tmp_path, monkeypatch):
     st = FakeStation(tmp_path, monkeypatch)
     other_station = st.config.with_overrides(station__name="cell-2").as_dict()
-    other = st.store.claim_new(other_station, RobotInfo(type="ur5e", serial=SERIAL), heartbeat=False)
+    other = st.store.claim_new(other_station, RobotIdentity(type="ur5e", serial=SERIAL), heartbeat=False)
 
     async def scenario():
         app = st.app()
@@ -57,7 +57,7 @@ def test_resuming_a_campaign_another_process_runs_leaves_it_untouched(tmp_path, 
     """The race the question cannot close: the operator answers "resume" after another process
     took the campaign. The run is refused, the arm does not move, the campaign's status stays."""
     st = FakeStation(tmp_path, monkeypatch)
-    cid = st.store.create_campaign(st.config.as_dict(), RobotInfo(type="ur5e", serial=SERIAL))
+    cid = st.store.create_campaign(st.config.as_dict(), RobotIdentity(type="ur5e", serial=SERIAL))
     st.store.set_status(cid, "interrupted")
     holder = st.store.claim(cid, SERIAL, heartbeat=False)
 

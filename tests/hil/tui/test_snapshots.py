@@ -24,7 +24,7 @@ from hil.campaign.events import (
     Suspended,
 )
 from hil.station.config import default_config
-from hil.store import CampaignRecord, CampaignSummary, ModelRecord, RobotInfo, ValidationRecord
+from hil.store import CampaignRecord, CampaignSummary, ModelRecord, RobotIdentity, ValidationRecord
 from hil.tui.app import create_app
 from hil.tui.messages import CampaignLoaded, EngineEvent, HistoryLoaded, SelectionDone, StationChanged
 from hil.tui.state import StationState
@@ -65,7 +65,7 @@ def record() -> CampaignRecord:
                                          "rejected": [], "condition": 20.5}}
     stats = {"before": {"count": 4, "mean": 2.1e-3, "rms": 2.19e-3, "max": 2.96e-3},
              "after": {"count": 4, "mean": 8.9e-6, "rms": 9.6e-6, "max": 1.35e-5}}
-    return CampaignRecord(summary=summary(), robot=RobotInfo("ur5e", "20235500001"),
+    return CampaignRecord(summary=summary(), robot=RobotIdentity("ur5e", "20235500001"),
                           config=default_config().as_dict(), config_hash="0" * 64, plan=None, detail="",
                           result=None, software="0.1.0", models=[ModelRecord(1, T0, 3e-6, doc)],
                           validations=[ValidationRecord(1, T0, 1, stats["before"], stats["after"], True,
