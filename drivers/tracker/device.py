@@ -1,6 +1,6 @@
 """One laser tracker for the campaign, the TUI and MOVEB, whatever protocol it speaks.
 
-`Tracker` is the protocol the orchestrator holds; `drivers.tracker.measurement.GeoComTracker` (GeoCOM
+`Tracker` is the protocol the orchestrator holds; `drivers.tracker.geocom.tracker.GeoComTracker` (GeoCOM
 over a serial line) and `drivers.tracker.emscon.EmsconTracker` (Leica's emScon TPI over TCP) implement
 it. Both report points in the tracker's own right-handed Cartesian frame in metres, raise the typed
 errors of `drivers.tracker.errors`, and bound every wait with a timeout.

@@ -19,8 +19,7 @@ from drivers.robot.model import KeepInZone, RobotConfig
 from drivers.tracker import errors as tracker_errors
 from drivers.tracker.device import Atmosphere, Tracker
 from drivers.tracker.emscon import EmsconConfig, EmsconTracker, TcpConfig
-from drivers.tracker.measurement import GeoComTracker, TrackerConfig
-from drivers.tracker.transport import SerialConfig
+from drivers.tracker.geocom import GeoComTracker, SerialConfig, TrackerConfig
 from hil.arm.catalog import get_robot
 from hil.errors import InputError
 from hil.station.config import StationConfig

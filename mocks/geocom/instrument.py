@@ -7,7 +7,7 @@ Behaviour a plain GeoCOM client can rely on:
   and get no answer;
 * an unknown RPC answers ``%R1P,0,<id>:3081`` (GRC_COM_PROC_UNAVAIL), wrong parameters
   ``…:2`` (GRC_IVPARAM), an undecodable header ``%R1P,0,0:3080``;
-* the opt-in CRC-16 suffix of `drivers.tracker.protocol` is checked when present (a bad one answers
+* the opt-in CRC-16 suffix of `drivers.tracker.geocom.protocol` is checked when present (a bad one answers
   ``%R1P,3101,<id>:0``) and then added to the reply; requests without it get plain replies.
 
 Optics: a measurement asks the `TargetSource` for the truth, converts it with the shared
@@ -26,9 +26,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from drivers.tracker.codes import ReturnCode
-from drivers.tracker.geometry import cartesian_to_polar, polar_to_cartesian
-from drivers.tracker.protocol import (
+from drivers.tracker.geocom.codes import ReturnCode
+from drivers.tracker.geocom.protocol import (
     crc16,
     decode_double,
     decode_int,
@@ -36,6 +35,7 @@ from drivers.tracker.protocol import (
     quote_string,
     split_values,
 )
+from drivers.tracker.geometry import cartesian_to_polar, polar_to_cartesian
 from mocks.geocom.faults import FaultInjector
 from mocks.geocom.noise import NoiseSpec, atmospheric_ppm
 from mocks.geocom.target import TargetSource
@@ -45,7 +45,7 @@ log = logging.getLogger(__name__)
 _REQUEST_RE = re.compile(r"^%R1Q,([0-9]{1,5})(?:,([0-9]{1,5}))?:(.*)$", re.DOTALL)
 _CRC_SUFFIX_RE = re.compile(rb";([0-9A-F]{4})$")
 
-# TMC_DoMeasure programs (see drivers.tracker.commands.MeasureProgram)
+# TMC_DoMeasure programs (see drivers.tracker.geocom.commands.MeasureProgram)
 _PROG_STOP, _PROG_DEF_DIST, _PROG_CLEAR, _PROG_DO_MEASURE, _PROG_RTRK, _PROG_RED_TRK = 0, 1, 3, 6, 8, 10
 
 

@@ -10,8 +10,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from drivers.tracker.geocom.protocol import add_crc
 from drivers.tracker.geometry import polar_to_cartesian
-from drivers.tracker.protocol import add_crc
 from mocks.geocom import NOISELESS, GeoComInstrument, GeoComSimulator, InstrumentConfig, StaticTarget
 
 TRUE = np.array([1.0, 2.0, 0.5])

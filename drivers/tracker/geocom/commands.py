@@ -13,9 +13,9 @@ from dataclasses import dataclass
 from enum import IntEnum
 from typing import TypeVar
 
-from drivers.tracker.codes import TARGET_LOST_CODES, WARNING_CODES, ReturnCode, describe
 from drivers.tracker.errors import GarbledReply, GeoComError, TargetLost
-from drivers.tracker.protocol import (
+from drivers.tracker.geocom.codes import TARGET_LOST_CODES, WARNING_CODES, ReturnCode, describe
+from drivers.tracker.geocom.protocol import (
     GeoComClient,
     Param,
     Reply,

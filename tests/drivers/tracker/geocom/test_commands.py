@@ -4,16 +4,16 @@ from __future__ import annotations
 
 import pytest
 
-from drivers.tracker.commands import (
+from drivers.tracker.errors import GarbledReply, GeoComError, TargetLost
+from drivers.tracker.geocom.commands import (
     AtmosphericCorrection,
     DistanceMode,
     LockStatus,
     MeasureProgram,
     TrackerCommands,
 )
-from drivers.tracker.errors import GarbledReply, GeoComError, TargetLost
-from drivers.tracker.protocol import GeoComClient
-from tests.drivers.tracker.scripted import ScriptedTransport
+from drivers.tracker.geocom.protocol import GeoComClient
+from tests.drivers.tracker.geocom.scripted import ScriptedTransport
 
 
 def commands(*exchange: tuple[str, str]) -> tuple[TrackerCommands, ScriptedTransport]:

@@ -34,7 +34,6 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
-from drivers.tracker.codes import ReturnCode, describe
 from drivers.tracker.errors import (
     ChecksumError,
     ConnectionLost,
@@ -42,6 +41,7 @@ from drivers.tracker.errors import (
     ProtocolError,
     TrackerTimeout,
 )
+from drivers.tracker.geocom.codes import ReturnCode, describe
 
 log = logging.getLogger(__name__)
 
@@ -299,7 +299,7 @@ def find_reply_frame(line: bytes) -> bytes | None:
 
 # --------------------------------------------------------------------------------------- client
 class LineTransport(Protocol):
-    """What the client needs from a transport (see `drivers.tracker.transport.SerialTransport`)."""
+    """What the client needs from a transport (see `drivers.tracker.geocom.transport.SerialTransport`)."""
 
     def write(self, data: bytes) -> None: ...
 

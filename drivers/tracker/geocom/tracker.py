@@ -18,13 +18,6 @@ from types import TracebackType
 
 import numpy as np
 
-from drivers.tracker.commands import (
-    AtmosphericCorrection,
-    LockStatus,
-    MeasureProgram,
-    PolarReading,
-    TrackerCommands,
-)
 from drivers.tracker.device import (
     Atmosphere,
     Identity,
@@ -34,9 +27,16 @@ from drivers.tracker.device import (
     measure_with_retries,
 )
 from drivers.tracker.errors import GeoComError, TargetLost, TrackerError, UnstablePoint
+from drivers.tracker.geocom.commands import (
+    AtmosphericCorrection,
+    LockStatus,
+    MeasureProgram,
+    PolarReading,
+    TrackerCommands,
+)
+from drivers.tracker.geocom.protocol import GeoComClient
+from drivers.tracker.geocom.transport import SerialConfig, SerialTransport
 from drivers.tracker.geometry import polar_to_cartesian
-from drivers.tracker.protocol import GeoComClient
-from drivers.tracker.transport import SerialConfig, SerialTransport
 
 log = logging.getLogger(__name__)
 

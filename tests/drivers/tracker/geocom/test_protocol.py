@@ -12,7 +12,7 @@ from drivers.tracker.errors import (
     ProtocolError,
     TrackerTimeout,
 )
-from drivers.tracker.protocol import (
+from drivers.tracker.geocom.protocol import (
     Byte,
     GeoComClient,
     Reply,
@@ -29,7 +29,7 @@ from drivers.tracker.protocol import (
     quote_string,
     split_values,
 )
-from tests.drivers.tracker.scripted import ScriptedTransport
+from tests.drivers.tracker.geocom.scripted import ScriptedTransport
 
 
 # ----------------------------------------------------------------------------------- codec

@@ -22,7 +22,7 @@ from drivers.tracker import (
     TrackerTimeout,
     UnstablePoint,
 )
-from drivers.tracker.commands import MeasureProgram
+from drivers.tracker.geocom.commands import MeasureProgram
 from drivers.tracker.geometry import polar_to_cartesian
 from mocks.geocom import (
     NOISELESS,
@@ -188,7 +188,7 @@ def test_late_reply_is_discarded_by_trid_never_returned(
 
         monkeypatch.setattr(transport, "write", write_then_release)
         target.set([0.3, 0.3, 0.3])
-        with caplog.at_level(logging.INFO, logger="drivers.tracker.protocol"):
+        with caplog.at_level(logging.INFO, logger="drivers.tracker.geocom.protocol"):
             point = simple_mea(tr, timeout=10.0)  # returns as soon as its own reply is in
         np.testing.assert_allclose(point, [0.3, 0.3, 0.3], atol=1e-9)
         assert "discarding stale reply" in caplog.text
