@@ -30,6 +30,7 @@ from hil.campaign.engine import RealClock
 from hil.campaign.events import EventBus
 from hil.campaign.runner import run_campaign
 from hil.station.config import default_config
+from hil.station.devices import open_devices
 from hil.store import Store
 from mocks.station import start_station
 
@@ -72,7 +73,7 @@ def run(args: argparse.Namespace, mode: str) -> tuple[float, int, int]:
             bus.subscribe(store.as_subscriber(), critical=True)
             t0 = time.perf_counter()
             outcome = run_campaign(config, campaign_chooser(config), bus=bus, campaign=campaign,
-                                   clock=RealClock(args.speed),
+                                   clock=RealClock(args.speed), devices=open_devices(config),
                                    engine_ready=lambda eng: setattr(eng, "overlap", not args.no_overlap))
             wall = time.perf_counter() - t0
     finally:

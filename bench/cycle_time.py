@@ -67,6 +67,7 @@ from hil.campaign.events import EventBus
 from hil.campaign.plan import CALIBRATION, VALIDATION, Choice, SelectionRequest
 from hil.campaign.runner import run_campaign
 from hil.station.config import load_config
+from hil.station.devices import open_devices
 from mocks.station import start_station
 from selector.motion_time import MotionProfile
 from selector.order import order_poses
@@ -190,7 +191,7 @@ def run_row(sim: Any, config: Any, choose: Any, home: np.ndarray, speed: float, 
     sim.inject("set_joints", q=home.tolist())
     before = sim.state()
     out = run_campaign(config, choose, bus=EventBus(), campaign=f"c{time.monotonic_ns()}",
-                       clock=RealClock(speed))
+                       clock=RealClock(speed), devices=open_devices(config))
     after = sim.state()
     if out.result is None:
         raise RuntimeError(f"the campaign ended {out.status}: {out.error}")

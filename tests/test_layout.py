@@ -1,8 +1,12 @@
 """The layout's rules, read from the code's own imports (those inside functions and TYPE_CHECKING too).
 
 * `selector` and `drivers` know nothing of `hil`;
-* inside `hil`, a package imports only packages below it (cli and tui on top; campaign above
-  calibration above arm);
+* inside `hil`, a package imports only packages below it (cli and tui on top, the jobs below them;
+  campaign above calibration above arm);
+* the front-ends meet only in the jobs layer: the terminal app imports nothing of the command line,
+  and no command module imports another (what they share lives in `hil.cli.support`);
+* the station is taken in one place: only `hil.jobs.station` locks the arm's address and opens the
+  devices (`hil.store.address_lock`, `hil.station.devices.open_devices`);
 * no module imports, directly or through others, a module that imports it back (no import circles).
 """
 
@@ -19,7 +23,7 @@ TOP = ("hil", "selector", "drivers", "mocks")
 #: hil's packages from the bottom up; a package may import only those before it (and itself).
 HIL_LAYERS: tuple[str, ...] = (
     "errors", "files", "arm", "calibration", "compensation", "station", "campaign", "store", "verify",
-    "report", "moveb", "tui", "cli",
+    "report", "moveb", "jobs", "tui", "cli",
 )
 
 
@@ -133,3 +137,41 @@ def test_no_import_circles() -> None:
         if v not in index:
             visit(v)
     assert not circles, "\n".join(" <-> ".join(c) for c in circles)
+
+
+def test_the_terminal_app_imports_nothing_of_the_command_line() -> None:
+    wrong = sorted(f"{m} -> {d}" for m, deps in GRAPH.items() if m.startswith("hil.tui")
+                   for d in deps if d == "hil.cli" or d.startswith("hil.cli."))
+    assert not wrong, "\n".join(wrong)
+
+
+def _command_module(module: str) -> bool:
+    parts = module.split(".")
+    return len(parts) == 3 and parts[:2] == ["hil", "cli"] and parts[2] != "support"
+
+
+def test_no_command_module_imports_another() -> None:
+    wrong = sorted(f"{m} -> {d}" for m, deps in GRAPH.items() if _command_module(m)
+                   for d in deps if _command_module(d) and d != m)
+    assert not wrong, "\n".join(wrong)
+
+
+def _names_used(path: Path) -> set[str]:
+    """Every name a module imports or reads as an attribute (``devices.open_devices`` included)."""
+    out: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.ImportFrom):
+            out.update(a.name for a in node.names)
+        elif isinstance(node, ast.Attribute):
+            out.add(node.attr)
+    return out
+
+
+@pytest.mark.parametrize("name", ["address_lock", "open_devices"])
+def test_the_station_is_taken_in_one_place(name: str) -> None:
+    """The arm's lock and its devices are taken by `hil.jobs.station` alone: a guard added there guards
+    every job (the store defines the lock, `hil.station.devices` the devices; neither takes them)."""
+    modules = _modules()
+    takers = sorted(m for m, path in modules.items() if m.startswith("hil.") and name in _names_used(path)
+                    and m not in ("hil.store", "hil.store.leases", "hil.station.devices"))
+    assert takers == ["hil.jobs.station"], takers

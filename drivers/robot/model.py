@@ -52,7 +52,9 @@ class RobotIdentity:
         """The arm of catalog `type` as its controller reported itself (`info`; None: nothing known)."""
         if info is None:
             return cls(type)
-        return cls(type, info.serial, info.model, info.software_version)
+        # what it reports (a stand-in robot may report less)
+        said = {k: getattr(info, k, "") for k in ("serial", "model", "software_version")}
+        return cls(type, *(str(said[k] or "") for k in ("serial", "model", "software_version")))
 
     @classmethod
     def coerce(cls, value: RobotIdentity | Mapping[str, Any] | str) -> RobotIdentity:

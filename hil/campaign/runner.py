@@ -1,9 +1,9 @@
 """Running one campaign end to end: devices, engine, plan, events in and result out.
 
-Shared by the headless CLI and the TUI so both behave the same: it opens the station's devices,
-emits `RunStarted`, runs the calibration plan on the engine with the station's suspenders, and
-always emits `RunFinished` (accepted, rejected, aborted, interrupted or failed) and closes the
-devices — whatever happened in between. A `KeyboardInterrupt` (the CLI's `RunInterrupted` for
+Shared by every job that runs a plan on the arm (`hil.jobs`) so all behave the same: on the station's
+open devices it emits `RunStarted`, runs the plan on the engine with the station's suspenders, and
+always emits `RunFinished` (accepted, rejected, aborted, interrupted or failed) and, unless told not
+to, closes the devices — whatever happened in between. A `KeyboardInterrupt` (the CLI's `RunInterrupted` for
 SIGINT, SIGTERM, SIGHUP) is an interruption, not an abort: status ``interrupted``, which the store
 keeps resumable, so re-running the same command continues the campaign as after ``kill -9``.
 """
@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from drivers.robot.model import RobotIdentity
 from hil import __version__
 from hil.arm.catalog import get_robot
 from hil.arm.geometry import Geometry
@@ -47,7 +48,7 @@ from hil.campaign.stopping import stopped_words
 from hil.campaign.suspenders import suspenders
 from hil.errors import HilError, InputError
 from hil.station.config import StationConfig
-from hil.station.devices import HARDWARE_ERRORS, Devices, open_devices
+from hil.station.devices import Devices
 from hil.station.robot_type import check_controller
 
 log = logging.getLogger(__name__)
@@ -111,10 +112,10 @@ def _nominal_deviation(config: StationConfig) -> Callable[[PoseRecord], float | 
 
 def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | None = None,
                  campaign: str | None = None, resume: ResumeState | None = None,
-                 clock: Clock | None = None, devices: Devices | None = None,
+                 clock: Clock | None = None, devices: Devices,
                  engine_ready: Callable[[Engine], None] | None = None,
                  validation_cycles: int = 1, lease: Any = None, close_devices: bool = True) -> RunOutcome:
-    """Run one calibration campaign on the configured (or given) devices; never raises for hardware.
+    """Run one calibration campaign on the station's open `devices`; never raises for hardware.
 
     Bad input (config, unsafe targets found before motion) still raises InputError. `engine_ready`
     receives the engine before it starts, so a UI can pause or abort it from another thread.
@@ -160,11 +161,12 @@ class RunContext:
 def run_plan(config: StationConfig, plan: Callable[[RunContext], Any], *,
              judge: Callable[[Any], tuple[str, str]], poses: int, measured: int = 0, resumed: bool = False,
              bus: EventBus | None = None, campaign: str | None = None, clock: Clock | None = None,
-             devices: Devices | None = None, engine_ready: Callable[[Engine], None] | None = None,
+             devices: Devices, engine_ready: Callable[[Engine], None] | None = None,
              lease: Any = None, deviation: Callable[[PoseRecord], float | None] | None = None,
              close_devices: bool = True) -> RunOutcome:
     """Run one plan of steps on the station's devices: the calibration campaign's and the ISO 9283
-    verification's (`hil.verify`) one way — devices opened (or given), the controller checked, the
+    verification's (`hil.verify`) one way — on the station's open devices (taken by
+    `hil.jobs.station.take_station`, or a test's), the controller checked, the
     engine with the station's suspenders and keep-in box, `RunStarted` … `RunFinished` always emitted,
     the devices closed (unless `close_devices` is False) whatever happened; never raises for hardware.
 
@@ -175,12 +177,6 @@ def run_plan(config: StationConfig, plan: Callable[[RunContext], Any], *,
     campaign = campaign or new_campaign_id()
     outcome = RunOutcome("failed", campaign)
     spec = get_robot(config.robot["type"])
-    try:
-        devices = devices or open_devices(config)
-    except HARDWARE_ERRORS as exc:
-        outcome.error = exc
-        bus.emit(RunFinished(campaign=campaign, status="failed", detail=f"connect: {exc}"))
-        return outcome
     info = getattr(devices.robot, "info", None)
     outcome.robot_info = ({"model": info.model, "serial": info.serial, "software": info.software_version}
                           if info is not None else {})
@@ -243,7 +239,7 @@ def run_plan(config: StationConfig, plan: Callable[[RunContext], Any], *,
     return outcome
 
 
-def claim_run(store: Any, identity: Mapping[str, Any], robot: Mapping[str, str], *,
+def claim_run(store: Any, identity: Mapping[str, Any], robot: RobotIdentity | Mapping[str, str], *,
               campaign: str | None = None, find: bool = False) -> tuple[Any, ResumeState | None]:
     """Own the campaign to run before anything moves; returns (its lease, its resume state or None).
 
@@ -256,7 +252,7 @@ def claim_run(store: Any, identity: Mapping[str, Any], robot: Mapping[str, str],
     previous owner left, not a snapshot taken while it still measured. Release the lease (``with``)
     when the run has ended and its result is stored.
     """
-    serial = robot.get("serial") or ""
+    serial = RobotIdentity.coerce(robot).serial
     for _ in range(3):
         cid = campaign or (store.find_resumable(identity, robot_serial=serial) if find else None)
         if cid is None:

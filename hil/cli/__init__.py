@@ -27,7 +27,7 @@ from typing import Any
 
 import hil
 from hil.arm.blas_threads import limit_blas_threads
-from hil.cli._common import quiet_on_closed_stdout
+from hil.cli.support.output import quiet_on_closed_stdout
 from hil.errors import FaultError, HilError, InputError
 
 # Modules of hil.cli that each add one subcommand (in help order).

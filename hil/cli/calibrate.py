@@ -33,16 +33,11 @@ above the acceptance threshold, 2 bad input, 3 hardware fault, 4 aborted, 130 in
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
-import sys
-import time
-from pathlib import Path
 from typing import Any
 
 from hil.arm.catalog import ROBOT_NAMES
-from hil.campaign.events import Event, EventBus
-from hil.cli._common import (
+from hil.cli.support.options import (
     CANDIDATES,
     CYCLES,
     POSE_COUNT,
@@ -53,8 +48,9 @@ from hil.cli._common import (
     finite_float,
     rms_threshold,
 )
-from hil.cli.progress import JsonLines, Progress
-from hil.cli.station_args import add_tracker_protocol, station_from_args
+from hil.cli.support.output import say, wrote
+from hil.cli.support.progress import JsonLines, Progress
+from hil.cli.support.station_options import add_tracker_protocol, station_source
 from hil.errors import InputError
 from hil.files.outputs import atomic_write_text, check_output
 
@@ -128,7 +124,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hil.cli.interrupts import interruptible
+    from hil.cli.support.interrupts import interruptible
 
     _check_poses(args)
     _check_outputs(args)
@@ -142,22 +138,11 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _check_poses(args: argparse.Namespace) -> None:
-    """Refuse a --poses the fit cannot identify from, before the station starts or the arm moves:
-    found later, it would fail only after the bootstrap (tracker location) had moved the arm. The
-    configuration's own count is checked when it is read (`hil.station.config`)."""
-    if args.poses is None or args.poses <= 0:  # not given, or refused as not positive
-        return
-    from hil.station.config import load_config, minimum_calibration_poses
+    """Refuse a --poses the fit cannot identify from, before the station starts or the arm moves
+    (`hil.jobs.calibration.check_pose_count`)."""
+    from hil.jobs.calibration import check_pose_count
 
-    config = load_config(args.config) if args.config else None
-    robot = args.robot or (config.robot["type"] if config is not None else "ur5e")
-    # with the compliance (on unless the station turns it off) its identifiable joints count too
-    compliance = bool(config.campaign["compliance"]) if config is not None else True
-    need, n = minimum_calibration_poses(robot, compliance, config.payload if config else None,
-                                        config.gravity if config else None)
-    if args.poses < need:
-        raise InputError(f"--poses {args.poses}: too few calibration poses: identifying the {n} parameters "
-                         f"of a {robot} from 3 coordinates per pose needs at least {need}")
+    check_pose_count(args.poses, args.config, args.robot)
 
 
 def _check_stop_margin(args: argparse.Namespace) -> None:
@@ -205,7 +190,7 @@ def _check_outputs(args: argparse.Namespace) -> None:
     the station starts: the result is written by a rename, which would replace that file."""
     if not (args.out or args.report):
         return
-    from hil.cli.output_paths import campaign_store
+    from hil.cli.support.output_paths import campaign_store
 
     db, where = campaign_store(args.db, args.config)
     inputs = {"--config": args.config, "--truth": args.truth}
@@ -216,171 +201,31 @@ def _check_outputs(args: argparse.Namespace) -> None:
                      outputs={"--out": args.out})
 
 
-def _say_outage(reason: str | None) -> None:
-    """A lost database link: the run waits (the arm stands at its pose) until it is back."""
-    if reason is None:
-        print("hil: database link back; the run continues", file=sys.stderr, flush=True)
-    else:
-        print(f"hil: {reason}; the arm waits at its pose", file=sys.stderr, flush=True)
+def _subscribers(args: argparse.Namespace) -> list[Any]:
+    """Progress on stderr, and with ``--json`` one event per line on stdout."""
+    return [Progress(), JsonLines()] if args.json else [Progress()]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from hil.campaign.chooser import campaign_chooser
-    from hil.campaign.engine import RealClock
-    from hil.campaign.runner import claim_run, plan_saver, run_campaign, store_recorder
-    from hil.report.result import report_data, result_document
-    from hil.station.devices import HARDWARE_ERRORS, open_devices
-    from hil.station.robot_type import check_controller
-    from hil.store import FINISHED, Store, StoreError, address_lock, resolve_location
+    from hil.jobs.calibration import calibrate
+    from hil.jobs.verification import VerifyOptions
 
-    with station_from_args(args) as (config, identity, truth):
-        if args.no_warmup:  # not part of what identifies the campaign (`hil.store.hashing`)
-            config = config.with_overrides(warmup__enabled=False)
-        cube = _verify_cube(args, config)  # --verify: the [verify] cube, refused before anything connects
-        # An existing store is opened (so a damaged or newer one is refused) before the arm is touched;
-        # a new one is created only once the controller has confirmed the configured robot, so a
-        # refused station leaves no file behind.
-        path = resolve_location(args.db, config)  # a file, or a PostgreSQL server (opened now: reachable?)
-        store: Store | None = (Store.open(path, config=config) if not isinstance(path, Path) or path.exists()
-                               else None)
-        choose = campaign_chooser(config)
-        guards = contextlib.ExitStack()  # the arm's address lock, then the campaign's lease
-        devices, verified = None, 0  # verified: the exit code the verification asks for (0: done)
-        try:
-            # no second process of this host connects to the arm (see hil.store.leases)
-            guards.enter_context(address_lock(config.robot["address"], what="hil calibrate"))
-            try:
-                devices = open_devices(config)
-            except HARDWARE_ERRORS as exc:
-                print(f"hil: hardware fault: cannot connect: {type(exc).__name__}: {exc}",
-                      file=sys.stderr)
-                return 3
-            info = devices.robot.info
-            try:  # the controller's word on the robot type, before anything is recorded or moved
-                check_controller(config, info)
-                if store is None:
-                    store = Store.open(path, config=config)
-            except BaseException:
-                devices.close()
-                raise
-            robot = {"type": config.robot["type"], "serial": info.serial if info else "",
-                     "model": info.model if info else "", "software": info.software_version if info else ""}
-            try:
-                if args.resume and store.find_resumable(identity, robot_serial=robot["serial"]) is None:
-                    raise InputError("--resume: no unfinished campaign of this station, robot and "
-                                     "configuration")
-                # this process owns the campaign and the arm before the first motion, or exits 2
-                lease, resume = claim_run(store, identity, robot, find=not args.new)
-            except BaseException:
-                devices.close()
-                raise
-            campaign = guards.enter_context(lease).campaign
-            store.on_outage = _say_outage
-            events: list[Event] = []
-            bus = EventBus()
-            bus.subscribe(store_recorder(store), critical=True)  # a failed write names itself
-            bus.subscribe(plan_saver(store, campaign), critical=True)
-            bus.subscribe(events.append)
-            bus.subscribe(Progress())
-            if args.json:
-                bus.subscribe(JsonLines())
-            started = time.time()
-            outcome = run_campaign(config, choose, bus=bus, campaign=campaign,
-                                   resume=resume, devices=devices, clock=RealClock(args.speed),
-                                   validation_cycles=args.cycles, lease=lease,
-                                   close_devices=not args.verify)  # --verify: the same devices go on
-            result = result_document(outcome, config, events, started, truth)
-            if outcome.unrecorded is not None:  # the store refused RunFinished: no progress line said why
-                print(f"hil: fault: campaign {campaign} {outcome.status}: {outcome.error}; what was "
-                      "recorded before stays: re-run the same command to continue it", file=sys.stderr)
-            try:
-                store.set_status(campaign, outcome.status, result=result)
-            except StoreError as exc:  # a full disk: a fault (exit 3), not "not accepted" (exit 1)
-                if outcome.unrecorded is None:
-                    print(f"hil: fault: campaign {campaign} ended {outcome.status}, but could not record "
-                          f"its result in {store.location}: {exc.__cause__ or exc}", file=sys.stderr)
-                return 3
-            if args.verify:
-                result["verification"], verified = _verify_after(args, outcome, store, devices, config,
-                                                                 identity, robot, truth, cube, lease)
-                try:
-                    store.set_status(campaign, outcome.status, result=result)
-                except StoreError as exc:
-                    print(f"hil: fault: could not record the verification with campaign {campaign} in "
-                          f"{store.location}: {exc.__cause__ or exc}", file=sys.stderr)
-                    return 3
-        finally:
-            if args.verify and devices is not None:  # run_campaign left them open for the verification
-                devices.close()
-            guards.close()  # never raises: a lease the store cannot delete lapses (Lease.release)
-            if store is not None:
-                store.close()
-    if outcome.status not in FINISHED:  # interrupted or failed: resumable, so no result (yet)
-        if outcome.status == "interrupted":
-            print(f"hil: campaign {campaign} is resumable: re-run the same command to continue it",
-                  file=sys.stderr)
-        return outcome.exit_code  # an earlier result at --out / --report stays as it was
-    from hil.cli._common import wrote
-
+    verify = (VerifyOptions(args.verify_cycles, args.out, lambda: _subscribers(args)) if args.verify
+              else None)
+    resume = "only" if args.resume else "new" if args.new else "find"
+    out = calibrate(station_source(args), db=args.db, speed=args.speed, no_warmup=args.no_warmup,
+                    validation_cycles=args.cycles, resume=resume, verify=verify,
+                    subscribers=_subscribers(args), say=say)
+    if not out.finished or out.document is None:  # interrupted or failed: resumable, so no result (yet)
+        return out.exit_code  # an earlier result at --out / --report stays as it was
+    if not out.recorded:  # finished, but its result could not be recorded: said
+        return out.exit_code
     if args.out:
-        atomic_write_text(args.out, json.dumps(result, indent=2, allow_nan=False) + "\n")
+        atomic_write_text(args.out, json.dumps(out.document, indent=2, allow_nan=False) + "\n")
         wrote(args.out, "hil-result/1")
-    if args.report and outcome.result is not None:
+    if args.report and out.run is not None and out.run.result is not None:
         from hil.report import write_report
 
-        write_report(report_data(outcome, config, events, started, result.get("verification")), args.report)
+        write_report(out.report_data(), args.report)
         wrote(args.report, "HTML report")
-    return verified if outcome.exit_code == 0 and verified else outcome.exit_code
-
-
-def _verify_cube(args: argparse.Namespace, config: Any) -> Any:
-    """--verify: the ``[verify]`` cube (None: the simulated station's default), checked against the
-    arm's reach and the keep-in box before anything connects."""
-    if not args.verify:
-        return None
-    from hil.verify.design import check_cube
-    from hil.verify.session import cube_where, requested_cube
-
-    cube = requested_cube(config, sim=args.sim)
-    if cube is not None:
-        check_cube(config.robot["type"], cube, config.smr["offset"],
-                   (config.keep_in["min"], config.keep_in["max"]), cube_where(config))
-    return cube
-
-
-def _verify_after(args: argparse.Namespace, outcome: Any, store: Any, devices: Any, config: Any,
-                  identity: Any, robot: Any, truth: Any, cube: Any, lease: Any) -> tuple[dict[str, Any], int]:
-    """--verify: the ISO 9283 pose test with the model just accepted, on the same devices (`hil.verify`).
-
-    Returns the result's ``verification`` block and the exit code it asks for (0: done; the test's own
-    code when it did not finish: 3 fault, 130 interrupted — resumable by ``hil verify --model`` with the
-    calibration's result; 2 when no configuration serves the cube). Nothing runs unless the calibration
-    was accepted. The calibration's lease is given up first: the verification is a campaign of its own
-    and takes the arm's lease itself. The calibration's result is already stored, so whatever happens
-    here it stays.
-    """
-    if outcome.status != "accepted" or outcome.result is None or outcome.unrecorded is not None:
-        return {"status": "not run", "reason": f"the calibration ended {outcome.status}"}, 0
-    from hil.arm.geometry import Geometry
-    from hil.campaign.engine import RealClock
-    from hil.verify.session import ModelInput, verify
-
-    lease.release()
-    doc = outcome.result.model
-    model = ModelInput.of(doc, Geometry.from_dict(doc, source="the calibrated model"),
-                          f"campaign {outcome.campaign}")
-    subscribers: list[Any] = [Progress()]
-    if args.json:
-        subscribers.append(JsonLines())
-    print("hil: verifying the calibrated model (ISO 9283 pose test)", file=sys.stderr)
-    try:
-        done = verify(store, devices, config, identity, robot, model=model, cube=cube,
-                      cycles=args.verify_cycles or config.verify["cycles"], clock=RealClock(args.speed),
-                      subscribers=subscribers, truth=truth)
-    except InputError as exc:  # no configuration serves the cube: the calibration stands, said so
-        print(f"hil: error: --verify: {exc}", file=sys.stderr)
-        return {"status": "not run", "reason": str(exc)}, 2
-    if done.outcome.status == "interrupted":
-        print(f"hil: verification {done.campaign} is resumable: run hil verify on this station with "
-              f"--model {args.out or 'the calibration result'} to continue it", file=sys.stderr)
-    return done.document, done.exit_code
+    return out.exit_code

@@ -11,7 +11,7 @@ import argparse
 import os
 import sys
 
-from hil.cli._common import print_json, wrote
+from hil.cli.support.output import print_json, wrote
 
 #: File name endings read as a URScript program, and as a CSV of poses; anything else is decided by its
 #: first line (a CSV header names x,y,z,rx,ry,rz).
@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
 
     from hil.arm.controller_model import ControllerCalibration
     from hil.calibration.model_file import load_geometry
-    from hil.cli.output_paths import campaign_store
+    from hil.cli.support.output_paths import campaign_store
     from hil.compensation.controller_source import PRIMARY_PORT, controller_from_arm, controller_from_file
     from hil.compensation.poses import parse_near, parse_tcp, to_vector
     from hil.compensation.solve import Compensator

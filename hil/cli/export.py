@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 
 from hil.calibration.exports import FORMATS
-from hil.cli._common import wrote
+from hil.cli.support.output import wrote
 from hil.errors import InputError
 
 #: Whose model to export: hil's calibrated one, or the controller's own (its factory calibration).
@@ -35,7 +35,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from hil.calibration.exports import export
     from hil.calibration.model_file import MODEL_FORMAT, load_geometry
-    from hil.cli.output_paths import campaign_store
+    from hil.cli.support.output_paths import campaign_store
     from hil.files.outputs import atomic_write_text, check_output
 
     db, where = campaign_store()

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from hil.cli._common import PAYLOAD_HELP, payload_or_none, wrote
+from hil.cli.support.options import PAYLOAD_HELP, payload_or_none
+from hil.cli.support.output import wrote
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -30,7 +31,7 @@ def run(args: argparse.Namespace) -> int:
     from hil.arm.kinematics import Kinematics
     from hil.calibration.measurements import read_joints
     from hil.calibration.model_file import load_geometry
-    from hil.cli.output_paths import campaign_store
+    from hil.cli.support.output_paths import campaign_store
     from hil.files.outputs import atomic_write_text, check_output, format_csv
 
     db, where = campaign_store()

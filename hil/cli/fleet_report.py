@@ -12,8 +12,8 @@ import argparse
 import datetime as _dt
 import sys
 
-from hil.cli._common import finite_float
-from hil.cli.store_options import add_store_options, open_store
+from hil.cli.support.options import finite_float
+from hil.cli.support.store_options import add_store_options, open_store
 
 
 def _day(text: str) -> float:
@@ -43,7 +43,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run_fleet_report(args: argparse.Namespace) -> int:
-    from hil.cli.output_paths import campaign_store
+    from hil.cli.support.output_paths import campaign_store
     from hil.files.outputs import check_output
 
     db, field = campaign_store(args.db, args.config)

@@ -16,7 +16,8 @@ from pathlib import Path
 from typing import Any
 
 from hil.calibration.exports import FORMATS, export
-from hil.cli._common import bounded_int, mm, print_json
+from hil.cli.support.options import bounded_int
+from hil.cli.support.output import mm, print_json
 from hil.errors import InputError
 from hil.files.outputs import atomic_write_text, check_output
 from hil.station.config import load_config
@@ -200,7 +201,7 @@ def _check_exports(args: argparse.Namespace) -> None:
     is opened: a rename onto the database would replace it with the export."""
     if not (args.export_model or args.export_measurements):
         return
-    from hil.cli.output_paths import campaign_store
+    from hil.cli.support.output_paths import campaign_store
 
     db, where = campaign_store(args.db, args.config)
     inputs = {"--config": args.config}

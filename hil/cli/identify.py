@@ -6,7 +6,8 @@ import argparse
 from typing import TYPE_CHECKING
 
 from hil.arm.catalog import ROBOT_NAMES, get_robot
-from hil.cli._common import PAYLOAD_HELP, mm, payload_or_none, print_json, triplet_or_none, wrote
+from hil.cli.support.options import PAYLOAD_HELP, payload_or_none, triplet_or_none
+from hil.cli.support.output import mm, print_json, wrote
 
 if TYPE_CHECKING:
     from hil.calibration.identification import FitResult
@@ -48,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
     from hil.calibration.identification import identify, validate
     from hil.calibration.measurements import read_measurements
     from hil.calibration.model_file import model_document, write_json
-    from hil.cli.output_paths import campaign_store
+    from hil.cli.support.output_paths import campaign_store
     from hil.files.outputs import check_output
     from hil.station.config import MAX_SMR_OFFSET
 

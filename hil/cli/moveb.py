@@ -12,17 +12,19 @@ Both print a readable summary on a terminal, and JSON with ``--json`` or when st
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
 import sys
 from pathlib import Path
 from typing import Any
 
 from hil.arm.catalog import ROBOT_NAMES
-from hil.cli._common import SEED, SIM_SPEED, finite_float, print_json, wants_json, wrote
-from hil.cli.station_args import add_tracker_protocol, station_from_args
+from hil.cli.support.options import SEED, SIM_SPEED, finite_float
+from hil.cli.support.output import print_json, wants_json, wrote
+from hil.cli.support.station_options import add_tracker_protocol
 from hil.errors import InputError
 from hil.files.outputs import check_output
+from hil.jobs.moveb import FRAMES, MovebRequest, run_moveb
+from hil.jobs.outcome import EXIT_FAULT
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -91,7 +93,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=lambda args: (p.print_help(sys.stderr), 2)[1])
 
 
-FRAMES = ("base", "current", "tracker")
 
 #: Sample spacing of ``moveb plan`` (mm): finer than 10 µm is below any UR arm's repeatability (UR5e:
 #: ±0.03 mm, ISO 9283) and a metre of path would need 10^5+ samples; 1e-9 asked numpy for 2.9 TiB.
@@ -133,7 +134,7 @@ def run_plan(args: argparse.Namespace) -> int:
 
     if not args.step > 0:
         raise InputError(f"--step must be positive, got {args.step}")
-    from hil.cli.output_paths import campaign_store
+    from hil.cli.support.output_paths import campaign_store
 
     db, where = campaign_store()
     check_output(args.out, field="--out", inputs={"PROGRAM": args.program}, store=db, store_field=where)
@@ -198,7 +199,7 @@ def _run_text(doc: dict[str, Any]) -> str:
 
 
 def run_run(args: argparse.Namespace) -> int:
-    from hil.cli.output_paths import campaign_store
+    from hil.cli.support.output_paths import campaign_store
 
     inputs = {"PROGRAM": args.program, "--model": args.model, "--truth": args.truth, "--config": args.config}
     db, where = campaign_store(None, args.config) if args.out or args.plot else (None, "")
@@ -208,9 +209,12 @@ def run_run(args: argparse.Namespace) -> int:
         check_output(args.plot, field="--plot", inputs=inputs, store=db, store_field=where,
                      outputs={"--out": args.out})
 
-    doc = run_from_cli(args)
-    if doc.get("exit_code") == 3:  # stdout may be a pipe nobody reads: the fault goes to stderr too
+    out = run_moveb(_request(args))
+    doc = out.document or {}
+    if out.exit_code == EXIT_FAULT:  # stdout may be a pipe nobody reads: the fault goes to stderr too
         print(f"hil: hardware fault: {doc.get('error')}", file=sys.stderr)
+    if args.plot and out.run is not None:
+        _plot(args.plot, args.program, out.run)
     if args.out:
         from hil.files.outputs import atomic_write_text
 
@@ -220,124 +224,28 @@ def run_run(args: argparse.Namespace) -> int:
         print_json(doc)
     else:
         sys.stdout.write(_run_text(doc))
-    return int(doc.get("exit_code", 0))
+    return out.exit_code
 
 
-def run_from_cli(args: argparse.Namespace) -> dict[str, Any]:
-    """`hil moveb run`: station from --config/--sim (as `hil calibrate`), plan, execute, report.
+def _request(args: argparse.Namespace) -> MovebRequest:
+    """``hil moveb run``'s options as the job's request."""
+    return MovebRequest(
+        args.program, config=args.config, sim=args.sim, truth=args.truth, speed=args.speed, seed=args.seed,
+        robot=args.robot, tracker_protocol=args.tracker_protocol, model=args.model, ik=args.ik,
+        continuity=args.continuity, frame=args.frame, velocity=args.velocity, acceleration=args.acceleration,
+        jerk=args.jerk, normal_acceleration=args.normal_acceleration, joint_speed=args.joint_speed,
+        joint_acceleration=args.joint_acceleration, tracker_rate=args.tracker_rate,
+        min_coverage=args.min_coverage)
 
-    The arm is driven only under its host-local address lock (`hil.store.address_lock`, the one
-    `hil calibrate` and the TUI take), taken before connecting and held until the devices are
-    closed: a MOVEB run never drives an arm another hil process of this host drives, and the other
-    way round; a held lock is refused as bad input (exit 2), naming its holder, before connecting.
-    That lock is the only guard: a MOVEB run opens no campaign store, so it takes no robot lease there
-    (a lease in one store is seen only by the campaigns of that store; the lock by every hil process
-    of this host, whatever store it uses).
-    """
-    import math
 
-    import numpy as np
-
-    from hil.arm.geometry import Geometry
-    from hil.arm.kinematics import Kinematics
-    from hil.calibration.model_file import load_geometry
+def _plot(path: str, program: str, result: Any) -> None:
+    """``--plot``: the commanded and measured path and the deviation along it."""
     from hil.moveb.accuracy import distance_to_path
-    from hil.moveb.plan import plan_program
-    from hil.moveb.program import load_program
-    from hil.moveb.run import NothingMeasured, execute, facing_frame, program_in_frame
-    from hil.moveb.timing import Limits
-    from hil.station.devices import HARDWARE_ERRORS, open_devices
-    from hil.station.robot_type import Claim, agreed_robot, check_controller, config_claim, option_claim
-    from hil.store import address_lock
+    from hil.moveb.plot import write_run_figure
 
-    program = load_program(args.program)
-    limits = Limits(args.velocity, args.acceleration, args.jerk, args.normal_acceleration)
-    if not args.tracker_rate > 0:
-        raise InputError(f"--tracker-rate must be positive, got {args.tracker_rate}")
-    if not 0.0 < args.joint_speed <= 1.0:
-        raise InputError(f"--joint-speed must be in (0, 1], got {args.joint_speed}")
-    if not 0.0 < args.min_coverage <= 1.0:
-        raise InputError(f"--min-coverage must be in (0, 1], got {args.min_coverage}")
-    if args.joint_acceleration is not None and not 0.0 < args.joint_acceleration < math.inf:
-        raise InputError(f"--joint-acceleration must be positive, got {args.joint_acceleration}")
-    model = load_geometry(args.model)[0] if args.model else None
-    for name in ("poses", "validation", "candidates", "accept"):  # read by `station_from_args`
-        setattr(args, name, None)
-    args.cycles = 1
-    place = args.frame or ("tracker" if args.sim else "base")
-    if place == "tracker" and not (args.sim or model is not None):
-        raise InputError("--frame tracker: needs --model (its tracker pose) or --sim")
-    # every source naming the arm must agree (--robot, the model, the truth; then the configuration and
-    # the controller): IK on another robot's kinematics would drive the arm somewhere unplanned
-    said = option_claim(args.robot)
-    if model is not None:
-        said.append(Claim(model.robot, f"the model {args.model} is for {model.robot}"))
-    if args.sim:
-        if args.truth:
-            from hil.calibration.model_file import load_truth
-
-            truth_robot = load_truth(args.truth)[0].robot
-            said.append(Claim(truth_robot, f"the truth {args.truth} is for {truth_robot}"))
-        args.robot = agreed_robot(said, default="ur5e")  # the arm the simulator is to simulate
-    with station_from_args(args) as (config, _identity, truth), contextlib.ExitStack() as guards:
-        agreed_robot([config_claim(config), *said])  # --config: its robot.type, before connecting
-        geometry = model or Geometry.nominal(config.robot["type"], smr=config.smr["offset"])
-        if model is not None and args.ik == "nominal":
-            # the uncalibrated arm, measured in the model's base frame (its tracker pose and SMR):
-            # the absolute path error calibration removes, not only its non-rigid part
-            geometry = Geometry.nominal(model.robot, smr=model.smr, tracker=model.tracker)
-        if place == "tracker":  # where the tracker stands: the model's, else the simulated world's
-            where = (model.tracker if model is not None else Geometry.from_dict(truth, source="sim")
-                     .tracker).translation
-            program = program_in_frame(program, facing_frame(program, where, geometry.spec.reach))
-        # the arm's lock before connecting, held until the devices are closed (see the docstring)
-        guards.enter_context(address_lock(config.robot["address"], what="hil moveb run"))
-        try:
-            devices = open_devices(config)
-        except HARDWARE_ERRORS as exc:
-            return {"status": "hardware fault", "error": f"{type(exc).__name__}: {exc}", "exit_code": 3}
-        try:
-            check_controller(config, devices.robot.info, *said)  # before any motion
-            if place == "current":
-                q = np.asarray(devices.robot.read_joints(1).q, dtype=float)
-                F = Kinematics(geometry).flange_poses(q)[0]
-                anchor = F.copy()
-                anchor[:3, 3] = (F[:3, :3] @ geometry.smr + F[:3, 3]) * 1e3
-                program = program_in_frame(program, anchor)
-            plan = plan_program(program, args.continuity)
-            keep_in = (np.array(config.keep_in["min"]), np.array(config.keep_in["max"]))
-            result = execute(devices, plan, geometry, limits, registered=model is None,
-                             tracker_rate=args.tracker_rate, joint_speed_fraction=args.joint_speed,
-                             joint_acceleration=args.joint_acceleration, keep_in=keep_in)
-        except HARDWARE_ERRORS as exc:
-            return {"status": "hardware fault", "error": f"{type(exc).__name__}: {exc}", "exit_code": 3}
-        except NothingMeasured as exc:  # where the tracker stands, not a fault of the hardware
-            return {"format": "hil-moveb-run/1", "status": "incomplete", "exit_code": 1, "error": str(exc),
-                    "program": args.program, "frame": place, "coverage": 0.0, "lost_samples": exc.lost,
-                    "path_accuracy": None}
-        finally:
-            devices.close()
-    if args.plot:
-        from hil.moveb.plot import write_run_figure
-
-        frame = "rigidly fitted (no model)" if result.registered else "model base frame"
-        write_run_figure(args.plot, result.path, result.path_s, result.measured,
-                         distance_to_path(result.measured, result.path), result.corners,
-                         f"{Path(args.program).name}: max {result.accuracy['max_deviation_mm']:.3f} mm, "
-                         f"RMS {result.accuracy['rms_deviation_mm']:.3f} mm ({frame}; "
-                         f"{result.accuracy['coverage']:.0%} of the path measured)")
-    doc: dict[str, Any] = {"format": "hil-moveb-run/1", "status": "done", "exit_code": 0}
-    cov = result.coverage
-    if cov is not None and cov.fraction < args.min_coverage:
-        a, b = cov.largest_gap
-        doc.update(status="incomplete", exit_code=1,
-                   error=f"the tracker measured {cov.fraction:.0%} of the path ({result.lost} records lost; "
-                         f"longest unmeasured stretch s = {a:.1f}-{b:.1f} mm): the figures describe only "
-                         "the measured part; keep the SMR facing the tracker with a clear line of sight")
-    doc.update({"program": args.program, "frame": place, "continuity": args.continuity, "model": args.model,
-                "ik": "nominal" if model is None else args.ik, "registered": result.registered,
-                "cycle_time_s": result.cycle_time, "lost_samples": result.lost,
-                "coverage": None if cov is None else cov.fraction,
-                "path_accuracy": result.accuracy, "path_accuracy_registered": result.accuracy_registered,
-                "joint_speeds": result.joint_speeds})
-    return doc
+    frame = "rigidly fitted (no model)" if result.registered else "model base frame"
+    write_run_figure(path, result.path, result.path_s, result.measured,
+                     distance_to_path(result.measured, result.path), result.corners,
+                     f"{Path(program).name}: max {result.accuracy['max_deviation_mm']:.3f} mm, "
+                     f"RMS {result.accuracy['rms_deviation_mm']:.3f} mm ({frame}; "
+                     f"{result.accuracy['coverage']:.0%} of the path measured)")

@@ -15,7 +15,7 @@ from collections.abc import Iterator
 from typing import Any
 
 from hil.calibration.model_file import read_json
-from hil.cli._common import wrote
+from hil.cli.support.output import wrote
 from hil.errors import InputError
 from hil.files.outputs import check_output
 from hil.report import report_data_from_result, write_report
@@ -38,7 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hil.cli.output_paths import campaign_store
+    from hil.cli.support.output_paths import campaign_store
 
     db, where = campaign_store()
     check_output(args.out, field="--out", inputs={"--result": args.result}, store=db, store_field=where)

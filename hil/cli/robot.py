@@ -16,8 +16,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from hil.calibration.exports import FORMATS
-from hil.cli._common import finite_float, print_json
-from hil.cli.store_options import add_store_options, clip, mm, open_store, when, where
+from hil.cli.support.options import finite_float
+from hil.cli.support.output import print_json
+from hil.cli.support.store_options import add_store_options, clip, mm, open_store, when, where
 from hil.errors import InputError
 
 if TYPE_CHECKING:
@@ -76,7 +77,7 @@ def _check(args: argparse.Namespace) -> None:
     if args.format and not args.export_model:
         raise InputError("--format: only with --export-model")
     if args.export_model is not None:
-        from hil.cli.output_paths import campaign_store
+        from hil.cli.support.output_paths import campaign_store
         from hil.files.outputs import check_output
 
         db, field = campaign_store(args.db, args.config)

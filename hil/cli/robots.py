@@ -11,8 +11,8 @@ import argparse
 import sys
 from typing import TYPE_CHECKING
 
-from hil.cli._common import print_json
-from hil.cli.store_options import add_store_options, clip, mm, open_store, when, where
+from hil.cli.support.output import print_json
+from hil.cli.support.store_options import add_store_options, clip, mm, open_store, when, where
 
 if TYPE_CHECKING:
     from hil.store.fleet import RobotSummary

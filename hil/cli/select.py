@@ -26,7 +26,8 @@ import math
 import sys
 from typing import Any
 
-from hil.cli._common import CANDIDATES, POSE_COUNT, SEED, finite_float, wrote
+from hil.cli.support.options import CANDIDATES, POSE_COUNT, SEED, finite_float
+from hil.cli.support.output import wrote
 from hil.errors import InputError
 from hil.station.config import MAX_KEEP_IN, MAX_SMR_OFFSET, MAX_TRACKER_DISTANCE
 from selector.candidates import CONSTRAINT_NAMES
@@ -136,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
     from selector.tabu import TabuSettings
 
     if args.out is not None:
-        from hil.cli.output_paths import campaign_store
+        from hil.cli.support.output_paths import campaign_store
 
         db, where = campaign_store()
         check_output(args.out, field="--out", store=db, store_field=where)
@@ -182,7 +183,7 @@ def run(args: argparse.Namespace) -> int:
         if outside:
             raise InputError(f"--start: {'; '.join(outside)} rad, the {spec.title}'s joint limits")
     constraints = parse_constraints(tracker=tracker, disabled=disabled, **settings)
-    from hil.cli._common import payload_or_none
+    from hil.cli.support.options import payload_or_none
 
     payload = payload_or_none(args.payload)
     status = StatusLine(None if args.quiet else sys.stderr)

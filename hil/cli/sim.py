@@ -13,7 +13,8 @@ import json
 import sys
 from typing import Any
 
-from hil.cli._common import SEED, SIM_SPEED, bounded_int, finite_float, wants_json
+from hil.cli.support.options import SEED, SIM_SPEED, bounded_int, finite_float
+from hil.cli.support.output import wants_json
 from hil.errors import InputError
 
 

@@ -11,7 +11,8 @@ from hil.arm.catalog import ROBOT_NAMES
 from hil.calibration.measurements import write_measurements
 from hil.calibration.model_file import load_truth, truth_document, write_json
 from hil.calibration.synthetic import Noise, measure, random_configurations, random_truth
-from hil.cli._common import SEED, bounded_int, finite_float, wrote
+from hil.cli.support.options import SEED, bounded_int, finite_float
+from hil.cli.support.output import wrote
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -41,7 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hil.cli.output_paths import campaign_store
+    from hil.cli.support.output_paths import campaign_store
     from hil.errors import InputError
     from hil.files.outputs import check_output_dir
 

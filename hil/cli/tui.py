@@ -10,9 +10,8 @@ from __future__ import annotations
 import argparse
 
 from hil.arm.catalog import ROBOT_NAMES
-from hil.cli._common import CANDIDATES, POSE_COUNT, RMS_THRESHOLD_HELP, SEED, SIM_SPEED, rms_threshold
-from hil.cli.station_args import add_tracker_protocol
-from hil.errors import InputError
+from hil.cli.support.options import CANDIDATES, POSE_COUNT, RMS_THRESHOLD_HELP, SEED, SIM_SPEED, rms_threshold
+from hil.cli.support.station_options import add_tracker_protocol
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -41,26 +40,18 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def options_from(args: argparse.Namespace) -> object:
     """`TuiOptions` from the command line; bad input raises InputError before the app starts."""
-    from hil.cli.station_args import config_overrides
+    from hil.cli.support.station_options import station_source
     from hil.files.outputs import check_output_dir
-    from hil.station.config import check_runnable, load_config
-    from hil.station.robot_type import Claim, agreed_robot, config_claim, option_claim
+    from hil.jobs.calibration import check_pose_count
+    from hil.station.robot_type import Claim, agreed_robot, option_claim
     from hil.tui.session import TuiOptions
 
     check_output_dir(args.out_dir, field="--out-dir")  # a file, or a missing parent: refused up front
-    overrides = config_overrides(args)
-    from hil.cli.calibrate import _check_poses
-
-    _check_poses(args)  # as `hil calibrate`: too few --poses is refused before the app starts, not later
-    if args.config:
-        if args.truth or args.speed != 1.0 or args.tracker_protocol:
-            raise InputError("--truth, --speed and --tracker-protocol go with --sim, not --config "
-                             "(the configuration's tracker.protocol says which tracker it has)")
-        config = check_runnable(load_config(args.config))  # before the app opens (or creates) a store
-        agreed_robot([config_claim(config), *option_claim(args.robot)])  # both must name the same arm
-        return TuiOptions(config=config, db=args.db, out_dir=args.out_dir, overrides=overrides)
-    if not args.speed > 0:
-        raise InputError(f"--speed must be positive, got {args.speed}")
+    # as `hil calibrate`: too few --poses is refused before the app starts, not later
+    check_pose_count(args.poses, args.config, args.robot)
+    source = station_source(args)  # before the app opens (or creates) a store
+    if source.config is not None:
+        return TuiOptions(config=source.config, db=args.db, out_dir=args.out_dir, overrides=source.overrides)
     claims = option_claim(args.robot)
     if args.truth:
         from hil.calibration.model_file import load_truth
@@ -70,7 +61,7 @@ def options_from(args: argparse.Namespace) -> object:
     robot = agreed_robot(claims, default="ur5e")  # --robot and the truth must agree, before the app starts
     return TuiOptions(sim=True, speed=args.speed, seed=args.seed, robot=robot,
                       truth=args.truth, tracker_protocol=args.tracker_protocol or "geocom", db=args.db,
-                      out_dir=args.out_dir, overrides=overrides)
+                      out_dir=args.out_dir, overrides=source.overrides)
 
 
 def check_store(db: str | None, config: object | None) -> None:

@@ -7,7 +7,8 @@ import argparse
 from hil.calibration.identification import validate
 from hil.calibration.measurements import read_measurements
 from hil.calibration.model_file import load_geometry
-from hil.cli._common import RMS_THRESHOLD_HELP, mm, print_json, rms_threshold
+from hil.cli.support.options import RMS_THRESHOLD_HELP, rms_threshold
+from hil.cli.support.output import mm, print_json
 
 
 def register(sub: argparse._SubParsersAction) -> None:

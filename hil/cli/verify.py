@@ -21,21 +21,17 @@ an HTML report, both only when the test finishes. Exit codes: 0 done, 2 bad inpu
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
-import sys
-from pathlib import Path
-from types import SimpleNamespace
 from typing import Any
 
 from hil.arm.catalog import ROBOT_NAMES
-from hil.cli._common import SEED, SIM_SPEED, VERIFY_CYCLES
+from hil.cli.support.options import SEED, SIM_SPEED, VERIFY_CYCLES
 from hil.errors import InputError
 from hil.files.outputs import atomic_write_text, check_output
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from hil.cli.station_args import add_tracker_protocol
+    from hil.cli.support.station_options import add_tracker_protocol
 
     p = sub.add_parser("verify", help="ISO 9283 pose test, uncompensated and compensated",
                        description=__doc__.split("\n\n")[0],
@@ -67,7 +63,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hil.cli.interrupts import interruptible
+    from hil.cli.support.interrupts import interruptible
     from hil.verify.session import load_model
 
     model = load_model(args.model) if args.model else None  # a missing or bad file: exit 2, nothing started
@@ -81,7 +77,7 @@ def _check_outputs(args: argparse.Namespace) -> None:
     station starts (as ``hil calibrate`` does)."""
     if not (args.out or args.report):
         return
-    from hil.cli.output_paths import campaign_store
+    from hil.cli.support.output_paths import campaign_store
 
     db, where = campaign_store(args.db, args.config)
     inputs = {"--config": args.config, "--truth": args.truth, "--model": args.model}
@@ -92,101 +88,37 @@ def _check_outputs(args: argparse.Namespace) -> None:
                      outputs={"--out": args.out})
 
 
-def station_args(args: argparse.Namespace, model: Any) -> SimpleNamespace:
-    """The options `station_from_args` reads: a calibration's counts are not a verification's."""
+def _simulated_robot(args: argparse.Namespace, model: Any) -> str | None:
+    """The robot to simulate: ``--robot``, else with ``--sim`` the model's arm (the one it calibrated)
+    unless a ``--truth`` names it; a ``--robot`` the model contradicts is bad input, naming both."""
     robot = args.robot
     if model is not None and robot is not None and robot.lower() != model.geometry.robot:
         raise InputError(f"--robot is {robot}, the model {model.source} is of a {model.geometry.robot}")
     if robot is None and args.sim and model is not None and not args.truth:
-        robot = model.geometry.robot  # the simulated arm is the one the model calibrated
-    return SimpleNamespace(config=args.config, sim=args.sim, truth=args.truth, speed=args.speed,
-                           seed=args.seed, robot=robot, tracker_protocol=args.tracker_protocol,
-                           poses=None, validation=None, candidates=None, accept=None, cycles=1)
-
-
-def check_model_robot(model: Any, config: Any) -> None:
-    """A model of another arm type than the station's is bad input, naming both."""
-    if model is not None and model.geometry.robot != config.robot["type"]:
-        raise InputError(f"--model {model.source} is a model of a {model.geometry.robot}, the station's "
-                         f"robot.type is {config.robot['type']}")
+        robot = model.geometry.robot
+    return robot
 
 
 def _run(args: argparse.Namespace, model: Any) -> int:
-    from hil.campaign.engine import RealClock
-    from hil.cli.calibrate import _say_outage
-    from hil.cli.progress import JsonLines, Progress
-    from hil.cli.station_args import station_from_args
-    from hil.station.devices import HARDWARE_ERRORS, open_devices
-    from hil.station.robot_type import check_controller
-    from hil.store import FINISHED, Store, StoreError, address_lock, resolve_location
-    from hil.verify.design import check_cube
-    from hil.verify.session import requested_cube, verify
+    from hil.cli.support.output import say, wrote
+    from hil.cli.support.progress import JsonLines, Progress
+    from hil.jobs.station import StationSource
+    from hil.jobs.verification import VerificationRequest, run_verification
 
-    with station_from_args(station_args(args, model)) as (config, identity, truth):
-        check_model_robot(model, config)
-        cube = requested_cube(config, sim=args.sim)
-        if cube is not None:  # before anything connects: a cube beyond reach is bad input
-            from hil.verify.session import cube_where
-
-            tool = model.geometry.smr if model else config.smr["offset"]
-            check_cube(config.robot["type"], cube, tool, (config.keep_in["min"], config.keep_in["max"]),
-                       cube_where(config))
-        cycles = args.cycles or config.verify["cycles"]
-        path = resolve_location(args.db, config)
-        store: Store | None = (Store.open(path, config=config) if not isinstance(path, Path) or path.exists()
-                               else None)
-        guards = contextlib.ExitStack()
-        devices = None
-        try:
-            guards.enter_context(address_lock(config.robot["address"], what="hil verify"))
-            try:
-                devices = open_devices(config)
-            except HARDWARE_ERRORS as exc:
-                print(f"hil: hardware fault: cannot connect: {type(exc).__name__}: {exc}", file=sys.stderr)
-                return 3
-            info = devices.robot.info
-            check_controller(config, info)  # the controller's word on the robot type, before anything
-            if store is None:
-                store = Store.open(path, config=config)
-            robot = {"type": config.robot["type"], "serial": info.serial if info else "",
-                     "model": info.model if info else "", "software": info.software_version if info else ""}
-            store.on_outage = _say_outage
-            subscribers: list[Any] = [Progress()]
-            if args.json:
-                subscribers.append(JsonLines())
-
-            def say(campaign: str, resumed: bool) -> None:
-                print(f"hil: {'resuming' if resumed else 'starting'} verification {campaign}"
-                      f"{'' if model else ' (no --model: uncompensated only)'}", file=sys.stderr)
-
-            try:
-                done = verify(store, devices, config, identity, robot, model=model, cube=cube, cycles=cycles,
-                              clock=RealClock(args.speed), subscribers=subscribers, new=args.new,
-                              resume_only=args.resume, truth=truth, on_campaign=say)
-            except StoreError as exc:  # the result could not be recorded (a full disk): a fault
-                print(f"hil: fault: could not record the verification: {exc.__cause__ or exc}",
-                      file=sys.stderr)
-                return 3
-        finally:
-            if devices is not None:
-                devices.close()  # run_plan closed them already; a refusal before it did not
-            guards.close()
-            if store is not None:
-                store.close()
-    outcome = done.outcome
-    if outcome.status not in FINISHED:
-        if outcome.status == "interrupted":
-            print(f"hil: verification {done.campaign} is resumable: re-run the same command to continue it",
-                  file=sys.stderr)
-        return outcome.exit_code
-    from hil.cli._common import wrote
-
+    source = StationSource.of(config=args.config, sim=args.sim, truth=args.truth, speed=args.speed,
+                              seed=args.seed, robot=_simulated_robot(args, model),
+                              tracker_protocol=args.tracker_protocol)
+    request = VerificationRequest(source, model, args.cycles, args.db, new=args.new, resume_only=args.resume)
+    subscribers: list[Any] = [Progress(), JsonLines()] if args.json else [Progress()]
+    out = run_verification(request, subscribers=subscribers, say=say)
+    if out.document is None:  # not finished: resumable, so no result (yet)
+        return out.exit_code
     if args.out:
-        atomic_write_text(args.out, json.dumps(done.document, indent=2, allow_nan=False) + "\n")
+        atomic_write_text(args.out, json.dumps(out.document, indent=2, allow_nan=False) + "\n")
         wrote(args.out, "hil-verification/1")
-    if args.report and "results" in done.document:
+    if args.report and "results" in out.document:
         from hil.report.verification import write_verification_report
 
-        write_verification_report(done.document, args.report)
+        write_verification_report(out.document, args.report)
         wrote(args.report, "HTML report")
-    return outcome.exit_code
+    return out.exit_code

@@ -129,15 +129,15 @@ def _name(v: Any) -> str | None:
 
 #: The largest RMS acceptance threshold (m): a calibrated arm is judged on tenths of a millimetre, so
 #: more is a value typed in millimetres (``acceptance = 0.1`` would pass at 100 mm). The command
-#: line's ``--accept``/``--max-rms`` have the same ceiling (`hil.cli._common.MAX_RMS_THRESHOLD`).
+#: line's ``--accept``/``--max-rms`` have the same ceiling (`hil.cli.support.options.MAX_RMS_THRESHOLD`).
 MAX_ACCEPTANCE = 0.01
 
 #: Most candidate configurations for the selector: ~650 bytes of Jacobian each, so 200 000 are ~130 MB
-#: (1e9 asked numpy for 107 GiB). The same as ``--candidates`` (`hil.cli._common.MAX_CANDIDATES`).
+#: (1e9 asked numpy for 107 GiB). The same as ``--candidates`` (`hil.cli.support.options.MAX_CANDIDATES`).
 MAX_CANDIDATES = 200_000
 
 #: Most calibration or validation poses: at ~10 s a pose 1000 are a day of measuring, far beyond any
-#: calibration (``--poses``/``--validation`` have the same ceiling: `hil.cli._common.POSE_COUNT`).
+#: calibration (``--poses``/``--validation`` have the same ceiling: `hil.cli.support.options.POSE_COUNT`).
 MAX_POSES = 1000
 
 #: The farthest a tracker may stand from the robot base (m): the selector keeps the SMR within the

@@ -9,7 +9,7 @@ What a campaign does when one of them fails is `hil.campaign.suspenders`.
 from __future__ import annotations
 
 import contextlib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -90,8 +90,14 @@ class Devices:
 
     robot: IsolatedURRobot
     tracker: Tracker
+    closed: bool = field(default=False, init=False, repr=False)
 
     def close(self) -> None:
+        """Close both, once: a run closes them as it ends and the station that opened them on its way
+        out (`hil.jobs.station.take_station`); the second close does nothing."""
+        if self.closed:
+            return
+        self.closed = True
         for close in (self.robot.close, self.tracker.close):
             with contextlib.suppress(Exception):  # best effort; both must be attempted
                 close()

@@ -21,6 +21,11 @@ from hil.arm.catalog import get_robot
 from hil.errors import InputError, UnknownRobotError
 
 
+class ControllerMismatch(InputError):
+    """The connected controller reports another robot than the station's (bad input: the configured
+    kinematics would drive another arm); its message names every source."""
+
+
 @dataclass(frozen=True)
 class Claim:
     """One source's word on the robot type, and how to name that source in an error.
@@ -99,4 +104,7 @@ def check_controller(config: Any, info: Any, *others: Claim) -> None:
     said = controller_claim(info, config.robot["address"])
     if said is None:
         return
-    agreed_robot([config_claim(config), *others, said])
+    try:
+        agreed_robot([config_claim(config), *others, said])
+    except InputError as exc:
+        raise ControllerMismatch(str(exc)) from None

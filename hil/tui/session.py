@@ -1,9 +1,10 @@
 """The app's link to the station, the store and the engine. Every method that blocks runs on a worker
 thread; results reach the UI only as messages (`hil.tui.messages`), posted thread-safely.
 
-It mirrors ``hil calibrate`` (`hil.cli.calibrate.run`) step for step — same station start-up, store,
-resume rules, event subscribers, result document — so a campaign run from the terminal app is the
-same campaign as a headless one. Two differences, both for the operator at the terminal:
+It takes the station and runs campaigns the way ``hil calibrate`` does, through the same functions
+(`hil.jobs.station.take_station`, `hil.jobs.calibration.run_calibration`): the same lock, devices,
+controller check, store claim, resume rules, critical subscribers and result document, so a campaign
+run from the terminal app is the same campaign as a headless one. The differences are the operator's:
 
 * the robot and tracker stay connected between runs (the Station screen reads their status and can
   measure the SMR); a run takes the open devices over and the session reconnects afterwards;
@@ -25,8 +26,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import threading
-import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -34,9 +34,13 @@ from typing import Any
 import numpy as np
 from textual.message import Message
 
-from hil.campaign.engine import Engine, RealClock
-from hil.campaign.events import Event, EventBus, RunFinished
+from drivers.robot.model import RobotIdentity
+from hil.campaign.engine import Engine
+from hil.campaign.events import Event, RunFinished
 from hil.errors import InputError
+from hil.jobs.calibration import StoreGate
+from hil.jobs.station import SimulatedSpec, StationSource, station_setup, take_station
+from hil.jobs.words import outage_words
 from hil.station.config import StationConfig
 from hil.tui.messages import (
     CampaignLoaded,
@@ -86,24 +90,14 @@ class TuiOptions:
     start_station: bool = True  # False: no station at all (snapshot tests feed the screens by hand)
 
 
-@contextlib.contextmanager
-def station_context(options: TuiOptions) -> Iterator[tuple[StationConfig, dict[str, Any], dict | None, Any]]:
-    """(config to run, config identifying the run in the store, hidden truth, simulator or None).
-
-    The simulator is handed out too: the app needs it for the fault-injection commands of the
-    command palette.
-    """
+def station_source(options: TuiOptions) -> StationSource:
+    """Where the app's station comes from (`hil.jobs.station`): the configuration, or the simulator."""
+    overrides = _dotted(options.overrides)
     if not options.sim:
         assert options.config is not None, "--config or --sim"
-        overrides = _dotted(options.overrides)
-        config = options.config.with_overrides(**overrides) if overrides else options.config
-        yield config, config.as_dict(), None, None
-        return
-    from hil.station.simulated import simulated_station
-
-    with simulated_station(options.robot, options.truth, options.speed, options.seed,
-                           options.tracker_protocol, **_dotted(options.overrides)) as station:
-        yield station
+        return StationSource(config=options.config, overrides=overrides)
+    return StationSource(sim=SimulatedSpec(options.robot, options.truth, options.speed, options.seed,
+                                           options.tracker_protocol), overrides=overrides)
 
 
 def _error(exc: BaseException) -> str:
@@ -136,13 +130,12 @@ class Session:
         self.paused = False
         self.quitting = False
         self._run_thread: threading.Thread | None = None
-        self._store_lock = threading.Lock()  # the run's store writes vs. `abandon_run`
-        self._abandoned = False  # the app gave up waiting for the run: it writes nothing more
+        self._gate = StoreGate()  # the run's store writes vs. `abandon_run`
         self._device_lock = threading.Lock()
         self._stop = threading.Event()
         self.ready = threading.Event()
         self._host: threading.Thread | None = None
-        self._arm_lock: contextlib.ExitStack | None = None  # the arm's address lock, while we have it
+        self._held: contextlib.ExitStack | None = None  # the station taken (`_take`), while we have it
 
     # --- plumbing ----------------------------------------------------------------------------------
     def post(self, message: Message) -> None:
@@ -157,12 +150,9 @@ class Session:
     def notice(self, text: str, severity: str = "information") -> None:
         self.post(Notice(text, severity))
 
-    def _store_outage(self, reason: str | None) -> None:
-        """The database link went (the run waits, the arm stands still) or came back."""
-        if reason is None:
-            self.notice("database link back: the run continues")
-        else:
-            self.notice(f"{reason}; the arm waits at its pose", "warning")
+    def _say(self, text: str, severity: str = "information") -> None:
+        """A job's words (`hil.jobs.words.Say`) as a notice."""
+        self.notice(text, severity)
 
     # --- the station's lifetime ----------------------------------------------------------------------
     def start(self) -> None:
@@ -176,12 +166,14 @@ class Session:
                      else "")
         self.changed()
         try:
-            with station_context(self.options) as (config, identity, truth, sim):
+            with station_setup(station_source(self.options)) as setup:
                 from hil.store import Store
 
-                self.config, self.identity, self.truth, self.sim = config, identity, truth, sim
+                config = setup.config
+                self.config, self.identity, self.truth, self.sim = (config, setup.identity, setup.truth,
+                                                                    setup.simulator)
                 self.store = Store.open(self.options.db, config=config)
-                self.store.on_outage = self._store_outage
+                self.store.on_outage = outage_words(self._say)
                 st.name = config.station["name"]
                 st.robot_address, st.tracker_url = config.robot["address"], config.tracker["url"]
                 st.phase = "disconnected"
@@ -206,19 +198,18 @@ class Session:
             self._host.join(timeout)
 
     # --- devices -------------------------------------------------------------------------------------
-    def _lock_arm(self, config: StationConfig) -> None:
-        """Hold the host-local lock on the arm's address (`hil.store.leases`, guard 1) before
-        connecting: while this app has the arm connected or runs on it, no other process of this
-        host connects to it (LeaseRefused, naming that process, if one already has)."""
-        if self._arm_lock is None:
-            from hil.store import address_lock
+    def _take(self, config: StationConfig) -> Any:
+        """Take the station (`hil.jobs.station.take_station`: the arm's address lock, the devices, the
+        controller's word on the robot type) and hold it until `_release`: while this app has the arm
+        connected or runs on it, no other process of this host connects to it."""
+        stack = contextlib.ExitStack()
+        taken = stack.enter_context(take_station(config, what="hil tui"))
+        self._held = stack
+        return taken
 
-            stack = contextlib.ExitStack()
-            stack.enter_context(address_lock(config.robot["address"], what="hil tui"))
-            self._arm_lock = stack
-
-    def _unlock_arm(self) -> None:
-        stack, self._arm_lock = self._arm_lock, None
+    def _release(self) -> None:
+        """Let go of the station taken by `_take` (its devices closed, the lock released)."""
+        stack, self._held = self._held, None
         if stack is not None:
             stack.close()
 
@@ -228,8 +219,7 @@ class Session:
         A controller that reports another robot than the configured ``robot.type`` is refused here
         (`hil.station.robot_type.check_controller`): shown on the Station screen and disconnected, so
         the operator sees it at connect rather than when a run starts (which would refuse it too)."""
-        from hil.station.devices import open_devices
-        from hil.station.robot_type import check_controller
+        from hil.station.robot_type import ControllerMismatch
 
         st = self.station
         if self.config is None:
@@ -241,25 +231,19 @@ class Session:
             st.phase, st.error = "connecting", ""
             self.changed()
             try:
-                self._lock_arm(self.config)
-                devices = open_devices(self.config)
-            except Exception as exc:  # every driver error, and a bad tracker URL, is the operator's to see
-                self._unlock_arm()
-                st.phase, st.error = "disconnected", f"cannot connect: {_error(exc)}"
-                self._safety_fault(exc)
+                devices = self._take(self.config).devices
+            except Exception as exc:
+                # a controller of another robot: the configured kinematics would drive another arm, so
+                # the station let go of it again
+                refused = isinstance(exc, ControllerMismatch)
+                what = "cannot use this robot" if refused else "cannot connect"
+                st.phase, st.error = "disconnected", f"{what}: {_error(exc)}"
+                if not refused:  # every driver error, and a bad tracker URL, is the operator's to see
+                    self._safety_fault(exc)
                 self.notice(st.error, "error")
                 self.changed()
                 return
             info, ident = devices.robot.info, devices.tracker.identity
-            try:  # the controller's word on the robot type, now rather than when a run starts
-                check_controller(self.config, info)
-            except InputError as exc:  # the configured kinematics would drive another arm: let go of it
-                devices.close()
-                self._unlock_arm()
-                st.phase, st.error = "disconnected", f"cannot use this robot: {_error(exc)}"
-                self.notice(st.error, "error")
-                self.changed()
-                return
             self.devices = devices
             st.robot = ({"model": info.model, "serial": info.serial, "software": info.software_version}
                         if info is not None else {})
@@ -310,9 +294,10 @@ class Session:
 
     def _close_devices(self) -> None:
         devices, self.devices = self.devices, None
-        if devices is not None:
+        if self._held is not None:
+            self._release()  # closes the devices it opened, then releases the lock
+        elif devices is not None:  # handed to the session as they are (tests)
             devices.close()
-        self._unlock_arm()
 
     def _read_status(self) -> None:
         """Safety status of the robot and lock status of the tracker (device lock held)."""
@@ -447,96 +432,73 @@ class Session:
         self._run_thread.start()
 
     def run(self, resume_campaign: str | None) -> None:
-        """One campaign, as ``hil calibrate`` runs it (a new one, or `resume_campaign` continued)."""
-        from hil.campaign.chooser import campaign_chooser
-        from hil.campaign.runner import claim_run, plan_saver, run_campaign
-        from hil.report.result import result_document
-        from hil.station.devices import open_devices
+        """One campaign, as ``hil calibrate`` runs it (a new one, or `resume_campaign` continued), on the
+        station this app holds (`hil.jobs.calibration.run_calibration`)."""
+        from hil.jobs.calibration import CalibrationRequest, run_calibration
+        from hil.jobs.station import StationSetup, TakenStation
 
         if self.run_active or self.config is None or self.store is None:
             return
-        self.run_active, self._abandoned = True, False
-        st, store = self.station, self.store
-        campaign = ""  # none of ours until claimed: a refused claim must not touch the campaign
-        self.run_campaign = campaign
-        lease: Any = None
-        record = store.as_subscriber()
+        self.run_active, self._gate = True, StoreGate()
+        st, store, gate = self.station, self.store, self._gate
+        self.run_campaign = ""  # none of ours until claimed: a refused claim must not touch the campaign
 
-        def to_store(event: Event) -> None:  # critical; silent once the app has given the run up
-            with self._store_lock:
-                if not self._abandoned:
-                    record(event)
+        def claimed(campaign: str) -> None:
+            self.run_campaign = campaign
+            st.unfinished = None
 
         def to_station(event: Event) -> None:  # the Station screen's readings, from the run's events
             if st.apply(event):
                 self.changed()
 
+        error: BaseException | None = None
         try:
             config = self.run_config()
             with self._device_lock:
                 devices, self.devices = self.devices, None
             if devices is None:
-                self._lock_arm(config)
-                devices = open_devices(config)
+                devices = self._take(config).devices
             st.phase = "in run"
             self.changed()
-            info = devices.robot.info
-            robot = {"type": config.robot["type"], "serial": info.serial if info else "",
-                     "model": info.model if info else "", "software": info.software_version if info else ""}
-            try:  # this process owns the campaign and the arm before the first motion (hil.store.leases)
-                lease, resume = claim_run(store, self.run_identity(), robot, campaign=resume_campaign)
-            except BaseException:
-                devices.close()
-                raise
-            campaign = lease.campaign
-            self.run_campaign = campaign
-            st.unfinished = None
-            events: list[Event] = []
-            bus = EventBus()
-            bus.subscribe(to_store, critical=True)
-            bus.subscribe(plan_saver(store, campaign), critical=True)
-            bus.subscribe(events.append)
-            bus.subscribe(to_station)
-            bus.subscribe(lambda event: self.post(EngineEvent(event)))
-            started = time.time()
-            outcome = run_campaign(config, campaign_chooser(config), bus=bus, campaign=campaign,
-                                   resume=resume, devices=devices,
-                                   clock=RealClock(self.options.speed if self.options.sim else 1.0),
-                                   engine_ready=self._engine_ready, lease=lease)
-            status, detail, error = self._final(outcome, events)
-            result = result_document(outcome, config, events, started, self.truth)
-            result["status"] = status
-            with self._store_lock:
-                if not self._abandoned:
-                    store.set_status(campaign, status, detail=detail or None, result=result)
+            assert self.identity is not None
+            request = CalibrationRequest(StationSetup(config, self.identity, self.truth, self.sim),
+                                         identity=self.run_identity(),
+                                         speed=self.options.speed if self.options.sim else 1.0,
+                                         campaign=resume_campaign, resume="new")
+            taken = TakenStation(config, devices, RobotIdentity.of(config.robot["type"], devices.robot.info),
+                                 store)
+            to_screens = (to_station, lambda event: self.post(EngineEvent(event)))
+            out = run_calibration(request, taken, subscribers=to_screens, say=self._say,
+                                  engine_ready=self._engine_ready, gate=gate, status_of=self._final,
+                                  on_claimed=claimed)
+            status, detail = out.status, out.detail
+            if out.run is not None and out.run.error is not None:
+                error = out.run.error
         except Exception as exc:  # bad input found before motion, a store failure, a connect failure
             status, detail, error = "failed", _error(exc), exc
             if self.quitting:
                 status = INTERRUPTED
             else:
                 self.notice(f"the run stopped: {detail}", "error")
-            if campaign:
-                with self._store_lock, contextlib.suppress(Exception):
-                    if not self._abandoned:
-                        store.set_status(campaign, status, detail=detail)
+            if self.run_campaign:
+                with contextlib.suppress(Exception):
+                    gate.write(lambda: store.set_status(self.run_campaign, status, detail=detail))
         finally:
-            if lease is not None:
-                lease.release()
-            self._unlock_arm()  # the run closed the devices; connect() takes the lock again
+            self._close_devices()  # the run's devices, and the station's lock; connect() takes them again
             self.engine = None
             self.run_active = False
             st.phase, st.safety, st.lock = "disconnected", "-", "-"
             self.changed()
         self._safety_fault(error)
-        self.post(RunEnded(campaign, status, detail, self.quitting))
+        self.post(RunEnded(self.run_campaign, status, detail, self.quitting))
         if not self.quitting and not self._stop.is_set():
             self.connect()
             if self.devices is None:
                 self.check_unfinished()
                 self.changed()
 
-    def _final(self, outcome: Any, events: list[Event]) -> tuple[str, str, BaseException | None]:
-        """The campaign's status in the store, its plain-words detail and the error that ended it.
+    def _final(self, outcome: Any, events: list[Event]) -> tuple[str, str]:
+        """The campaign's status in the store and its plain-words detail.
 
         An emergency stop, and whatever a quit ends the run with, leave it ``interrupted``
         (resumable): nothing is wrong with the campaign, the operator carries on after recovering.
@@ -546,13 +508,13 @@ class Session:
         error = outcome.error
         if error is None:
             finished = next((e for e in reversed(events) if isinstance(e, RunFinished)), None)
-            return outcome.status, finished.detail if finished is not None else "", None
+            return outcome.status, finished.detail if finished is not None else ""
         detail = _error(error)
         if isinstance(error, EmergencyStop):
-            return INTERRUPTED, f"{detail}; recover the arm, then resume the campaign", error
+            return INTERRUPTED, f"{detail}; recover the arm, then resume the campaign"
         if self.quitting and outcome.status in ("aborted", "failed", INTERRUPTED):
-            return INTERRUPTED, QUIT_REASON, error
-        return outcome.status, detail, error
+            return INTERRUPTED, QUIT_REASON
+        return outcome.status, detail
 
     def _engine_ready(self, engine: Engine) -> None:
         self.engine, self.paused = engine, False
@@ -576,16 +538,17 @@ class Session:
     def abandon_run(self) -> str:
         """The run did not stop in time (a long computation): mark its campaign interrupted here and
         let the run write nothing more; returns the campaign (or "")."""
-        with self._store_lock:
-            if not self.run_active or self._abandoned:
-                return ""
-            self._abandoned = True
-            campaign = self.run_campaign
-            if campaign and self.store is not None:
+        campaign, store = self.run_campaign, self.store
+
+        def mark() -> None:
+            if campaign and store is not None:
                 try:
-                    self.store.set_status(campaign, INTERRUPTED, detail=QUIT_REASON)
+                    store.set_status(campaign, INTERRUPTED, detail=QUIT_REASON)
                 except Exception as exc:
                     log.info("marking %s interrupted: %s", campaign, technical(exc))
+
+        if not self.run_active or not self._gate.abandon(mark):
+            return ""
         return campaign
 
     def pause(self) -> bool:

@@ -27,6 +27,7 @@ from hil.campaign.events import EventBus, PointMeasured, PoseStarted, Resumed, R
 from hil.campaign.plan import CALIBRATION
 from hil.campaign.runner import run_campaign
 from hil.station.config import default_config
+from hil.station.devices import open_devices
 from hil.store import Store
 from mocks.station import start_station
 from mocks.world import World
@@ -171,7 +172,8 @@ class Station:
     def run(self):
         try:
             return run_campaign(self.config, campaign_chooser(self.config), bus=self.bus,
-                                campaign=self.campaign, clock=RealClock(SPEED))
+                                campaign=self.campaign, clock=RealClock(SPEED),
+                                devices=open_devices(self.config))
         finally:
             self.sim.stop()
 

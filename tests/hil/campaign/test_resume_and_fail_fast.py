@@ -39,6 +39,7 @@ from hil.campaign.plan import (
 )
 from hil.campaign.runner import RecordFailed, plan_saver, resume_state, run_campaign, store_recorder
 from hil.station.config import default_config
+from hil.station.devices import open_devices
 from hil.store import Store
 from tests.hil.campaign.fakes import FakeArm, FakeBeamLost, FakeTracker, visible_poses
 from tests.hil.campaign.full_disk import FullDisk
@@ -253,7 +254,7 @@ def test_a_wrong_tracker_position_on_the_simulated_station_stops_after_three_los
         events: list = []
         bus = EventBus()
         bus.subscribe(events.append)
-        outcome = run_campaign(config, choose, bus=bus, clock=RealClock(100.0))
+        outcome = run_campaign(config, choose, bus=bus, clock=RealClock(100.0), devices=open_devices(config))
     finally:
         sim.stop()
     assert outcome.status == "failed" and outcome.exit_code == 3, outcome.error

@@ -35,7 +35,7 @@ from hil.campaign.events import (
 )
 from hil.campaign.plan import CALIBRATION, VALIDATION, Choice, ResumeState, calibration_plan
 from hil.campaign.runner import plan_saver, resume_state, run_campaign, store_recorder
-from hil.cli.progress import Progress
+from hil.cli.support.progress import Progress
 from hil.errors import InputError
 from hil.report import render_html
 from hil.report.data import report_data_from_result

@@ -29,6 +29,7 @@ from hil.campaign.events import (
 )
 from hil.campaign.runner import run_campaign
 from hil.station.config import default_config
+from hil.station.devices import open_devices
 from hil.store import Store
 
 SPEED = 200.0
@@ -54,7 +55,7 @@ def test_a_simulated_campaign_warms_the_arm_up_and_watches_the_reference(tmp_pat
         bus.subscribe(store.as_subscriber(), critical=True)
         bus.subscribe(events.append)
         outcome = run_campaign(config, campaign_chooser(config), bus=bus, campaign=campaign,
-                               clock=RealClock(SPEED))
+                               devices=open_devices(config), clock=RealClock(SPEED))
     finally:
         sim.stop()
     assert outcome.status in ("accepted", "rejected"), outcome.error

@@ -177,7 +177,7 @@ def test_select_starts_from_a_configuration_inside_the_joint_limits(
 
 def test_the_two_candidate_ceilings_agree() -> None:
     """``--candidates`` and ``campaign.candidates`` overriding each other must mean the same."""
-    from hil.cli._common import MAX_CANDIDATES
+    from hil.cli.support.options import MAX_CANDIDATES
     from hil.station import config
 
     assert MAX_CANDIDATES == config.MAX_CANDIDATES

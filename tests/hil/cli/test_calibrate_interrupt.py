@@ -25,7 +25,7 @@ from hil.calibration.synthetic import random_truth
 from hil.campaign.engine import RunInterrupted
 from hil.campaign.plan import Choice
 from hil.cli import main
-from hil.cli.interrupts import interruptible
+from hil.cli.support.interrupts import interruptible
 from hil.store import Store
 from tests.hil.campaign.fakes import FakeArm, FakeTracker, visible_poses
 

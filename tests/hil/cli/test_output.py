@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from hil.cli import main
-from hil.cli._common import EXIT_STDOUT_CLOSED
+from hil.cli.support.output import EXIT_STDOUT_CLOSED
 from hil.store import Store
 
 ROOT = Path(__file__).resolve().parents[3]

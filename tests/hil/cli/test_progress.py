@@ -14,7 +14,7 @@ from hil.campaign.events import (
     RunFinished,
     RunStarted,
 )
-from hil.cli.progress import VERIFICATION, Progress
+from hil.cli.support.progress import VERIFICATION, Progress
 from hil.verify.plan import KIND
 
 MODES = ["uncompensated", "compensated"]

@@ -11,7 +11,7 @@ from hil.campaign.events import (
     WarmupFinished,
     WarmupProgress,
 )
-from hil.cli.progress import Progress
+from hil.cli.support.progress import Progress
 
 Q = [0.0] * 6
 

@@ -97,18 +97,19 @@ class _BlindTracker:
 
 def test_a_tracker_that_saw_nothing_makes_the_run_incomplete_not_a_hardware_fault(
         tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
-    import hil.cli.moveb
+    import hil.jobs.moveb
     import hil.station.devices
+    from hil.jobs.station import StationSetup
 
     world, home = _sim_world(1)
     truth = truth_document(world.truth, Noise())
 
     @contextlib.contextmanager
-    def station(_args: object):  # type: ignore[no-untyped-def]
-        yield default_config(), {}, truth
+    def station(_source: object):  # type: ignore[no-untyped-def]
+        yield StationSetup(default_config(), {}, truth)
 
     devices = SimpleNamespace(robot=_Robot(home), tracker=_BlindTracker(), close=lambda: None)
-    monkeypatch.setattr(hil.cli.moveb, "station_from_args", station)
+    monkeypatch.setattr(hil.jobs.moveb, "station_setup", station)
     monkeypatch.setattr(hil.station.devices, "open_devices", lambda _config: devices)
     out = tmp_path / "run.json"
     code = main(["moveb", "run", str(EXAMPLES / "square.moveb"), "--sim", "--out", str(out)])

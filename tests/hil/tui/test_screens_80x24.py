@@ -12,7 +12,7 @@ from textual.app import App, ComposeResult
 
 from hil.campaign.events import EventBus, PlanReady, PointMeasured, RunFinished, RunStarted
 from hil.campaign.runner import plan_saver
-from hil.cli.progress import Progress
+from hil.cli.support.progress import Progress
 from hil.station.config import default_config
 from hil.store import Store
 from hil.tui.app import create_app

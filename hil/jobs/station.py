@@ -1,0 +1,170 @@
+"""Taking a station: the one sequence every job that drives an arm goes through.
+
+Where a job's station comes from (`StationSource`: a station configuration, or the simulated station
+started for the job) and how the arm is taken (`take_station`): the host-local lock on the arm's
+address, the robot and the tracker opened, the controller's word on the robot type checked, the
+store opened or created, one robot identity. ``hil calibrate``, ``hil verify``, ``hil moveb run`` and
+the terminal app all take the arm this way, so a guard added here guards every one of them; before
+this module each front-end spelled the sequence out itself, and the lock and the robot-type check had
+to be added to each in turn.
+
+Order matters, and is the same for all:
+
+1. an existing store is opened first (a damaged or newer one is refused before the arm is touched);
+2. the arm's address lock (`hil.store.address_lock`): no second hil process of this host connects;
+3. the devices (`hil.station.devices.open_devices`; a driver error leaves nothing open and is raised
+   as it is, typed, for the caller to report as a station fault);
+4. the controller's model checked against ``robot.type`` and every other claim (`check_controller`);
+5. only then is a new store file created, so a refused station leaves no file behind.
+
+Everything taken is released on every way out (an exception, Ctrl-C, a normal end) in reverse order.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from drivers.robot.model import RobotIdentity
+from hil.errors import InputError
+from hil.station.config import StationConfig, check_runnable, load_config
+from hil.station.robot_type import Claim, agreed_robot, check_controller, config_claim, option_claim
+
+if TYPE_CHECKING:
+    from hil.station.devices import Devices
+    from hil.store import Store
+
+
+@dataclass(frozen=True)
+class SimulatedSpec:
+    """The simulated station a job starts for itself (``--sim``)."""
+
+    robot: str | None = None  # None: the truth's, else a UR5e
+    truth: str | None = None  # a hil-truth/1 file, else a random arm from `seed`
+    speed: float = 1.0  # fast-time factor
+    seed: int = 1
+    tracker_protocol: str = "geocom"
+
+
+@dataclass(frozen=True)
+class StationSource:
+    """Where a job's station comes from: a loaded configuration, or a simulated station.
+
+    `overrides` are ``section__key`` values the command line or the app set over the configuration
+    (``campaign__calibration_poses``...); with a configuration they change the campaign's identity too.
+    """
+
+    config: StationConfig | None = None
+    sim: SimulatedSpec | None = None
+    overrides: dict[str, Any] = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, *, config: str | StationConfig | None, sim: bool, truth: str | None = None,
+           speed: float = 1.0, seed: int = 1, robot: str | None = None,
+           tracker_protocol: str | None = None, overrides: dict[str, Any] | None = None) -> StationSource:
+        """The source the options name (``--config`` or ``--sim`` and theirs), checked before anything
+        starts: the simulator's options with a configuration, a non-positive speed, an unknown
+        ``--robot`` or one the configuration contradicts are bad input (InputError naming them)."""
+        said = option_claim(robot)  # an unknown --robot is refused first, named
+        overrides = dict(overrides or {})
+        if config is not None:
+            if truth or speed != 1.0 or tracker_protocol:
+                raise InputError("--truth, --speed and --tracker-protocol go with --sim, not --config "
+                                 "(the configuration's tracker.protocol says which tracker it has)")
+            loaded = config if isinstance(config, StationConfig) else load_config(config)
+            loaded = check_runnable(loaded)  # before a store is opened or created
+            agreed_robot([config_claim(loaded), *said])  # both must name the same arm
+            return cls(config=loaded, overrides=overrides)
+        if not sim:
+            raise InputError("--config or --sim: which station?")
+        if not speed > 0:
+            raise InputError(f"--speed must be positive, got {speed}")
+        return cls(sim=SimulatedSpec(robot, truth, speed, seed, tracker_protocol or "geocom"),
+                   overrides=overrides)
+
+    @property
+    def speed(self) -> float:
+        """The station's clock speed: fast time for a simulated one, real time for a real one."""
+        return self.sim.speed if self.sim is not None else 1.0
+
+
+@dataclass(frozen=True)
+class StationSetup:
+    """A station ready to be taken: its configuration and what identifies its runs in the store."""
+
+    config: StationConfig  # to run with
+    identity: dict[str, Any]  # the configuration that identifies a campaign (no addresses of a sim)
+    truth: dict[str, Any] | None  # the simulated arm's hidden truth (None: a real station)
+    simulator: Any = None  # the running simulator (fault injection), None for a real station
+
+
+@contextlib.contextmanager
+def station_setup(source: StationSource) -> Iterator[StationSetup]:
+    """The station of `source`, set up for a job (a simulated one started, and stopped on exit)."""
+    if source.sim is None:
+        assert source.config is not None
+        config = source.config.with_overrides(**source.overrides) if source.overrides else source.config
+        yield StationSetup(config, config.as_dict(), None)
+        return
+    from hil.station.simulated import simulated_station
+
+    sim = source.sim
+    with simulated_station(sim.robot, sim.truth, sim.speed, sim.seed, sim.tracker_protocol,
+                           **source.overrides) as (config, identity, truth, simulator):
+        yield StationSetup(config, identity, truth, simulator)
+
+
+@dataclass
+class TakenStation:
+    """A station taken by one job: its open devices, the arm they drive, and the store."""
+
+    config: StationConfig
+    devices: Devices
+    robot: RobotIdentity
+    store: Store | None = None
+
+
+def open_existing_store(location: Any, config: StationConfig) -> Store | None:
+    """The store at `location` if it exists (a server always does), opened now so that a damaged or a
+    newer one is refused before the arm is touched; None for a file still to be created."""
+    from hil.store import Store
+
+    if isinstance(location, Path) and not location.exists():
+        return None
+    return Store.open(location, config=config)
+
+
+@contextlib.contextmanager
+def take_station(config: StationConfig, *, what: str, claims: Sequence[Claim] = (),
+                 store: Any = None) -> Iterator[TakenStation]:
+    """Take the station for one job (see the module docstring); `what` names the job in the lock.
+
+    `claims` are further words on the robot type (``--robot``, a model file) the controller must agree
+    with. `store`: None (the job needs none), an open `Store` (kept open: its owner closes it), or a
+    location (`hil.store.resolve_location`) opened here (created once the controller agreed) and
+    closed on exit. A held lock is `hil.store.LeaseRefused` (bad input, naming the holder); a device
+    that cannot be reached raises its driver's error after everything taken is released.
+    """
+    from hil.station import devices as station_devices
+    from hil.store import Store, address_lock
+
+    with contextlib.ExitStack() as stack:
+        opened: Store | None = None
+        if store is not None and not isinstance(store, Store):
+            location = store
+            opened = open_existing_store(location, config)
+            if opened is not None:
+                stack.callback(opened.close)
+        stack.enter_context(address_lock(config.robot["address"], what=what))
+        devices = station_devices.open_devices(config)
+        stack.callback(devices.close)
+        info = devices.robot.info
+        check_controller(config, info, *claims)  # before anything is recorded or moved
+        if store is not None and not isinstance(store, Store) and opened is None:
+            opened = Store.open(location, config=config)
+            stack.callback(opened.close)
+        yield TakenStation(config, devices, RobotIdentity.of(config.robot["type"], info),
+                           store if isinstance(store, Store) else opened)
