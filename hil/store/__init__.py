@@ -12,7 +12,7 @@ May import: `hil.campaign.events` (what it records), `hil.errors`. Never the CLI
 """
 
 from hil.store.core import Store, StoreError, UnknownCampaignError, new_campaign_id
-from hil.store.engine import is_postgres
+from hil.store.database import is_postgres
 from hil.store.hashing import config_hash, measurement_hash
 from hil.store.leases import Lease, LeaseRefused, address_lock
 from hil.store.migrate import SCHEMA_VERSION

@@ -72,7 +72,7 @@ from hil.campaign.events import (
     ValidationDone,
 )
 from hil.errors import InputError
-from hil.store.engine import display_url, is_postgres, postgres_engine, sqlite_engine
+from hil.store.database import display_url, is_postgres, postgres_engine, sqlite_engine
 from hil.store.hashing import canonical_json, config_hash, measurement_hash
 from hil.store.leases import LEASE_TTL, Lease, LeaseRefused, describe_holder, holder_gone
 from hil.store.migrate import SCHEMA_VERSION, found_version, upgrade
