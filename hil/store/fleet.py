@@ -66,7 +66,7 @@ ROBOT_PARAMETERS: tuple[str, ...] = ("joint", "flange")
 _DAY = 86400.0
 
 
-class UnknownRobotError(InputError):
+class UnknownSerialError(InputError):
     """No robot with that serial number in this database."""
 
 
@@ -315,7 +315,7 @@ def _robot(conn: Connection, serial: str, location: str) -> tuple[int, RobotReco
     if row is None:
         known = conn.execute(select(func.count()).select_from(r)).scalar_one()
         hint = " (see `hil robots`)" if known else " (it has no robots with a known serial yet)"
-        raise UnknownRobotError(f"{location}: no robot with serial {serial!r}{hint}")
+        raise UnknownSerialError(f"{location}: no robot with serial {serial!r}{hint}")
     controller = _loads(row[7])
     return int(row[0]), RobotRecord(serial=row[1], type=row[2], model=row[3] or "",
                                     software=row[4] or "", first_seen=float(row[5]),
@@ -461,7 +461,7 @@ def _comparisons(good: list[tuple[str, float, int]], params: Mapping[int, Mappin
 
 def robot_history(store: Store, serial: str, *, k: float = DEFAULT_K,
                   prefixes: tuple[str, ...] = ROBOT_PARAMETERS) -> RobotHistory:
-    """One robot (UnknownRobotError if no robot has that serial): its record, every calibration oldest
+    """One robot (UnknownSerialError if no robot has that serial): its record, every calibration oldest
     first, the campaign whose model is current, and the geometry changes between consecutive good
     calibrations (`compare_parameters` with `k`)."""
     _check_k(k)
@@ -531,7 +531,7 @@ def geometry_changes(store: Store, *, since: float | None = None, k: float = DEF
 
 def current_model(store: Store, serial: str) -> tuple[str, dict[str, Any]] | None:
     """(campaign id, model document) of the robot's current model: the latest model of its newest
-    accepted calibration whose latest mark is not bad; None if it has none. UnknownRobotError if no
+    accepted calibration whose latest mark is not bad; None if it has none. UnknownSerialError if no
     robot has that serial."""
     c, m = tb.campaigns, tb.models
     with store.reading() as conn:
