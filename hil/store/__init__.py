@@ -8,10 +8,12 @@ the durability, threading and lost-link rules, `hil.store.tables` for the tables
 `hil.store.leases` for who may run a campaign and drive an arm, `hil.store.fleet` for a plant's
 robots and their calibration history.
 
-May import: `hil.campaign.events` (what it records), `hil.errors`. Never the CLI or the TUI.
+May import: `hil.campaign.events` (what it records), `hil.campaign.ids` (a campaign's id),
+`hil.errors`. Never the CLI or the TUI.
 """
 
-from hil.store.core import Store, StoreError, UnknownCampaignError, new_campaign_id
+from hil.campaign.ids import new_campaign_id
+from hil.store.core import Store, StoreError, UnknownCampaignError
 from hil.store.database import is_postgres
 from hil.store.hashing import config_hash, measurement_hash
 from hil.store.leases import Lease, LeaseRefused, address_lock

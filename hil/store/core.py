@@ -71,6 +71,7 @@ from hil.campaign.events import (
     StateChanged,
     ValidationDone,
 )
+from hil.campaign.ids import new_campaign_id
 from hil.errors import InputError
 from hil.store.database import display_url, is_postgres, postgres_engine, sqlite_engine
 from hil.store.hashing import canonical_json, config_hash, measurement_hash
@@ -164,13 +165,6 @@ def _finite_or_none(value: Any) -> float | None:
     except (TypeError, ValueError):
         return None
     return f if math.isfinite(f) else None
-
-
-def new_campaign_id(now: float | None = None) -> str:
-    """``YYYYMMDD-HHMMSS-xxxx`` (local time, 16 random bits): sorts by date, reads aloud, unique
-    enough that a collision (retried anyway) needs two campaigns started in the same second."""
-    stamp = time.strftime("%Y%m%d-%H%M%S", time.localtime(time.time() if now is None else now))
-    return f"{stamp}-{secrets.token_hex(2)}"
 
 
 def _insert(conn: Connection, table: Any) -> Any:
