@@ -40,19 +40,15 @@ from sqlalchemy import ColumnElement, Connection, and_, func, insert, or_, selec
 
 import hil.store.tables as tb
 from hil.errors import InputError
-from hil.store.core import UnknownCampaignError
 from hil.store.owner import is_gone
-from hil.store.records import CALIBRATION, INTERRUPTED, VERIFICATION, _AsDict
+from hil.store.queries import UnknownCampaignError
+from hil.store.records import CALIBRATION, INTERRUPTED, LIVE_STATES, VERIFICATION, _AsDict
 
 if TYPE_CHECKING:
     from hil.store.core import Store
 
 #: The status of a calibration whose model may be used (and the only one `current_model` considers).
 ACCEPTED = "accepted"
-
-#: Statuses of a run in progress: one whose process is gone reads as ``interrupted`` (as in ``hil
-#: history``), since nobody will ever finish it.
-_LIVE = frozenset({"running", "paused", "suspended", "stopping"})
 
 #: Default k of "beyond uncertainty": |Δ| > k·sqrt(σa² + σb²). Each of the ~18 robot parameters is
 #: tested on its own, so k = 3 (0.27 % per parameter) would flag about 5 % of calibrations of arms that
@@ -279,7 +275,7 @@ def _calibrations(conn: Connection, where: ColumnElement[bool]) -> list[Calibrat
                      .outerjoin(mk, mk.c.id == _latest_id(tb.marks)))
         .where(where).order_by(c.c.created, c.c.id))
     rows = conn.execute(query).all()
-    live = [row[0] for row in rows if row[4] in _LIVE]
+    live = [row[0] for row in rows if row[4] in LIVE_STATES]
     gone = _gone(conn, live) if live else set()
     out = []
     for (cid, serial, created, station, status, before, after, passed, model, mark_id, bad, reason, who,
