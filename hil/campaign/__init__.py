@@ -10,6 +10,7 @@
 * `engine` — the state machine that executes a plan: pause, resume, abort, checkpoints, suspenders;
 * `suspenders` — the station's faults mapped to pauses that clear by themselves or by the operator;
 * `events` — the frozen dataclasses every subscriber (store, TUI, CLI printer) receives;
+* `ids` — campaign ids (UTC start time and random bits), made here or by the store alike;
 * `runner` — one campaign from devices to outcome, resumed from the store's state when asked.
 
 May import: `hil.station`, `hil.calibration`, `hil.arm`, `hil.files`, `hil.errors`, `selector`, `drivers`.

@@ -10,9 +10,7 @@ keeps resumable, so re-running the same command continues the campaign as after 
 
 from __future__ import annotations
 
-import datetime as _dt
 import logging
-import secrets
 import signal
 import sqlite3
 from collections.abc import Callable, Mapping
@@ -42,6 +40,7 @@ from hil.campaign.events import (
     RunFinished,
     RunStarted,
 )
+from hil.campaign.ids import new_campaign_id
 from hil.campaign.plan import BOOTSTRAP, CampaignResult, ChoosePoses, ResumeState, calibration_plan
 from hil.campaign.steps import PoseRecord
 from hil.campaign.stopping import stopped_words
@@ -52,11 +51,6 @@ from hil.station.devices import Devices
 from hil.station.robot_type import check_controller
 
 log = logging.getLogger(__name__)
-
-
-def new_campaign_id() -> str:
-    """A short, sortable, unique campaign id: UTC date-time plus 4 random hex digits."""
-    return _dt.datetime.now(_dt.UTC).strftime("%Y%m%d-%H%M%S-") + secrets.token_hex(2)
 
 
 @dataclass

@@ -2,17 +2,22 @@
 station) or PostgreSQL (a plant's fleet), through SQLAlchemy Core with Alembic migrations.
 
 "The store is the truth" (DESIGN.md): each measurement is committed before the next move, a killed
-run resumes from what is here, and ``hil history`` / ``hil show`` read it. See `hil.store.core` for
-the durability, threading and lost-link rules, `hil.store.tables` for the tables,
+run resumes from what is here, and ``hil history`` / ``hil show`` read it. `Store`
+(`hil.store.core`) is the one object callers get; it is made of `hil.store.transactions` (the
+durability, threading and lost-link rules), `hil.store.queries` (the read side),
+`hil.store.recorder` (campaign events into rows) and `hil.store.rows` (the rows a write adds). See
+`hil.store.database` for the SQLite and PostgreSQL engines, `hil.store.tables` for the tables,
 `hil.store.migrate` for their upgrades, `hil.store.paths` for where the store lives,
 `hil.store.leases` for who may run a campaign and drive an arm, `hil.store.fleet` for a plant's
 robots and their calibration history.
 
-May import: `hil.campaign.events` (what it records), `hil.errors`. Never the CLI or the TUI.
+May import: `hil.campaign.events` (what it records), `hil.campaign.ids` (a campaign's id),
+`hil.errors`. Never the CLI or the TUI.
 """
 
-from hil.store.core import Store, StoreError, UnknownCampaignError, new_campaign_id
-from hil.store.engine import is_postgres
+from hil.campaign.ids import new_campaign_id
+from hil.store.core import Store, StoreError, UnknownCampaignError
+from hil.store.database import is_postgres
 from hil.store.hashing import config_hash, measurement_hash
 from hil.store.leases import Lease, LeaseRefused, address_lock
 from hil.store.migrate import SCHEMA_VERSION

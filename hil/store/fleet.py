@@ -40,19 +40,15 @@ from sqlalchemy import ColumnElement, Connection, and_, func, insert, or_, selec
 
 import hil.store.tables as tb
 from hil.errors import InputError
-from hil.store.core import UnknownCampaignError
 from hil.store.owner import is_gone
-from hil.store.records import CALIBRATION, INTERRUPTED, VERIFICATION, _AsDict
+from hil.store.queries import UnknownCampaignError
+from hil.store.records import CALIBRATION, INTERRUPTED, LIVE_STATES, VERIFICATION, _AsDict
 
 if TYPE_CHECKING:
     from hil.store.core import Store
 
 #: The status of a calibration whose model may be used (and the only one `current_model` considers).
 ACCEPTED = "accepted"
-
-#: Statuses of a run in progress: one whose process is gone reads as ``interrupted`` (as in ``hil
-#: history``), since nobody will ever finish it.
-_LIVE = frozenset({"running", "paused", "suspended", "stopping"})
 
 #: Default k of "beyond uncertainty": |Δ| > k·sqrt(σa² + σb²). Each of the ~18 robot parameters is
 #: tested on its own, so k = 3 (0.27 % per parameter) would flag about 5 % of calibrations of arms that
@@ -66,7 +62,7 @@ ROBOT_PARAMETERS: tuple[str, ...] = ("joint", "flange")
 _DAY = 86400.0
 
 
-class UnknownRobotError(InputError):
+class UnknownSerialError(InputError):
     """No robot with that serial number in this database."""
 
 
@@ -279,7 +275,7 @@ def _calibrations(conn: Connection, where: ColumnElement[bool]) -> list[Calibrat
                      .outerjoin(mk, mk.c.id == _latest_id(tb.marks)))
         .where(where).order_by(c.c.created, c.c.id))
     rows = conn.execute(query).all()
-    live = [row[0] for row in rows if row[4] in _LIVE]
+    live = [row[0] for row in rows if row[4] in LIVE_STATES]
     gone = _gone(conn, live) if live else set()
     out = []
     for (cid, serial, created, station, status, before, after, passed, model, mark_id, bad, reason, who,
@@ -315,7 +311,7 @@ def _robot(conn: Connection, serial: str, location: str) -> tuple[int, RobotReco
     if row is None:
         known = conn.execute(select(func.count()).select_from(r)).scalar_one()
         hint = " (see `hil robots`)" if known else " (it has no robots with a known serial yet)"
-        raise UnknownRobotError(f"{location}: no robot with serial {serial!r}{hint}")
+        raise UnknownSerialError(f"{location}: no robot with serial {serial!r}{hint}")
     controller = _loads(row[7])
     return int(row[0]), RobotRecord(serial=row[1], type=row[2], model=row[3] or "",
                                     software=row[4] or "", first_seen=float(row[5]),
@@ -461,7 +457,7 @@ def _comparisons(good: list[tuple[str, float, int]], params: Mapping[int, Mappin
 
 def robot_history(store: Store, serial: str, *, k: float = DEFAULT_K,
                   prefixes: tuple[str, ...] = ROBOT_PARAMETERS) -> RobotHistory:
-    """One robot (UnknownRobotError if no robot has that serial): its record, every calibration oldest
+    """One robot (UnknownSerialError if no robot has that serial): its record, every calibration oldest
     first, the campaign whose model is current, and the geometry changes between consecutive good
     calibrations (`compare_parameters` with `k`)."""
     _check_k(k)
@@ -531,7 +527,7 @@ def geometry_changes(store: Store, *, since: float | None = None, k: float = DEF
 
 def current_model(store: Store, serial: str) -> tuple[str, dict[str, Any]] | None:
     """(campaign id, model document) of the robot's current model: the latest model of its newest
-    accepted calibration whose latest mark is not bad; None if it has none. UnknownRobotError if no
+    accepted calibration whose latest mark is not bad; None if it has none. UnknownSerialError if no
     robot has that serial."""
     c, m = tb.campaigns, tb.models
     with store.reading() as conn:

@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from hil.store.engine import is_postgres
+from hil.store.database import is_postgres
 
 ENV_VAR = "HIL_DB"
 

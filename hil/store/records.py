@@ -29,6 +29,10 @@ FINISHED: frozenset[str] = frozenset({"accepted", "rejected", "aborted"})
 # mid-run, or a process that died (the store reads a run whose owner is gone as this): resumable.
 INTERRUPTED = "interrupted"
 
+# Engine states that are also campaign statuses, those of a run in progress (the final status comes
+# from RunFinished). A reader finding one whose run's process is gone says INTERRUPTED.
+LIVE_STATES: frozenset[str] = frozenset({"running", "paused", "suspended", "stopping"})
+
 
 def _plain(value: Any) -> Any:
     if dataclasses.is_dataclass(value) and not isinstance(value, type):

@@ -1,8 +1,9 @@
 """The store's tables as SQLAlchemy Core metadata: one schema for SQLite and PostgreSQL.
 
 This is the *current* shape (Alembic's head, `hil.store.migrations`); the migrations build it step by
-step and are what creates and upgrades a database. Queries in `hil.store.core` and `hil.store.fleet`
-are written against these objects, so the same statement runs on both engines.
+step and are what creates and upgrades a database. Queries (`hil.store.rows`, `hil.store.queries`,
+`hil.store.core`, `hil.store.fleet`) are written against these objects, so the same statement runs
+on both engines.
 
 Why the tables look as they do:
 

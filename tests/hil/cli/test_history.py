@@ -112,7 +112,7 @@ def test_a_campaign_whose_process_died_is_interrupted_and_resumable(db, capsys, 
 
     gone = subprocess.Popen(["true"])
     gone.wait()
-    monkeypatch.setattr("hil.store.core.this_process", lambda: {**owner.this_process(), "pid": gone.pid})
+    monkeypatch.setattr("hil.store.recorder.this_process", lambda: {**owner.this_process(), "pid": gone.pid})
     with Store.open(db) as s:
         cid = s.create_campaign(default_config().as_dict(), RobotIdentity("ur5e", "2023550003"),
                                 now=1.7e9 + 200)

@@ -319,7 +319,7 @@ def test_events_are_numbered_per_campaign_and_a_dead_owner_reads_as_interrupted(
 
 
 def test_threads_appending_to_one_campaign_log_get_one_gapless_sequence(store):
-    """A `Store` may be shared between threads (`hil.store.core`): appends to one campaign's log made
+    """A `Store` may be shared between threads (`hil.store.transactions`): appends to one campaign's log made
     at the same moment are numbered one after the other, as SQLite's write lock does it."""
     cid = store.create_campaign(cfg(), ROBOT)
     threads_n, each = 4, 15

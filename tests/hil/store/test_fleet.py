@@ -21,7 +21,7 @@ from hil.store import Store, UnknownCampaignError
 from hil.store import tables as tb
 from hil.store.fleet import (
     DEFAULT_K,
-    UnknownRobotError,
+    UnknownSerialError,
     calibrations,
     compare_parameters,
     current_model,
@@ -240,9 +240,9 @@ def test_a_mark_needs_a_reason_and_a_campaign_and_writes_nothing_otherwise(store
 
 def test_an_unknown_serial_is_bad_input(store):
     for call in (robot_history, current_model):
-        with pytest.raises(UnknownRobotError, match=r"no robot with serial '999'.*hil robots"):
+        with pytest.raises(UnknownSerialError, match=r"no robot with serial '999'.*hil robots"):
             call(store, "999")
-    assert issubclass(UnknownRobotError, InputError)
+    assert issubclass(UnknownSerialError, InputError)
 
 
 def test_the_calibrations_since_a_day(store, built_fleet: Fleet):

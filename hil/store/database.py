@@ -1,12 +1,15 @@
 """SQLAlchemy engines for the two places a store can live: an SQLite file or a PostgreSQL server.
 
-SQLite (one station). The file runs in WAL mode with ``synchronous=FULL`` (see `hil.store.core` for
-why), foreign keys on, and a busy timeout so writers of several threads or processes queue on
-SQLite's lock instead of failing. Python's sqlite3 driver opens transactions implicitly and never
-with ``BEGIN IMMEDIATE``; SQLAlchemy's documented recipe for pysqlite turns that off and emits BEGIN
-itself, which here becomes ``BEGIN IMMEDIATE`` for a write (execution option ``hil_write``): a writer
-takes the lock when it starts, so two writers never deadlock upgrading a read lock. The store's own
-connection class (`hil.store.sqlite_errors`) names the file in the error a damaged page raises.
+Named for the database it opens, not "engine": `hil.campaign.engine` is the campaign engine.
+
+SQLite (one station). The file runs in WAL mode with ``synchronous=FULL`` (see
+`hil.store.transactions` for why), foreign keys on, and a busy timeout so writers of several threads
+or processes queue on SQLite's lock instead of failing. Python's sqlite3 driver opens transactions
+implicitly and never with ``BEGIN IMMEDIATE``; SQLAlchemy's documented recipe for pysqlite turns
+that off and emits BEGIN itself, which here becomes ``BEGIN IMMEDIATE`` for a write (execution
+option ``hil_write``): a writer takes the lock when it starts, so two writers never deadlock
+upgrading a read lock. The store's own connection class (`hil.store.sqlite_errors`) names the file
+in the error a damaged page raises.
 
 PostgreSQL (a plant's fleet). ``postgresql://`` URLs are driven through psycopg 3. Connections are
 checked before use (``pool_pre_ping``) so a server restarted between two writes costs a reconnect,
