@@ -44,7 +44,8 @@ from mocks.ur.factory_calibration import factory_calibration
 from mocks.world import World
 
 #: Seconds one GeoCOM measuring RPC (TMC_GetSimpleMea in tracking mode) takes inside the simulated
-#: instrument. GeoCOM is the language of Leica's motorised total stations (DESIGN.md); their tracking
+#: instrument. GeoCOM is the language of Leica's motorised total stations (docs/design.md,
+#: Facts: GeoCOM); their tracking
 #: distance mode delivers about 10 distances a second (Leica TPS1200 technical data, "Tracking" EDM
 #: mode, ≈0.15 s per distance; the driver's TMC_GetSimpleMea waits up to 100 ms, `TrackerConfig.wait_ms`,
 #: for one): 0.1 s is the faster end of that. The emScon simulator's point takes its stationary
@@ -55,7 +56,8 @@ GEOCOM_MEASURE_S = 0.1
 def joint_temperatures(thermal: Thermal | None) -> TemperatureFn:
     """Every joint at the lab's ambient plus the arm's warm-up ΔT(t) (none without a thermal block).
 
-    The truth's thermal block is one ΔT for the whole arm (DESIGN.md), so every joint reports it: the
+    The truth's thermal block is one ΔT for the whole arm (docs/design.md, Contracts: non-geometric errors),
+    so every joint reports it: the
     temperatures say how far the warm-up has come, the number a warm-up watch reads.
     """
     def at(t: float) -> list[float]:

@@ -8,7 +8,8 @@ acceptance half-angle of the line to the tracker.
 
 The truth is a real arm: it sags under gravity by its joints' compliance (`Kinematics` applies the
 truth's ``compliance`` for its ``payload``) and grows as it warms up. At simulated time t the arm is
-``truth.warmed(t)`` (DESIGN.md, "Non-geometric errors"), t read from `clock`: the robot simulator's
+``truth.warmed(t)`` (docs/design.md, Contracts: non-geometric errors), t read from
+`clock`: the robot simulator's
 `SimClock`, whose seconds count from when the simulated controller started, so the running time of the
 arm is the time since its controller was switched on. Without a clock the arm stays cold.
 

@@ -104,7 +104,7 @@ class ControllerCalibration:
         return Geometry(spec.name, joints, link(5, 0.0), np.asarray(smr, float),
                         pin.SE3.Identity() if tracker is None else tracker)
 
-    # --- the JSON "controller" block (DESIGN.md) -----------------------------------------------
+    # --- the JSON "controller" block (docs/design.md, Contracts: the controller's own calibration) ---
     def to_dict(self) -> dict[str, list[float]]:
         return {k: [float(v) for v in getattr(self, k)] for k in DELTA_KEYS}
 

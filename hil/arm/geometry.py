@@ -4,7 +4,8 @@ A `Geometry` is what identification estimates and every other part evaluates: si
 URDF convention (joint i rotates about the z axis of its origin frame, joint 1's origin in the robot base
 frame, joint i's in joint i-1's rotated frame), the flange frame in joint 6's frame, the SMR centre in
 the flange frame and the tracker frame in the robot base frame. The JSON block is the contract shared by
-model files (``hil-model/1``) and simulator truths (``hil-truth/1``); see DESIGN.md.
+model files (``hil-model/1``) and simulator truths (``hil-truth/1``); see
+docs/design.md, Contracts: geometry JSON.
 
 Orientations in files are URDF ``rpy``: R = Rz(yaw)·Ry(pitch)·Rx(roll), which is pinocchio's
 ``rpyToMatrix`` convention.
@@ -50,7 +51,8 @@ def _dh_origin(a: float, alpha: float, d_next: float) -> pin.SE3:
 class Geometry:
     """Joint origins, flange, SMR offset and tracker pose of one arm (metres, radians).
 
-    The optional non-geometric blocks (DESIGN.md): `compliance` (rad/Nm per joint; None is a rigid
+    The optional non-geometric blocks (docs/design.md, Contracts: non-geometric errors): `compliance`
+    (rad/Nm per joint; None is a rigid
     arm), the `payload` it carries (None: nothing), `gravity` in the base frame (the mounting) and, in
     a simulator's truth only, `thermal` growth. `Kinematics` applies the compliance for the payload.
     """
@@ -121,7 +123,8 @@ class Geometry:
         """The arm after `t` seconds of running: link translations grown by its `thermal` block.
 
         Every joint origin's and the flange's translation is scaled by 1 + expansion·ΔT(t); the SMR
-        offset and the tracker pose do not grow (DESIGN.md). Without a thermal block: unchanged.
+        offset and the tracker pose do not grow (docs/design.md, Contracts: non-geometric errors).
+        Without a thermal block: unchanged.
         """
         out = self.copy()
         if self.thermal is None:

@@ -1,7 +1,7 @@
 """Gravity torques of an arm carrying its payload, and the link angles its compliant joints settle at.
 
 A UR joint is a strain-wave gear: under the gravity torque g(q) it holds, the link lags its encoder by
-compliance × torque. DESIGN.md ("Non-geometric errors") fixes the model:
+compliance × torque. docs/design.md ("Contracts: non-geometric errors") fixes the model:
 q_link = q_encoder − c ⊙ g(q_encoder), g = pinocchio's ``computeGeneralizedGravity`` of the arm with
 its payload, in the gravity of its mounting. The torque is evaluated at the encoder angles, as the
 contract says, not iterated to the link angles the arm really holds: with `typical_compliance` the

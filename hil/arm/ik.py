@@ -9,7 +9,8 @@ the current branch; a target it cannot reach, or one that leaves the joint limit
 
 A compliant model (`Geometry.compliance`) is solved in two steps: the rigid chain gives the link angles
 that put the flange at the target, then the encoder angles are the fixed point of
-q = q_link + c ⊙ g(q) (the link lags its encoder by c ⊙ g, DESIGN.md), a contraction by about
+q = q_link + c ⊙ g(q) (the link lags its encoder by c ⊙ g,
+docs/design.md, Contracts: non-geometric errors), a contraction by about
 c·∂g/∂q ≈ 10⁻³ per step, so a few steps reach the tolerance.
 """
 

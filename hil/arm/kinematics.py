@@ -7,7 +7,7 @@ The calibration parameters are small errors applied *multiplicatively* to the cu
 * the SMR centre in the flange frame, s ← s + δ_s                        (3, ``smr.x/y/z``)
 * the tracker frame in the base frame, T_bt ← T_bt·exp(δ_t)              (6, ``tracker.*``)
 
-and, when the arm is compliant (DESIGN.md, "Non-geometric errors"), the joints' compliance:
+and, when the arm is compliant (docs/design.md, Contracts: non-geometric errors), the joints' compliance:
 
 * c_j (rad/Nm): the link lags its encoder, q_link = q − c ⊙ g(q)                (6, ``compliance.j1 … j6``)
 

@@ -1,6 +1,7 @@
 """What the arm carries and how it is mounted: the inputs of its gravity torques.
 
-A compliant arm sags by compliance × the gravity torque each joint holds (DESIGN.md, "Non-geometric
+A compliant arm sags by compliance × the gravity torque each joint holds
+(docs/design.md, "Contracts: non-geometric
 errors"), so every prediction needs the payload and the direction of gravity. The payload is the mass
 on the flange and its centre of mass in the flange frame (as Polyscope's "Payload" setting and URScript's
 ``set_target_payload`` give it); gravity is (0, 0, −9.81) m/s² in the base frame for a floor-mounted

@@ -1,6 +1,7 @@
 """Link masses and centres of mass, rated payloads and typical joint compliance of the catalog's arms.
 
-A compliant arm sags by compliance × the gravity torque each joint holds (DESIGN.md, "Non-geometric
+A compliant arm sags by compliance × the gravity torque each joint holds
+(docs/design.md, "Contracts: non-geometric
 errors"); the torque comes from these masses (`hil.arm.gravity`).
 
 **Link masses and centres of mass** are UR's published values as ``ur_description`` carries them:
@@ -24,7 +25,7 @@ checked in the same commit's ``urdf/ur_macro.xacro`` and ``urdf/inc/ur_common.xa
   (x, −z, y) for shoulder and wrist 1, (x, z, −y) for wrist 2. Spot-checked against that article for the
   UR3e, UR5e, UR10e and UR20: they agree, except the UR20's wrist 3, which the article now gives as
   0.846 kg at z = −0.0318 m (ur_description: 0.926 kg at −0.0293 m); hil keeps ur_description's value,
-  as DESIGN.md says.
+  as docs/design.md, Facts: compliance says.
 
 The base link (``base_mass``, "might be incorrect") never moves and holds no joint torque; it is left out.
 

@@ -1,4 +1,5 @@
-"""Thermal growth of a simulated arm as it warms up (truth only; DESIGN.md, "Non-geometric errors").
+"""Thermal growth of a simulated arm as it warms up (truth only;
+docs/design.md, Contracts: non-geometric errors).
 
 Aluminium links lengthen with temperature, and a UR's joints warm up over the first tens of minutes of
 running, so an arm measured cold and used warm is a few hundredths to tenths of a millimetre off. The

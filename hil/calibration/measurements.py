@@ -1,4 +1,4 @@
-"""Reading and writing measurement and joint CSV files (the contract in DESIGN.md).
+"""Reading and writing measurement and joint CSV files (docs/design.md, Contracts: measurements CSV).
 
 A measurements file has the header ``q1,q2,q3,q4,q5,q6,x,y,z`` (joint radians, SMR position in the
 tracker frame in metres); extra columns are allowed and ignored. Every problem is reported as an

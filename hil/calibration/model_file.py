@@ -31,7 +31,8 @@ from hil.files.outputs import atomic_write_text
 MODEL_FORMAT = "hil-model/1"
 RESULT_FORMAT = "hil-result/1"  # a campaign result; it embeds the model
 TRUTH_FORMAT = "hil-truth/1"
-#: A model's ``controller`` block: the controller's deltas (DESIGN.md) and how it names its calibration.
+#: A model's ``controller`` block: the controller's deltas (docs/design.md, Contracts: the
+#: controller's own calibration) and how it names its calibration.
 CONTROLLER_KEYS: tuple[str, ...] = (*DELTA_KEYS, "checksum", "calibration_status")
 
 #: Plausible magnitudes of the numbers in a geometry block, checked before anything uses them. A UR's
@@ -109,7 +110,8 @@ def model_document(fit: FitResult, validation: dict[str, Any] | None = None,
     """The ``hil-model/1`` JSON document of an identification result.
 
     `controller`: the controller's own model the campaign ran with (its KinematicsInfo record, see
-    `hil.campaign.controller`), kept as the ``controller`` block — the deltas of DESIGN.md plus the
+    `hil.campaign.controller`), kept as the ``controller`` block — the deltas
+    (docs/design.md, Contracts: the controller's own calibration) plus the
     controller's per-joint ``checksum`` and ``calibration_status`` — so the model can be compared
     with, and exported beside, the one the arm moves with (`model_controller` reads it back).
     """
@@ -168,7 +170,8 @@ def truth_document(truth: Geometry, noise: Noise,
 def truth_controller(doc: Mapping[str, Any], source: str = "truth") -> ControllerCalibration | None:
     """The simulated controller's own calibration a truth document names, or None when it names none.
 
-    None lets the simulator draw one for the arm (DESIGN.md, "The controller's own calibration"); a
+    None lets the simulator draw one for the arm (docs/design.md, Contracts: the controller's own
+    calibration); a
     malformed block is an InputError naming the file and the field.
     """
     block = doc.get("controller")

@@ -5,7 +5,8 @@ describe an arm the same way: every joint origin and the flange carry a random 6
 (σ 0.5 mm per translation axis, 1 mrad per rotation axis by default), the SMR sits a few centimetres
 off the flange axis, and the tracker stands 2–4 m from the base facing it.
 
-Unless asked for a rigid arm, the truth is a real one (DESIGN.md, "Non-geometric errors"): its joints
+Unless asked for a rigid arm, the truth is a real one
+(docs/design.md, Contracts: non-geometric errors): its joints
 are compliant (UR's typical strain-wave stiffness, `hil.arm.physical.typical_compliance`, each joint
 0.8–1.2 times it), it carries the SMR, its nest and an adaptor plate (`smr_payload`), and it warms up
 as it runs (`Thermal` defaults). Its encoders read with a UR joint's noise (`ENCODER_SIGMA`).
@@ -99,7 +100,8 @@ def random_truth(robot: str, rng: np.random.Generator, *, translation_sigma: flo
     child = rng.spawn(1)[0]
     truth.compliance = typical_compliance(spec.name) * child.uniform(*COMPLIANCE_SPREAD, 6)
     truth.payload = smr_payload(truth.smr)
-    # DESIGN.md's example warm-up: aluminium links (2.3e-5 /K), 6 K in a 15-min time constant. UR joints
+    # docs/design.md's example warm-up (Facts: thermal growth): aluminium links (2.3e-5 /K), 6 K in a
+    # 15-min time constant. UR joints
     # do warm as they run: a UR3's and a UR5's viscous friction fell by a fifth "under rising joint
     # temperatures" over repeated runs of one trajectory (Robotics 2021, 10(3), 83,
     # doi:10.3390/robotics10030083), and UR has a cold arm warm up with slow motions before full speed

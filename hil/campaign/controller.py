@@ -1,7 +1,8 @@
 """The controller's own kinematic model in a campaign: what it reported, and how far it is from the truth.
 
 A UR controller moves, reports ``actual_TCP_pose`` and solves IK with its nominal DH table plus the
-factory deltas it publishes as KinematicsInfo (robot-state message 16, sub-package 5; DESIGN.md, "The
+factory deltas it publishes as KinematicsInfo (robot-state message 16, sub-package 5;
+docs/design.md, "Contracts: the
 controller's own calibration"). A campaign keeps that model (`controller_record`: the same JSON in
 the result's ``robot_info``, the store's ``campaigns.controller`` / ``robots.controller`` and, as its
 deltas, checksums and status, the model file's ``controller`` block) and measures how far it is from
@@ -30,7 +31,7 @@ from hil.arm.controller_model import DELTA_KEYS, ControllerCalibration
 from hil.calibration.identification import ErrorStats, register, validate
 from hil.calibration.measurements import Measurements
 
-#: The KinematicsInfo fields in the order of the package (DESIGN.md): full DH values per joint.
+#: KinematicsInfo's fields in package order (docs/design.md, Facts: UR primary interface): full DH per joint.
 DH_KEYS: tuple[str, ...] = ("dh_theta", "dh_a", "dh_d", "dh_alpha")
 
 
@@ -52,7 +53,8 @@ def controller_record(robot: str, kinematics: Any) -> dict[str, Any] | None:
     `kinematics` is the driver's KinematicsInfo (``ControllerInfo.kinematics``: ``checksum``, ``dh_theta``
     … ``dh_alpha``, ``calibration_status``) or its ``as_dict()``. The record is one flat JSON object:
     those fields as the controller sent them, plus the deltas to `robot`'s nominal DH (the
-    ``controller`` block of DESIGN.md), so any reader finds the block it knows in it. The deltas are
+    ``controller`` block of docs/design.md, Contracts: the controller's own calibration), so any
+    reader finds the block it knows in it. The deltas are
     not bounded here: they are the controller's own word, and a real one carries cancelling d values
     on the parallel joints far beyond a file's plausibility limits.
     """

@@ -1,6 +1,7 @@
 """Where the controller's own model comes from: a file holding its ``controller`` block, or the arm.
 
-Compensation needs the deltas the controller adds to its nominal DH (DESIGN.md, "The controller's own
+Compensation needs the deltas the controller adds to its nominal DH
+(docs/design.md, "Contracts: the controller's own
 calibration"). They are either written down — a simulator truth, a model that carries them, or any
 ``{"robot": ..., "controller": {...}}`` file — or read from the live controller's KinematicsInfo
 package on its primary interface (port 30001), which publishes the full DH table it moves by.

@@ -95,7 +95,7 @@ def plan_program(program: Program, continuity: str = "G2", beta: float = 0.5) ->
 
 
 def write_samples(path: str, samples: Samples) -> None:
-    """samples.csv with the DESIGN.md header (mm, unit vectors, 1/mm)."""
+    """samples.csv with the header of docs/design.md, Contracts: MOVEB files (mm, unit vectors, 1/mm)."""
     atomic_write_text(path, format_csv(SAMPLES_HEADER, samples.rows()))
 
 

@@ -1,6 +1,7 @@
 """MOVEB programs: one ``MOVEB X Y Z I J K U V W D E`` per line, parsed and validated.
 
-Units are millimetres for X Y Z D E (DESIGN.md); I J K is the unit tool Z axis and U V W the unit tool
+Units are millimetres for X Y Z D E (docs/design.md, Contracts: MOVEB files); I J K is the unit tool
+Z axis and U V W the unit tool
 X axis, both in the robot base frame. ``#`` starts a comment, blank lines are ignored, the keyword is
 case-insensitive. Every problem raises `InputError` naming the file and line, so the CLI prints one
 line and exits 2.

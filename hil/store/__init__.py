@@ -1,7 +1,8 @@
 """The durable store: every campaign, pose, measurement, model, validation and event, in SQLite (one
 station) or PostgreSQL (a plant's fleet), through SQLAlchemy Core with Alembic migrations.
 
-"The store is the truth" (DESIGN.md): each measurement is committed before the next move, a killed
+"The store is the truth" (docs/design.md, The store): each measurement is committed before the next
+move, a killed
 run resumes from what is here, and ``hil history`` / ``hil show`` read it. `Store`
 (`hil.store.core`) is the one object callers get; it is made of `hil.store.transactions` (the
 durability, threading and lost-link rules), `hil.store.queries` (the read side),

@@ -25,7 +25,8 @@ JSON-lines control channel:
 The controller's own kinematic model — nominal DH plus its factory calibration deltas — drives
 everything it computes (``actual_TCP_pose``, moveL/servoL targets, FK/IK) and is what its primary and
 secondary interfaces publish as KinematicsInfo. It comes from ``SimConfig.controller`` (the JSON
-block of DESIGN.md) or is drawn per robot from the seed (`mocks.ur.factory_calibration`);
+block of docs/design.md, Contracts: the controller's own calibration) or is drawn per
+robot from the seed (`mocks.ur.factory_calibration`);
 `SimController.set_calibration` swaps it (the simulated station fits one to its truth).
 """
 
@@ -85,7 +86,8 @@ class SimConfig:
     max_speed: list[float] | None = None
     remote_control: bool = True
     speed_slider: float = 1.0
-    # the controller's factory calibration, the JSON block of DESIGN.md ({"delta_theta": [6], ...});
+    # the controller's factory calibration, the JSON block of docs/design.md, Contracts: the
+    # controller's own calibration ({"delta_theta": [6], ...});
     # None: drawn for this robot from `seed` (mocks.ur.factory_calibration.random_factory_calibration)
     controller: dict[str, Any] | None = None
     fk_factory: str | None = None  # "module:function"(robot) -> FK callable replacing the controller's

@@ -61,7 +61,8 @@ def test_start_pose_sees_the_tracker_for_any_random_truth():
 
 
 def test_a_warming_arm_moves_the_smr_by_expansion_times_rise_times_reach():
-    """Every link translation grows by expansion·ΔT(t) (DESIGN.md); the SMR offset does not."""
+    """Every link translation grows by expansion·ΔT(t) (docs/design.md, Contracts: non-geometric errors);
+    the SMR offset does not."""
     from hil.arm.thermal import Thermal
 
     thermal = Thermal(expansion=2.3e-5, rise=6.0, time_constant=900.0)

@@ -83,7 +83,8 @@ def test_the_cli_writes_the_time_aware_report(tmp_path):
                            "--out", str(out)], cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     report = json.loads(out.read_text())
-    for key in ("robot", "index", "value", "bound", "method", "seconds", "poses"):  # DESIGN.md's contract
+    # the contract of docs/design.md, Contracts: pose selection
+    for key in ("robot", "index", "value", "bound", "method", "seconds", "poses"):
         assert key in report
     assert report["motion"]["speed"] == 1.0 and report["motion"]["acceleration"] == 2.0
     assert len(report["poses"]) == report["count"] and all(len(q) == 6 for q in report["poses"])

@@ -41,7 +41,7 @@ from hil.store.records import ROLES
 from tests.hil.campaign.fakes import visible_poses
 from tests.hil.campaign.thermal_fakes import AMBIENT, Devices, VirtualClock, WarmingArm, WarmingTracker
 
-#: The simulated arm's warm-up (DESIGN.md's example: 2.3e-5 /K, 6 K, 900 s).
+#: The simulated arm's warm-up (docs/design.md, Facts: thermal growth: 2.3e-5 /K, 6 K, 900 s).
 UR_THERMAL = Thermal()
 
 

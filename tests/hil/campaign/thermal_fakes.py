@@ -2,7 +2,7 @@
 
 The clock is the station's: moves, settling and measuring advance it (no wall-clock time passes), so a
 40-minute warm-up runs in a fraction of a second. The tracker sees the true arm at the clock's time,
-`Geometry.warmed(t)` (thermal growth, DESIGN.md "Non-geometric errors"); the arm reports its joint
+`Geometry.warmed(t)` (docs/design.md, Contracts: non-geometric errors); the arm reports its joint
 temperatures as the simulator does (ambient + ΔT(t)).
 """
 

@@ -4,7 +4,8 @@ Shared by tests/hil/cli/test_bad_input_sweep.py (one test per case) and bench/ad
 figures for an issue's closing note), so both measure exactly the same thing.
 
 Each `Case` is a command line (run in-process through `hil.cli.main`) plus the files it needs in a fresh
-directory of its own. The contract checked for a case that expects exit code 2 (DESIGN.md, hil/cli):
+directory of its own. The contract checked for a case that expects exit code 2
+(docs/design.md, Contracts: exit codes and errors):
 
 * exit code 2, exactly one line on stderr, no "Traceback";
 * that line names what is wrong: every entry of `Case.names` appears in it (``"a|b"``: either);

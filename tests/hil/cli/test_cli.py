@@ -1,4 +1,5 @@
-"""The CLI contracts of DESIGN.md, and bad input: exit 2, one line naming the problem, nothing written."""
+"""The CLI contracts of docs/design.md (Contracts: command line), and bad input: exit 2, one line naming
+the problem, nothing written."""
 
 import json
 import subprocess

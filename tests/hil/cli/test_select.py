@@ -1,4 +1,4 @@
-"""`hil select`: the JSON contract of DESIGN.md and one-line errors (exit 2) for every bad input."""
+"""`hil select`: JSON (docs/design.md, Contracts: pose selection); one-line errors (exit 2) for bad input."""
 
 from __future__ import annotations
 

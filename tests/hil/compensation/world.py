@@ -35,7 +35,7 @@ class World:
 
 def random_controller(rng: np.random.Generator, cancelling: bool = False) -> ControllerCalibration:
     """Factory deltas of a plausible size (mrad, mm); `cancelling`: the hundreds of millimetres of
-    opposite d on the parallel joints 2-4 a real calibration.conf shows (DESIGN.md)."""
+    opposite d on joints 2-4 a real calibration.conf shows (docs/design.md, Facts: identification)."""
     dd = rng.normal(0, 1e-3, 6)
     if cancelling:
         dd[1:4] += np.array([0.2, -0.35, 0.15])
