@@ -29,6 +29,14 @@ import hil
 from hil.arm.blas_threads import limit_blas_threads
 from hil.cli.support.output import quiet_on_closed_stdout
 from hil.errors import FaultError, HilError, InputError
+from hil.jobs.outcome import (
+    EXIT_BAD_INPUT,
+    EXIT_FAILED,
+    EXIT_FAULT,
+    EXIT_INTERNAL,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+)
 
 # Modules of hil.cli that each add one subcommand (in help order).
 COMMAND_MODULES: tuple[str, ...] = (
@@ -75,13 +83,8 @@ COMMAND_HELP: dict[str, tuple[tuple[str, str], ...]] = {
     "tui": (("tui", "the operator's terminal app (keyboard only, 80x24 and larger)"),),
 }
 
-EXIT_OK = 0
-EXIT_FAILED = 1
-EXIT_BAD_INPUT = 2
-EXIT_HARDWARE = 3
-EXIT_ABORTED = 4
-EXIT_INTERRUPTED = 130  # Ctrl-C; 128 + the signal number for SIGTERM (143) and SIGHUP (129)
-EXIT_INTERNAL = 70
+#: hardware faults are the station's faults (`hil.jobs.outcome.EXIT_FAULT`)
+EXIT_HARDWARE = EXIT_FAULT
 
 
 class _ShowDefaults(argparse.HelpFormatter):
