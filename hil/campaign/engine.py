@@ -39,7 +39,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -48,7 +48,7 @@ import numpy as np
 from drivers.tracker.errors import UnstablePoint
 from hil.arm.catalog import RobotSpec
 from hil.arm.geometry import Geometry
-from hil.arm.safety import check_target
+from hil.arm.routes import Router, UnsafePathError
 from hil.campaign.events import (
     Event,
     EventBus,
@@ -131,31 +131,6 @@ class SuspendTimeout(HilError):
     def __init__(self, text: str, kind: str = "", limit: float = 0.0, instruction: str = "") -> None:
         super().__init__(text)
         self.kind, self.limit, self.instruction = kind, limit, instruction
-
-
-class UnsafePathError(HilError):
-    """No safe way to a (safe) target from where the arm is: the pose is skipped."""
-
-
-#: Detour postures (shoulder q2, elbow q3) tried in order when neither the straight path nor the home
-#: pose is safe: the upright posture first (a floor-mounted arm's highest), then folded ones. A UR10e
-#: stands about 1.5 m tall upright, above a 1.2 m keep-in box, where its straight paths between widely
-#: spread poses also sweep outside: with the upright detour alone the example station skipped 15-26 of
-#: a 50-pose campaign's poses on UR10e arms (bench/cycle_time.py stations), with these 1-3. The elbow
-#: stays within ±2.4 rad, and every folded posture is checked for self-collision (the selector's
-#: capsules) before it is used.
-TRANSIT_POSTURES: tuple[tuple[float, float], ...] = (
-    (-np.pi / 2, 0.0),
-    *((q2, sign * q3) for q3 in (2.4, 2.0, 1.5, 0.8) for sign in (1.0, -1.0)
-      for q2 in (-np.pi / 2, -2.2, -1.0, -2.8, -0.4)),
-)
-
-
-def _transit(q: np.ndarray, shoulder: float = -np.pi / 2, elbow: float = 0.0) -> np.ndarray:
-    """A transit posture above `q`'s base angle (the upright one by default), wrist angles kept."""
-    out = np.array(q, dtype=float)
-    out[1], out[2] = shoulder, elbow
-    return out
 
 
 class PoseSkippedError(HilError):
@@ -262,6 +237,7 @@ class Engine:
 
     def __post_init__(self) -> None:
         self.state = IDLE
+        self.router = Router(self.spec, self.keep_in, self.check_model, self.home)
         self.stats = RunStats()
         self._lock = threading.Lock()
         self._pause = threading.Event()
@@ -272,7 +248,6 @@ class Engine:
         self._extend = 0  # request_extend: pending "wait longer" requests for the current suspension
         self._poke = threading.Event()  # wakes a suspension's wait for any request
         self._last_q: np.ndarray | None = None
-        self._shape: Any = None  # the arm's capsules for `_collides`, made on first use
         self._t0: float | None = None  # the clock when the run started (`ReadConditions`)
         self.current: Acquire | None = None
         self.records: list[PoseRecord] = []
@@ -572,65 +547,8 @@ class Engine:
         return self.robot.wait_move()  # type: ignore[attr-defined]
 
     def _route(self, q: np.ndarray) -> list[np.ndarray]:
-        """Targets to move through to reach `q` safely.
-
-        The target itself must be safe (joint limits, keep-in box), else InputError: the plan is wrong.
-        If the straight joint-space path from where the arm is leaves the box, detours are tried:
-        through the home pose, and through each of `TRANSIT_POSTURES` (the upright posture, q2 = −π/2,
-        q3 = 0, a floor-mounted arm's highest, then folded ones) above the current and the target base
-        angles; of the safe ones the quickest is taken (the least leading-joint travel summed over its
-        legs). If every leg of none of them is safe, `UnsafePathError`: the pose is skipped, never
-        approached. Nothing is ever clamped.
-        """
-        check_target(q, self.spec, self.keep_in, self.check_model)
-        if self._last_q is None:
-            return [q]
-        here = self._last_q
-        safe: list[list[np.ndarray]] = []
-        for route in self._routes(here, q):
-            try:
-                start = here
-                for target in route:
-                    check_target(target, self.spec, self.keep_in, self.check_model, start)
-                    start = target
-            except HilError:
-                continue
-            if len(route) == 1:  # straight there: nothing is quicker
-                return route
-            safe.append(route)
-        if safe:  # the quickest detour: moveJ time grows with the leading joint's travel on each leg
-            return min(safe, key=lambda r: sum(float(np.max(np.abs(b - a)))
-                                               for a, b in zip([here, *r[:-1]], r, strict=True)))
-        raise UnsafePathError(f"no safe path from {np.round(here, 3).tolist()} to "
-                              f"{np.round(q, 3).tolist()} inside the keep-in box (direct, via home, via "
-                              f"{len(TRANSIT_POSTURES)} upright and folded postures)")
-
-    def _routes(self, here: np.ndarray, q: np.ndarray) -> Iterator[list[np.ndarray]]:
-        """The routes `_route` tries, in order, made as they are needed (most legs go straight)."""
-        yield [q]
-        if self.home is not None:
-            yield [np.asarray(self.home, dtype=float), q]
-        for k, (shoulder, elbow) in enumerate(TRANSIT_POSTURES):
-            a, b = _transit(here, shoulder, elbow), _transit(q, shoulder, elbow)
-            if k and self._collides(np.linspace(a, b, 5)):  # the upright posture cannot fold onto itself
-                continue
-            yield [a, b, q]
-
-    def _collides(self, q: np.ndarray) -> bool:
-        """Whether any of configurations `q` (n, 6) brings two non-adjacent links of the arm together
-        (the selector's capsules and margin, `selector.candidates`)."""
-        from hil.calibration.selection import SelectionModel
-        from selector.candidates import CONSTRAINT_NAMES, Constraints, evaluate
-
-        if self._shape is None:
-            smr = None if self.check_model is None else np.asarray(self.check_model.smr, dtype=float)
-            # an SMR at the flange centre (a model without one) would leave the SMR's parameters
-            # unobservable, which the model's set-up refuses: the capsules do not care
-            smr = (0.0, 0.0, 0.045) if smr is None or np.linalg.norm(smr) < 1e-3 else tuple(smr)
-            self._shape = SelectionModel(self.spec.name, smr)
-        others = frozenset(CONSTRAINT_NAMES) - {"self-collision"}
-        passes, _ = evaluate(self._shape, q, Constraints(disabled=others))
-        return not bool(np.all(passes["self-collision"]))
+        """Targets to move through from where the arm is to reach `q` safely (`Router.route`)."""
+        return self.router.route(self._last_q, q)
 
     def _acquire(self, group: Acquire) -> PoseRecord | Skipped:
         """Run one pose visit; after a suspension, run it again from its first step.
