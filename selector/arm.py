@@ -40,6 +40,8 @@ CAPSULE_NAMES: tuple[str, ...] = (
 )
 #: UR5e housing radii (m) per capsule, with a few millimetres of margin.
 UR5E_RADII: tuple[float, ...] = (0.080, 0.080, 0.060, 0.065, 0.050, 0.048, 0.048, 0.048, 0.025)
+#: Clearance (m) two capsules keep beyond their radii for a posture to count as free of self-collision.
+COLLISION_MARGIN = 0.01
 
 
 @dataclass(frozen=True)
@@ -76,6 +78,15 @@ class ArmShape:
         """(P, 2) capsule index pairs checked for self-collision: at least three apart in the chain."""
         n = len(CAPSULE_NAMES)
         return np.array([(i, j) for i in range(n) for j in range(i + 3, n)])
+
+    def collision_free(self, segments: np.ndarray, margin: float = COLLISION_MARGIN) -> np.ndarray:
+        """(N,) whether no two capsules of `collision_pairs` come closer than `margin` (surface to
+        surface), for capsule end points `segments` (N, 9, 2, 3) from `segments`."""
+        radii = np.asarray(self.radii)
+        pairs = self.collision_pairs
+        a, b = segments[:, pairs[:, 0]], segments[:, pairs[:, 1]]
+        d = segment_distance(a[:, :, 0], a[:, :, 1], b[:, :, 0], b[:, :, 1])
+        return np.all(d >= radii[pairs[:, 0]] + radii[pairs[:, 1]] + margin, axis=1)
 
 
 def segment_distance(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) -> np.ndarray:

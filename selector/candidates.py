@@ -32,7 +32,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from selector.arm import elbow_measure, segment_distance, shoulder_measure, wrist_measure
+from selector.arm import (
+    COLLISION_MARGIN,
+    elbow_measure,
+    segment_distance,
+    shoulder_measure,
+    wrist_measure,
+)
 from selector.errors import NoCandidatesError, SelectorError
 from selector.model import PoseModel
 
@@ -58,7 +64,7 @@ class Constraints:
     wrist_margin_deg: float = 10.0
     elbow_margin_deg: float = 10.0
     shoulder_margin: float = 0.05
-    collision_margin: float = 0.01
+    collision_margin: float = COLLISION_MARGIN
     joint_lower: tuple[float, ...] | None = None
     joint_upper: tuple[float, ...] | None = None
     disabled: frozenset[str] = field(default_factory=frozenset)
@@ -198,11 +204,7 @@ def evaluate(model: PoseModel, q: np.ndarray, constraints: Constraints, *, casca
         elif name == "shoulder":
             ok = shoulder_measure(Fi) >= c.shoulder_margin
         else:  # self-collision
-            pairs = model.arm.collision_pairs
-            a, b = segs_i[:, pairs[:, 0]], segs_i[:, pairs[:, 1]]
-            d = segment_distance(a[:, :, 0], a[:, :, 1], b[:, :, 0], b[:, :, 1])
-            clearance = radii[pairs[:, 0]] + radii[pairs[:, 1]] + c.collision_margin
-            ok = np.all(d >= clearance, axis=1)
+            ok = model.arm.collision_free(segs_i, c.collision_margin)
         mask = np.zeros(n, dtype=bool)
         mask[rows] = ok
         passes[name] = mask

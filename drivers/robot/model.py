@@ -2,7 +2,9 @@
 
 The protocol is what a campaign engine needs from an arm: open/close, move to joints under limits and
 wait until steady, read the joints averaged over samples, stop. `URRobot` implements it over ur_rtde;
-tests can substitute any object with the same methods.
+tests can substitute any object with the same methods. What only some arms can do is a protocol of its
+own, checked with ``isinstance``: `SplitMoves` (send a move and wait for it apart) and
+`ReadsJointTemperatures`.
 """
 
 from __future__ import annotations
@@ -163,3 +165,21 @@ class Robot(Protocol):
     def read_joints(self, samples: int = 1) -> JointReading: ...
 
     def stop(self) -> None: ...
+
+
+@runtime_checkable
+class SplitMoves(Protocol):
+    """A robot whose move can be sent and waited for apart (`URRobot.start_move` / `wait_move`), so its
+    caller can do something else while the arm travels (the campaign engine commits the last point)."""
+
+    def start_move(self, q: np.ndarray, *, speed: float | None = None,
+                   acceleration: float | None = None) -> np.ndarray: ...
+
+    def wait_move(self, samples: int = 1) -> JointReading: ...
+
+
+@runtime_checkable
+class ReadsJointTemperatures(Protocol):
+    """A robot that reports its six joints' temperatures (°C; RTDE ``joint_temperatures``)."""
+
+    def joint_temperatures(self) -> np.ndarray: ...

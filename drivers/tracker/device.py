@@ -14,7 +14,7 @@ import threading
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from types import TracebackType
-from typing import Protocol
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -84,6 +84,7 @@ class Identity:
     interface: str  # "GeoCOM 1.50.0", "emScon TPI 3.6.0"
 
 
+@runtime_checkable
 class Tracker(Protocol):
     """What the campaign, the TUI and MOVEB use of a laser tracker. No I/O before `open()`."""
 

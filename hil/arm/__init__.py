@@ -5,10 +5,15 @@
 * `kinematics` — batched forward kinematics and identification Jacobians (pinocchio), the parameter
   vector and its identifiable subset;
 * `ik` — inverse kinematics of a (calibrated) model, for tool paths;
-* `safety` — a motion target checked against the joint limits and the keep-in box, never clamped.
+* `safety` — a motion target checked against the joint limits and the keep-in box, never clamped;
+* `self_collision` — whether a posture folds the arm onto itself (the selector's link capsules on
+  these kinematics' joint frames);
+* `routes` — how the arm gets to a target inside the keep-in box: straight, or the quickest safe
+  detour (home, upright and folded transit postures), as the campaign moves and its dry run shows;
 * `blas_threads` — one BLAS thread per process: the model's matrices are small, and OpenBLAS's threads
   only slow them (the CLI and the simulators set it when they start).
 
 One kinematic model serves the selector, identification, the simulators and the exports.
-May import: `hil.errors`, `hil.files`. Imported by every package above it, and by `mocks`.
+May import: `hil.errors`, `hil.files`, and `selector` (its link capsules, for `self_collision`).
+Imported by every package above it, and by `mocks`.
 """

@@ -20,7 +20,8 @@ Choices made here:
   arm's gravity torques make identifiable (for the payload and mounting) join the parameters, so the
   poses are chosen to separate the sag from the geometry too; their expected magnitude is the typical
   strain-wave compliance (`hil.arm.physical.typical_compliance`).
-* **Link thickness** scales with the upper-arm length: (|a2| / 0.425)^0.6 times a UR5e's.
+* **Link thickness** scales with the upper-arm length: (|a2| / 0.425)^0.6 times a UR5e's
+  (`hil.arm.self_collision.arm_shape`, the capsules the campaign's routes are checked with too).
 """
 
 from __future__ import annotations
@@ -43,8 +44,8 @@ from hil.arm.kinematics import (
     identifiable_parameters,
     identifiable_with_compliance,
 )
+from hil.arm.self_collision import arm_shape
 from hil.errors import InputError
-from selector.arm import ArmShape
 from selector.bound import d_optimal_bound
 from selector.candidates import CONSTRAINT_NAMES, Constraints, evaluate, generate_candidates
 from selector.design import check_count
@@ -133,11 +134,6 @@ class SelectionModel:
     def jacobian(self, q: np.ndarray) -> np.ndarray:
         """(N, 3, n) identification Jacobian of the observable parameters (hil's pinocchio model)."""
         return self.kinematics.jacobian(q, self.parameters)
-
-
-def arm_shape(robot: str) -> ArmShape:
-    """The arm's link capsules: a UR5e's scaled by (|a2| / 0.425)^0.6 (see the module docstring)."""
-    return ArmShape.scaled((abs(get_robot(robot).dh.a[1]) / 0.425) ** 0.6)
 
 
 def parse_constraints(*, tracker: Sequence[float] | None, disabled: Sequence[str] = (),

@@ -1,5 +1,12 @@
 """One engine says how: it executes plans against devices and owns the run's state.
 
+It only executes. Each step a plan yields goes to its handler by the step's type (`_plan_handlers`;
+the steps of a pose visit, `_device_handlers`); the devices are the drivers' typed ones
+(`drivers.robot.model.Robot`, `drivers.tracker.device.Tracker`), and what only some arms can do is a
+declared protocol (`SplitMoves`, `ReadsJointTemperatures`). How the arm gets to a target — straight, or
+a detour through safe postures inside the keep-in box — is the arm package's (`hil.arm.routes.Router`),
+the same routes a dry run lays out (`hil.campaign.steps.plan_motion`).
+
 States: idle → running ⇄ paused / suspended → stopping → aborted | interrupted | done (| failed).
 Requests to pause, resume and abort come from other threads (the TUI) and take effect at step
 boundaries; an abort stops the arm. A `KeyboardInterrupt` (Ctrl-C, or `RunInterrupted`, which the
@@ -15,11 +22,11 @@ emitted and the exception propagates.
 The engine never prints. It emits events; the store subscribes as a critical subscriber (delivered
 first: a failure ends the run). A measured point's events (`PoseReached`, `PointMeasured`) are held
 back until the next step: when that step is a move and the arm can be started and waited for apart
-(`start_move` / `wait_move`, `drivers.robot.ur.URRobot`), the engine sends the move, delivers the
-held events — the store commits the point — while the arm travels, then waits for the arm; any other
-step, any other event, a pause or the end of the run delivers them first. So the order of events is
-unchanged for every subscriber, the commit costs no robot time, and it is always finished before the
-next measurement. A failed commit stops the arm and fails the run (no suspender retries it).
+(`SplitMoves`: `start_move` / `wait_move`, as `drivers.robot.ur.URRobot`), the engine sends the move,
+delivers the held events — the store commits the point — while the arm travels, then waits for the
+arm; any other step, any other event, a pause or the end of the run delivers them first. So the order
+of events is unchanged for every subscriber, the commit costs no robot time, and it is always finished
+before the next measurement. A failed commit stops the arm and fails the run (no suspender retries it).
 What the operator is promised stays true: a point reported measured (a `PointMeasured` that reached
 the displays, which come after the store) is in the store; an interrupted run (Ctrl-C, a stop
 request, an abort) stops the arm and then commits the point it holds; only a ``kill -9`` (or a power
@@ -29,7 +36,7 @@ before the next move starts, as an engine without it did.
 
 For the warm-up and the drift watch (`hil.campaign.warmup`) it also answers `ReadConditions` (the
 station time since the run started, its clock scaled by the clock's ``speed``, and the arm's joint
-temperatures when the driver reads them), skips an ``optional`` move without a safe path instead of
+temperatures when the driver reports them), skips an ``optional`` move without a safe path instead of
 failing, and hands a visit of role `REFERENCE` back to the plan alone: no pose events, no
 `PointMeasured`, never among `records`.
 """
@@ -39,16 +46,18 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
 
+from drivers.robot.model import JointReading, ReadsJointTemperatures, Robot, SplitMoves
+from drivers.tracker.device import Tracker, TrackerPoint
 from drivers.tracker.errors import UnstablePoint
 from hil.arm.catalog import RobotSpec
 from hil.arm.geometry import Geometry
-from hil.arm.safety import check_target
+from hil.arm.routes import Router, UnsafePathError
 from hil.campaign.events import (
     Event,
     EventBus,
@@ -133,31 +142,6 @@ class SuspendTimeout(HilError):
         self.kind, self.limit, self.instruction = kind, limit, instruction
 
 
-class UnsafePathError(HilError):
-    """No safe way to a (safe) target from where the arm is: the pose is skipped."""
-
-
-#: Detour postures (shoulder q2, elbow q3) tried in order when neither the straight path nor the home
-#: pose is safe: the upright posture first (a floor-mounted arm's highest), then folded ones. A UR10e
-#: stands about 1.5 m tall upright, above a 1.2 m keep-in box, where its straight paths between widely
-#: spread poses also sweep outside: with the upright detour alone the example station skipped 15-26 of
-#: a 50-pose campaign's poses on UR10e arms (bench/cycle_time.py stations), with these 1-3. The elbow
-#: stays within ±2.4 rad, and every folded posture is checked for self-collision (the selector's
-#: capsules) before it is used.
-TRANSIT_POSTURES: tuple[tuple[float, float], ...] = (
-    (-np.pi / 2, 0.0),
-    *((q2, sign * q3) for q3 in (2.4, 2.0, 1.5, 0.8) for sign in (1.0, -1.0)
-      for q2 in (-np.pi / 2, -2.2, -1.0, -2.8, -0.4)),
-)
-
-
-def _transit(q: np.ndarray, shoulder: float = -np.pi / 2, elbow: float = 0.0) -> np.ndarray:
-    """A transit posture above `q`'s base angle (the upright one by default), wrist angles kept."""
-    out = np.array(q, dtype=float)
-    out[1], out[2] = shoulder, elbow
-    return out
-
-
 class PoseSkippedError(HilError):
     """A pose visit was given up (its suspender clears by skipping, e.g. a beam that never returns)."""
 
@@ -180,26 +164,6 @@ class RealClock:
     def sleep(self, seconds: float) -> None:
         if seconds > 0:
             time.sleep(seconds / self.speed)
-
-
-class RobotDevice(Protocol):
-    """What the engine needs from an arm (drivers.robot.URRobot has this shape)."""
-
-    def move_to(self, q: np.ndarray, *, speed: float | None = None,
-                acceleration: float | None = None) -> Any: ...
-
-    def read_joints(self, samples: int = 1) -> Any: ...  # .q and .spread arrays
-
-    def stop(self) -> None: ...
-
-
-class TrackerDevice(Protocol):
-    """What the engine needs from a tracker (drivers.tracker.Tracker has this shape)."""
-
-    def measure_point(self, samples: int = 1) -> Any: ...  # .xyz (or .position), .spread, .samples
-
-    # and, for `SettleMeasure`, ``sample()``: one reading now (a tracker without it is read with
-    # ``measure_point(1)``)
 
 
 @dataclass
@@ -241,12 +205,21 @@ class RunStats:
         return {k: float(v) for k, v in self.__dict__.items()}
 
 
+def _handler(table: dict[type, Callable[[Any], Any]], step: Step) -> Callable[[Any], Any]:
+    """The handler of `step`'s type (or of the nearest base it derives from) in `table`."""
+    for kind in type(step).__mro__:
+        handler = table.get(kind)
+        if handler is not None:
+            return handler
+    raise TypeError(f"the engine cannot execute {step!r}")
+
+
 @dataclass
 class Engine:
     """Executes a plan; see the module docstring."""
 
-    robot: RobotDevice
-    tracker: TrackerDevice
+    robot: Robot  # `SplitMoves` too lets a point's commit overlap the next move
+    tracker: Tracker
     campaign: str
     spec: RobotSpec
     bus: EventBus = field(default_factory=EventBus)
@@ -262,6 +235,16 @@ class Engine:
 
     def __post_init__(self) -> None:
         self.state = IDLE
+        self.router = Router(self.spec, self.keep_in, self.check_model, self.home)
+        # step type → handler: what the plan yields, and what a pose visit (`Acquire`) is made of
+        self._device_handlers: dict[type, Callable[[Any], Any]] = {
+            Move: self._go, Settle: self._settle, ReadJoints: self._read_joints, Measure: self._measure,
+            SettleMeasure: self._settle_measure}
+        self._plan_handlers: dict[type, Callable[[Any], Any]] = {
+            Acquire: self._acquire, Phase: self._phase, Emit: self._emit, Checkpoint: self._checkpoint,
+            ReadConditions: self._read_conditions, Move: self._plan_move, Settle: self._plan_device_step,
+            ReadJoints: self._plan_device_step, Measure: self._plan_device_step,
+            SettleMeasure: self._plan_device_step}
         self.stats = RunStats()
         self._lock = threading.Lock()
         self._pause = threading.Event()
@@ -272,7 +255,6 @@ class Engine:
         self._extend = 0  # request_extend: pending "wait longer" requests for the current suspension
         self._poke = threading.Event()  # wakes a suspension's wait for any request
         self._last_q: np.ndarray | None = None
-        self._shape: Any = None  # the arm's capsules for `_collides`, made on first use
         self._t0: float | None = None  # the clock when the run started (`ReadConditions`)
         self.current: Acquire | None = None
         self.records: list[PoseRecord] = []
@@ -355,8 +337,7 @@ class Engine:
     @property
     def _overlaps(self) -> bool:
         """Whether a point's commit can run during the next move (the arm has start/wait)."""
-        return self.overlap and callable(getattr(self.robot, "start_move", None)) and \
-            callable(getattr(self.robot, "wait_move", None))
+        return self.overlap and isinstance(self.robot, SplitMoves)
 
     def _hold(self, event: Event, record: PoseRecord | None = None) -> None:
         """Deliver `event` with the next move (`_move`), or now when moves cannot overlap."""
@@ -442,25 +423,34 @@ class Engine:
             self.stats.total = self.clock.monotonic() - t0
 
     def _execute(self, step: Step) -> Any:
+        """Run one step of the plan by its handler (`_plan_handlers`); returns the plan's reply."""
         if not isinstance(step, Acquire | Move):  # only a move overlaps a held point's commit
             self._flush()
-        if isinstance(step, Acquire):
-            return self._acquire(step)
-        if isinstance(step, Phase):
-            self.emit(PhaseChanged(campaign=self.campaign, phase=step.name, detail=step.detail))
-            return None
-        if isinstance(step, Emit):
-            self.emit(step.event)
-            return None
-        if isinstance(step, Checkpoint):
-            return None
-        if isinstance(step, ReadConditions):
-            return self._conditions(step.temperatures)
-        if isinstance(step, Move) and step.optional:
-            try:
-                return self._with_suspenders(lambda: self._device_step(step))
-            except UnsafePathError as exc:
-                return Skipped(-1, "", str(exc), lost=False)
+        return _handler(self._plan_handlers, step)(step)
+
+    def _phase(self, step: Phase) -> None:
+        self.emit(PhaseChanged(campaign=self.campaign, phase=step.name, detail=step.detail))
+
+    def _emit(self, step: Emit) -> None:
+        self.emit(step.event)
+
+    def _checkpoint(self, step: Checkpoint) -> None:
+        """Nothing to do: everything before it was recorded as it happened (the store's events)."""
+
+    def _read_conditions(self, step: ReadConditions) -> Conditions:
+        return self._conditions(step.temperatures)
+
+    def _plan_move(self, step: Move) -> JointReading | Skipped:
+        """A `Move` outside a pose visit; an ``optional`` one without a safe path is `Skipped`."""
+        try:
+            return self._with_suspenders(lambda: self._device_step(step))
+        except UnsafePathError as exc:
+            if not step.optional:
+                raise
+            return Skipped(-1, "", str(exc), lost=False)
+
+    def _plan_device_step(self, step: Settle | ReadJoints | Measure | SettleMeasure) -> Any:
+        """A device step outside a pose visit: retried after a suspension like a visit."""
         return self._with_suspenders(lambda: self._device_step(step))
 
     def station_time(self) -> float:
@@ -475,41 +465,46 @@ class Engine:
         (RTDE ``joint_temperatures``, `drivers.robot.ur.URRobot`), its joint temperatures. A reading
         that fails is left out (None): it describes the measurement, it is not one."""
         temps = None
-        read = getattr(self.robot, "joint_temperatures", None) if temperatures else None
-        if callable(read):
+        if temperatures and isinstance(self.robot, ReadsJointTemperatures):
             try:
-                temps = tuple(float(v) for v in np.asarray(read(), dtype=float).reshape(-1))
+                temps = tuple(float(v) for v in
+                              np.asarray(self.robot.joint_temperatures(), dtype=float).reshape(-1))
             except Exception as exc:  # a missing RTDE field, a dropped link: the next move will tell
                 log.debug("reading the joint temperatures failed: %s", exc)
         return Conditions(self.station_time(), temps)
 
     def _device_step(self, step: Step) -> Any:
-        clock = self.clock
+        """Run one device step (`_device_handlers`), its time counted in `stats`."""
         if not isinstance(step, Move):  # a held point is committed before anything is measured
             self._flush()
-        t = clock.monotonic()
-        if isinstance(step, Move):
-            result = None
-            for target in self._route(np.asarray(step.q, dtype=float)):
-                result = self._move(target, step)
-                self._last_q = target
-            self.stats.motion += clock.monotonic() - t
-            return result
-        if isinstance(step, Settle):
-            clock.sleep(step.seconds)
-            self.stats.settle += clock.monotonic() - t
-            return None
-        if isinstance(step, ReadJoints):
-            result = self.robot.read_joints(step.samples)
-            self.stats.joints += clock.monotonic() - t
-            return result
-        if isinstance(step, Measure):
-            result = self.tracker.measure_point(step.samples)
-            self.stats.measure += clock.monotonic() - t
-            return result
-        if isinstance(step, SettleMeasure):
-            return self._settle_measure(step)
-        raise TypeError(f"the engine cannot execute {step!r}")
+        return _handler(self._device_handlers, step)(step)
+
+    def _go(self, step: Move) -> JointReading | None:
+        """`Move`: every leg of the route to its target (`_route`)."""
+        t = self.clock.monotonic()
+        result = None
+        for target in self._route(np.asarray(step.q, dtype=float)):
+            result = self._move(target, step)
+            self._last_q = target
+        self.stats.motion += self.clock.monotonic() - t
+        return result
+
+    def _settle(self, step: Settle) -> None:
+        t = self.clock.monotonic()
+        self.clock.sleep(step.seconds)
+        self.stats.settle += self.clock.monotonic() - t
+
+    def _read_joints(self, step: ReadJoints) -> JointReading:
+        t = self.clock.monotonic()
+        result = self.robot.read_joints(step.samples)
+        self.stats.joints += self.clock.monotonic() - t
+        return result
+
+    def _measure(self, step: Measure) -> TrackerPoint:
+        t = self.clock.monotonic()
+        result = self.tracker.measure_point(step.samples)
+        self.stats.measure += self.clock.monotonic() - t
+        return result
 
     def _settle_measure(self, step: SettleMeasure) -> Settled:
         """`SettleMeasure`: single readings, each followed by the joints, until the window is still.
@@ -521,16 +516,13 @@ class Engine:
         speed = float(getattr(clock, "speed", 1.0))
         window = max(2, int(step.samples))
         frames = max(1, -(-int(step.joint_samples) // window))  # joint frames after each reading
-        sample = getattr(self.tracker, "sample", None)
-        read = sample if callable(sample) else (lambda: self.tracker.measure_point(1))
         t0 = clock.monotonic()
         points: list[np.ndarray] = []
         joints: list[np.ndarray] = []
         stamps: list[float] = []
         while True:
             stamps.append(clock.monotonic())
-            point = read()
-            points.append(np.asarray(point.xyz if hasattr(point, "xyz") else point.position, float))
+            points.append(np.asarray(self.tracker.sample().xyz, float))
             joints.append(np.asarray(self.robot.read_joints(frames).q, float))
             if len(points) >= window:
                 P = np.array(points[-window:])
@@ -555,82 +547,26 @@ class Engine:
                        q_spread=Q.std(axis=0, ddof=1), waited=(start - t0) * speed,
                        readings=len(points))
 
-    def _move(self, target: np.ndarray, step: Move) -> Any:
+    def _move(self, target: np.ndarray, step: Move) -> JointReading:
         """One leg of a `Move`. With events held back (the last point's), the move is sent first,
         they are delivered while the arm travels, and then the arm is waited for; a delivery that
         fails stops the arm and ends the run. Without (or when moves cannot overlap): deliver, move."""
-        if not (self._pending and self._overlaps):
+        robot = self.robot
+        if not (self._pending and self.overlap and isinstance(robot, SplitMoves)):  # `_overlaps`
             self._flush()
-            return self.robot.move_to(target, speed=step.speed, acceleration=step.acceleration)
-        self.robot.start_move(target, speed=step.speed, acceleration=step.acceleration)  # type: ignore[attr-defined]
+            return robot.move_to(target, speed=step.speed, acceleration=step.acceleration)
+        robot.start_move(target, speed=step.speed, acceleration=step.acceleration)
         try:
             self._flush(moving=True)
         except BaseException as exc:
             self._commit_error = exc  # the point may not be kept: no suspender may retry this visit
             self._stop_arm()
             raise
-        return self.robot.wait_move()  # type: ignore[attr-defined]
+        return robot.wait_move()
 
     def _route(self, q: np.ndarray) -> list[np.ndarray]:
-        """Targets to move through to reach `q` safely.
-
-        The target itself must be safe (joint limits, keep-in box), else InputError: the plan is wrong.
-        If the straight joint-space path from where the arm is leaves the box, detours are tried:
-        through the home pose, and through each of `TRANSIT_POSTURES` (the upright posture, q2 = −π/2,
-        q3 = 0, a floor-mounted arm's highest, then folded ones) above the current and the target base
-        angles; of the safe ones the quickest is taken (the least leading-joint travel summed over its
-        legs). If every leg of none of them is safe, `UnsafePathError`: the pose is skipped, never
-        approached. Nothing is ever clamped.
-        """
-        check_target(q, self.spec, self.keep_in, self.check_model)
-        if self._last_q is None:
-            return [q]
-        here = self._last_q
-        safe: list[list[np.ndarray]] = []
-        for route in self._routes(here, q):
-            try:
-                start = here
-                for target in route:
-                    check_target(target, self.spec, self.keep_in, self.check_model, start)
-                    start = target
-            except HilError:
-                continue
-            if len(route) == 1:  # straight there: nothing is quicker
-                return route
-            safe.append(route)
-        if safe:  # the quickest detour: moveJ time grows with the leading joint's travel on each leg
-            return min(safe, key=lambda r: sum(float(np.max(np.abs(b - a)))
-                                               for a, b in zip([here, *r[:-1]], r, strict=True)))
-        raise UnsafePathError(f"no safe path from {np.round(here, 3).tolist()} to "
-                              f"{np.round(q, 3).tolist()} inside the keep-in box (direct, via home, via "
-                              f"{len(TRANSIT_POSTURES)} upright and folded postures)")
-
-    def _routes(self, here: np.ndarray, q: np.ndarray) -> Iterator[list[np.ndarray]]:
-        """The routes `_route` tries, in order, made as they are needed (most legs go straight)."""
-        yield [q]
-        if self.home is not None:
-            yield [np.asarray(self.home, dtype=float), q]
-        for k, (shoulder, elbow) in enumerate(TRANSIT_POSTURES):
-            a, b = _transit(here, shoulder, elbow), _transit(q, shoulder, elbow)
-            if k and self._collides(np.linspace(a, b, 5)):  # the upright posture cannot fold onto itself
-                continue
-            yield [a, b, q]
-
-    def _collides(self, q: np.ndarray) -> bool:
-        """Whether any of configurations `q` (n, 6) brings two non-adjacent links of the arm together
-        (the selector's capsules and margin, `selector.candidates`)."""
-        from hil.calibration.selection import SelectionModel
-        from selector.candidates import CONSTRAINT_NAMES, Constraints, evaluate
-
-        if self._shape is None:
-            smr = None if self.check_model is None else np.asarray(self.check_model.smr, dtype=float)
-            # an SMR at the flange centre (a model without one) would leave the SMR's parameters
-            # unobservable, which the model's set-up refuses: the capsules do not care
-            smr = (0.0, 0.0, 0.045) if smr is None or np.linalg.norm(smr) < 1e-3 else tuple(smr)
-            self._shape = SelectionModel(self.spec.name, smr)
-        others = frozenset(CONSTRAINT_NAMES) - {"self-collision"}
-        passes, _ = evaluate(self._shape, q, Constraints(disabled=others))
-        return not bool(np.all(passes["self-collision"]))
+        """Targets to move through from where the arm is to reach `q` safely (`Router.route`)."""
+        return self.router.route(self._last_q, q)
 
     def _acquire(self, group: Acquire) -> PoseRecord | Skipped:
         """Run one pose visit; after a suspension, run it again from its first step.
@@ -666,7 +602,7 @@ class Engine:
         else:
             reading = next(r for s, r in zip(group.steps, results, strict=True) if isinstance(s, ReadJoints))
             point = next(r for s, r in zip(group.steps, results, strict=True) if isinstance(s, Measure))
-            xyz = np.asarray(point.xyz if hasattr(point, "xyz") else point.position, dtype=float)
+            xyz = np.asarray(point.xyz, dtype=float)
             record = PoseRecord(
                 index=group.index, role=group.role, target=np.array(group.target),
                 q=np.asarray(reading.q, float), q_spread=np.asarray(reading.spread, float),

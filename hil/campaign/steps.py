@@ -4,8 +4,9 @@ A plan is a generator of steps. The engine executes each step and sends its resu
 generator (``reading = yield ReadJoints(10)``), as in bluesky, so a plan can depend on what it
 measured — a bootstrap that locates the tracker before the selector runs — and still do no I/O of its
 own. Because steps are plain data, a plan can be dry-run against canned replies (`dry_run`) and its
-every motion checked against the joint limits and the keep-in zone before the arm moves
-(`check_motion`).
+every motion laid out before the arm moves, along the same routes the engine will take
+(`plan_motion`: straight, a detour through safe postures, or skipped for want of a safe path) and
+checked against the joint limits and the keep-in zone (`check_motion`).
 
 `Acquire` groups the steps of one pose (move, settle, read joints, measure; or move and
 `SettleMeasure`, which settles on the tracker's evidence and reads the joints in the same window). It
@@ -27,7 +28,7 @@ import numpy as np
 
 from hil.arm.catalog import RobotSpec
 from hil.arm.geometry import Geometry
-from hil.arm.safety import check_target
+from hil.arm.routes import Router, UnsafePathError
 
 #: The role of a reference-pose visit (warm-up and drift watch): not one of the campaign's poses.
 REFERENCE = "reference"
@@ -244,14 +245,60 @@ def moves_of(steps: Iterable[Step]) -> list[np.ndarray]:
     return out
 
 
+@dataclass(frozen=True)
+class Leg:
+    """One motion of a (dry-run) plan as the engine will make it (`plan_motion`).
+
+    `via`: the postures of the detour the arm takes before `target` (the home pose, or two transit
+    postures), empty when it goes straight. `skipped`: why the run will not go there at all (no safe
+    path: the pose visit, or an optional move, is skipped and the arm stays where it was), "" when it
+    moves.
+    """
+
+    target: tuple[float, ...]
+    via: tuple[tuple[float, ...], ...] = ()
+    skipped: str = ""
+
+    @property
+    def detour(self) -> bool:
+        return bool(self.via)
+
+
+def plan_motion(steps: Iterable[Step], router: Router, start: np.ndarray | None = None) -> list[Leg]:
+    """Every motion of a (dry-run) plan as the engine will make it, in order: each leg planned from
+    where the arm will be with the engine's own routes (`Router.route`), from `start` (default: the
+    router's home pose, where the engine starts; None: the first target alone is checked).
+
+    A target outside the joint limits or the keep-in box raises InputError (the run would stop there,
+    before moving); a plain `Move` with no safe path raises `UnsafePathError`, as the run would; inside
+    an `Acquire` or for an ``optional`` move that leg is `Leg.skipped`, as the run skips it.
+    """
+    here = start if start is not None else router.home
+    legs: list[Leg] = []
+    for step in steps:
+        if isinstance(step, Move):
+            moves, skippable = [step], step.optional
+        elif isinstance(step, Acquire):
+            moves, skippable = [x for x in step.steps if isinstance(x, Move)], True
+        else:
+            continue
+        for move in moves:
+            try:
+                route = router.route(here, np.asarray(move.q, dtype=float))
+            except UnsafePathError as exc:
+                if not skippable:
+                    raise
+                legs.append(Leg(tuple(move.q), skipped=str(exc)))
+                break  # the engine gives up the whole visit: the arm stays where it is
+            legs.append(Leg(tuple(move.q), tuple(tuple(float(v) for v in p) for p in route[:-1])))
+            here = route[-1]
+    return legs
+
+
 def check_motion(steps: Iterable[Step], spec: RobotSpec,
                  keep_in: tuple[np.ndarray, np.ndarray] | None = None,
-                 model: Geometry | None = None, start: np.ndarray | None = None) -> int:
-    """Check every motion of a (dry-run) plan; returns how many targets were checked."""
-    previous = start
-    count = 0
-    for q in moves_of(steps):
-        check_target(q, spec, keep_in, model, previous)
-        previous = q
-        count += 1
-    return count
+                 model: Geometry | None = None, start: np.ndarray | None = None,
+                 home: np.ndarray | None = None) -> int:
+    """Check every motion of a (dry-run) plan along the routes the run will take (`plan_motion`);
+    returns how many targets were checked."""
+    return len(plan_motion(steps, Router(spec, keep_in, model, home), start))

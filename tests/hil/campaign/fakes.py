@@ -1,16 +1,22 @@
 """In-process stand-ins for the robot and the tracker, driven by a hidden truth, for engine tests.
 
-They follow the shapes of drivers.robot.URRobot and drivers.tracker.Tracker (move_to/read_joints/
-stop; measure_point) and can be told to fail: a protective stop on a given move, a lost beam for a
-number of measurements, a dead connection.
+They satisfy the drivers' protocols the engine holds (`drivers.robot.model.Robot`,
+`drivers.tracker.device.Tracker`) and answer with the drivers' own data (`JointReading`,
+`TrackerPoint`), and can be told to fail: a protective stop on a given move, a lost beam for a number
+of measurements, a dead connection. The arm moves in one call (no `SplitMoves`) and reports no joint
+temperatures; subclasses add either.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
+from drivers.robot.model import ControllerInfo, JointReading
+from drivers.tracker.device import Identity, PointStatus, StreamSample, TrackerPoint
 from hil.arm.geometry import Geometry
 from hil.arm.kinematics import Kinematics
 
@@ -27,22 +33,73 @@ class FakeHardwareFault(Exception):
     pass
 
 
-@dataclass
-class Reading:
-    q: np.ndarray
-    spread: np.ndarray
+@dataclass(frozen=True)
+class Reading(JointReading):
+    """The driver's joint reading with the fakes' defaults: one sample, no timestamp."""
+
     samples: int = 1
+    timestamp: float = 0.0
+
+
+@dataclass(frozen=True)
+class Point(TrackerPoint):
+    """The driver's tracker point from arrays (position, spread), its status OK."""
+
+    status: PointStatus = PointStatus.OK
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "position", tuple(float(v) for v in self.position))
+        object.__setattr__(self, "spread", tuple(float(v) for v in self.spread))
+
+
+class RobotParts:
+    """What `Robot` asks beyond moving, reading and stopping: an in-process arm has nothing to open."""
+
+    info: ControllerInfo | None = None
+
+    def open(self) -> ControllerInfo | None:
+        return self.info
+
+    def close(self) -> None:
+        pass
+
+
+class TrackerParts:
+    """What `Tracker` asks beyond `measure_point` and `relock`: nothing to open, always ready, no
+    stream; `sample` is a one-sample measurement (its beam losses included)."""
+
+    identity: Identity | None = None
+
+    def measure_point(self, samples: int = 1) -> TrackerPoint:
+        raise NotImplementedError
+
+    def sample(self) -> TrackerPoint:
+        return self.measure_point(1)
+
+    def ready(self) -> bool:
+        return True
+
+    def lock_status(self) -> str:
+        return "locked in"
+
+    def open(self) -> Any:
+        return self
+
+    def close(self) -> None:
+        pass
+
+    def __enter__(self) -> Any:
+        return self.open()
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def stream(self, rate_hz: float, **kwargs: Any) -> Iterator[StreamSample]:
+        raise NotImplementedError("the fake tracker takes points, it does not stream")
 
 
 @dataclass
-class Point:
-    xyz: np.ndarray
-    spread: np.ndarray
-    samples: int
-
-
-@dataclass
-class FakeArm:
+class FakeArm(RobotParts):
     start: np.ndarray
     encoder_sigma: float = 1e-6
     seed: int = 0
@@ -88,7 +145,7 @@ class FakeArm:
 
 
 @dataclass
-class FakeTracker:
+class FakeTracker(TrackerParts):
     arm: FakeArm
     truth: Geometry
     sigma: float = 20e-6

@@ -24,7 +24,7 @@ from hil.campaign.steps import (
     SettleMeasure,
     acquire,
 )
-from tests.hil.campaign.fakes import FakeBeamLost, Point, Reading
+from tests.hil.campaign.fakes import FakeBeamLost, Point, Reading, RobotParts, TrackerParts
 from tests.hil.campaign.thermal_fakes import VirtualClock
 
 STABILITY = 50e-6
@@ -34,7 +34,7 @@ READ_S = 0.1  # virtual seconds a tracker reading takes
 DRIFT = 1e-4  # rad/s every joint creeps by: tells which readings the joints were paired with
 
 
-class RingingArm:
+class RingingArm(RobotParts):
     """Moves take a second; the SMR rings after each with amplitude acceleration·LEVER/ωₙ²."""
 
     def __init__(self, clock: VirtualClock) -> None:
@@ -68,7 +68,7 @@ class RingingArm:
         pass
 
 
-class RingingTracker:
+class RingingTracker(TrackerParts):
     """Single readings of a still point plus the arm's ring along x; a log of (time, reading)."""
 
     def __init__(self, arm: RingingArm, sigma: float = 5e-6, lose_on: int | None = None) -> None:

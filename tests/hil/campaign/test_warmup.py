@@ -14,9 +14,10 @@ import numpy as np
 import pytest
 
 from hil.arm.catalog import get_robot
+from hil.arm.routes import UnsafePathError
 from hil.arm.thermal import Thermal
 from hil.calibration.synthetic import random_truth
-from hil.campaign.engine import Engine, RunInterrupted, UnsafePathError
+from hil.campaign.engine import Engine, RunInterrupted
 from hil.campaign.events import (
     DriftFlagged,
     EventBus,
