@@ -10,7 +10,7 @@ constraints, measured at the times a campaign at the example config's speed woul
 * (a) geometry only, the campaign starting on a cold arm;
 * (b) geometry + compliance, the same cold start;
 * (c) (b) after a warm-up: the poses cycled, a reference re-measured every 120 s, until the first-order
-  fit of its drift (`hil.calibration.warmup`, τ from the joint temperatures the controller reports)
+  fit of its drift (`hil.calibration.warmup_fit`, τ from the joint temperatures the controller reports)
   says less than 5 µm is still to come and three time constants have passed, or an hour; then a drift
   watch every 10 poses (reported, never fitted);
 * (d) (c) with the poses chosen for the compliance parameters too (the selector's design includes
@@ -38,7 +38,7 @@ from hil.calibration.identification import identify
 from hil.calibration.measurements import Measurements
 from hil.calibration.selection import SelectionModel, parse_constraints, select_poses
 from hil.calibration.synthetic import Noise, measure, random_truth, true_points
-from hil.calibration.warmup import fit_warmup
+from hil.calibration.warmup_fit import fit_warmup
 from selector.candidates import generate_candidates
 
 PAYLOAD = Payload(3.0, (0.0, 0.0, 0.05))

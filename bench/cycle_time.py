@@ -55,6 +55,7 @@ from hil.calibration.measurements import Measurements
 from hil.calibration.model_file import truth_document
 from hil.calibration.selection import design_space, parse_constraints
 from hil.calibration.synthetic import Noise, measure, random_truth, true_points
+from hil.campaign.calibration_plan import CALIBRATION, VALIDATION, Choice, SelectionRequest
 from hil.campaign.chooser import (
     ACCEPTANCE_MARGIN_DEG,
     CAMPAIGN_LOWER,
@@ -64,7 +65,6 @@ from hil.campaign.chooser import (
 )
 from hil.campaign.engine import RealClock
 from hil.campaign.events import EventBus
-from hil.campaign.plan import CALIBRATION, VALIDATION, Choice, SelectionRequest
 from hil.campaign.runner import run_campaign
 from hil.station.config import load_config
 from hil.station.devices import open_devices

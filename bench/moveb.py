@@ -22,7 +22,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from hil.moveb.baselines import Profile, arc_blend, cubic_spline
-from hil.moveb.plan import plan_program
+from hil.moveb.path_plan import plan_program
 from hil.moveb.program import format_program, parse_program
 from hil.moveb.timing import Limits, feed_profile
 

@@ -264,8 +264,8 @@ RECHECK_MARGIN_DEG = 2.0
 @functools.lru_cache(maxsize=4)
 def _sight_model(robot: str, smr: tuple[float, ...], tracker: tuple[float, ...]) -> SelectionModel:
     """`hidden_reason`'s model, kept: a campaign asks about pose after pose with the same SMR and
-    tracker (refitted only every few points, `hil.campaign.plan._SightCheck`), and building the model
-    (its identifiable parameters: a Jacobian of 120 poses and a pivoted QR) took 10-35 ms against the
+    tracker (refitted only every few points, `hil.campaign.calibration_plan._SightCheck`), and building the
+    model (its identifiable parameters: a Jacobian of 120 poses and a pivoted QR) took 10-35 ms against the
     check's 3 ms, measured on the simulated station (issue 17; the check itself only reads it)."""
     return SelectionModel(robot, smr, tracker)
 

@@ -2,7 +2,7 @@
 
 * `steps` — the plain steps a plan yields (move, settle, read joints, measure, checkpoint), dry runs
   and a whole plan's motion laid out along the routes the run takes (`hil.arm.routes`);
-* `plan` — the calibration plan: bootstrap, select, warm up, measure, identify, validate;
+* `calibration_plan` — the calibration plan: bootstrap, select, warm up, measure, identify, validate;
 * `warmup` — the warm-up before measuring and the drift watch of a reference pose while measuring;
   `reference_lines` — the operator's words for their events;
 * `controller` — the controller's own kinematic model: the record kept, its error on the validation poses;

@@ -15,7 +15,7 @@ import numpy as np
 import selector
 from hil.calibration.selection import SelectionModel, hidden_reason, parse_constraints, select_poses
 from hil.calibration.timed_selection import select_timed
-from hil.campaign.plan import Choice, SelectionRequest
+from hil.campaign.calibration_plan import Choice, SelectionRequest
 from hil.errors import InputError
 from selector.candidates import Constraints, generate_candidates
 from selector.cluster_sample import cluster_sample
@@ -47,13 +47,13 @@ CAMPAIGN_UPPER = (math.pi, 0.0, math.pi, math.pi, math.pi, math.pi)
 
 
 def campaign_chooser(config: Any) -> Any:
-    """The campaign's pose chooser (`hil.campaign.plan.ChoosePoses`) for a station configuration.
+    """The campaign's pose chooser (`hil.campaign.calibration_plan.ChoosePoses`) for a station configuration.
 
     Calibration poses by the tabu search (with the bound, for the report); validation poses at random
     among the same constraints' candidates, with another seed, because validation should sample the
     workspace rather than the poses that are best for the fit.
     """
-    from hil.campaign.plan import CALIBRATION, Choice
+    from hil.campaign.calibration_plan import CALIBRATION, Choice
 
     def choose(request: SelectionRequest) -> Choice:
         half = max(1.0, request.acceptance_angle - ACCEPTANCE_MARGIN_DEG)
@@ -101,7 +101,7 @@ def pose_dwell(config: Any) -> Dwell:
 
 def _time_aware(config: Any, request: SelectionRequest, constraints: Constraints) -> Choice:
     """Calibration poses and one tour through them and the validation poses (`request.fixed`)."""
-    from hil.campaign.plan import Choice
+    from hil.campaign.calibration_plan import Choice
 
     camp = config.campaign
     budget = float(camp["time_budget"]) or None
@@ -145,7 +145,7 @@ def _random_poses(request: Any, constraints: Constraints) -> Any:
     No minimum count (validation identifies nothing) and no optimisation: validation should sample
     the workspace the robot will work in, not the poses that suit the fit.
     """
-    from hil.campaign.plan import Choice
+    from hil.campaign.calibration_plan import Choice
 
     model, cands = _validation_candidates(request, constraints)
     rng = np.random.default_rng(request.seed)
@@ -165,7 +165,7 @@ def _clustered_poses(config: Any, request: Any, constraints: Constraints) -> Any
     are the first-stage draw of each pose, in visiting order: the standard error of the validation
     mean square needs them (`selector.cluster_sample.cluster_standard_error`).
     """
-    from hil.campaign.plan import Choice
+    from hil.campaign.calibration_plan import Choice
 
     model, cands = _validation_candidates(request, constraints)
     speeds = MotionProfile(float(config.robot["speed"]), float(config.robot["acceleration"]),

@@ -54,8 +54,8 @@ KEYED: dict[str, tuple[str, ...] | None] = {
 START_RESOLUTION = 0.01
 
 #: A tracker located by the bootstrap lands a little elsewhere every campaign (about a centimetre with
-#: the SMR fitted too, `hil.campaign.plan`): positions to 1 cm and orientations to 0.01 rad ask the same
-#: question. The chooser keeps `ACCEPTANCE_MARGIN_DEG` (5°) of the SMR's cone in reserve for exactly
+#: the SMR fitted too, `hil.campaign.calibration_plan`): positions to 1 cm and orientations to 0.01 rad ask
+#: the same question. The chooser keeps `ACCEPTANCE_MARGIN_DEG` (5°) of the SMR's cone in reserve for exactly
 #: that, and 1 cm at the 2-4 m of a station turns the line of sight by under 0.3°; the engine checks the
 #: line of sight again before every pose anyway.
 TRACKER_RESOLUTION = 0.01
@@ -111,7 +111,7 @@ def cache_directory(directory: str | Path) -> Path:
 
 def cached_chooser(choose: Any, config: Any, directory: str | Path) -> Any:
     """`choose` (a `ChoosePoses`) answering from ``directory`` when it answered the same question before."""
-    from hil.campaign.plan import Choice
+    from hil.campaign.calibration_plan import Choice
 
     root = cache_directory(directory)
 

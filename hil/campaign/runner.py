@@ -26,6 +26,13 @@ from hil.arm.geometry import Geometry
 from hil.arm.kinematics import Kinematics
 from hil.calibration.identification import register
 from hil.calibration.measurements import Measurements
+from hil.campaign.calibration_plan import (
+    BOOTSTRAP,
+    CampaignResult,
+    ChoosePoses,
+    ResumeState,
+    calibration_plan,
+)
 from hil.campaign.controller import controller_record
 from hil.campaign.engine import Clock, Engine, RealClock, RunAborted, RunInterrupted
 from hil.campaign.events import (
@@ -41,7 +48,6 @@ from hil.campaign.events import (
     RunStarted,
 )
 from hil.campaign.ids import new_campaign_id
-from hil.campaign.plan import BOOTSTRAP, CampaignResult, ChoosePoses, ResumeState, calibration_plan
 from hil.campaign.steps import PoseRecord
 from hil.campaign.stopping import stopped_words
 from hil.campaign.suspenders import suspenders

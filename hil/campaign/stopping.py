@@ -192,7 +192,7 @@ class StoppingRule:
 
 
 class EarlyStop:
-    """The rule as a running campaign applies it (`hil.campaign.plan.calibration_plan`).
+    """The rule as a running campaign applies it (`hil.campaign.calibration_plan.calibration_plan`).
 
     `rule` None: the rule is off (``campaign.stop_early`` false). `stored`: the record of a stop the
     store already holds (the campaign's `AcquisitionStopped` event): a resumed campaign keeps that

@@ -8,7 +8,7 @@ and a model fitted cold is wrong on the warm arm it will drive. Calibration prac
 §6.2 (the robot is warmed up before it is tested) and §7.6 (drift of pose characteristics), and every
 laser-tracker calibration guide — warms the arm up first and re-measures a reference while measuring.
 
-How (the plan steps of `ReferenceWatch`; the plan, `hil.campaign.plan`, says when):
+How (the plan steps of `ReferenceWatch`; the plan, `hil.campaign.calibration_plan`, says when):
 
 * **The reference pose** (`reference_pose`) is the validation pose whose SMR is nearest the middle of
   all the planned SMR positions: one the selector checked the tracker sees, well inside the
@@ -23,7 +23,7 @@ How (the plan steps of `ReferenceWatch`; the plan, `hil.campaign.plan`, says whe
   constant one interval shows only an eighth of the growth still to come, so "two consecutive
   measurements within 10 µm" would call an arm warm with some 80 µm of growth ahead (and the tracker's
   noise decides the last micrometres). The arm is warm when the first-order fit of the whole series
-  (`hil.calibration.warmup.fit_warmup`, from its 4th measurement) says the drift still to come is below
+  (`hil.calibration.warmup_fit.fit_warmup`, from its 4th measurement) says the drift still to come is below
   ``limit`` and the series spans three fitted time constants (the fit has then seen the curve
   flatten, not guessed it from its start). After ``max_time`` the run goes on with a warning
   (`WarmupFinished`, ``converged`` false), recorded in the result. The last warm-up measurement is
@@ -61,7 +61,7 @@ from hil.arm.catalog import get_robot
 from hil.arm.geometry import Geometry
 from hil.arm.kinematics import Kinematics
 from hil.arm.safety import check_target
-from hil.calibration.warmup import DriftFit, fit_warmup
+from hil.calibration.warmup_fit import DriftFit, fit_warmup
 from hil.campaign.events import (
     DriftFlagged,
     Message,
@@ -159,10 +159,10 @@ class ReferenceWatch:
     def settled(self, series: Sequence[ReferenceMeasured]) -> tuple[bool, DriftFit | None]:
         """Whether a warm-up `series` (this run's, in order) shows the arm warm: the fitted drift still
         to come below ``warmup.limit`` over a series spanning three fitted time constants; and the fit
-        (None before `hil.calibration.warmup.MIN_POINTS` measurements)."""
+        (None before `hil.calibration.warmup_fit.MIN_POINTS` measurements)."""
         times = np.array([p.elapsed for p in series], dtype=float)
         # the joint temperatures the controller reports, when every measurement has them, fix τ
-        # without the tracker's noise (hil.calibration.warmup)
+        # without the tracker's noise (hil.calibration.warmup_fit)
         temps = ([p.temperatures for p in series]
                  if series and all(p.temperatures for p in series) else None)
         fit = (fit_warmup(times, self.positions(series),

@@ -129,7 +129,7 @@ def _json_option(p: argparse.ArgumentParser) -> None:
 
 
 def run_plan(args: argparse.Namespace) -> int:
-    from hil.moveb.plan import plan_program, summary, write_samples
+    from hil.moveb.path_plan import plan_program, summary, write_samples
     from hil.moveb.program import load_program
 
     if not args.step > 0:

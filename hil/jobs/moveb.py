@@ -88,7 +88,7 @@ def run_moveb(request: MovebRequest) -> MovebOutcome:
     from hil.arm.geometry import Geometry
     from hil.arm.kinematics import Kinematics
     from hil.calibration.model_file import load_geometry
-    from hil.moveb.plan import plan_program
+    from hil.moveb.path_plan import plan_program
     from hil.moveb.program import load_program
     from hil.moveb.run import NothingMeasured, execute, facing_frame, program_in_frame
     from hil.moveb.timing import Limits

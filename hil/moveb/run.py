@@ -43,7 +43,7 @@ from hil.errors import HilError, InputError
 from hil.moveb.accuracy import Coverage, coverage, path_accuracy
 from hil.moveb.joints import JointSpeedError, JointSpeeds, joint_speed_ceiling, retime
 from hil.moveb.orientation import rotation_matrices
-from hil.moveb.plan import Plan, Samples
+from hil.moveb.path_plan import Plan, Samples
 from hil.moveb.program import Program
 from hil.moveb.timing import Limits
 

@@ -205,8 +205,8 @@ class ReportData:
     # warm-up and drift watch (`hil.campaign.warmup.ReferenceWatch.summary`: the reference's series,
     # the largest drift, its limit, flagged, the warm-ups); None when both were off
     drift: Mapping[str, Any] | None = None
-    # the stopping rule (`hil.campaign.plan.CampaignResult.stopping`: stopped, reason, predicted_rms,
-    # target, poses_used, poses_left, ...); None when it was off
+    # the stopping rule (`hil.campaign.calibration_plan.CampaignResult.stopping`: stopped, reason,
+    # predicted_rms, target, poses_used, poses_left, ...); None when it was off
     stopping: Mapping[str, Any] | None = None
     # the validation RMS's standard error under the validation design
     # (`hil.calibration.validation_precision`: design, poses, clusters, rms_standard_error,
@@ -300,10 +300,10 @@ def report_data_from(
       (`hil.campaign.controller.controller_validation`), shown beside before and after;
     * ``verification``: the pose test run after the calibration (``hil calibrate --verify``), its
       document as the result embeds it under ``verification``;
-    * ``drift``: the warm-up and drift watch (`hil.campaign.plan.CampaignResult.drift`);
-    * ``stopping``: the stopping rule's record (`hil.campaign.plan.CampaignResult.stopping`);
+    * ``drift``: the warm-up and drift watch (`hil.campaign.calibration_plan.CampaignResult.drift`);
+    * ``stopping``: the stopping rule's record (`hil.campaign.calibration_plan.CampaignResult.stopping`);
     * ``validation_precision``: the validation RMS's standard error under the validation design
-      (`hil.campaign.plan.CampaignResult.validation_precision`).
+      (`hil.campaign.calibration_plan.CampaignResult.validation_precision`).
     """
     from hil.calibration.model_file import model_document, software_versions, tracker_pose
 

@@ -18,7 +18,7 @@ from hil.station.config import StationConfig
 def report_data(outcome: Any, config: StationConfig, events: list[Event], started: float,
                 verification: dict[str, Any] | None = None) -> Any:
     """The report's data of a finished campaign; `verification`: its pose test (``--verify``)."""
-    from hil.campaign.plan import BOOTSTRAP, CALIBRATION, VALIDATION, measurements_of
+    from hil.campaign.calibration_plan import BOOTSTRAP, CALIBRATION, VALIDATION, measurements_of
     from hil.report import RobotIdentity, report_data_from
     from hil.report.data import Observability, tour_summary
 

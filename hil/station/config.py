@@ -303,8 +303,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # divide validation_poses)
         "validation_clusters": Key("int", 0, _within(0, MAX_POSES),
                                    "clustered validation: clusters drawn (0: simple random sample)"),
-        # the bootstrap has 8 arm moves (hil.campaign.plan._BOOTSTRAP_DELTAS) and makes at least 4:
-        # other values were silently clamped
+        # the bootstrap has 8 arm moves (hil.campaign.calibration_plan._BOOTSTRAP_DELTAS) and makes at
+        # least 4: other values were silently clamped
         "bootstrap_poses": Key("int", 6, _within(4, 8), "poses measured to locate the tracker"),
         # each sample is a tracker measurement (~0.1-1 s): 100 per point already averages the noise away
         "samples": Key("int", 5, _within(1, 100), "tracker samples per point"),

@@ -36,7 +36,7 @@ from hil.tui.messages import (
 from hil.tui.screens.base import HilScreen
 from hil.tui.screens.dialogs import Confirm, HelpScreen, ResumeDialog, Stopping
 from hil.tui.screens.history import HistoryScreen
-from hil.tui.screens.plan import PlanScreen
+from hil.tui.screens.pose_plan import PlanScreen
 from hil.tui.screens.results import ResultsScreen
 from hil.tui.screens.run import RunScreen
 from hil.tui.screens.station import StationScreen

@@ -585,8 +585,8 @@ class Session:
         from hil.arm.geometry import Geometry, look_at_tracker
         from hil.arm.kinematics import Kinematics
         from hil.calibration.selection import DEFAULT_TRACKER_FOR_JACOBIAN
+        from hil.campaign.calibration_plan import CALIBRATION, SelectionRequest
         from hil.campaign.chooser import campaign_chooser
-        from hil.campaign.plan import CALIBRATION, SelectionRequest
 
         if self.config is None:
             self.post(SelectionFailed("the station is not ready yet"))

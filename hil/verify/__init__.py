@@ -3,8 +3,9 @@
 The test cube and its poses P1–P5 (`hil.verify.cube`), the standard's formulas for position accuracy AP
 and repeatability RP (`hil.verify.accuracy`), the joint targets of both modes — the controller's own
 model (uncompensated) and hil's calibrated one (compensated) — checked before anything moves
-(`hil.verify.design`), the test as a plan of steps for the campaign engine (`hil.verify.plan`), the
-result document (`hil.verify.result`) and a verification on a station's devices, stored like a
+(`hil.verify.design`), the test as a plan of steps for the campaign engine
+(`hil.verify.verification_plan`), the result document (`hil.verify.result`) and a verification on a
+station's devices, stored like a
 campaign and resumable (`hil.verify.session`).
 
 May import: `hil.arm`, `hil.calibration`, `hil.campaign`, `hil.compensation`, `hil.station`,

@@ -10,9 +10,9 @@
   no configuration serves the cube) before the campaign is created, so bad input leaves nothing in the
   store; they are stored with the campaign (its plan: ``"kind": "verification"``, the `Design`) and a
   resumed verification drives exactly those, wherever the arm was left.
-* **Run.** The plan (`hil.verify.plan`) runs through `hil.campaign.runner.run_plan`, the calibration's
-  runner: suspenders, interrupts, the arm stopped on any error, `RunStarted`…`RunFinished`, every
-  measurement committed by the store's critical subscriber before the next move.
+* **Run.** The plan (`hil.verify.verification_plan`) runs through `hil.campaign.runner.run_plan`, the
+  calibration's runner: suspenders, interrupts, the arm stopped on any error, `RunStarted`…`RunFinished`,
+  every measurement committed by the store's critical subscriber before the next move.
 * **Status.** A verification has no acceptance threshold: a finished one is stored ``accepted`` (the
   store's finished state; exit code 0), its figures in the campaign's result.
 """
@@ -48,8 +48,8 @@ from hil.verify.design import (
     design_test,
     tracker_from_start,
 )
-from hil.verify.plan import KIND, verification_plan
 from hil.verify.result import FORMAT, deviation, evaluate, model_frame, registered_frame, summary
+from hil.verify.verification_plan import KIND, verification_plan
 
 #: The geometry block of a model document: what its sha256 (the verification's identity) covers.
 MODEL_KEYS = ("robot", "joints", "flange", "smr", "tracker", "compliance", "payload")

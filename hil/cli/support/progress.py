@@ -37,8 +37,8 @@ from hil.campaign.events import (
 )
 from hil.campaign.reference_lines import describe as describe_reference
 
-#: `PlanReady.selection["kind"]` of a verification (`hil.verify.plan.KIND`; not imported, so that the
-#: CLI's start-up does not load the verification's kinematics).
+#: `PlanReady.selection["kind"]` of a verification (`hil.verify.verification_plan.KIND`; not imported, so
+#: that the CLI's start-up does not load the verification's kinematics).
 VERIFICATION = "verification"
 #: Events that may come between `RunStarted` and the plan's `PlanReady` and print nothing.
 _SILENT = (ControllerModel, StateChanged)

@@ -14,7 +14,7 @@ from textual.css.query import NoMatches
 from textual.widgets import DataTable, Footer, ProgressBar, Static
 
 from hil.tui.screens.base import HilScreen
-from hil.tui.screens.plan import FIELDS, count_problem
+from hil.tui.screens.pose_plan import FIELDS, count_problem
 from hil.tui.screens.station import fault_text, unfinished_text
 from hil.tui.state import PoseRow, RunState
 from hil.tui.widgets.nav import NavBar

@@ -127,7 +127,7 @@ def test_a_campaign_model_carries_the_hash_of_its_measurements(rng, tmp_path):
     import hashlib
 
     from hil.calibration.measurements import write_measurements
-    from hil.campaign.plan import measurements_of
+    from hil.campaign.calibration_plan import measurements_of
     from hil.campaign.steps import PoseRecord
 
     truth = random_truth("ur5e", rng)

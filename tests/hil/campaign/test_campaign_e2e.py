@@ -21,10 +21,10 @@ from hil.arm.geometry import Geometry
 from hil.arm.kinematics import ALL_PARAMETER_NAMES, Kinematics
 from hil.calibration.model_file import truth_document, write_json
 from hil.calibration.synthetic import Noise, random_truth
+from hil.campaign.calibration_plan import CALIBRATION
 from hil.campaign.chooser import campaign_chooser
 from hil.campaign.engine import RealClock
 from hil.campaign.events import EventBus, PointMeasured, PoseStarted, Resumed, RunFinished, Suspended
-from hil.campaign.plan import CALIBRATION
 from hil.campaign.runner import run_campaign
 from hil.station.config import default_config
 from hil.station.devices import open_devices

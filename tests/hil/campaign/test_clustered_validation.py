@@ -13,6 +13,7 @@ import pytest
 from hil.arm.geometry import Geometry, look_at_tracker
 from hil.calibration.selection import SelectionModel
 from hil.calibration.synthetic import random_truth
+from hil.campaign.calibration_plan import VALIDATION, Choice, SelectionRequest
 from hil.campaign.chooser import (
     ACCEPTANCE_MARGIN_DEG,
     CAMPAIGN_LOWER,
@@ -22,7 +23,6 @@ from hil.campaign.chooser import (
 )
 from hil.campaign.engine import RealClock, RunInterrupted
 from hil.campaign.events import EventBus, PlanReady, PointMeasured, PoseStarted
-from hil.campaign.plan import VALIDATION, Choice, SelectionRequest
 from hil.campaign.runner import plan_saver, resume_state, run_campaign, store_recorder
 from hil.errors import InputError
 from hil.station.config import EXAMPLE, default_config, load_config

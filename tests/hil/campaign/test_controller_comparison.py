@@ -21,9 +21,9 @@ from hil.arm.geometry import Geometry
 from hil.calibration.identification import register, validate
 from hil.calibration.measurements import Measurements
 from hil.calibration.synthetic import Noise, measure, random_truth
+from hil.campaign.calibration_plan import Choice, calibration_plan
 from hil.campaign.controller import controller_calibration, controller_record, controller_validation
 from hil.campaign.events import ControllerModel, EventBus, RunStarted, ValidationDone
-from hil.campaign.plan import Choice, calibration_plan
 from hil.campaign.runner import run_campaign
 from hil.campaign.steps import Acquire, Emit, PoseRecord, dry_run
 from hil.report.result import result_document
@@ -221,7 +221,7 @@ def test_the_runner_keeps_the_controllers_model_and_the_result_reports_it():
 
 
 def test_a_comparison_that_cannot_be_made_is_said_and_the_campaign_goes_on(monkeypatch):
-    import hil.campaign.plan as plan_module
+    import hil.campaign.calibration_plan as plan_module
     from hil.calibration.identification import IdentificationError
     from hil.campaign.events import Message
 

@@ -9,6 +9,7 @@ from hil.arm.catalog import get_robot
 from hil.arm.geometry import Geometry, pose_to_dict
 from hil.arm.kinematics import Kinematics
 from hil.calibration.synthetic import random_truth
+from hil.campaign.calibration_plan import CALIBRATION, Choice, ResumeState, calibration_plan
 from hil.campaign.engine import (
     ABORTED,
     DONE,
@@ -32,7 +33,6 @@ from hil.campaign.events import (
     Suspended,
     SuspendExtended,
 )
-from hil.campaign.plan import CALIBRATION, Choice, ResumeState, calibration_plan
 from hil.campaign.steps import Acquire, Move, acquire, check_motion, dry_run
 from hil.errors import InputError
 from hil.station.config import default_config

@@ -17,6 +17,7 @@ import pytest
 
 from hil.arm.catalog import get_robot
 from hil.calibration.synthetic import random_truth
+from hil.campaign.calibration_plan import Choice, calibration_plan
 from hil.campaign.engine import FAILED, Engine, RealClock, RunInterrupted, Suspender
 from hil.campaign.events import (
     EventBus,
@@ -25,7 +26,6 @@ from hil.campaign.events import (
     PoseStarted,
     StateChanged,
 )
-from hil.campaign.plan import Choice, calibration_plan
 from hil.campaign.runner import plan_saver, resume_state, run_campaign, store_recorder
 from hil.station.config import default_config
 from hil.store import Store

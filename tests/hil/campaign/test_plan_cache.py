@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from hil.calibration.synthetic import random_truth
+from hil.campaign.calibration_plan import CALIBRATION, Choice, SelectionRequest
 from hil.campaign.chooser import campaign_chooser
 from hil.campaign.engine import RealClock
 from hil.campaign.events import EventBus, PlanReady
-from hil.campaign.plan import CALIBRATION, Choice, SelectionRequest
 from hil.campaign.plan_cache import cached_chooser, request_key
 from hil.campaign.runner import run_campaign
 from hil.errors import InputError

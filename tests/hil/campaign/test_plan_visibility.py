@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 from hil.calibration.synthetic import Noise, measure, random_truth
+from hil.campaign.calibration_plan import BOOTSTRAP, calibration_plan
 from hil.campaign.chooser import campaign_chooser
 from hil.campaign.events import PlanReady
-from hil.campaign.plan import BOOTSTRAP, calibration_plan
 from hil.campaign.steps import Acquire, Emit, PoseRecord, ReadJoints, dry_run
 from hil.station.config import default_config
 from mocks.world import World
@@ -73,8 +73,8 @@ def test_a_planned_pose_the_tracker_would_not_see_is_skipped_without_moving_ther
     """The poses are checked again during the run with the tracker and SMR fitted to the points so far;
     one that faces away is skipped at once with the reason, not driven to and waited on for 30 s."""
     from hil.calibration.selection import hidden_reason
+    from hil.campaign.calibration_plan import Choice
     from hil.campaign.events import PoseSkipped
-    from hil.campaign.plan import Choice
     from tests.hil.campaign.fakes import visible_poses
 
     rng = np.random.default_rng(8)

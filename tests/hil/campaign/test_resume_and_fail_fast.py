@@ -17,6 +17,14 @@ import pytest
 
 from hil.arm.catalog import get_robot
 from hil.calibration.synthetic import random_truth
+from hil.campaign.calibration_plan import (
+    BOOTSTRAP,
+    VALIDATION,
+    Choice,
+    TrackerLooksWrong,
+    bootstrap_targets,
+    calibration_plan,
+)
 from hil.campaign.chooser import campaign_chooser
 from hil.campaign.engine import FAILED, Engine, RealClock, RunInterrupted, Suspender
 from hil.campaign.events import (
@@ -28,14 +36,6 @@ from hil.campaign.events import (
     PoseStarted,
     RunFinished,
     Suspended,
-)
-from hil.campaign.plan import (
-    BOOTSTRAP,
-    VALIDATION,
-    Choice,
-    TrackerLooksWrong,
-    bootstrap_targets,
-    calibration_plan,
 )
 from hil.campaign.runner import RecordFailed, plan_saver, resume_state, run_campaign, store_recorder
 from hil.station.config import default_config

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from hil.calibration.synthetic import random_truth
+from hil.campaign.calibration_plan import Choice
 from hil.campaign.events import EventBus, RunFinished
-from hil.campaign.plan import Choice
 from hil.campaign.runner import run_campaign
 from hil.cli import main
 from hil.errors import InputError

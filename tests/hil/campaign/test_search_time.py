@@ -3,8 +3,8 @@ and a longer search is at least as fast a tour (the search only keeps improvemen
 
 from __future__ import annotations
 
+from hil.campaign.calibration_plan import CALIBRATION, VALIDATION, SelectionRequest
 from hil.campaign.chooser import campaign_chooser
-from hil.campaign.plan import CALIBRATION, VALIDATION, SelectionRequest
 from hil.station.config import EXAMPLE, load_config
 from tests.hil.campaign.test_clustered_validation import CANDIDATES, _request
 

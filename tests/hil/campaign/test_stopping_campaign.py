@@ -24,6 +24,7 @@ from hil.arm.catalog import get_robot
 from hil.arm.geometry import look_at_tracker
 from hil.calibration.model_file import truth_document, write_json
 from hil.calibration.synthetic import Noise, random_truth
+from hil.campaign.calibration_plan import CALIBRATION, VALIDATION, Choice, ResumeState, calibration_plan
 from hil.campaign.engine import Engine, RealClock, RunInterrupted
 from hil.campaign.events import (
     AcquisitionStopped,
@@ -33,7 +34,6 @@ from hil.campaign.events import (
     PoseStarted,
     RunFinished,
 )
-from hil.campaign.plan import CALIBRATION, VALIDATION, Choice, ResumeState, calibration_plan
 from hil.campaign.runner import plan_saver, resume_state, run_campaign, store_recorder
 from hil.cli.support.progress import Progress
 from hil.errors import InputError

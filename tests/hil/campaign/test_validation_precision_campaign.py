@@ -13,10 +13,10 @@ import pytest
 
 from hil.calibration.synthetic import random_truth
 from hil.calibration.validation_precision import validation_precision
+from hil.campaign.calibration_plan import CALIBRATION, VALIDATION, Choice, SelectionRequest
 from hil.campaign.chooser import campaign_chooser
 from hil.campaign.engine import RealClock, RunInterrupted
 from hil.campaign.events import EventBus, PlanReady, PointMeasured
-from hil.campaign.plan import CALIBRATION, VALIDATION, Choice, SelectionRequest
 from hil.campaign.runner import plan_saver, resume_state, run_campaign, store_recorder
 from hil.report import report_data_from_result
 from hil.report.render import render_html

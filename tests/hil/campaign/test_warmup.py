@@ -17,6 +17,7 @@ from hil.arm.catalog import get_robot
 from hil.arm.routes import UnsafePathError
 from hil.arm.thermal import Thermal
 from hil.calibration.synthetic import random_truth
+from hil.campaign.calibration_plan import BOOTSTRAP, CALIBRATION, VALIDATION, Choice
 from hil.campaign.engine import Engine, RunInterrupted
 from hil.campaign.events import (
     DriftFlagged,
@@ -31,7 +32,6 @@ from hil.campaign.events import (
     WarmupFinished,
     WarmupProgress,
 )
-from hil.campaign.plan import BOOTSTRAP, CALIBRATION, VALIDATION, Choice
 from hil.campaign.reference_lines import describe
 from hil.campaign.runner import plan_saver, resume_state, run_campaign, store_recorder
 from hil.campaign.steps import REFERENCE, Move, PoseRecord, ReadConditions, Skipped, acquire

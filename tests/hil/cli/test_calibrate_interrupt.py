@@ -22,8 +22,8 @@ import numpy as np
 import pytest
 
 from hil.calibration.synthetic import random_truth
+from hil.campaign.calibration_plan import Choice
 from hil.campaign.engine import RunInterrupted
-from hil.campaign.plan import Choice
 from hil.cli import main
 from hil.cli.support.interrupts import interruptible
 from hil.store import Store

@@ -40,12 +40,12 @@ def test_a_closed_stdout_ends_the_command_quietly(tmp_path: Path, capsys: pytest
 
 def test_a_broken_pipe_elsewhere_is_still_an_error(tmp_path: Path, capsys: pytest.CaptureFixture[str],
                                                    monkeypatch: pytest.MonkeyPatch) -> None:
-    import hil.moveb.plan
+    import hil.moveb.path_plan
 
     def broken(*_args: object) -> None:
         raise BrokenPipeError(32, "Broken pipe")  # e.g. a device's socket, not the reader of stdout
 
-    monkeypatch.setattr(hil.moveb.plan, "write_samples", broken)
+    monkeypatch.setattr(hil.moveb.path_plan, "write_samples", broken)
     assert main(["moveb", "plan", str(SQUARE), "--out", str(tmp_path / "s.csv")]) == 70
     assert "BrokenPipeError" in capsys.readouterr().err
 

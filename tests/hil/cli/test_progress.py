@@ -15,7 +15,7 @@ from hil.campaign.events import (
     RunStarted,
 )
 from hil.cli.support.progress import VERIFICATION, Progress
-from hil.verify.plan import KIND
+from hil.verify.verification_plan import KIND
 
 MODES = ["uncompensated", "compensated"]
 

@@ -16,7 +16,7 @@ import numpy as np
 
 from hil.arm.controller_model import ControllerCalibration
 from hil.calibration.synthetic import random_truth
-from hil.campaign.plan import Choice
+from hil.campaign.calibration_plan import Choice
 from hil.cli import main
 from hil.store import Store
 from hil.verify.cube import CYCLE_ORDER, POSE_NAMES

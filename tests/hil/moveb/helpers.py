@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hil.moveb.plan import Plan
+from hil.moveb.path_plan import Plan
 
 
 def distance_to_polyline(points: np.ndarray, vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -22,7 +22,7 @@ from hil.arm.geometry import Geometry
 from hil.calibration.model_file import truth_document
 from hil.calibration.synthetic import Noise, random_truth
 from hil.cli import main
-from hil.moveb.plan import plan_program
+from hil.moveb.path_plan import plan_program
 from hil.moveb.program import load_program
 from hil.moveb.run import facing_frame, program_in_frame, solve_trajectory
 from hil.moveb.timing import Limits

@@ -10,7 +10,7 @@ from hil.arm.ik import solve_path
 from hil.arm.kinematics import Kinematics
 from hil.errors import InputError
 from hil.moveb.joints import JointSpeedError, joint_speed_ceiling, joint_speeds, retime
-from hil.moveb.plan import plan_program
+from hil.moveb.path_plan import plan_program
 from hil.moveb.program import load_program
 from hil.moveb.run import solve_trajectory, tool_targets
 from hil.moveb.timing import Limits

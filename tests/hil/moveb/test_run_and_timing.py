@@ -13,7 +13,7 @@ from hil.arm.ik import UnreachableError, solve_ik, solve_path
 from hil.arm.kinematics import Kinematics
 from hil.calibration.synthetic import random_truth
 from hil.cli import main
-from hil.moveb.plan import SAMPLES_HEADER, plan_program
+from hil.moveb.path_plan import SAMPLES_HEADER, plan_program
 from hil.moveb.program import load_program
 from hil.moveb.run import path_accuracy, register, tool_targets
 from hil.moveb.timing import Limits

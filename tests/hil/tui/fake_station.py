@@ -18,7 +18,7 @@ from drivers.robot.errors import EmergencyStop, MotionAborted
 from drivers.robot.model import ControllerInfo
 from drivers.tracker.errors import TargetLost
 from hil.calibration.synthetic import random_truth
-from hil.campaign.plan import Choice
+from hil.campaign.calibration_plan import Choice
 from hil.station.config import default_config
 from hil.station.devices import Devices
 from hil.store import Store

@@ -10,7 +10,7 @@ from hil.campaign.events import PlanReady
 from hil.campaign.steps import Acquire, Emit, Move, Phase, PoseRecord, Skipped, dry_run
 from hil.verify.cube import CYCLE_ORDER, POSE_NAMES
 from hil.verify.design import COMPENSATED, MODES, UNCOMPENSATED, Design
-from hil.verify.plan import ROLE, BeamKeepsFailing, verification_plan
+from hil.verify.verification_plan import ROLE, BeamKeepsFailing, verification_plan
 from tests.hil.verify.station import cell
 
 VISIT = dict(settle=0.0, joint_samples=2, samples=3)

@@ -10,7 +10,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from hil.moveb.bridge import ALPHA_G3, BridgeShape, bridge_derivatives, control_points
-from hil.moveb.plan import Plan, plan_program
+from hil.moveb.path_plan import Plan, plan_program
 from hil.moveb.program import format_program, load_program, parse_program
 from tests.hil.moveb.helpers import distance_to_polyline, point_errors
 
