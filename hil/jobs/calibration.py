@@ -177,13 +177,16 @@ def run_calibration(request: CalibrationRequest, taken: TakenStation, *,
         for subscriber in subscribers:
             bus.subscribe(subscriber)
         started = time.time()
-        run = run_campaign(config, campaign_chooser(config), bus=bus, campaign=campaign, resume=resume,
-                           devices=taken.devices, clock=RealClock(request.speed),
-                           validation_cycles=request.validation_cycles, lease=lease,
-                           engine_ready=engine_ready,
-                           # closed as the run ends, before RunFinished (the operator may quit on it);
-                           # --verify: the same devices go on, and the station closes them after
-                           close_devices=request.verify is None)
+        # closed as the run ends, before RunFinished (the operator may quit on it); --verify: the same
+        # devices go on, and the station closes them after
+        close = request.verify is None
+        try:
+            run = run_campaign(config, campaign_chooser(config), bus=bus, campaign=campaign, resume=resume,
+                               devices=taken.devices, clock=RealClock(request.speed),
+                               validation_cycles=request.validation_cycles, lease=lease,
+                               engine_ready=engine_ready, close_devices=close)
+        finally:
+            taken.devices_closed = taken.devices_closed or close
         status, detail = status_of(run, events) if status_of is not None else (run.status, "")
         result = result_document(run, config, events, started, request.setup.truth)
         result["status"] = status
@@ -208,7 +211,7 @@ def run_calibration(request: CalibrationRequest, taken: TakenStation, *,
         result["verification"], verified = verify_after(request.verify, run, taken, request.campaign_identity,
                                                         request.setup.truth, say=say)
         try:
-            store.set_status(campaign, run.status, result=result)
+            gate.write(lambda: store.set_status(campaign, status, detail=detail or None, result=result))
         except StoreError as exc:
             say(f"fault: could not record the verification with campaign {campaign} in {store.location}: "
                 f"{exc.__cause__ or exc}", "error")
@@ -251,5 +254,5 @@ def calibrate(source: StationSource, *, db: str | None, speed: float = 1.0, no_w
             taken.store.on_outage = outage_words(say)
             out = run_calibration(request, taken, subscribers=subscribers, say=say)
     if out.status == "interrupted" and out.recorded:  # resumable, and recorded so
-        say(f"campaign {out.campaign} is resumable: re-run the same command to continue it")
+        say(f"campaign {out.campaign} is resumable: re-run the same command to continue it", "information")
     return out

@@ -125,6 +125,13 @@ class TakenStation:
     devices: Devices
     robot: RobotIdentity
     store: Store | None = None
+    devices_closed: bool = False  # a run closed them as it ended (`run_plan`): not closed again
+
+    def close_devices(self) -> None:
+        """Close the devices, once (`take_station` on its way out, unless a run already did)."""
+        if not self.devices_closed:
+            self.devices_closed = True
+            self.devices.close()
 
 
 def open_existing_store(location: Any, config: StationConfig) -> Store | None:
@@ -160,11 +167,12 @@ def take_station(config: StationConfig, *, what: str, claims: Sequence[Claim] = 
                 stack.callback(opened.close)
         stack.enter_context(address_lock(config.robot["address"], what=what))
         devices = station_devices.open_devices(config)
-        stack.callback(devices.close)
         info = devices.robot.info
+        taken = TakenStation(config, devices, RobotIdentity.of(config.robot["type"], info))
+        stack.callback(taken.close_devices)
         check_controller(config, info, *claims)  # before anything is recorded or moved
         if store is not None and not isinstance(store, Store) and opened is None:
             opened = Store.open(location, config=config)
             stack.callback(opened.close)
-        yield TakenStation(config, devices, RobotIdentity.of(config.robot["type"], info),
-                           store if isinstance(store, Store) else opened)
+        taken.store = store if isinstance(store, Store) else opened
+        yield taken

@@ -39,7 +39,7 @@ from hil.campaign.engine import Engine
 from hil.campaign.events import Event, RunFinished
 from hil.errors import InputError
 from hil.jobs.calibration import StoreGate
-from hil.jobs.station import SimulatedSpec, StationSource, station_setup, take_station
+from hil.jobs.station import SimulatedSpec, StationSource, TakenStation, station_setup, take_station
 from hil.jobs.words import outage_words
 from hil.station.config import StationConfig
 from hil.tui.messages import (
@@ -136,6 +136,7 @@ class Session:
         self.ready = threading.Event()
         self._host: threading.Thread | None = None
         self._held: contextlib.ExitStack | None = None  # the station taken (`_take`), while we have it
+        self._taken: TakenStation | None = None
 
     # --- plumbing ----------------------------------------------------------------------------------
     def post(self, message: Message) -> None:
@@ -204,12 +205,12 @@ class Session:
         connected or runs on it, no other process of this host connects to it."""
         stack = contextlib.ExitStack()
         taken = stack.enter_context(take_station(config, what="hil tui"))
-        self._held = stack
+        self._held, self._taken = stack, taken
         return taken
 
     def _release(self) -> None:
         """Let go of the station taken by `_take` (its devices closed, the lock released)."""
-        stack, self._held = self._held, None
+        stack, self._held, self._taken = self._held, None, None
         if stack is not None:
             stack.close()
 
@@ -435,7 +436,7 @@ class Session:
         """One campaign, as ``hil calibrate`` runs it (a new one, or `resume_campaign` continued), on the
         station this app holds (`hil.jobs.calibration.run_calibration`)."""
         from hil.jobs.calibration import CalibrationRequest, run_calibration
-        from hil.jobs.station import StationSetup, TakenStation
+        from hil.jobs.station import StationSetup
 
         if self.run_active or self.config is None or self.store is None:
             return
@@ -452,6 +453,8 @@ class Session:
                 self.changed()
 
         error: BaseException | None = None
+        taken: TakenStation | None = None
+        devices: Any = None
         try:
             config = self.run_config()
             with self._device_lock:
@@ -465,8 +468,11 @@ class Session:
                                          identity=self.run_identity(),
                                          speed=self.options.speed if self.options.sim else 1.0,
                                          campaign=resume_campaign, resume="new")
-            taken = TakenStation(config, devices, RobotIdentity.of(config.robot["type"], devices.robot.info),
-                                 store)
+            taken = self._taken
+            if taken is None or taken.devices is not devices:  # devices handed to the session (tests)
+                robot = RobotIdentity.of(config.robot["type"], devices.robot.info)
+                taken = TakenStation(config, devices, robot)
+            taken.store = store
             to_screens = (to_station, lambda event: self.post(EngineEvent(event)))
             out = run_calibration(request, taken, subscribers=to_screens, say=self._say,
                                   engine_ready=self._engine_ready, gate=gate, status_of=self._final,
@@ -483,8 +489,11 @@ class Session:
             if self.run_campaign:
                 with contextlib.suppress(Exception):
                     gate.write(lambda: store.set_status(self.run_campaign, status, detail=detail))
-        finally:
-            self._close_devices()  # the run's devices, and the station's lock; connect() takes them again
+        finally:  # the run's devices and the station's lock; connect() takes them again
+            if self._held is not None:
+                self._release()  # closes the devices unless the run did, and releases the lock
+            elif devices is not None and not (taken is not None and taken.devices_closed):
+                devices.close()  # handed to the session as they are (tests)
             self.engine = None
             self.run_active = False
             st.phase, st.safety, st.lock = "disconnected", "-", "-"

@@ -22,7 +22,7 @@ from hil.jobs.calibration import (
     check_pose_count,
     run_calibration,
 )
-from hil.jobs.outcome import EXIT_FAILED, EXIT_FAULT, EXIT_OK
+from hil.jobs.outcome import EXIT_FAILED, EXIT_FAULT, EXIT_INTERRUPTED, EXIT_OK
 from hil.jobs.station import StationSetup, StationSource, take_station
 from hil.station.config import minimum_calibration_poses
 from hil.store import FINISHED, RobotIdentity, StoreError, address_lock
@@ -186,3 +186,21 @@ def test_calibrate_on_an_arm_that_does_not_answer_is_a_fault_said_leaving_no_sto
     assert said == [("hardware fault: cannot connect: RobotUnreachable: nothing answers at the robot's "
                      "address", "error")]
     assert not db.exists() and station.arm.moves == 0
+
+
+def test_calibrate_interrupted_says_the_campaign_is_resumable(
+        station: FakeStation, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    move = station.arm.move_to
+
+    def interrupted_at_the_third_move(q: Any, **kw: Any) -> Any:
+        if station.arm.moves == 2:
+            raise KeyboardInterrupt  # Ctrl-C while the arm travels
+        return move(q, **kw)
+
+    monkeypatch.setattr(station.arm, "move_to", interrupted_at_the_third_move)
+    said: list[tuple[str, str]] = []
+    out = calibrate(_source(station), db=str(tmp_path / "c.db"),
+                    say=lambda text, severity: said.append((text, severity)))  # a Say as words.py types it
+    assert (out.status, out.exit_code, out.recorded) == ("interrupted", EXIT_INTERRUPTED, True)
+    assert said[-1] == (f"campaign {out.campaign} is resumable: re-run the same command to continue it",
+                        "information")
