@@ -207,15 +207,16 @@ def _subscribers(args: argparse.Namespace) -> list[Any]:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from hil.jobs.calibration import calibrate
+    from hil.jobs.calibration import CalibrationRequest, calibrate
     from hil.jobs.verification import VerifyOptions
 
     verify = (VerifyOptions(args.verify_cycles, args.out, lambda: _subscribers(args)) if args.verify
               else None)
-    resume = "only" if args.resume else "new" if args.new else "find"
-    out = calibrate(station_source(args), db=args.db, speed=args.speed, no_warmup=args.no_warmup,
-                    validation_cycles=args.cycles, resume=resume, verify=verify,
-                    subscribers=_subscribers(args), say=say)
+    request = CalibrationRequest(station_source(args), db=args.db, no_warmup=args.no_warmup,
+                                 validation_cycles=args.cycles,
+                                 resume="only" if args.resume else "new" if args.new else "find",
+                                 verify=verify)
+    out = calibrate(request, subscribers=_subscribers(args), say=say)
     if not out.finished or out.document is None:  # interrupted or failed: resumable, so no result (yet)
         return out.exit_code  # an earlier result at --out / --report stays as it was
     if not out.recorded:  # finished, but its result could not be recorded: said

@@ -29,7 +29,7 @@ from hil.jobs.words import Say, outage_words, quiet
 if TYPE_CHECKING:
     from hil.campaign.engine import Engine
     from hil.campaign.runner import RunOutcome
-    from hil.jobs.verification import VerifyAfter
+    from hil.jobs.verification import VerifyAfter, VerifyOptions
 
 #: How a campaign is found: "find" continues the unfinished one of this station, robot and
 #: configuration (else a new one); "new" always starts afresh; "only" refuses unless one exists.
@@ -38,23 +38,25 @@ Resume = Literal["find", "new", "only"]
 
 @dataclass(frozen=True)
 class CalibrationRequest:
-    """What to calibrate and how; the front-end's options, checked, in one place."""
+    """What to calibrate and how: the front-end's options, checked, in one place.
 
-    setup: StationSetup  # the station's configuration (overrides applied) and campaign identity
-    identity: Mapping[str, Any] | None = None  # None: the setup's (the app adds its Plan screen's keys)
-    speed: float = 1.0  # the station clock's speed (a simulated station's fast time)
+    ``hil calibrate`` fills it from its arguments; the terminal app from its start-up options, its
+    Plan screen (`identity`, with the keys it changed) and the operator's choice (`campaign`).
+    """
+
+    source: StationSource  # the station: a configuration, or the simulated one
+    db: str | None = None  # the store (None: $HIL_DB, the configuration's, the user's default)
+    no_warmup: bool = False  # the arm has been running: measure without warming it up
     validation_cycles: int = 1  # visits of each validation pose (>1 adds ISO 9283 AP/RP)
     resume: Resume = "find"
     campaign: str | None = None  # continue exactly this campaign (the operator chose it)
-    verify: VerifyAfter | None = None  # ``--verify``: the pose test after an accepted calibration
+    identity: Mapping[str, Any] | None = None  # what finds the campaign again (None: the station's)
+    verify: VerifyOptions | None = None  # ``--verify``: the pose test after an accepted calibration
 
     @property
-    def config(self) -> Any:
-        return self.setup.config
-
-    @property
-    def campaign_identity(self) -> Mapping[str, Any]:
-        return self.identity if self.identity is not None else self.setup.identity
+    def speed(self) -> float:
+        """The station clock's speed (a simulated station's fast time)."""
+        return self.source.speed
 
 
 class StoreGate:
@@ -130,11 +132,11 @@ def check_pose_count(poses: int | None, config_path: str | None, robot: str | No
                          f"of a {robot} from 3 coordinates per pose needs at least {need}")
 
 
-def claim(store: Any, request: CalibrationRequest, robot: Any) -> tuple[Any, Any]:
+def claim(store: Any, request: CalibrationRequest, identity: Mapping[str, Any], robot: Any
+          ) -> tuple[Any, Any]:
     """The campaign's lease and resume state (`hil.campaign.runner.claim_run`) as the request asks."""
     from hil.campaign.runner import claim_run
 
-    identity = request.campaign_identity
     if request.campaign is not None:
         return claim_run(store, identity, robot, campaign=request.campaign)
     if request.resume == "only" and store.find_resumable(identity, robot_serial=robot.serial) is None:
@@ -142,12 +144,14 @@ def claim(store: Any, request: CalibrationRequest, robot: Any) -> tuple[Any, Any
     return claim_run(store, identity, robot, find=request.resume != "new")
 
 
-def run_calibration(request: CalibrationRequest, taken: TakenStation, *,
+def run_calibration(request: CalibrationRequest, setup: StationSetup, taken: TakenStation, *,
+                    verify: VerifyAfter | None = None,
                     subscribers: Sequence[Callable[[Event], None]] = (), say: Say = quiet,
                     engine_ready: Callable[[Engine], None] | None = None, gate: StoreGate | None = None,
                     status_of: Callable[[RunOutcome, list[Event]], tuple[str, str]] | None = None,
                     on_claimed: Callable[[str], None] | None = None) -> CalibrationOutcome:
-    """One campaign on `taken` (its devices and store): claimed, run, its result stored.
+    """One campaign of `request` on the station `setup` describes and `taken` holds (its devices and
+    store): claimed, run, its result stored; then `verify`'s pose test (``--verify``), if given.
 
     `subscribers` hear every event after the store's critical ones. `status_of` turns the run's end
     into the stored status and its words (default: the run's own). `gate` lets the caller give the run
@@ -160,9 +164,10 @@ def run_calibration(request: CalibrationRequest, taken: TakenStation, *,
     from hil.report.result import result_document
     from hil.store import StoreError
 
-    store, config, gate = taken.store, request.config, gate or StoreGate()
+    store, config, gate = taken.store, setup.config, gate or StoreGate()
     assert store is not None, "a calibration needs the store"
-    lease, resume = claim(store, request, taken.robot)  # before the first motion, or bad input
+    identity = request.identity if request.identity is not None else setup.identity
+    lease, resume = claim(store, request, identity, taken.robot)  # before the first motion, or bad input
     with lease:
         campaign = lease.campaign
         if on_claimed is not None:
@@ -179,7 +184,7 @@ def run_calibration(request: CalibrationRequest, taken: TakenStation, *,
         started = time.time()
         # closed as the run ends, before RunFinished (the operator may quit on it); --verify: the same
         # devices go on, and the station closes them after
-        close = request.verify is None
+        close = verify is None
         try:
             run = run_campaign(config, campaign_chooser(config), bus=bus, campaign=campaign, resume=resume,
                                devices=taken.devices, clock=RealClock(request.speed),
@@ -188,7 +193,7 @@ def run_calibration(request: CalibrationRequest, taken: TakenStation, *,
         finally:
             taken.devices_closed = taken.devices_closed or close
         status, detail = status_of(run, events) if status_of is not None else (run.status, "")
-        result = result_document(run, config, events, started, request.setup.truth)
+        result = result_document(run, config, events, started, setup.truth)
         result["status"] = status
         out = CalibrationOutcome(run.exit_code, status, campaign, result, run=run, config=config,
                                  events=events, started=started, detail=detail)
@@ -203,13 +208,12 @@ def run_calibration(request: CalibrationRequest, taken: TakenStation, *,
                     f"{store.location}: {exc.__cause__ or exc}", "error")
             out.exit_code, out.recorded = EXIT_FAULT, False
             return out
-        if request.verify is None:
+        if verify is None:
             return out
         from hil.jobs.verification import verify_after
 
         lease.release()  # the verification is a campaign of its own and takes the arm's lease itself
-        result["verification"], verified = verify_after(request.verify, run, taken, request.campaign_identity,
-                                                        request.setup.truth, say=say)
+        result["verification"], verified = verify_after(verify, run, taken, identity, setup.truth, say=say)
         try:
             gate.write(lambda: store.set_status(campaign, status, detail=detail or None, result=result))
         except StoreError as exc:
@@ -222,28 +226,26 @@ def run_calibration(request: CalibrationRequest, taken: TakenStation, *,
         return out
 
 
-def calibrate(source: StationSource, *, db: str | None, speed: float = 1.0, no_warmup: bool = False,
-              validation_cycles: int = 1, resume: Resume = "find", verify: Any = None,
-              subscribers: Sequence[Callable[[Event], None]] = (), say: Say = quiet) -> CalibrationOutcome:
-    """``hil calibrate``: the whole headless job (module docstring). `verify`: a
-    `hil.jobs.verification.VerifyOptions` for ``--verify``, None without. Bad input raises InputError
-    before anything moves; a device that cannot be reached is a fault (exit 3), said."""
+def calibrate(request: CalibrationRequest, *, subscribers: Sequence[Callable[[Event], None]] = (),
+              say: Say = quiet) -> CalibrationOutcome:
+    """``hil calibrate``: the whole headless job (module docstring): the station set up from the
+    request's source, the store, the arm taken, the campaign, and ``--verify``'s pose test. Bad input
+    raises InputError before anything moves; a device that cannot be reached is a fault (exit 3), said."""
     from hil.station.devices import HARDWARE_ERRORS
     from hil.store import resolve_location
 
-    with station_setup(source) as setup:
-        if no_warmup:  # not part of what identifies the campaign (`hil.store.hashing`)
+    with station_setup(request.source) as setup:
+        if request.no_warmup:  # not part of what identifies the campaign (`hil.store.hashing`)
             setup = StationSetup(setup.config.with_overrides(warmup__enabled=False), setup.identity,
                                  setup.truth, setup.simulator)
         after = None
-        if verify is not None:  # the [verify] cube, refused before anything connects
+        if request.verify is not None:  # the [verify] cube, refused before anything connects
             from hil.jobs.verification import VerifyAfter
 
-            after = VerifyAfter.of(setup.config, verify, speed, sim=source.sim is not None)
-        request = CalibrationRequest(setup, speed=speed, validation_cycles=validation_cycles, resume=resume,
-                                     verify=after)
+            after = VerifyAfter.of(setup.config, request.verify, request.speed,
+                                   sim=request.source.sim is not None)
         # a file, or a PostgreSQL server (opened now: reachable?)
-        location = resolve_location(db, setup.config)
+        location = resolve_location(request.db, setup.config)
         with contextlib.ExitStack() as stack:
             try:
                 taken = stack.enter_context(take_station(setup.config, what="hil calibrate", store=location))
@@ -252,7 +254,7 @@ def calibrate(source: StationSource, *, db: str | None, speed: float = 1.0, no_w
                 return CalibrationOutcome(EXIT_FAULT, "failed")
             assert taken.store is not None
             taken.store.on_outage = outage_words(say)
-            out = run_calibration(request, taken, subscribers=subscribers, say=say)
+            out = run_calibration(request, setup, taken, verify=after, subscribers=subscribers, say=say)
     if out.status == "interrupted" and out.recorded:  # resumable, and recorded so
         say(f"campaign {out.campaign} is resumable: re-run the same command to continue it", "information")
     return out

@@ -93,8 +93,7 @@ class TuiOptions:
 def station_source(options: TuiOptions) -> StationSource:
     """Where the app's station comes from (`hil.jobs.station`): the configuration, or the simulator."""
     overrides = _dotted(options.overrides)
-    if not options.sim:
-        assert options.config is not None, "--config or --sim"
+    if not options.sim:  # --config (checked by `hil.cli.tui`; the tests' stations have none)
         return StationSource(config=options.config, overrides=overrides)
     return StationSource(sim=SimulatedSpec(options.robot, options.truth, options.speed, options.seed,
                                            options.tracker_protocol), overrides=overrides)
@@ -464,17 +463,16 @@ class Session:
             st.phase = "in run"
             self.changed()
             assert self.identity is not None
-            request = CalibrationRequest(StationSetup(config, self.identity, self.truth, self.sim),
-                                         identity=self.run_identity(),
-                                         speed=self.options.speed if self.options.sim else 1.0,
+            request = CalibrationRequest(station_source(self.options), identity=self.run_identity(),
                                          campaign=resume_campaign, resume="new")
+            setup = StationSetup(config, self.identity, self.truth, self.sim)
             taken = self._taken
             if taken is None or taken.devices is not devices:  # devices handed to the session (tests)
                 robot = RobotIdentity.of(config.robot["type"], devices.robot.info)
                 taken = TakenStation(config, devices, robot)
             taken.store = store
             to_screens = (to_station, lambda event: self.post(EngineEvent(event)))
-            out = run_calibration(request, taken, subscribers=to_screens, say=self._say,
+            out = run_calibration(request, setup, taken, subscribers=to_screens, say=self._say,
                                   engine_ready=self._engine_ready, gate=gate, status_of=self._final,
                                   on_claimed=claimed)
             status, detail = out.status, out.detail

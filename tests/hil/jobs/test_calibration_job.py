@@ -41,9 +41,9 @@ def station(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, address: str) -> It
 
 def run(st: FakeStation, *, resume: Resume = "find", **kwargs: Any) -> CalibrationOutcome:
     """One `run_calibration` on the fake station, taken as every job takes it."""
-    request = CalibrationRequest(StationSetup(st.config, st.config.as_dict(), None), resume=resume)
+    request = CalibrationRequest(StationSource(config=st.config), resume=resume)
     with take_station(st.config, what="test", store=st.store) as taken:
-        return run_calibration(request, taken, **kwargs)
+        return run_calibration(request, StationSetup(st.config, st.config.as_dict(), None), taken, **kwargs)
 
 
 def test_a_run_claims_a_campaign_and_stores_its_result(station: FakeStation) -> None:
@@ -167,7 +167,8 @@ def test_calibrate_runs_the_whole_job_into_the_store_it_names(station: FakeStati
 
     db = tmp_path / "calibrate.db"
     said: list[str] = []
-    out = calibrate(_source(station), db=str(db), say=lambda text, severity: said.append(text))
+    out = calibrate(CalibrationRequest(_source(station), db=str(db)),
+                    say=lambda text, severity: said.append(text))
     assert out.status in FINISHED and out.exit_code == EXIT_OF[out.status] and said == []
     with Store.open(db) as store:
         assert [(c.id, c.status) for c in store.campaigns()] == [(out.campaign, out.status)]
@@ -181,7 +182,8 @@ def test_calibrate_on_an_arm_that_does_not_answer_is_a_fault_said_leaving_no_sto
     station.reconnects.append(RobotUnreachable("nothing answers at the robot's address"))
     db = tmp_path / "never.db"
     said: list[tuple[str, str]] = []
-    out = calibrate(_source(station), db=str(db), say=lambda text, severity: said.append((text, severity)))
+    out = calibrate(CalibrationRequest(_source(station), db=str(db)),
+                    say=lambda text, severity: said.append((text, severity)))
     assert (out.exit_code, out.status, out.document) == (EXIT_FAULT, "failed", None)
     assert said == [("hardware fault: cannot connect: RobotUnreachable: nothing answers at the robot's "
                      "address", "error")]
@@ -199,7 +201,7 @@ def test_calibrate_interrupted_says_the_campaign_is_resumable(
 
     monkeypatch.setattr(station.arm, "move_to", interrupted_at_the_third_move)
     said: list[tuple[str, str]] = []
-    out = calibrate(_source(station), db=str(tmp_path / "c.db"),
+    out = calibrate(CalibrationRequest(_source(station), db=str(tmp_path / "c.db")),
                     say=lambda text, severity: said.append((text, severity)))  # a Say as words.py types it
     assert (out.status, out.exit_code, out.recorded) == ("interrupted", EXIT_INTERRUPTED, True)
     assert said[-1] == (f"campaign {out.campaign} is resumable: re-run the same command to continue it",
