@@ -6,6 +6,16 @@ that single line on stderr; library callers catch it like any ValueError.
 """
 
 
+#: Exit codes of the command line (docs/design.md, Contracts: exit codes), one table for every package.
+EXIT_OK = 0  # done: accepted, finished
+EXIT_FAILED = 1  # ran, but did not pass: a calibration above its threshold, a path measured too little
+EXIT_BAD_INPUT = 2  # `InputError`: a file, a flag, a configuration value; one line naming it
+EXIT_FAULT = 3  # `FaultError` and the drivers' errors: the station, a device or database that does not answer
+EXIT_ABORTED = 4  # aborted by the operator (final)
+EXIT_INTERRUPTED = 130  # Ctrl-C; in general 128 + the signal number (143 SIGTERM, 129 SIGHUP)
+EXIT_INTERNAL = 70  # a bug: one line (``--debug`` shows the traceback)
+
+
 class HilError(Exception):
     """Base of the errors hil raises on purpose (as opposed to bugs)."""
 

@@ -51,7 +51,7 @@ from hil.campaign.ids import new_campaign_id
 from hil.campaign.steps import PoseRecord
 from hil.campaign.stopping import stopped_words
 from hil.campaign.suspenders import suspenders
-from hil.errors import HilError, InputError
+from hil.errors import EXIT_ABORTED, EXIT_FAILED, EXIT_FAULT, EXIT_OK, HilError, InputError
 from hil.station.config import StationConfig
 from hil.station.devices import Devices
 from hil.station.robot_type import check_controller
@@ -78,14 +78,14 @@ class RunOutcome:
         """0 accepted, 1 rejected, 3 hardware fault, 4 aborted, 128 + the signal number interrupted
         (130 for Ctrl-C, the shell's convention); bad input raises before a run."""
         if self.status == "accepted":
-            return 0
+            return EXIT_OK
         if self.status == "rejected":
-            return 1
+            return EXIT_FAILED
         if self.status == "aborted":
-            return 4
+            return EXIT_ABORTED
         if self.status == "interrupted":
             return 128 + int(getattr(self.error, "signum", signal.SIGINT))
-        return 3
+        return EXIT_FAULT
 
 
 def _nominal_deviation(config: StationConfig) -> Callable[[PoseRecord], float | None]:

@@ -12,6 +12,7 @@ import os
 import sys
 
 from hil.cli.support.output import print_json, wrote
+from hil.jobs.outcome import EXIT_OK
 
 #: File name endings read as a URScript program, and as a CSV of poses; anything else is decided by its
 #: first line (a CSV header names x,y,z,rx,ry,rz).
@@ -141,4 +142,4 @@ def run(args: argparse.Namespace) -> int:
         print_json(doc)
     else:
         sys.stderr.write(summary.text())
-    return 0
+    return EXIT_OK

@@ -12,6 +12,7 @@ import argparse
 from hil.calibration.exports import FORMATS
 from hil.cli.support.output import wrote
 from hil.errors import InputError
+from hil.jobs.outcome import EXIT_OK
 
 #: Whose model to export: hil's calibrated one, or the controller's own (its factory calibration).
 WHICH: tuple[str, ...] = ("hil", "controller")
@@ -47,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
         text = export(doc, geometry, args.format, source=args.model)
     atomic_write_text(args.out, text)
     wrote(args.out, args.format if args.which == "hil" else f"{args.format} of the controller's model")
-    return 0
+    return EXIT_OK
 
 
 def _controller_yaml(args: argparse.Namespace, doc: dict) -> str:

@@ -6,6 +6,7 @@ import argparse
 
 from hil.cli.support.options import PAYLOAD_HELP, payload_or_none
 from hil.cli.support.output import wrote
+from hil.jobs.outcome import EXIT_OK
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -45,4 +46,4 @@ def run(args: argparse.Namespace) -> int:
     points = Kinematics(geometry).points(q, frame=args.frame, point=args.point)
     atomic_write_text(args.out, format_csv(("x", "y", "z"), points))
     wrote(args.out, f"{len(points)} positions, {args.point} in the {args.frame} frame")
-    return 0
+    return EXIT_OK

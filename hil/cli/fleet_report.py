@@ -14,6 +14,7 @@ import sys
 
 from hil.cli.support.options import finite_float
 from hil.cli.support.store_options import add_store_options, open_store
+from hil.jobs.outcome import EXIT_OK
 
 
 def _day(text: str) -> float:
@@ -55,4 +56,4 @@ def run_fleet_report(args: argparse.Namespace) -> int:
     write_fleet_report(data, args.out)
     print(f"wrote {args.out} ({len(data.robots)} robots, {len(data.calibrations)} calibrations)",
           file=sys.stderr)
-    return 0
+    return EXIT_OK

@@ -20,6 +20,7 @@ from hil.cli.support.options import bounded_int
 from hil.cli.support.output import mm, print_json
 from hil.errors import InputError
 from hil.files.outputs import atomic_write_text, check_output
+from hil.jobs.outcome import EXIT_OK
 from hil.station.config import load_config
 from hil.store import INTERRUPTED, ROLES, CampaignRecord, CampaignSummary, Store, resolve_location
 
@@ -104,18 +105,18 @@ def run_history(args: argparse.Namespace) -> int:
         where = store.location
     if args.json:
         print_json({"database": where, "campaigns": [r.as_dict() for r in rows]})
-        return 0
+        return EXIT_OK
     shown = os.path.abspath(store.path) if store.path is not None else where
     print(f"database: {shown}", file=sys.stderr)  # which store (stdout: the table)
     if not rows:
         print(f"no campaigns in {where}")
-        return 0
+        return EXIT_OK
     print(_ROW.format("ID", "UPDATED", "STATION", "ROBOT", "STATUS", "POSES", "VAL [mm]"))
     for r in rows:
         print(_history_line(r))
     if any(r.status == INTERRUPTED for r in rows):
         print(_INTERRUPTED_NOTE)
-    return 0
+    return EXIT_OK
 
 
 def _export_format(args: argparse.Namespace) -> str:
@@ -226,4 +227,4 @@ def run_show(args: argparse.Namespace) -> int:
             print(line)
     for path in written:
         print(f"wrote {os.fspath(path)}", file=sys.stderr)
-    return 0
+    return EXIT_OK

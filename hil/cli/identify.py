@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 from hil.arm.catalog import ROBOT_NAMES, get_robot
 from hil.cli.support.options import PAYLOAD_HELP, payload_or_none, triplet_or_none
 from hil.cli.support.output import mm, print_json, wrote
+from hil.jobs.outcome import EXIT_OK
 
 if TYPE_CHECKING:
     from hil.calibration.identification import FitResult
@@ -73,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
         info["validation"] = validation
     if args.json:
         print_json(info)
-        return 0
+        return EXIT_OK
     print(f"{robot}: {info['used']}/{info['poses']} poses, {info['parameters']} parameters, "
           f"{fit.iterations} iterations, condition {fit.condition:.1f}, {fit.seconds * 1e3:.0f} ms")
     print(f"  after tracker alignment  RMS {mm(fit.initial_rms)}")
@@ -90,4 +91,4 @@ def run(args: argparse.Namespace) -> int:
                 print(f"  {name:<16} {v:.3e} ± {sd:.1e} rad/Nm")
     for c in fit.correlated[:10]:
         print(f"  correlated: {c.a} ~ {c.b}  ρ = {c.rho:+.3f}")
-    return 0
+    return EXIT_OK

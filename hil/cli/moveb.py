@@ -24,7 +24,7 @@ from hil.cli.support.station_options import add_tracker_protocol
 from hil.errors import InputError
 from hil.files.outputs import check_output
 from hil.jobs.moveb import FRAMES, MovebRequest, run_moveb
-from hil.jobs.outcome import EXIT_FAULT
+from hil.jobs.outcome import EXIT_BAD_INPUT, EXIT_FAULT, EXIT_OK
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -90,7 +90,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                      help="write a figure: commanded and measured path, deviation along the path")
     _json_option(run)
     run.set_defaults(func=run_run)
-    p.set_defaults(func=lambda args: (p.print_help(sys.stderr), 2)[1])
+    p.set_defaults(func=lambda args: (p.print_help(sys.stderr), EXIT_BAD_INPUT)[1])
 
 
 
@@ -156,7 +156,7 @@ def run_plan(args: argparse.Namespace) -> int:
         print_json(doc)
     else:
         sys.stdout.write(_plan_text(doc))
-    return 0
+    return EXIT_OK
 
 
 def _plan_text(doc: dict[str, Any]) -> str:

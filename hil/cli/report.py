@@ -18,6 +18,7 @@ from hil.calibration.model_file import read_json
 from hil.cli.support.output import wrote
 from hil.errors import InputError
 from hil.files.outputs import check_output
+from hil.jobs.outcome import EXIT_OK
 from hil.report import report_data_from_result, write_report
 
 #: `hil.verify.result.FORMAT`, the ``hil verify --out`` document (not imported: the verification's
@@ -49,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
     with _malformed(args.result):
         write_report(data, args.out)
     wrote(args.out, "PASS" if data.passed else "FAIL")
-    return 0
+    return EXIT_OK
 
 
 def _verification(doc: dict[str, Any], args: argparse.Namespace) -> int:
@@ -61,7 +62,7 @@ def _verification(doc: dict[str, Any], args: argparse.Namespace) -> int:
     with _malformed(args.result):
         write_verification_report(doc, args.out)
     wrote(args.out, "ISO 9283 pose test")
-    return 0
+    return EXIT_OK
 
 
 @contextlib.contextmanager

@@ -20,6 +20,7 @@ from hil.cli.support.options import finite_float
 from hil.cli.support.output import print_json
 from hil.cli.support.store_options import add_store_options, clip, mm, open_store, when, where
 from hil.errors import InputError
+from hil.jobs.outcome import EXIT_OK
 
 if TYPE_CHECKING:
     from hil.store import Store
@@ -240,5 +241,5 @@ def run_robot(args: argparse.Namespace) -> int:
             print(line)
     if exported is not None:
         print(f"wrote {os.fspath(args.export_model)} (current model: campaign {exported})", file=sys.stderr)
-    return 0
+    return EXIT_OK
 

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 from hil.cli.support.output import print_json
 from hil.cli.support.store_options import add_store_options, clip, mm, open_store, when, where
+from hil.jobs.outcome import EXIT_OK
 
 if TYPE_CHECKING:
     from hil.store.fleet import RobotSummary
@@ -55,11 +56,11 @@ def run_robots(args: argparse.Namespace) -> int:
         shown = where(store)
     if args.json:
         print_json({"database": location, "robots": [r.as_dict() for r in rows]})
-        return 0
+        return EXIT_OK
     print(f"database: {shown}", file=sys.stderr)
     if not rows:
         print(f"no robots in {location}" + (f" last calibrated at {args.station}" if args.station else ""))
-        return 0
+        return EXIT_OK
     print(_ROW.format("ROBOT", "TYPE", "LAST CALIB", "RESULT", "VAL mm", "AGE", "STATION", "CURRENT"))
     for r in rows:
         age = "-" if r.age_days is None else f"{int(r.age_days)}d"
@@ -69,4 +70,4 @@ def run_robots(args: argparse.Namespace) -> int:
     without = sum(1 for r in rows if r.current is None)
     print(f"{len(rows)} robots" + (f", {without} without a usable calibration" if without else "")
           + "; VAL = validation RMS after calibration")
-    return 0
+    return EXIT_OK

@@ -29,6 +29,7 @@ from typing import Any
 from hil.cli.support.options import CANDIDATES, POSE_COUNT, SEED, finite_float
 from hil.cli.support.output import wrote
 from hil.errors import InputError
+from hil.jobs.outcome import EXIT_OK
 from hil.station.config import MAX_KEEP_IN, MAX_SMR_OFFSET, MAX_TRACKER_DISTANCE
 from selector.candidates import CONSTRAINT_NAMES
 from selector.indices import INDEX_NAMES, SCALINGS
@@ -224,7 +225,7 @@ def run(args: argparse.Namespace) -> int:
         wrote(args.out, f"{report['count']} poses")
     else:
         sys.stdout.write(text)
-    return 0
+    return EXIT_OK
 
 
 class StatusLine:

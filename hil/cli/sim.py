@@ -16,6 +16,7 @@ from typing import Any
 from hil.cli.support.options import SEED, SIM_SPEED, bounded_int, finite_float
 from hil.cli.support.output import wants_json
 from hil.errors import InputError
+from hil.jobs.outcome import EXIT_OK
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -119,4 +120,4 @@ def run(args: argparse.Namespace) -> int:
               ready=ready)
     except OSError as exc:
         raise InputError(f"--address: cannot serve on {args.address}: {exc}") from None
-    return 0
+    return EXIT_OK

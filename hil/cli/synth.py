@@ -13,6 +13,7 @@ from hil.calibration.model_file import load_truth, truth_document, write_json
 from hil.calibration.synthetic import Noise, measure, random_configurations, random_truth
 from hil.cli.support.options import SEED, bounded_int, finite_float
 from hil.cli.support.output import wrote
+from hil.jobs.outcome import EXIT_OK
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -76,4 +77,4 @@ def run(args: argparse.Namespace) -> int:
     wrote(out / "truth.json", "the hidden truth")
     wrote(out / "measurements.csv", f"{args.poses} poses")
     wrote(out / "validation.csv", f"{args.validation} poses")
-    return 0
+    return EXIT_OK

@@ -9,6 +9,7 @@ from hil.calibration.measurements import read_measurements
 from hil.calibration.model_file import load_geometry
 from hil.cli.support.options import RMS_THRESHOLD_HELP, rms_threshold
 from hil.cli.support.output import mm, print_json
+from hil.jobs.outcome import EXIT_FAILED, EXIT_OK
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -34,4 +35,4 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(f"{stats.count} poses: mean {mm(stats.mean)}  RMS {mm(stats.rms)}  max {mm(stats.max)}"
               + ("" if args.max_rms is None else ("  PASS" if passed else "  FAIL")))
-    return 0 if passed else 1
+    return EXIT_OK if passed else EXIT_FAILED

@@ -1,6 +1,7 @@
 """How a job ended, in terms every front-end can act on: an exit code, a status and what to say.
 
-The exit codes are the CLI's contract (docs/design.md, Contracts: exit codes) and are named here once,
+The exit codes are the CLI's contract (docs/design.md, Contracts: exit codes), named once in
+`hil.errors` beside the errors they answer (a campaign's own outcome uses them too) and handed on here,
 so no job or command returns a literal number. A job never prints: what the operator must be told
 (a fault, "resumable: re-run the same command") it says through its `hil.jobs.words.Say` callback.
 """
@@ -10,13 +11,18 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-EXIT_OK = 0  # done: accepted, finished
-EXIT_FAILED = 1  # ran, but did not pass: a calibration above its threshold, a path measured too little
-EXIT_BAD_INPUT = 2  # a file, a flag, a configuration value; one line naming it
-EXIT_FAULT = 3  # the station: a device or a database that does not answer, a fault that ended the run
-EXIT_ABORTED = 4  # aborted by the operator (final)
-EXIT_INTERRUPTED = 130  # Ctrl-C; in general 128 + the signal number (143 SIGTERM, 129 SIGHUP)
-EXIT_INTERNAL = 70  # a bug: one line (``--debug`` shows the traceback)
+from hil.errors import (
+    EXIT_ABORTED,
+    EXIT_BAD_INPUT,
+    EXIT_FAILED,
+    EXIT_FAULT,
+    EXIT_INTERNAL,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+)
+
+__all__ = ["EXIT_ABORTED", "EXIT_BAD_INPUT", "EXIT_FAILED", "EXIT_FAULT", "EXIT_INTERNAL", "EXIT_INTERRUPTED",
+           "EXIT_OK", "JobOutcome"]
 
 
 @dataclass
