@@ -254,8 +254,10 @@ class ReferenceWatch:
                 reason = "no calibration pose could be reached safely to cycle through"
                 break
         seconds = (yield ReadConditions(temperatures=False)).t - start
+        # what `settled` compared with three time constants: the span of the series it judged
+        span = series[-1].elapsed - series[0].elapsed if series else None
         if not converged and not reason and fit is not None and fit.remaining < limit:
-            span = series[-1].elapsed - series[0].elapsed
+            assert span is not None  # a fit needs a series
             three = 3 * fit.time_constant / 60
             reason = (f"about {um(fit.remaining)} of drift is still to come, but the measurements span "
                       f"{span / 60:.0f} min, under three fitted time constants ({three:.0f} min): too "
@@ -263,7 +265,8 @@ class ReferenceWatch:
         remaining = None if fit is None else fit.remaining
         tau = None if fit is None else fit.time_constant
         self.warmup = {"seconds": seconds, "converged": converged, "references": len(series),
-                       "reason": reason, "moved": moved, "remaining": remaining, "time_constant": tau}
+                       "reason": reason, "moved": moved, "remaining": remaining, "time_constant": tau,
+                       "span": span}
         yield Emit(WarmupFinished(campaign=self.campaign, seconds=seconds, converged=converged,
                                   references=len(series), moved=moved, limit=limit, reason=reason,
                                   remaining=remaining, time_constant=tau))
@@ -333,14 +336,15 @@ class ReferenceWatch:
         for run in sorted({p.run for p in self.points} | ({self.run} if self.warmup else set())):
             if run == self.run and self.warmup is not None:
                 runs.append({"run": run, **{k: self.warmup[k] for k in (
-                    "seconds", "converged", "references", "remaining", "time_constant")}})
+                    "seconds", "converged", "references", "remaining", "time_constant", "span")}})
                 continue
             ws = [p for p in self.points if p.run == run and p.phase == WARMUP]
             if ws:  # an earlier run: judged again from its stored series
                 settled, fit = self.settled(ws)
                 runs.append({"run": run, "seconds": ws[-1].elapsed - ws[0].elapsed, "references": len(ws),
                              "converged": settled, "remaining": None if fit is None else fit.remaining,
-                             "time_constant": None if fit is None else fit.time_constant})
+                             "time_constant": None if fit is None else fit.time_constant,
+                             "span": ws[-1].elapsed - ws[0].elapsed})
         mine = self.warmup or {}
         return {
             "reference": [float(v) for v in self.reference],
@@ -355,7 +359,7 @@ class ReferenceWatch:
                        "ran": self.warmup is not None, "seconds": mine.get("seconds"),
                        "converged": mine.get("converged"), "reason": mine.get("reason", ""),
                        "remaining": mine.get("remaining"), "time_constant": mine.get("time_constant"),
-                       "runs": runs},
+                       "span": mine.get("span"), "runs": runs},
         }
 
 

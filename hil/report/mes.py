@@ -96,7 +96,11 @@ def mes_result(data: ReportData) -> dict[str, Any]:
       "phase": "warmup" | "drift", "elapsed": station s since the run started, "time": Unix s, "q",
       "xyz": m (tracker frame), "moved": m | null, "drift": m from the baseline | null, "baseline",
       "temperatures": °C | null}], "warmup": {"enabled", "interval", "limit", "max_time", "ran",
-      "seconds", "converged", "reason", "runs": [{"run", "seconds", "converged", "references"}]}}``.
+      "seconds", "converged", "reason", "remaining": m | null, "time_constant": s | null, "span": s |
+      null, "runs": [{"run", "seconds", "converged", "references", "remaining", "time_constant",
+      "span"}]}}``: the warm-up's rule (`hil.campaign.warmup`) judged ``remaining`` (the drift the
+      first-order fit says is still to come) against ``limit`` and ``span`` (station seconds from the
+      run's first warm-up measurement to its last) against three ``time_constant``.
       ``flagged``: the reference drifted beyond ``limit`` while measuring; ``passed`` is still the
       validation's verdict alone
     * ``stopping`` (when the stopping rule was on, ``campaign.stop_early``): ``{"stopped": bool,

@@ -227,11 +227,14 @@ def _drift(d: ReportData) -> str:
     if warm.get("ran"):
         why = warm.get("reason") or "still moving beyond the limit at max_time"
         settled = "yes" if warm.get("converged") else f"no — {why}; measured anyway"
+        figures = _warmup_figures(warm, block.get("series"))
         every_s = fmt_num(warm.get("interval"), "g")
         rows += [("warm-up", esc(f"{warm.get('seconds') or 0:.0f} s of cycling through the calibration "
                                  f"poses, the reference re-measured every {every_s} s")),
-                 ("warm-up settled (two consecutive reference measurements within "
-                  f"{esc(_um(warm.get('limit')))})", esc(settled))]
+                 (esc(f"warm-up settled (the rule applied: a first-order fit of the reference's whole "
+                      f"series says less than {_um(warm.get('limit'))} of drift is still to come, over a "
+                      "series spanning three fitted time constants)"),
+                  esc(settled + (f": {figures}" if figures else "")))]
     else:
         rows.append(("warm-up", esc("on, but nothing was left to measure in this run" if warm.get("enabled")
                                     else "off (warmup.enabled = false)")))
@@ -257,6 +260,28 @@ def _drift(d: ReportData) -> str:
                              "warm-up (orange), drift watch while measuring (blue), the baseline (star) and "
                              "the drift limit (dotted red); a dotted vertical line marks a resumed run."))
     return "".join(parts)
+
+
+def _minutes(seconds: Any) -> str:
+    return f"{seconds / 60:.1f} min" if _finite(seconds) else "—"
+
+
+def _warmup_figures(warm: Mapping[str, Any], series: Any) -> str:
+    """The figures the warm-up rule judged (`hil.campaign.warmup.ReferenceWatch.settled`): the fitted
+    drift still to come against the limit, the series' span against three fitted time constants. A
+    result written before the warm-up block carried its ``span``: the span of the last run's warm-up
+    measurements in ``series``."""
+    remaining, tau, span = warm.get("remaining"), warm.get("time_constant"), warm.get("span")
+    if not _finite(span) and isinstance(series, list):
+        points = [s for s in series if isinstance(s, Mapping) and s.get("phase") == "warmup"
+                  and _finite(s.get("elapsed")) and _finite(s.get("run"))]
+        last = max((s["run"] for s in points), default=None)
+        times = [s["elapsed"] for s in points if s["run"] == last]
+        span = max(times) - min(times) if times else None
+    if not _finite(remaining) or not _finite(tau):
+        return "no fit: too few reference measurements"
+    return (f"about {_um(remaining)} of drift still to come (limit {_um(warm.get('limit'))}); the series "
+            f"spans {_minutes(span)}, three fitted time constants {_minutes(3 * tau)} (τ = {_minutes(tau)})")
 
 
 def _calibration(d: ReportData) -> str:

@@ -135,6 +135,10 @@ def test_the_warm_up_ends_once_the_fitted_drift_still_to_come_is_below_the_limit
     block = outcome.result.drift
     assert block["warmup"]["converged"] and block["warmup"]["seconds"] == pytest.approx(done.seconds)
     assert block["baseline"] == warm[-1].seq
+    # what the rule judged, for the report to state: the series' span against three time constants
+    span = warm[-1].elapsed - warm[0].elapsed
+    assert block["warmup"]["span"] == pytest.approx(span) and span >= 3 * block["warmup"]["time_constant"]
+    assert block["warmup"]["runs"][-1]["span"] == pytest.approx(span)
 
 
 def test_a_warm_arm_is_warm_within_a_few_reference_measurements(tmp_path):

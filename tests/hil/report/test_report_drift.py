@@ -130,6 +130,34 @@ def test_the_drift_plot_is_a_picture_of_both_runs():
         assert image.shape[0] > (500 if temperatures else 380)  # the temperatures' panel below
 
 
+def test_the_report_states_the_warm_up_rule_the_campaign_applied_with_its_figures(campaign):
+    """The campaign judges "warm" by the first-order fit of the whole series (`ReferenceWatch.settled`):
+    drift still to come below the limit, over a series spanning three fitted time constants. The
+    report states that rule and the figures it judged, never "two consecutive measurements"."""
+    body = section(render_html(build(campaign, drift_block(flagged=False))))
+    assert "two consecutive" not in body
+    assert "first-order fit" in body
+    # run 2's series: 6 measurements over 650 s; τ = 210 s, so three time constants are 630 s
+    assert "about 4.0 µm of drift still to come (limit 10.0 µm)" in body
+    assert "the series spans 10.8 min, three fitted time constants 10.5 min (τ = 3.5 min)" in body
+    # a warm-up that ended at max_time says why, with the same figures
+    block = drift_block(flagged=False)
+    block["warmup"].update(converged=False, remaining=25e-6, time_constant=900.0,
+                           reason="still moving beyond the limit at max_time")
+    body = section(render_html(build(campaign, block)))
+    assert "no — still moving beyond the limit at max_time; measured anyway" in body
+    assert "about 25.0 µm of drift still to come (limit 10.0 µm)" in body
+    assert "three fitted time constants 45.0 min" in body
+
+
+def test_the_warm_up_figures_of_a_result_read_back_are_the_same(campaign):
+    block = drift_block(flagged=False)
+    block["warmup"]["span"] = 650.0
+    doc = mes_result(build(campaign, block))
+    again = section(render_html(report_data_from_result(doc, "r.json")))
+    assert "the series spans 10.8 min" in again
+
+
 def test_the_notes_say_an_unsettled_warm_up_and_a_flag():
     notes = summarise_events([
         WarmupFinished(campaign="c", seconds=3600.0, converged=False, references=30, remaining=2e-5,
