@@ -72,8 +72,9 @@ def mes_result(data: ReportData) -> dict[str, Any]:
       (time-aware selection only): ``{"poses", "robot_time": s, "relative_error", "seed_poses",
       "seed_robot_time": s, "reused": bool | null}``, the tour's prediction beside method 000's
     * ``times``: ``{"motion", "settle", "measure", "compute", ...}`` seconds per phase, plus
-      ``total`` (the run's wall time, not a phase) and ``retries`` (a count of retried pose visits),
-      or null
+      ``total`` (the run's wall time, not a phase), ``events_in_motion`` (the part of ``motion`` spent
+      committing points while the arm travelled: inside ``motion``, not a phase of its own) and
+      ``retries`` (a count of retried pose visits), or null
     * ``suspensions``: list of ``{"kind", "message", "waited", "t"}``; ``notes``: list of strings
     * ``hashes``: ``{what: sha256}`` of the input data; ``software``: ``{package: version}``
     * ``config``: the station configuration as validated

@@ -423,17 +423,19 @@ def _observability(d: ReportData) -> str:
     return _kv(rows)
 
 
-#: Keys of the campaign's time breakdown that are not phases: the run's wall time and a count.
-_NOT_PHASES = ("total", "retries")
+#: Keys of the campaign's time breakdown that are not phases: the run's wall time, a count, and the
+#: part of ``motion`` spent delivering a point's events while the arm travels
+#: (`hil.campaign.engine.RunStats.events_in_motion`: already inside ``motion``).
+_NOT_PHASES = ("total", "retries", "events_in_motion")
 _OTHER = "other (between steps: events, store, I/O)"
 
 
 def wall_time(times: Mapping[str, Any]) -> tuple[dict[str, float], float, int | None]:
     """The phases (seconds), which sum to the total, the total and the retried pose visits.
 
-    ``total`` is the run's wall time and ``retries`` a count: neither is a phase. Time no phase
-    accounts for shows as one more phase (`_OTHER`); a total below the phases' sum (or none) is
-    replaced by that sum.
+    ``total`` is the run's wall time, ``retries`` a count and ``events_in_motion`` a part of
+    ``motion``: none is a phase. Time no phase accounts for shows as one more phase (`_OTHER`); a
+    total below the phases' sum (or none) is replaced by that sum.
     """
     phases = {str(k): float(v) for k, v in times.items() if k not in _NOT_PHASES and _finite(v)}
     accounted = sum(phases.values())
@@ -460,6 +462,11 @@ def _campaign(d: ReportData) -> str:
                      "<b>100 %</b>" if total > 0 else ""])
         parts.append("<h3>Wall time</h3>" + f'<div class="stack">{bar}</div>'
                      + _table(["phase", "time", "share"], rows, "num"))
+        overlap = d.times.get("events_in_motion")
+        if _finite(overlap) and overlap > 0 and "motion" in phases:
+            note = (f"motion: {overlap:.1f} s of it delivering events while the arm travelled (each "
+                    "point committed to the store during the next move)")
+            parts.append(f'<p class="muted">{esc(note)}</p>')
         if retries is not None:
             parts.append(_kv([("pose visits retried after a suspension", esc(retries))]))
     parts.append("<h3>Suspensions</h3>")
