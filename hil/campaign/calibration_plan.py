@@ -175,6 +175,31 @@ class CampaignResult:
     stopping: dict[str, Any] | None = None
     # the validation RMS's standard error under the validation design (`validation_precision`)
     validation_precision: dict[str, Any] | None = None
+    # poses planned and measured per role (`pose_counts`): the one source of every output's counts
+    counts: dict[str, dict[str, int]] = field(default_factory=dict)
+
+
+def pose_counts(bootstrap: list[tuple[int, np.ndarray]] | None, planned: list[tuple[int, str, np.ndarray]],
+                records: Mapping[tuple[str, int], PoseRecord]) -> dict[str, dict[str, int]]:
+    """Poses planned and measured per role: the bootstrap's from its stored plan (its arm moves,
+    ``campaign.bootstrap_poses``, plus the wrist turns: `bootstrap_targets`; none when the tracker
+    position was configured, or as many as were measured by an older hil that stored no bootstrap
+    plan), calibration and validation poses from the campaign's plan (validation cycles included).
+    The fit uses the bootstrap and calibration points measured; every count a report, a result, the
+    console or the TUI shows is one of these."""
+    measured = {role: sum(1 for r, _ in records if r == role)
+                for role in (BOOTSTRAP, CALIBRATION, VALIDATION)}
+    boot = len(bootstrap) if bootstrap is not None else measured[BOOTSTRAP]
+    return {BOOTSTRAP: {"planned": boot, "measured": measured[BOOTSTRAP]},
+            **{role: {"planned": sum(1 for _, r, _ in planned if r == role), "measured": measured[role]}
+               for role in (CALIBRATION, VALIDATION)}}
+
+
+def bootstrap_words(count: int) -> str:
+    """How many bootstrap poses, and what they are: ``campaign.bootstrap_poses`` moves of the arm
+    plus the wrist turns (`bootstrap_targets`), so a config saying 6 measures 10."""
+    turns = len(_WRIST_TURNS)
+    return f"{count} bootstrap poses ({count - turns} small moves of the arm, {turns} turns of the wrist)"
 
 
 def _tour_plan(first: int, cal: Choice, val: Choice) -> list[tuple[int, str, np.ndarray]]:
@@ -356,7 +381,9 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
         tracker, smr_guess = _locate(boot, robot, smr_guess)
     if tracker is None:
         if boot_plan is None:
-            yield Phase("bootstrap", "locating the tracker from small moves around the start pose")
+            count = len(bootstrap_targets(np.zeros(6), camp["bootstrap_poses"]))
+            yield Phase("bootstrap", f"locating the tracker from {bootstrap_words(count)} around the "
+                                     "start pose")
             start = np.asarray((yield ReadJoints(config.robot["joint_samples"])).q, float)
             # after any index an older run used, so no stored pose is given another target
             first = 1 + max((i for _, i in records), default=-1)
@@ -380,7 +407,7 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
         boot = [r for (role, _), r in sorted(records.items()) if role == BOOTSTRAP]
         if len(boot) < 3:  # three points fix a frame; fewer is a station problem, not a fit failure
             raise IdentificationError(
-                f"cannot locate the tracker: {len(boot)} of {camp['bootstrap_poses']} bootstrap points "
+                f"cannot locate the tracker: {len(boot)} of {len(boot_plan)} bootstrap points "
                 "measured (is the SMR facing the tracker with a clear line of sight at the start pose? "
                 "or set tracker.position in the configuration)")
         tracker, smr_guess = _locate(boot, robot, smr_guess)
@@ -535,4 +562,5 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     doc = model_document(fit, after.as_dict(), controller=controller)
     drift = watch.summary() if config.warmup["enabled"] or config.drift["every"] or watch.points else None
     return CampaignResult(fit, before, after, passed, list(records.values()), tracker, selection,
-                          iso, doc, theirs, drift, stop.summary(), precision)
+                          iso, doc, theirs, drift, stop.summary(), precision,
+                          pose_counts(boot_plan, planned, records))

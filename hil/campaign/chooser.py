@@ -8,6 +8,7 @@ candidates. It lives with the campaign because it speaks the plan's request and 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -72,7 +73,7 @@ def campaign_chooser(config: Any) -> Any:
             payload=config.payload, gravity=config.gravity)
         info = {k: report[k] for k in ("index", "value", "o1", "bound", "percent_of_bound", "method",
                                        "seconds", "travel_time", "candidates", "parameters")}
-        return Choice(np.array(report["poses"]), info)
+        return Choice(np.array(report["poses"]), {**info, **_parameter_counts(report)})
 
     # the same line-of-sight and acceptance tests, asked again during the run (`plan._SightCheck`)
     choose.hidden = hidden_reason  # type: ignore[attr-defined]
@@ -115,7 +116,17 @@ def _time_aware(config: Any, request: SelectionRequest, constraints: Constraints
     info = {k: report[k] for k in ("index", "value", "o1", "method", "form", "seconds", "travel_time",
                                    "candidates", "parameters", "predicted", "seed_method", "motion",
                                    "dwell", "budget", "tour", "details")}
-    return Choice(np.array(report["poses"]), info)
+    return Choice(np.array(report["poses"]), {**info, **_parameter_counts(report)})
+
+
+def _parameter_counts(report: Mapping[str, Any]) -> dict[str, Any]:
+    """The selection's ``parameters`` are those its SMR guess makes observable; the fit identifies
+    them and the ``unobservable`` ones (the same identifiable set, compliance included when
+    configured: `hil.station.config.minimum_calibration_poses`): ``identified_parameters`` is the
+    fit's count, what a plan is compared with (the model's ``parameters`` once it is fitted)."""
+    unobservable = list(report.get("unobservable") or [])
+    return {"unobservable": unobservable,
+            "identified_parameters": int(report["parameters"]) + len(unobservable)}
 
 
 def _validation_poses(config: Any, request: Any, constraints: Constraints) -> Any:

@@ -212,6 +212,10 @@ class ReportData:
     # (`hil.calibration.validation_precision`: design, poses, clusters, rms_standard_error,
     # design_effect); None when not known (an offline identification, an older result)
     validation_precision: Mapping[str, Any] | None = None
+    # poses planned and measured per role, {"bootstrap"|"calibration"|"validation": {"planned",
+    # "measured"}} (`hil.campaign.calibration_plan.pose_counts`); None when not known (an offline
+    # identification, an older result)
+    poses: Mapping[str, Mapping[str, int]] | None = None
 
     @property
     def drift_flagged(self) -> bool:
@@ -281,6 +285,7 @@ def report_data_from(
     drift: Mapping[str, Any] | None = None,
     stopping: Mapping[str, Any] | None = None,
     validation_precision: Mapping[str, Any] | None = None,
+    poses: Mapping[str, Mapping[str, int]] | None = None,
 ) -> ReportData:
     """Assemble a `ReportData` from what the campaign engine has at the end of a run.
 
@@ -303,7 +308,8 @@ def report_data_from(
     * ``drift``: the warm-up and drift watch (`hil.campaign.calibration_plan.CampaignResult.drift`);
     * ``stopping``: the stopping rule's record (`hil.campaign.calibration_plan.CampaignResult.stopping`);
     * ``validation_precision``: the validation RMS's standard error under the validation design
-      (`hil.campaign.calibration_plan.CampaignResult.validation_precision`).
+      (`hil.campaign.calibration_plan.CampaignResult.validation_precision`);
+    * ``poses``: poses planned and measured per role (`hil.campaign.calibration_plan.pose_counts`).
     """
     from hil.calibration.model_file import model_document, software_versions, tracker_pose
 
@@ -385,6 +391,7 @@ def report_data_from(
         drift=dict(drift) if drift is not None else None,
         stopping=dict(stopping) if stopping is not None else None,
         validation_precision=dict(validation_precision) if validation_precision is not None else None,
+        poses={k: dict(v) for k, v in poses.items()} if poses is not None else None,
     )
 
 
@@ -527,7 +534,26 @@ def _from_result(doc: Mapping[str, Any], source: str) -> ReportData:
         drift=_drift(doc.get("drift"), source),
         stopping=_stopping(doc.get("stopping"), source),
         validation_precision=_precision(validation.get("precision"), source),
+        poses=_pose_counts(doc.get("poses"), source),
     )
+
+
+def _pose_counts(block: Any, source: str) -> Mapping[str, Mapping[str, int]] | None:
+    """The result's ``poses`` block: per role, whole numbers ``planned`` and ``measured``."""
+    if block is None:
+        return None
+    if not isinstance(block, Mapping):
+        raise InputError(f"{source}: field 'poses' must be an object")
+    out = {}
+    for role, counts in block.items():
+        if not isinstance(counts, Mapping):
+            raise InputError(f"{source}: field 'poses.{role}' must be an object")
+        for key in ("planned", "measured"):
+            value = counts.get(key)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+                raise InputError(f"{source}: field 'poses.{role}.{key}' must be a whole number of poses")
+        out[str(role)] = {"planned": counts["planned"], "measured": counts["measured"]}
+    return out
 
 
 def _precision(block: Any, source: str) -> Mapping[str, Any] | None:

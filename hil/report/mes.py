@@ -104,6 +104,10 @@ def mes_result(data: ReportData) -> dict[str, Any]:
       run's first warm-up measurement to its last) against three ``time_constant``.
       ``flagged``: the reference drifted beyond ``limit`` while measuring; ``passed`` is still the
       validation's verdict alone
+    * ``poses`` (a campaign's): ``{"bootstrap": C, "calibration": C, "validation": C}``, C =
+      ``{"planned", "measured"}``: the bootstrap's poses are ``campaign.bootstrap_poses`` moves of the
+      arm plus 4 wrist turns (none with ``tracker.position`` configured); validation counts every
+      cycle; the fit uses the bootstrap and calibration poses measured (``fit.poses``)
     * ``stopping`` (when the stopping rule was on, ``campaign.stop_early``): ``{"stopped": bool,
       "reason", "predicted_rms": m, "target": m (margin × acceptance), "acceptance": m, "margin",
       "confidence", "poses_used", "poses_left": calibration poses measured and not visited,
@@ -174,4 +178,6 @@ def mes_result(data: ReportData) -> dict[str, Any]:
         doc["drift"] = _plain(dict(data.drift))
     if data.stopping is not None:  # likewise only with the stopping rule on
         doc["stopping"] = _plain(dict(data.stopping))
+    if data.poses is not None:  # likewise only for a campaign
+        doc["poses"] = _plain({k: dict(v) for k, v in data.poses.items()})
     return doc

@@ -134,7 +134,7 @@ def _summary(d: ReportData) -> str:
                       f"max {fmt_mm(c.max)}: factory calibration, same poses"))
     tiles += [
         ("Fit RMS", f"<b>{fmt_mm(f.rms)}</b>", f"max {fmt_mm(f.max)}, noise σ {fmt_mm(f.sigma, 4)}"),
-        ("Poses", f"<b>{f.used}</b> used / {f.poses - f.used} rejected", f"{f.poses} calibration poses"),
+        ("Poses", f"<b>{f.used}</b> used / {f.poses - f.used} rejected", esc(_fitted_poses(d))),
         ("Iterations", f"<b>{f.iterations}</b>", f"{f.seconds:.2f} s compute" if _finite(f.seconds) else ""),
         ("Condition number", f"<b>{fmt_num(f.condition, '.1f')}</b>",
          "column-normalised Jacobian"),
@@ -167,6 +167,31 @@ def _summary(d: ReportData) -> str:
     cells = "".join(f'<div class="tile"><div class="label">{label}</div><div class="value">{value}</div>'
                     f'<div class="note">{note}</div></div>' for label, value, note in tiles)
     return f'<div class="tiles">{cells}</div>'
+
+
+def _fitted_poses(d: ReportData) -> str:
+    """The fit's poses by where they came from (`ReportData.poses`): the bootstrap's points locate the
+    tracker and are fitted with the calibration poses."""
+    counts = d.poses or {}
+    boot, cal = counts.get("bootstrap") or {}, counts.get("calibration") or {}
+    if boot.get("measured") is None or cal.get("measured") is None:
+        return f"{d.fit.poses} fitted poses"
+    if not boot["measured"]:
+        return f"{d.fit.poses} fitted: calibration poses"
+    return f"{d.fit.poses} fitted: {boot['measured']} bootstrap + {cal['measured']} calibration"
+
+
+def _pose_rows(d: ReportData) -> list[tuple[str, str]]:
+    """The campaign's poses per role, planned and measured (`ReportData.poses`)."""
+    words = {"bootstrap": "bootstrap poses (locate the tracker; fitted too)",
+             "calibration": "calibration poses", "validation": "validation poses (held out)"}
+    rows = []
+    for role, counts in (d.poses or {}).items():
+        if role == "bootstrap" and not counts.get("planned"):
+            continue  # the tracker position was configured: no bootstrap
+        rows.append((esc(f"{words.get(role, role)}: measured of planned"),
+                     esc(f"{counts.get('measured')} of {counts.get('planned')}")))
+    return rows
 
 
 def _validation(d: ReportData) -> str:
@@ -290,7 +315,8 @@ def _calibration(d: ReportData) -> str:
     after = d.calibration_after
     if before is not None and (after is None or len(before.norms) != len(after.norms)):
         before = None
-    rows = [("poses measured", esc(f.poses)), ("poses used", esc(f.used))]
+    rows = [*_pose_rows(d), ("poses fitted", esc(_fitted_poses(d))),
+            ("poses used (not rejected as outliers)", esc(f.used))]
     if before is not None and before.per_pose:
         rows.append((esc(f"RMS before calibration ({BEFORE_MEANS})"), esc(fmt_mm(before.rms))))
     rows += [

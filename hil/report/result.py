@@ -19,10 +19,13 @@ def report_data(outcome: Any, config: StationConfig, events: list[Event], starte
                 verification: dict[str, Any] | None = None) -> Any:
     """The report's data of a finished campaign; `verification`: its pose test (``--verify``)."""
     from hil.campaign.calibration_plan import BOOTSTRAP, CALIBRATION, VALIDATION, measurements_of
+    from hil.campaign.events import RunFinished
     from hil.report import RobotIdentity, report_data_from
     from hil.report.data import Observability, tour_summary
 
     r = outcome.result
+    # the campaign ended when its run did (RunFinished), not when this report is made
+    ends = [e.t for e in events if isinstance(e, RunFinished) and e.campaign == outcome.campaign]
     by_role: dict[str, list[Any]] = {BOOTSTRAP: [], CALIBRATION: [], VALIDATION: []}
     for rec in sorted(r.records, key=lambda x: x.index):
         by_role[rec.role].append(rec)
@@ -42,11 +45,13 @@ def report_data(outcome: Any, config: StationConfig, events: list[Event], starte
         r.fit, r.before, r.after, config, campaign=outcome.campaign,
         robot=RobotIdentity(config.robot["type"], outcome.robot_info.get("serial", ""),
                             outcome.robot_info.get("model", ""), outcome.robot_info.get("software", "")),
-        started=started, finished=time.time(), calibration=cal, validation=val, iso9283=iso,
+        started=started, finished=ends[-1] if ends else time.time(), calibration=cal, validation=val,
+        iso9283=iso,
         observability=obs, times=outcome.timing, events=events,
         hashes={"measurements": digest}, model=r.model, line_kind="pose",
         validation_controller=r.controller, verification=verification, drift=r.drift,
-        stopping=r.stopping, validation_precision=r.validation_precision)
+        stopping=r.stopping, validation_precision=r.validation_precision,
+        poses=r.counts or None)
 
 
 def result_document(outcome: Any, config: StationConfig, events: list[Event], started: float,

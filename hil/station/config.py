@@ -305,7 +305,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                    "clustered validation: clusters drawn (0: simple random sample)"),
         # the bootstrap has 8 arm moves (hil.campaign.calibration_plan._BOOTSTRAP_DELTAS) and makes at
         # least 4: other values were silently clamped
-        "bootstrap_poses": Key("int", 6, _within(4, 8), "poses measured to locate the tracker"),
+        # plus 4 turns of the wrist (_WRIST_TURNS), which make the SMR's offset observable: 6 measures 10
+        "bootstrap_poses": Key("int", 6, _within(4, 8),
+                               "small arm moves measured to locate the tracker (4 wrist turns are added)"),
         # each sample is a tracker measurement (~0.1-1 s): 100 per point already averages the noise away
         "samples": Key("int", 5, _within(1, 100), "tracker samples per point"),
         # a tracker's noise is micrometres (AT960: 15 µm + 6 µm/m MPE): a spread allowed above 1 mm no

@@ -57,12 +57,14 @@ def _measurement(row: Sequence[Any]) -> Measurement:
 def _summary_query() -> Any:
     """One row per campaign for `CampaignSummary`. planned / measured / skipped count the campaign's
     calibration and validation poses: the count the progress bar, the Run screen and the history share
-    (the bootstrap's points only locate the tracker)."""
+    (the bootstrap's points locate the tracker, and are counted apart: bootstrap_planned /
+    bootstrap_measured)."""
     c, s, r, p = tb.campaigns, tb.stations, tb.robots, tb.poses
     m, v, e = tb.models, tb.validations, tb.events
 
-    def pose_count(status: str | None) -> Any:
-        q = select(func.count()).select_from(p).where(p.c.campaign == c.c.id, p.c.role != "bootstrap")
+    def pose_count(status: str | None, bootstrap: bool = False) -> Any:
+        role = p.c.role == "bootstrap" if bootstrap else p.c.role != "bootstrap"
+        q = select(func.count()).select_from(p).where(p.c.campaign == c.c.id, role)
         if status is not None:
             q = q.where(p.c.status == status)
         return q.correlate(c).scalar_subquery()
@@ -76,7 +78,7 @@ def _summary_query() -> Any:
     return (select(c.c.id, c.c.created, c.c.updated, s.c.name, c.c.robot_type,
                    func.coalesce(r.c.serial, ""), c.c.status, pose_count(None), pose_count("measured"),
                    pose_count("skipped"), latest(m.c.rms, m), latest(v.c.rms, v), latest(v.c.passed, v),
-                   c.c.kind,
+                   c.c.kind, pose_count(None, bootstrap=True), pose_count("measured", bootstrap=True),
                    case((c.c.status.in_(sorted(LIVE_STATES)), started), else_=literal(None)))
             .select_from(c.join(s, s.c.id == c.c.station).outerjoin(r, r.c.id == c.c.robot)))
 
@@ -88,8 +90,10 @@ def _summary(row: Sequence[Any]) -> CampaignSummary:
     """A summary row; a live status whose run's process is gone (kill -9, power cut) reads as
     ``interrupted``, which it is: resumable (the database itself is left as it is — a reader never
     writes)."""
-    *head, passed, kind, started = row
-    summary = CampaignSummary(*head, passed=None if passed is None else bool(passed), kind=str(kind))
+    *head, passed, kind, boot_planned, boot_measured, started = row
+    summary = CampaignSummary(*head, passed=None if passed is None else bool(passed), kind=str(kind),
+                              bootstrap_planned=int(boot_planned or 0),
+                              bootstrap_measured=int(boot_measured or 0))
     if started is not None and is_gone(json.loads(started).get("owner")):
         summary = dataclasses.replace(summary, status=INTERRUPTED)
     return summary

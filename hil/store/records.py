@@ -93,6 +93,11 @@ class CampaignSummary(_AsDict):
     validation_rms: float | None  # after calibration, latest validation (m)
     passed: bool | None
     kind: str = CALIBRATION
+    # the bootstrap's poses (they locate the tracker before the campaign's poses are planned, and are
+    # fitted with the calibration poses): its stored plan's count and how many were measured. A
+    # campaign interrupted during its bootstrap has planned 0 and these > 0.
+    bootstrap_planned: int = 0
+    bootstrap_measured: int = 0
 
     @property
     def finished(self) -> bool:
