@@ -477,7 +477,7 @@ def _campaign(d: ReportData) -> str:
     parts = []
     if d.times:
         phases, total, retries = wall_time(d.times)
-        colors = ["#1f6fb4", "#7fb3e0", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#a3acb9"]
+        colors = ["#1f6fb4", "#7fb3e0", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#a3acb9", "#d9dde3"]
         color = {k: colors[i % len(colors)] for i, k in enumerate(phases)}
         bar = "".join(f'<span style="width: {100 * v / total:.2f}%; background: {color[k]}" '
                       f'title="{esc(k)}"></span>' for k, v in phases.items() if total > 0)

@@ -7,6 +7,10 @@ Definitions the CLI, the TUI and the fleet report share:
   latest validation (RMS and max before and after calibration on held-out poses), its latest model
   and its latest **mark**: the ``marks`` table is a journal of judgements (``bad`` with a reason, or
   good again), and the newest mark of a campaign is the one that holds.
+* A robot's **last calibration** is its newest *finished* campaign (accepted, rejected or aborted:
+  `hil.store.records.FINISHED`). A newest campaign that is not finished — running, or interrupted or
+  failed and so resumable (a live status whose process is gone reads as interrupted) — is the robot's
+  calibration **in progress**, shown as such, never as its last calibration nor among its results.
 * A calibration is **good** when its status is ``accepted``, it has a model and its latest mark is not
   bad. A robot's **current model** is the latest model of its newest good calibration: marking that one
   bad falls back to the previous good one, marking it good again restores it.
@@ -42,7 +46,7 @@ import hil.store.tables as tb
 from hil.errors import InputError
 from hil.store.owner import is_gone
 from hil.store.queries import UnknownCampaignError
-from hil.store.records import CALIBRATION, INTERRUPTED, LIVE_STATES, VERIFICATION, _AsDict
+from hil.store.records import CALIBRATION, FINISHED, INTERRUPTED, LIVE_STATES, VERIFICATION, _AsDict
 
 if TYPE_CHECKING:
     from hil.store.core import Store
@@ -101,6 +105,11 @@ class Calibration(_AsDict):
     def marked_bad(self) -> bool:
         return self.mark is not None and self.mark.bad
 
+    @property
+    def finished(self) -> bool:
+        """Over (accepted, rejected, aborted); else in progress: running, or resumable."""
+        return self.status in FINISHED
+
 
 @dataclass(frozen=True)
 class RobotRecord(_AsDict):
@@ -115,13 +124,14 @@ class RobotRecord(_AsDict):
 
 @dataclass(frozen=True)
 class RobotSummary(_AsDict):
-    """One line of ``hil robots``: the robot, its last calibration, and which model is current."""
+    """One line of ``hil robots``: the robot, its last calibration, its calibration in progress, and
+    which model is current."""
 
     serial: str
     type: str
     model: str
-    calibrations: int  # campaigns of this robot
-    last: str | None = None  # its newest campaign (None: never calibrated)
+    calibrations: int  # campaigns of this robot, finished or not
+    last: str | None = None  # its newest finished campaign (None: none finished)
     last_created: float | None = None
     station: str | None = None  # where the last calibration ran
     status: str | None = None
@@ -133,6 +143,11 @@ class RobotSummary(_AsDict):
     current: str | None = None  # the campaign whose model is current; None: no good calibration
     current_created: float | None = None
     current_rms: float | None = None  # validation RMS after calibration of the current model (m)
+    # its newest campaign when that is not finished: running, or interrupted / failed (resumable)
+    in_progress: str | None = None
+    in_progress_created: float | None = None
+    in_progress_status: str | None = None  # running, paused, ..., interrupted, failed
+    in_progress_station: str | None = None
 
 
 @dataclass(frozen=True)
@@ -241,6 +256,12 @@ def _all_campaigns() -> Any:
     return select(c.c.id, c.c.robot, c.c.created).where(c.c.robot.is_not(None), c.c.kind == CALIBRATION)
 
 
+def _finished_campaigns() -> Any:
+    """(id, robot, created) of every finished calibration (`FINISHED`: a robot's last calibration is
+    the newest of these)."""
+    return _all_campaigns().where(tb.campaigns.c.status.in_(sorted(FINISHED)))
+
+
 def _loads(text: str | None) -> Any:
     if text is None:
         return None
@@ -320,10 +341,12 @@ def _robot(conn: Connection, serial: str, location: str) -> tuple[int, RobotReco
 
 
 def fleet(store: Store, *, station: str | None = None, now: float | None = None) -> list[RobotSummary]:
-    """Every robot with a known serial, sorted by serial: its last calibration (campaign, time,
-    station, status, validation RMS before/after, passed, age in days at `now`) and its current model's
-    campaign. `station` keeps the robots whose last calibration ran there (InputError if no station
-    has that name). Reads no model document."""
+    """Every robot with a known serial, sorted by serial: its last (finished) calibration (campaign,
+    time, station, status, validation RMS before/after, passed, age in days at `now`), its calibration
+    in progress (its newest campaign when not finished: running or resumable) and its current model's
+    campaign. `station` keeps the robots whose last calibration ran there (or, with none finished, whose
+    calibration in progress runs there; InputError if no station has that name). Reads no model
+    document."""
     now = time.time() if now is None else now
     r, c, s = tb.robots, tb.campaigns, tb.stations
     with store.reading() as conn:
@@ -335,14 +358,21 @@ def fleet(store: Store, *, station: str | None = None, now: float | None = None)
         counts = dict(conn.execute(select(c.c.robot, func.count())
                                    .where(c.c.robot.is_not(None), c.c.kind == CALIBRATION)
                                    .group_by(c.c.robot)).all())
-        last = {x.serial: x for x in _calibrations(conn, c.c.id.in_(_newest_per_robot(_all_campaigns())))}
+        last = {x.serial: x for x in _calibrations(conn, c.c.id.in_(_newest_per_robot(_finished_campaigns())))}
+        newest = {x.serial: x for x in _calibrations(conn, c.c.id.in_(_newest_per_robot(_all_campaigns())))}
         current = {x.serial: x for x in _calibrations(conn, c.c.id.in_(_newest_per_robot(_good_campaigns())))}
     out = []
     for rid, serial, rtype, model in robots:
         x, cur = last.get(serial), current.get(serial)
-        if station is not None and (x is None or x.station != station):
+        going = newest.get(serial)
+        going = None if going is None or going.finished else going
+        where_ = x.station if x is not None else going.station if going is not None else None
+        if station is not None and where_ != station:
             continue
         fields: dict[str, Any] = {}
+        if going is not None:
+            fields.update(in_progress=going.id, in_progress_created=going.created,
+                          in_progress_status=going.status, in_progress_station=going.station)
         if x is not None:
             fields.update(last=x.id, last_created=x.created, station=x.station, status=x.status,
                           before_rms=x.before_rms, after_rms=x.after_rms, passed=x.passed,

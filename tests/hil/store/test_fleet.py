@@ -103,9 +103,39 @@ def test_a_run_whose_process_died_reads_as_interrupted(store):
             campaign=cid, seq=1, t=T0 + 90 * DAY, type="RunStarted",
             data=json.dumps({"event": "RunStarted", "campaign": cid, "owner": owner})))
     store.set_status(cid, "running")
-    row = next(r for r in fleet(store) if r.serial == STEADY)
-    assert (row.last, row.status, row.calibrations) == (cid, "interrupted", 4)
+    row = next(r for r in fleet(store, now=T0) if r.serial == STEADY)
+    # in progress (resumable), not its last calibration: that is still its last finished one
+    assert (row.in_progress, row.in_progress_status, row.calibrations) == (cid, "interrupted", 4)
+    assert row.last == built_last(store) and row.status == "accepted"
     assert row.current != cid  # not accepted: the current model stays where it was
+
+
+def built_last(store: Store) -> str:
+    """STEADY's newest finished calibration."""
+    return max((c for c in calibrations(store) if c.serial == STEADY and c.finished),
+               key=lambda c: c.created).id
+
+
+@pytest.mark.parametrize("status", ["interrupted", "failed", "running"])
+def test_a_calibration_in_progress_is_not_the_robots_last_calibration(store, built_fleet: Fleet, status):
+    """An interrupted campaign (or a failed one: resumable too, or one running now) is the robot's
+    calibration in progress; its last calibration is its last finished one, with that one's result."""
+    last_finished = built_fleet.campaigns[STEADY][-1]
+    cid = store.create_campaign({"station": {"name": STATIONS[1]}, "robot": {"type": "ur5e"}},
+                                {"type": "ur5e", "serial": STEADY}, now=T0 + 90 * DAY)
+    store.set_status(cid, status)
+    row = next(r for r in fleet(store, now=T0 + 91 * DAY) if r.serial == STEADY)
+    assert (row.last, row.status, row.passed) == (last_finished, "accepted", True)
+    assert row.age_days == pytest.approx((T0 + 91 * DAY - row.last_created) / DAY)
+    assert (row.in_progress, row.in_progress_status, row.in_progress_station) == (cid, status, STATIONS[1])
+    assert row.in_progress_created == T0 + 90 * DAY and row.calibrations == 4
+    assert row.as_dict()["in_progress"] == cid
+    # a robot whose calibrations are all finished has none in progress
+    assert all(r.in_progress is None for r in fleet(store) if r.serial != STEADY)
+    # once finished, it is the last calibration and nothing is in progress
+    store.set_status(cid, "rejected")
+    row = next(r for r in fleet(store) if r.serial == STEADY)
+    assert (row.last, row.status, row.in_progress) == (cid, "rejected", None)
 
 
 # --- one robot's history --------------------------------------------------------------------------------
