@@ -78,6 +78,57 @@ def test_robots_lists_the_fleet(fleet_store_location, built_fleet: Fleet, capsys
     assert all(len(line) < 80 for line in lines)  # the 80x24 terminal
 
 
+def _one_robot_store(tmp_path: Path, serial: str, station: str) -> str:
+    db = tmp_path / "one.db"
+    with Store.open(db) as store:
+        cid = store.create_campaign({"station": {"name": station}, "robot": {"type": "ur5e"}},
+                                    {"type": "ur5e", "serial": serial})
+        store.set_status(cid, "accepted")
+    return str(db)
+
+
+def test_one_robot_is_one_robot(tmp_path, capsys):
+    out, _ = run(capsys, ["robots", "--db", _one_robot_store(tmp_path, "20235500101", "eol-cell-1")])
+    assert out.splitlines()[-1].startswith("1 robot, ")  # not "1 robots"
+
+
+def test_a_pipe_gets_every_cell_whole_and_a_narrow_terminal_a_clipped_table(tmp_path, capsys, monkeypatch):
+    serial, station = "UR-LINE4-20235500101-B", "end-of-line cell north 7"
+    db = _one_robot_store(tmp_path, serial, station)
+    out, _ = run(capsys, ["robots", "--db", db])  # captured: not a terminal
+    row = out.splitlines()[1]
+    assert row.split()[0] == serial and station in row and "…" not in out
+    # on an 80-column terminal the text columns are cut to fit, an ellipsis marking the cut
+    monkeypatch.setattr("sys.stdout.isatty", lambda: True, raising=False)
+    monkeypatch.setattr("shutil.get_terminal_size", lambda *a, **k: __import__("os").terminal_size((80, 24)))
+    out, _ = run(capsys, ["robots", "--db", db])
+    assert all(len(line) < 80 for line in out.splitlines())
+    assert serial[:11] + "…" in out and station[:10] + "…" in out
+    # a terminal wide enough shows it whole
+    monkeypatch.setattr("shutil.get_terminal_size", lambda *a, **k: __import__("os").terminal_size((200, 24)))
+    out, _ = run(capsys, ["robots", "--db", db])
+    assert serial in out and station in out and "…" not in out
+
+
+def test_an_interrupted_calibration_is_shown_in_progress_not_as_the_last(fleet_store_location,
+                                                                          built_fleet: Fleet, capsys):
+    db = str(fleet_store_location)
+    with Store.open(db) as store:
+        cid = store.create_campaign({"station": {"name": STATIONS[0]}, "robot": {"type": "ur5e"}},
+                                    {"type": "ur5e", "serial": STEADY})
+        store.set_status(cid, "interrupted")
+    out, _ = run(capsys, ["robots", "--db", db])
+    lines = out.splitlines()
+    at = next(i for i, line in enumerate(lines) if line.startswith(STEADY))
+    assert "accepted" in lines[at] and lines[at].endswith("= last")  # its last finished calibration
+    assert lines[at + 1].strip().startswith(f"in progress: {cid} interrupted (resumable)")
+    assert "interrupted" not in "".join(lines[:at + 1])
+    assert lines[-1].startswith("3 robots, 1 with a calibration in progress;")
+    doc = json.loads(run(capsys, ["robots", "--db", db, "--json"])[0])
+    steady = next(r for r in doc["robots"] if r["serial"] == STEADY)
+    assert steady["last"] == built_fleet.campaigns[STEADY][-1] and steady["in_progress"] == cid
+
+
 def test_robots_json_and_station(fleet_store_location, built_fleet: Fleet, capsys):
     db = str(fleet_store_location)
     out, err = run(capsys, ["robots", "--db", db, "--json"])
