@@ -358,7 +358,8 @@ def fleet(store: Store, *, station: str | None = None, now: float | None = None)
         counts = dict(conn.execute(select(c.c.robot, func.count())
                                    .where(c.c.robot.is_not(None), c.c.kind == CALIBRATION)
                                    .group_by(c.c.robot)).all())
-        last = {x.serial: x for x in _calibrations(conn, c.c.id.in_(_newest_per_robot(_finished_campaigns())))}
+        last = {x.serial: x
+                for x in _calibrations(conn, c.c.id.in_(_newest_per_robot(_finished_campaigns())))}
         newest = {x.serial: x for x in _calibrations(conn, c.c.id.in_(_newest_per_robot(_all_campaigns())))}
         current = {x.serial: x for x in _calibrations(conn, c.c.id.in_(_newest_per_robot(_good_campaigns())))}
     out = []
