@@ -200,6 +200,22 @@ def current_distribution(robots: Sequence[RobotSummary]) -> bytes | None:
     return png(fig)
 
 
+#: The bars of "calibrations per station", bottom up: accepted, finished otherwise, and in progress
+#: (running, or interrupted or failed: resumable, not a result).
+STATION_BARS = ("accepted", "rejected or aborted", "in progress (resumable)")
+
+
+def station_counts(rows: Sequence[Calibration], names: Sequence[str]) -> dict[str, np.ndarray]:
+    """Per station of `names`, its calibrations counted into `STATION_BARS`."""
+    def count(station: str, keep: Any) -> int:
+        return sum(1 for c in rows if c.station == station and keep(c))
+
+    keeps = (lambda c: c.status == "accepted", lambda c: c.finished and c.status != "accepted",
+             lambda c: not c.finished)
+    return {bar: np.array([count(s, keep) for s in names]) for bar, keep in zip(STATION_BARS, keeps,
+                                                                                  strict=True)}
+
+
 def stations_side_by_side(rows: Sequence[Calibration]) -> bytes | None:
     """Per station: a box plot of the validation RMS after calibration (mm, log; every calibration a
     dot) and the number of calibrations it ran, accepted or not. None without data."""
@@ -227,10 +243,14 @@ def stations_side_by_side(rows: Sequence[Calibration]) -> bytes | None:
         _log_mm(left)
     left.set_ylabel("validation RMS after calibration (mm)", fontsize=9)
     left.set_title("accuracy per station", fontsize=9)
-    accepted = np.array([sum(1 for c in rows if c.station == s and c.status == "accepted") for s in names])
-    total = np.array([sum(1 for c in rows if c.station == s) for s in names])
-    right.bar(pos, accepted, 0.6, color=AFTER, label="accepted")
-    right.bar(pos, total - accepted, 0.6, bottom=accepted, color=BEFORE, label="other (rejected, failed, …)")
+    counts = station_counts(rows, names)
+    bottom = np.zeros(len(names))
+    for bar, color, hatch in zip(STATION_BARS, (AFTER, BEFORE, "white"), (None, None, "///"), strict=True):
+        if counts[bar].any() or bar != STATION_BARS[2]:
+            right.bar(pos, counts[bar], 0.6, bottom=bottom, color=color, label=bar, hatch=hatch,
+                      edgecolor=BEFORE if hatch else None)
+        bottom = bottom + counts[bar]
+    total = bottom
     right.set_ylabel("calibrations", fontsize=9)
     right.set_title("calibrations per station", fontsize=9)
     right.yaxis.set_major_locator(MaxNLocator(integer=True))
@@ -252,14 +272,22 @@ def _date(t: float | None, fmt: str = "%Y-%m-%d") -> str:
 
 
 def _result(r: RobotSummary) -> str:
+    """The last (finished) calibration's result, and under it the calibration in progress, if any."""
+    going = ""
+    if r.in_progress is not None:
+        state = r.in_progress_status or "?"
+        going = (f'<br /><span class="id">in progress: {esc(state)}'
+                 f'{" (resumable)" if state in ("interrupted", "failed") else ""}, '
+                 f'{esc(_date(r.in_progress_created))} {esc(r.in_progress)}</span>')
     if r.status is None:
-        return '<span class="muted">never calibrated</span>'
+        return ('<span class="muted">'
+                + ("none finished" if r.in_progress is not None else "never calibrated") + "</span>" + going)
     text = esc(r.status)
     if r.marked_bad:
-        return f'<span class="bad">{text}, marked bad</span>'
+        return f'<span class="bad">{text}, marked bad</span>' + going
     if r.status == "accepted":
-        return f'<span class="ok">{text}</span>'
-    return f'<span class="bad">{text}</span>' if r.status in ("rejected", "failed") else text
+        return f'<span class="ok">{text}</span>' + going
+    return (f'<span class="bad">{text}</span>' if r.status == "rejected" else text) + going
 
 
 def _grid(head: Sequence[str], rows: Sequence[Sequence[str]], right: frozenset[int], cls: str = "") -> str:
@@ -292,8 +320,9 @@ def _fleet_table(robots: Sequence[RobotSummary]) -> str:
                      esc(fmt_mm(r.before_rms)), esc(fmt_mm(r.after_rms)),
                      esc("—" if r.age_days is None else f"{r.age_days:.0f} d"), esc(r.station or "—"),
                      current])
-    return ('<p class="muted">Each robot\'s last calibration (validation on held-out poses: RMS before '
-            "calibration, the nominal arm, and after) and the calibration whose model is current: its "
+    return ('<p class="muted">Each robot\'s last finished calibration (validation on held-out poses: RMS '
+            "before calibration, the nominal arm, and after), a calibration in progress under its result "
+            "(running, or interrupted and resumable), and the calibration whose model is current: its "
             "newest accepted one not marked bad.</p>"
             + _grid(["robot", "type", "last calibration", "result", "RMS before", "RMS after", "age",
                      "station", "current model"], rows, frozenset({4, 5, 6}), "fleet"))
@@ -340,8 +369,10 @@ def _tiles(data: FleetData) -> str:
     moved = {serial for serial, _ in data.moved}
     tiles = [("Robots", f"<b>{len(data.robots)}</b>",
               f"{sum(1 for r in data.robots if r.current is not None)} with a current model"),
-             ("Calibrations", f"<b>{len(data.calibrations)}</b>",
-              f"{sum(1 for c in data.calibrations if c.status == 'accepted')} accepted"),
+             ("Calibrations", f"<b>{sum(1 for c in data.calibrations if c.finished)}</b>",
+              f"{sum(1 for c in data.calibrations if c.status == 'accepted')} accepted"
+              + (f", {going} in progress" if (going := sum(1 for c in data.calibrations if not c.finished))
+                 else "")),
              ("Stations", f"<b>{len({c.station for c in data.calibrations})}</b>", "that calibrated"),
              ("Median current RMS", f"<b>{esc(fmt_mm(statistics.median(current)) if current else '—')}</b>",
               "validation, after calibration"),
@@ -396,7 +427,8 @@ def render_fleet_html(data: FleetData, *, generated: str | None = None) -> str:
         _section("stations", titles["stations"], _figure_or_note(
             stations_side_by_side(data.calibrations), "stations compared",
             "Left: validation RMS after calibration of each calibration a station ran (box: quartiles; "
-            "dots: calibrations). Right: how many calibrations each ran, accepted or not.",
+            "dots: calibrations). Right: how many calibrations each ran: accepted, rejected or aborted, "
+            "and in progress (running, or interrupted and resumable: no result yet).",
             "No calibration in this period.")),
         _section("moved", titles["moved"], _moved(data)),
         _section("marks", titles["marks"], _marks(data.calibrations)),

@@ -137,3 +137,33 @@ def test_bad_input_writes_nothing(fleet_store_location, tmp_path, capsys):
     assert "--sigmas" in run_bad(capsys, ["--db", db, "--out", str(out), "--sigmas", "0"])
     assert not out.exists() and not missing.exists()
     assert fingerprint(fleet_store_location) == before
+
+
+def test_an_interrupted_calibration_is_in_progress_not_a_result(fleet_store_location, built_fleet: Fleet,
+                                                                tmp_path):
+    """An interrupted (resumable) campaign is neither the robot's last calibration nor counted among
+    the finished ones that were not accepted."""
+    from hil.report.fleet import STATION_BARS, station_counts
+
+    with Store.open(fleet_store_location) as store:
+        before = fleet_data(store, now=T0 + 100 * DAY)
+        cid = store.create_campaign({"station": {"name": STATIONS[0]}, "robot": {"type": "ur5e"}},
+                                    {"type": "ur5e", "serial": STEADY}, now=T0 + 95 * DAY)
+        store.set_status(cid, "interrupted")
+        after = fleet_data(store, now=T0 + 100 * DAY)
+    was, now = (station_counts(d.calibrations, STATIONS) for d in (before, after))
+    accepted, other, going = STATION_BARS
+    assert list(now[other]) == list(was[other]) and list(now[accepted]) == list(was[accepted])
+    assert list(now[going]) == [1, 0] and not was[going].any()
+    html = render_fleet_html(after)
+    self_contained(html)
+    row = next(r for r in html.split('<section id="fleet">')[1].split("<tr>") if STEADY in r)
+    assert '<span class="ok">accepted</span>' in row and built_fleet.campaigns[STEADY][-1] in row
+    assert f"in progress: interrupted (resumable), {_local_day(T0 + 95 * DAY)} {cid}" in row
+    assert "<b>9</b>" in html and "accepted, 1 in progress" in html  # 9 finished, 1 in progress
+
+
+def _local_day(t: float) -> str:
+    import datetime as dt
+
+    return dt.datetime.fromtimestamp(t).strftime("%Y-%m-%d")
