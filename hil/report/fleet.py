@@ -192,7 +192,8 @@ def current_distribution(robots: Sequence[RobotSummary]) -> bytes | None:
         ax.plot(values, np.zeros_like(values), "|", color="#333", ms=12, mew=1.2, clip_on=False, zorder=5)
     median = float(np.median(values))
     ax.axvline(median, color="#333", ls="--", lw=1)
-    ax.set_title(f"{values.size} robots with a current model; median {median:.3f} mm (dashed)", fontsize=9)
+    ax.set_title(f"{values.size} robot{'' if values.size == 1 else 's'} with a current model; median "
+                 f"{median:.3f} mm (dashed)", fontsize=9)
     ax.set_xlabel("validation RMS after calibration of the current model (mm)", fontsize=9)
     ax.set_ylabel("robots", fontsize=9)
     ax.yaxis.set_major_locator(MaxNLocator(integer=True))
@@ -254,7 +255,7 @@ def stations_side_by_side(rows: Sequence[Calibration]) -> bytes | None:
     right.set_ylabel("calibrations", fontsize=9)
     right.set_title("calibrations per station", fontsize=9)
     right.yaxis.set_major_locator(MaxNLocator(integer=True))
-    right.set_ylim(0, max(1, int(total.max())) * 1.3)
+    right.set_ylim(0, max(1, int(total.max())) * 1.6)  # room for the legend's three bars
     right.legend(fontsize=8, frameon=False, loc="upper right")
     rotate = len(names) > 4 or max(len(n) for n in names) > 12
     for ax in (left, right):
@@ -277,7 +278,7 @@ def _result(r: RobotSummary) -> str:
     if r.in_progress is not None:
         state = r.in_progress_status or "?"
         going = (f'<br /><span class="id">in progress: {esc(state)}'
-                 f'{" (resumable)" if state in ("interrupted", "failed") else ""}, '
+                 f'{" (resumable)" if state in ("interrupted", "failed") else ""}<br />'
                  f'{esc(_date(r.in_progress_created))} {esc(r.in_progress)}</span>')
     if r.status is None:
         return ('<span class="muted">'

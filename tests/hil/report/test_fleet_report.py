@@ -159,7 +159,7 @@ def test_an_interrupted_calibration_is_in_progress_not_a_result(fleet_store_loca
     self_contained(html)
     row = next(r for r in html.split('<section id="fleet">')[1].split("<tr>") if STEADY in r)
     assert '<span class="ok">accepted</span>' in row and built_fleet.campaigns[STEADY][-1] in row
-    assert f"in progress: interrupted (resumable), {_local_day(T0 + 95 * DAY)} {cid}" in row
+    assert f"in progress: interrupted (resumable)<br />{_local_day(T0 + 95 * DAY)} {cid}" in row
     assert "<b>9</b>" in html and "accepted, 1 in progress" in html  # 9 finished, 1 in progress
 
 
