@@ -349,7 +349,7 @@ class EmsconTracker:
         client = self.client
         client.singles.clear()
         client.errors.clear()
-        self._start_measurement()
+        self._start_measurement(search=False)  # measure_with_retries re-locks, a bounded number of times
         deadline = time.monotonic() + self.config.timeout + self.config.measure_time_ms / 1000.0
         client.wait(lambda: bool(client.singles or client.errors), deadline, "the stationary measurement")
         if client.errors:
@@ -438,7 +438,7 @@ class EmsconTracker:
         except TrackerError:
             log.warning("could not return the tracker to stationary mode", exc_info=True)
 
-    def _start_measurement(self) -> None:
+    def _start_measurement(self, search: bool = True) -> None:
         """ES_C_StartMeasurement once the tracker can measure.
 
         ES_RS_MeasurementStatusNotReady says the tracker's measurement status (the one its
@@ -448,7 +448,8 @@ class EmsconTracker:
         bounded: a FindReflector at the last distance when the beam is not known to be locked (its
         own search timeout), then the MeasStatus_Ready event for up to ``ready_timeout``, then the
         start again. Only a search that finds nothing, or a status still not Ready at the deadline,
-        is `TargetLost`.
+        is `TargetLost`. Without ``search`` a beam not known to be locked is `TargetLost` at once, for
+        a caller that re-locks itself (`measure_point`: its bounded re-locks, not one more search).
         """
         client = self.client
         deadline = time.monotonic() + self.config.ready_timeout
@@ -459,6 +460,8 @@ class EmsconTracker:
                 self._judge(answer)
                 return
             if client.beam_locked is not True and not searched:
+                if not search:
+                    self._judge(answer)
                 searched = True
                 if not self.relock():
                     self._raise(Command.START_MEASUREMENT, answer.status,
