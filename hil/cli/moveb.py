@@ -19,7 +19,7 @@ from typing import Any
 
 from hil.arm.catalog import ROBOT_NAMES
 from hil.cli.support.options import SEED, SIM_SPEED, finite_float
-from hil.cli.support.output import print_json, wants_json, wrote
+from hil.cli.support.output import print_json, say, wants_json, wrote
 from hil.cli.support.station_options import add_tracker_protocol
 from hil.errors import InputError
 from hil.files.outputs import check_output
@@ -181,6 +181,10 @@ def _run_text(doc: dict[str, Any]) -> str:
         lines.append(f"  {doc['error']}")
     if doc.get("frame"):
         lines.append(f"  program frame   {doc['frame']}")
+    smr = doc.get("smr")
+    if smr:
+        x, y, z = smr["offset_mm"]
+        lines.append(f"  SMR offset      ({x:.1f}, {y:.1f}, {z:.1f}) mm, {smr['source']}")
     if doc.get("cycle_time_s") is not None:
         lines.append(f"  cycle time      {doc['cycle_time_s']:.3f} s")
     if doc.get("coverage") is not None:
@@ -209,12 +213,13 @@ def run_run(args: argparse.Namespace) -> int:
         check_output(args.plot, field="--plot", inputs=inputs, store=db, store_field=where,
                      outputs={"--out": args.out})
 
-    out = run_moveb(_request(args))
+    out = run_moveb(_request(args), say=say)
     doc = out.document or {}
     if out.exit_code == EXIT_FAULT:  # stdout may be a pipe nobody reads: the fault goes to stderr too
         print(f"hil: hardware fault: {doc.get('error')}", file=sys.stderr)
     if args.plot and out.run is not None:
         _plot(args.plot, args.program, out.run)
+        wrote(args.plot, "figure: commanded and measured path, deviation along it")
     if args.out:
         from hil.files.outputs import atomic_write_text
 

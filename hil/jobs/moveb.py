@@ -20,6 +20,7 @@ from typing import Any
 from hil.errors import InputError
 from hil.jobs.outcome import EXIT_FAILED, EXIT_FAULT, EXIT_OK, JobOutcome
 from hil.jobs.station import StationSource, station_setup, take_station
+from hil.jobs.words import Say, quiet
 
 FORMAT = "hil-moveb-run/1"
 #: Where the program runs: as written in the base frame, at the arm's current TCP pose, or in front of
@@ -80,9 +81,21 @@ def _fault(exc: BaseException) -> MovebOutcome:
         "status": "hardware fault", "error": f"{type(exc).__name__}: {exc}", "exit_code": EXIT_FAULT})
 
 
-def run_moveb(request: MovebRequest) -> MovebOutcome:
+def smr_words(smr_mm: Any, source: str) -> str:
+    """What a run without a model says of the SMR offset it assumes: a wrong one shows as path error."""
+    x, y, z = (float(v) for v in smr_mm)
+    return (f"no model: the SMR centre is assumed at ({x:.1f}, {y:.1f}, {z:.1f}) mm in the flange frame "
+            f"({source}); an error in it shows as path error wherever the tool turns")
+
+
+def run_moveb(request: MovebRequest, *, say: Say = quiet) -> MovebOutcome:
     """Plan, execute and measure the program (module docstring); the outcome's document is the
-    ``hil-moveb-run/1`` result (a hardware fault included: ``status`` says it, exit code 3)."""
+    ``hil-moveb-run/1`` result (a hardware fault included: ``status`` says it, exit code 3).
+
+    The result names the SMR offset the run used and where it came from (``smr``): the model's, else
+    the configuration's ``smr.offset`` (the simulated station's: its SMR holder's drawing). Without a
+    model `say` says it before the arm moves: the tracker measures the SMR, the path is commanded for
+    the assumed one, and the difference shows wherever the tool turns."""
     import numpy as np
 
     from hil.arm.geometry import Geometry
@@ -120,6 +133,9 @@ def run_moveb(request: MovebRequest) -> MovebOutcome:
         config, truth = setup.config, setup.truth
         agreed_robot([config_claim(config), *said])  # --config: its robot.type, before connecting
         geometry = model or Geometry.nominal(config.robot["type"], smr=config.smr["offset"])
+        smr_source = (f"the model {request.model}" if model is not None else
+                      "the simulated station's smr.offset, from its SMR holder's drawing" if request.sim
+                      else f"smr.offset of {request.config}")
         if model is not None and request.ik == "nominal":
             # the uncalibrated arm, measured in the model's base frame (its tracker pose and SMR):
             # the absolute path error calibration removes, not only its non-rigid part
@@ -133,6 +149,9 @@ def run_moveb(request: MovebRequest) -> MovebOutcome:
         except HARDWARE_ERRORS as exc:
             return _fault(exc)
         devices = taken.devices
+        smr_mm = [float(v) * 1e3 for v in geometry.smr]
+        if model is None:
+            say(smr_words(smr_mm, smr_source), "warning")
         try:
             if place == "current":
                 q = np.asarray(devices.robot.read_joints(1).q, dtype=float)
@@ -162,7 +181,8 @@ def run_moveb(request: MovebRequest) -> MovebOutcome:
                          "the measured part; keep the SMR facing the tracker with a clear line of sight")
     doc.update({"program": request.program, "frame": place, "continuity": request.continuity,
                 "model": request.model, "ik": "nominal" if model is None else request.ik,
-                "registered": result.registered, "cycle_time_s": result.cycle_time,
+                "registered": result.registered, "smr": {"offset_mm": smr_mm, "source": smr_source},
+                "cycle_time_s": result.cycle_time,
                 "lost_samples": result.lost,
                 "coverage": None if cov is None else cov.fraction,
                 "path_accuracy": result.accuracy, "path_accuracy_registered": result.accuracy_registered,

@@ -5,8 +5,10 @@ address is random, so a run is identified in the store by what it simulates (rob
 file's hash) rather than by where it listens: re-running the same command resumes the same campaign.
 
 The configuration says what an operator of that arm would know: the payload on its flange
-(``robot.payload``, the truth's) and how its base is mounted (``robot.mounting``, from the truth's
-gravity); never the truth's compliance or warm-up, which are what hil has to find out or cope with.
+(``robot.payload``, the truth's), how its base is mounted (``robot.mounting``, from the truth's
+gravity) and where the SMR sits on the flange (``smr.offset``, from the SMR holder's drawing:
+`operator_knowledge`); never the truth's compliance or warm-up, which are what hil has to find out or
+cope with.
 """
 
 from __future__ import annotations
@@ -66,14 +68,27 @@ def simulated_station(robot: str | None = None, truth: str | None = None, speed:
         sim.stop()
 
 
+#: How well an operator knows where the SMR centre sits on the flange (m): from the SMR holder's
+#: drawing, a machined plate dowelled to the ISO 9409-1 flange, whose un-toleranced dimensions hold
+#: ISO 2768-1 class m (±0.2 mm over 6-30 mm, ±0.3 mm over 30-120 mm). The simulated operator reads the
+#: truth's offset off such a drawing, to the nearest 0.5 mm: at most 0.25 mm an axis.
+SMR_DRAWING_STEP = 0.5e-3
+
+
 def operator_knowledge(truth: dict[str, Any]) -> dict[str, Any]:
-    """Config overrides for what the simulated arm's operator knows: its payload and its mounting.
+    """Config overrides for what the simulated arm's operator knows: its payload, its mounting and
+    where its SMR sits (`SMR_DRAWING_STEP`). The SMR offset matters most to a run without a model
+    (``hil moveb run``), which must assume it: an offset wrong by e mm shows as path error of about
+    e·sin(θ) where the tool turns by θ, which no rigid fit removes.
 
     The mounting is the roll and pitch that turn floor gravity into the truth's (yaw does not change
     gravity): with u = −g/|g| the base's world z axis seen in the base frame, u = (−sin p, cos p sin r,
     cos p cos r) for R = Ry(p)·Rx(r).
     """
     out: dict[str, Any] = {}
+    if truth.get("smr") is not None:
+        drawing = np.round(np.asarray(truth["smr"], dtype=float) / SMR_DRAWING_STEP) * SMR_DRAWING_STEP
+        out["smr__offset"] = [float(v) for v in drawing]
     if truth.get("payload") is not None:
         out["robot__payload"] = truth["payload"]
     gravity = truth.get("gravity")

@@ -63,14 +63,24 @@ Measurements: StartMeasurement while one runs answers ``ServerBusy``; not initia
   squares), the a-priori standard deviation of one reading from the `NoiseSpec` propagated to x, y, z,
   pointing errors 0, the set meteo values, status 0. Beam lost before the end: ``MEAS_STATUS_NOT_READY``
   then ``ErrorResponse(START_MEASUREMENT, NoStationaryResult)`` and no result.
-* continuous time: a sample every lTimeSeparation ms of simulated time from the start, each a
+* continuous time: a sample every lTimeSeparation ms of the tracker's clock from the start, each a
   `MeasValue` with status 0 and its time on the tracker's clock (lTime1 whole seconds, lTime2
-  microseconds since the server started), sent in `MultiMeasResult` packets of at most
-  `packets.MAX_SAMPLES` whenever the server flushes (about every 100 ms of wall time, as emScon's
-  TcpDataPacketRate of 3..10 packets/s), at the end of the stream, before a beam-loss event and
-  before the answer to StopMeasurement. No samples while the beam is lost; after a FindReflector
-  re-lock the stream resumes on the same time grid. It stops after lNumberOfPoints samples (0 =
-  until StopMeasurement). Regions are not simulated (bUseRegion=1 answers ``NotImplemented``).
+  microseconds since the server started; see Clocks), the SMR where it was at that time, sent in
+  `MultiMeasResult` packets of at most `packets.MAX_SAMPLES` whenever the server flushes (about
+  every 100 ms of wall time, as emScon's TcpDataPacketRate of 3..10 packets/s), at the end of the
+  stream, before a beam-loss event and before the answer to StopMeasurement. No samples while the
+  beam is lost; after a FindReflector re-lock the stream resumes on the same time grid. It stops
+  after lNumberOfPoints samples (0 = until StopMeasurement). Regions are not simulated (bUseRegion=1
+  answers ``NotImplemented``).
+
+Clocks: everything the instrument does runs on simulated seconds (``now``), except the tracker's own
+clock, which stamps continuous samples and spaces their grid. A real tracker's clock is a quartz of its
+own that runs at the rate of the host's (to tens of ppm) whatever the simulation's speed, and a client
+maps its stamps onto the host's clock by an offset alone; a fast-time station (simulated seconds 20
+times faster than the wall's) stamping samples in simulated seconds would make every sample's time
+wrong by up to 95 % of its age. So the server passes that clock (``clock``: seconds of the wall clock
+since it started) beside ``now``, and a continuous sample stamped τ carries the SMR's position at the
+simulated time that τ was (linear between the last two looks at the target, on both axes).
 
 StopMeasurement answers AllOK (also when idle) and ends the stream; a stationary measurement it
 interrupts sends no result. Changing units, measurement mode, mode parameters, coordinate system
@@ -223,12 +233,13 @@ class _Stationary:
 
 @dataclass
 class _Continuous:
-    start: float
-    separation: float  # seconds
+    start: float  # on the tracker's clock, as the grid and the stamps
+    separation: float  # seconds of the tracker's clock
     limit: int  # 0 = until stopped
     next_k: int = 0
     produced: int = 0
     pending: list[MeasValue] = field(default_factory=list)
+    begun: float = 0.0  # the simulated time it started (when ticks may advance it)
 
     def time_of(self, k: int) -> float:
         return self.start + k * self.separation
@@ -259,7 +270,10 @@ class EmsconInstrument:
         self.environment = (20.0, 1013.25, 50.0)
         self._measurement: _Stationary | _Continuous | None = None
         state = self.source.target()
-        self._anchors = ((now, state.position), (now, state.position))
+        self._now = self._clock_now = now  # the last simulated time and tracker clock seen
+        self._rate = 1.0  # simulated seconds per second of the tracker's clock, as last seen
+        # the last two looks at the target: (simulated time, tracker clock, position)
+        self._anchors = ((now, now, state.position), (now, now, state.position))
         self.locked = state.visible
         self._seen = state
         self.commands = 0
@@ -298,9 +312,12 @@ class EmsconInstrument:
         }
 
     # ------------------------------------------------------------------------------ public
-    def handle(self, packet: bytes, now: float) -> list[bytes]:
-        """Answer one client packet; the packets due at ``now`` (a `PacketError` if it does not decode)."""
+    def handle(self, packet: bytes, now: float, clock: float | None = None) -> list[bytes]:
+        """Answer one client packet; the packets due at ``now`` (a `PacketError` if it does not decode).
+
+        ``clock``: the tracker's own clock at ``now`` (module docstring, Clocks); ``now`` when None."""
         request = decode_request(packet)
+        self._clocks(now, clock)
         self.commands += 1
         t = max(now, self._busy_until)  # commands queue behind a running Initialize
         self._seen = self._observe(now, t)
@@ -329,14 +346,17 @@ class EmsconInstrument:
         self._after_answer(t, command, status)
         return self._drain(now)
 
-    def tick(self, now: float, flush: bool = True, watch: bool = False) -> list[bytes]:
+    def tick(self, now: float, flush: bool = True, watch: bool = False,
+             clock: float | None = None) -> list[bytes]:
         """Advance a running measurement to ``now``; the packets due.
 
         ``flush`` sends the continuous samples collected so far; ``watch`` looks at the target even
-        when no measurement runs (a real tracker notices a broken beam by itself).
+        when no measurement runs (a real tracker notices a broken beam by itself). ``clock``: the
+        tracker's own clock at ``now`` (module docstring, Clocks); ``now`` when None.
         """
+        self._clocks(now, clock)
         m = self._measurement
-        if m is not None and now >= m.start:
+        if m is not None and now >= (m.begun if isinstance(m, _Continuous) else m.start):
             self._observe(now, now)
             if isinstance(m, _Stationary):
                 self._advance_stationary(m, now)
@@ -365,6 +385,17 @@ class EmsconInstrument:
         return self._measurement is not None
 
     # ------------------------------------------------------------------------------ plumbing
+    def _clocks(self, now: float, clock: float | None) -> None:
+        """Note the simulated time and the tracker's clock at it (and the rate between the two)."""
+        clock = now if clock is None else clock
+        if now > self._now and clock > self._clock_now:
+            self._rate = (now - self._now) / (clock - self._clock_now)
+        self._now, self._clock_now = now, clock
+
+    def _clock_at(self, t: float) -> float:
+        """The tracker's clock at simulated time ``t`` (a command queued behind a busy one: later)."""
+        return self._clock_now + (t - self._now) / self._rate
+
     def _emit(self, t: float, packet: bytes) -> None:
         self._seq += 1
         heapq.heappush(self._outbox, (t, self._seq, packet))
@@ -386,10 +417,11 @@ class EmsconInstrument:
     def _observe(self, now: float, t: float) -> TargetState:
         """Look at the target; drop the lock (and say so, once) when it is not visible."""
         state = self.source.target()
+        clock = self._clock_at(now)
         if now > self._anchors[1][0]:
-            self._anchors = (self._anchors[1], (now, state.position))
+            self._anchors = (self._anchors[1], (now, clock, state.position))
         else:
-            self._anchors = (self._anchors[0], (self._anchors[1][0], state.position))
+            self._anchors = (self._anchors[0], (*self._anchors[1][:2], state.position))
         if self.locked and not state.visible:
             log.debug("beam lost: %s", state.reason)
             self._lose(t)
@@ -401,17 +433,20 @@ class EmsconInstrument:
             self._flush(self._measurement, t)
         self._emit(t, encode_status_change(SystemStatusChange.MEAS_STATUS_NOT_READY))
 
-    def _truths(self, times: list[float]) -> NDArray[np.float64]:
-        """True positions (n, 3) at ``times``: linear between the last two looks at the target."""
-        (t0, p0), (t1, p1) = self._anchors
+    def _truths(self, times: list[float], on_clock: bool = False) -> NDArray[np.float64]:
+        """True positions (n, 3) at ``times`` (simulated, or on the tracker's clock with ``on_clock``):
+        linear between the last two looks at the target."""
+        axis = 1 if on_clock else 0
+        (t0, p0), (t1, p1) = ((a[axis], a[2]) for a in self._anchors)
         p0, p1 = np.asarray(p0, dtype=float), np.asarray(p1, dtype=float)
         if t1 <= t0 or np.array_equal(p0, p1):
             return np.tile(p1, (len(times), 1))
         a = np.clip((np.asarray(times, dtype=float) - t0) / (t1 - t0), 0.0, 1.0)[:, None]
         return (1.0 - a) * p0 + a * p1
 
-    def _readings(self, times: list[float]) -> NDArray[np.float64]:
-        """Noisy tracker-frame readings (n, 3) in metres at ``times``, as the GeoCOM simulator measures."""
+    def _readings(self, times: list[float], on_clock: bool = False) -> NDArray[np.float64]:
+        """Noisy tracker-frame readings (n, 3) in metres at ``times`` (`_truths`), as the GeoCOM
+        simulator measures."""
         cfg = self.config
         t_set, p_set, _ = self.environment
         scale = 1.0 + 1e-6 * (atmospheric_ppm(t_set, p_set)
@@ -419,7 +454,7 @@ class EmsconInstrument:
         polar = np.empty((len(times), 3))
         previous: NDArray[np.float64] | None = None
         hz = v = d = 0.0
-        for i, p in enumerate(self._truths(times)):
+        for i, p in enumerate(self._truths(times, on_clock)):
             if previous is None or not np.array_equal(p, previous):  # a still target: convert once
                 hz, v, d = cartesian_to_polar(p)
                 previous = p
@@ -476,13 +511,14 @@ class EmsconInstrument:
     def _advance_continuous(self, m: _Continuous, now: float, flush: bool) -> None:
         due: list[int] = []
         k = m.next_k
-        while m.time_of(k) <= now + 1e-12 and not (m.limit and m.produced + len(due) >= m.limit):
+        upto = self._clock_at(now)
+        while m.time_of(k) <= upto + 1e-12 and not (m.limit and m.produced + len(due) >= m.limit):
             due.append(k)
             k += 1
         m.next_k = k
         if due and self.locked:
             times = [m.time_of(i) for i in due]
-            readings = (self._readings(times) * self._length_scale).tolist()
+            readings = (self._readings(times, on_clock=True) * self._length_scale).tolist()
             for t, (x, y, z) in zip(times, readings, strict=True):
                 t1, t2 = divmod(round(t * 1e6), 1_000_000)
                 m.pending.append(MeasValue(0, t1, t2, (x, y, z)))
@@ -649,12 +685,12 @@ class EmsconInstrument:
             self._measurement = _Stationary(t, t + duration, count)
         else:
             separation, points, _, _ = self.continuous_params
-            self._measurement = _Continuous(t, separation / 1000.0, points)
+            self._measurement = _Continuous(self._clock_at(t), separation / 1000.0, points, begun=t)
         return ()
 
     def _stop_measurement(self, t: float, params: tuple[Any, ...]) -> tuple[Any, ...]:
         m = self._measurement
-        if isinstance(m, _Continuous) and t >= m.start:
+        if isinstance(m, _Continuous) and t >= m.begun:
             self._advance_continuous(m, t, flush=True)
         return ()
 
@@ -677,7 +713,7 @@ class EmsconInstrument:
             self.locked = True
             m = self._measurement
             if isinstance(m, _Continuous):  # resume on the time grid, from now on
-                m.next_k = max(m.next_k, math.ceil((t - m.start) / m.separation - 1e-9))
+                m.next_k = max(m.next_k, math.ceil((self._clock_at(t) - m.start) / m.separation - 1e-9))
         return ()
 
 

@@ -3,9 +3,10 @@
 ``EmsconSimulator(source).start()`` listens on a loopback address (``.url``, ``tcp://127.0.0.1:<port>``).
 Time: the instrument runs on simulated seconds since `start()`, read from the ``clock`` given (the
 robot simulator's ``SimClock.now`` in the station, so both simulators agree) or, without one, from
-the wall clock times ``ServerConfig.time_scale``. A session thread reads commands, answers them, ticks
-the instrument every ``poll_s`` of wall time and lets continuous samples out every ``batch_s`` (emScon's
-TcpDataPacketRate: 3..10 packets/s).
+the wall clock times ``ServerConfig.time_scale``; the tracker's own clock, which stamps continuous
+samples, runs at the wall clock's rate either way (`tracker_clock`), as a real tracker's does. A
+session thread reads commands, answers them, ticks the instrument every ``poll_s`` of wall time and
+lets continuous samples out every ``batch_s`` (emScon's TcpDataPacketRate: 3..10 packets/s).
 
 A second connection while a client is served gets ``ErrorResponse(ES_C_Unknown,
 MultiConnectionsNotAllowed)`` and is closed; once the client leaves, the next one is accepted. A packet
@@ -92,6 +93,12 @@ class EmsconSimulator:
     def now(self) -> float:
         """Simulated seconds since the server started (the tracker's clock)."""
         return self._clock() - self._t0
+
+    def tracker_clock(self) -> float:
+        """The tracker's own clock (seconds since the server started): the wall clock's rate, also
+        when ``now`` runs in fast time, as a real tracker's quartz does (`mocks.emscon.instrument`,
+        Clocks)."""
+        return time.monotonic() - self._t0_wall
 
     @property
     def url(self) -> str:
@@ -238,7 +245,7 @@ class EmsconSimulator:
                     for packet in packets:
                         with self._lock:
                             try:
-                                out = self.instrument.handle(packet, self.now())
+                                out = self.instrument.handle(packet, self.now(), self.tracker_clock())
                             except PacketError as exc:
                                 log.info("emScon: closing after an undecodable packet: %s", exc)
                                 return
@@ -247,7 +254,8 @@ class EmsconSimulator:
                 if flush:
                     last_flush = time.monotonic()
                 with self._lock:
-                    out = self.instrument.tick(self.now(), flush=flush, watch=flush)
+                    out = self.instrument.tick(self.now(), flush=flush, watch=flush,
+                                               clock=self.tracker_clock())
                     bursts, self._garbage = self._garbage, 0
                 out += [self._garbage_bytes() for _ in range(bursts)]
                 self._send(conn, out)

@@ -14,9 +14,11 @@ sends the beam to the bird bath (ES_C_GoBirdBath), where an operator can catch i
 
 Points: `measure_point(samples)` runs ``samples`` stationary measurements (each one averaged inside
 the tracker over the measuring time; ES_C_StartMeasurement answers, then a SingleMeasResultT follows)
-and reports their mean and spread. A lost beam (ES_RS_MeasurementStatusNotReady, an
-ES_RS_NoStationaryResult error packet, or the MeasStatus_NotReady event) is `TargetLost`; the driver
-re-locks with ES_C_FindReflector at the last measured distance a bounded number of times first.
+and reports their mean and spread. ES_RS_MeasurementStatusNotReady to a start is "not ready yet"
+and is waited on, bounded, with a FindReflector when the beam is not known to be locked
+(`_start_measurement`); a beam lost while measuring (an ES_RS_NoStationaryResult error packet, or the
+MeasStatus_NotReady event) and a search that finds nothing are `TargetLost`; the driver re-locks with
+ES_C_FindReflector at the last measured distance a bounded number of times first.
 
 Paths: `stream` switches to continuous-time mode (ES_C_SetContinuousTimeModeParams: the sample
 separation in ms, no point limit), starts, yields the samples of each MultiMeasResultT and stops and
@@ -108,10 +110,11 @@ class EmsconConfig:
     link_retries: int = 1
     search_radius_m: float = 0.05  # ES_C_SetSearchParams
     search_timeout_ms: int = 5000
+    ready_timeout: float = 2.0  # wait this long for MeasStatus_Ready after a "not ready yet" answer
     bird_bath_on_loss: bool = False  # after a failed search, park the beam in the bird bath for an operator
 
     def __post_init__(self) -> None:
-        for name in ("timeout", "initialize_timeout"):
+        for name in ("timeout", "initialize_timeout", "ready_timeout"):
             if not 0 < getattr(self, name) < math.inf:
                 raise ValueError(f"{name} must be positive and finite")
         if not 0 <= self.warmup_timeout < math.inf:
@@ -346,8 +349,7 @@ class EmsconTracker:
         client = self.client
         client.singles.clear()
         client.errors.clear()
-        answer = client.request(Command.START_MEASUREMENT)
-        self._judge(answer)
+        self._start_measurement(search=False)  # measure_with_retries re-locks, a bounded number of times
         deadline = time.monotonic() + self.config.timeout + self.config.measure_time_ms / 1000.0
         client.wait(lambda: bool(client.singles or client.errors), deadline, "the stationary measurement")
         if client.errors:
@@ -374,7 +376,7 @@ class EmsconTracker:
         client.errors.clear()
         losses = client.beam_changes
         try:
-            self._judge(client.request(Command.START_MEASUREMENT))
+            self._start_measurement()
             t0 = clock()
             count = 0
             offset: float | None = None
@@ -435,6 +437,45 @@ class EmsconTracker:
             self.client.multis.clear()
         except TrackerError:
             log.warning("could not return the tracker to stationary mode", exc_info=True)
+
+    def _start_measurement(self, search: bool = True) -> None:
+        """ES_C_StartMeasurement once the tracker can measure.
+
+        ES_RS_MeasurementStatusNotReady says the tracker's measurement status (the one its
+        MeasStatus_NotReady / _Busy / _Ready events report, ES_C_API_Def.h) is not Ready *yet*: no
+        reflector locked — the SMR turned away while the arm moved to a path's start and faces the
+        tracker again — or one just caught whose distance is still being set. That is waited on,
+        bounded: a FindReflector at the last distance when the beam is not known to be locked (its
+        own search timeout), then the MeasStatus_Ready event for up to ``ready_timeout``, then the
+        start again. Only a search that finds nothing, or a status still not Ready at the deadline,
+        is `TargetLost`. Without ``search`` a beam not known to be locked is `TargetLost` at once, for
+        a caller that re-locks itself (`measure_point`: its bounded re-locks, not one more search).
+        """
+        client = self.client
+        deadline = time.monotonic() + self.config.ready_timeout
+        searched = False
+        while True:
+            answer = client.request(Command.START_MEASUREMENT)
+            if answer.ok or answer.status != ResultStatus.MeasurementStatusNotReady:
+                self._judge(answer)
+                return
+            if client.beam_locked is not True and not searched:
+                if not search:
+                    self._judge(answer)
+                searched = True
+                if not self.relock():
+                    self._raise(Command.START_MEASUREMENT, answer.status,
+                                "answer, and FindReflector found no reflector")
+                deadline = time.monotonic() + self.config.ready_timeout
+            while client.beam_locked is not True and time.monotonic() < deadline:
+                client.pump(min(deadline, time.monotonic() + 0.05))
+            if client.beam_locked is not True:
+                self._raise(Command.START_MEASUREMENT, answer.status,
+                            f"answer, still not ready after {self.config.ready_timeout:g} s")
+            if time.monotonic() >= deadline:
+                self._raise(Command.START_MEASUREMENT, answer.status,
+                            f"answer, still not ready after {self.config.ready_timeout:g} s")
+            time.sleep(0.01)  # Ready announced: ask again (bounded by the deadline above)
 
     # --- answers ---------------------------------------------------------------------------------
     def _check(self, command: Command, *params: object, timeout: float | None = None) -> Answer:

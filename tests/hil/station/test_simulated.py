@@ -1,4 +1,5 @@
-"""The simulated station's configuration says what its arm's operator knows: payload and mounting."""
+"""The simulated station's configuration says what its arm's operator knows: payload, mounting and
+where the SMR sits on the flange."""
 
 from __future__ import annotations
 
@@ -29,3 +30,14 @@ def test_the_mounting_turns_floor_gravity_into_the_truths() -> None:
         mounting = operator_knowledge({"gravity": g.tolist()})["robot__mounting"]
         np.testing.assert_allclose(gravity_of_mounting(mounting), g, atol=1e-12)
     assert operator_knowledge({}) == {}
+
+
+def test_the_config_knows_the_smr_offset_from_its_holders_drawing() -> None:
+    """Where the SMR sits on the flange is on the SMR holder's drawing: the configuration carries the
+    truth's offset to the drawing's 0.5 mm (a MOVEB run without a model assumed (0, 0, 45) mm while the
+    simulated SMR sat at (1.0, 36.0, 25.2) mm, and reported 9.5 mm of path error on a tilting seam)."""
+    known = operator_knowledge({"smr": [0.00094573, 0.0360371, 0.02576638]})["smr__offset"]
+    np.testing.assert_allclose(known, [0.001, 0.036, 0.026], atol=1e-12)
+    with simulated_station("ur5e", speed=10.0, seed=2) as (config, _identity, truth, _sim):
+        offset = np.array(config.values["smr"]["offset"])
+        assert np.abs(offset - np.array(truth["smr"])).max() <= 0.25e-3

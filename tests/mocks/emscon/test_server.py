@@ -26,6 +26,7 @@ from drivers.tracker.emscon.packets import (
 )
 from mocks.emscon import EmsconConfig, EmsconSimulator, ServerConfig
 from mocks.geocom import StaticTarget
+from mocks.geocom.target import TargetState
 
 C = Command
 OK = ResultStatus.AllOK
@@ -195,12 +196,52 @@ def test_continuous_stream_timestamps_batches_and_stop(client: Client) -> None:
     packets += [r for r in before if isinstance(r, MultiMeasResult)]
     samples = [s for p in packets for s in p.samples]
     times = np.array([s.seconds for s in samples])
-    # a wall second = 20 s simulated = 4000 samples, in packets about 0.1 s of wall time apart
-    assert 1500 < len(samples) <= 4000 * wall + 200 and 3 <= len(packets) <= wall / 0.1 + 3
+    # 5 ms on the tracker's clock, which runs at the wall's rate in fast time too: a wall second is
+    # 200 samples (not 20 simulated seconds' 4000), in packets about 0.1 s of wall time apart
+    assert 75 < len(samples) <= 200 * wall + 10 and 3 <= len(packets) <= wall / 0.1 + 3
     np.testing.assert_allclose(np.diff(times), 0.005, atol=2e-6)
     assert all(0 <= s.time2 < 1_000_000 for s in samples)
     assert np.max(np.abs(np.array([s.position for s in samples]) - TRUE)) < 1e-4
     assert not any(isinstance(r, MultiMeasResult) for r in client.receive(0.3))  # stopped
+
+
+class WallMovingTarget:
+    """An SMR moving at ``speed`` m/s along x in wall-clock time, as the simulated arm under servo
+    streaming does whatever the simulation's speed (its targets arrive at the wall clock's rate)."""
+
+    def __init__(self, speed: float) -> None:
+        self.speed = speed
+        self.t0 = time.monotonic()
+
+    def target(self) -> TargetState:
+        return TargetState(TRUE + np.array([self.speed * (time.monotonic() - self.t0), 0.0, 0.0]))
+
+
+def test_continuous_stamps_run_on_a_clock_at_the_wall_rate_in_fast_time() -> None:
+    """A tracker's quartz runs at the host clock's rate; in a fast-time simulation too, a continuous
+    sample's stamp says when (at that rate) the SMR was where the sample says: the position against
+    the stamp moves at the SMR's true speed, and the stamps span the wall time streamed. Stamps on
+    simulated seconds (20 times faster) made a 0.1 m/s SMR look 20 times slower."""
+    target = WallMovingTarget(0.1)
+    with EmsconSimulator(target, ServerConfig(time_scale=SCALE, instrument=EmsconConfig(seed=1))) as s:
+        c = Client(s.url)
+        try:
+            start_up(c, mode=1)
+            c.ok(C.SET_CONTINUOUS_TIME_MODE_PARAMS, 10, 0, 0, 0)
+            t0 = time.monotonic()
+            c.ok(C.START_MEASUREMENT)
+            packets = [r for r in c.receive(1.0) if isinstance(r, MultiMeasResult)]
+            before, _ = c.call(C.STOP_MEASUREMENT)
+            wall = time.monotonic() - t0
+        finally:
+            c.close()
+    samples = [v for p in packets + [r for r in before if isinstance(r, MultiMeasResult)] for v in p.samples]
+    times = np.array([v.seconds for v in samples])
+    x = np.array([v.position[0] for v in samples])
+    assert 40 < len(samples) <= 100 * wall + 10
+    assert times[-1] - times[0] <= wall + 0.02
+    slope, _ = np.polyfit(times, x, 1)
+    assert slope == pytest.approx(0.1, rel=0.05)
 
 
 def test_continuous_with_a_point_count_stops_by_itself(client: Client) -> None:

@@ -336,6 +336,30 @@ def test_a_beam_lost_mid_stream_yields_a_lost_sample_and_no_relock(target: Stati
     assert tracker.relock() and tracker.measure_point(1).samples == 1
 
 
+def test_a_stream_starts_after_the_beam_was_lost_while_the_arm_moved_to_its_start(
+        target: StaticTarget, sim: EmsconSimulator, tracker: EmsconTracker) -> None:
+    """The SMR turned away while the arm moved to the path's start (the tracker notices by itself and
+    drops the lock) and faces the tracker again there: ES_C_StartMeasurement answers
+    ES_RS_MeasurementStatusNotReady, the tracker is not ready *yet*. The stream searches, waits for
+    MeasStatus_Ready and streams; it was a TargetLost (a MOVEB run on emScon failed 3 of 3)."""
+    target.set(TRUTH, visible=False)
+    assert _wait(lambda: not sim.instrument.locked)
+    target.set(TRUTH, visible=True)
+    samples = list(tracker.stream(200.0, max_samples=40))
+    assert len(samples) == 40 and all(s.position is not None for s in samples)
+
+
+def test_a_stream_whose_smr_stays_hidden_is_a_lost_target_after_a_bounded_search(
+        target: StaticTarget, sim: EmsconSimulator) -> None:
+    with opened(sim.url, search_timeout_ms=2000) as tr:  # 2 simulated seconds: 0.1 s of wall time
+        target.set(TRUTH, visible=False)
+        assert _wait(lambda: not sim.instrument.locked)
+        t0 = time.monotonic()
+        with pytest.raises(TargetLost, match="found no reflector: ES_RS_MeasurementStatusNotReady"):
+            list(tr.stream(200.0, max_samples=10))
+        assert time.monotonic() - t0 < tr.config.timeout + tr.config.ready_timeout + 2.0
+
+
 def _wait(pred: object, timeout: float = 2.0) -> bool:
     end = time.monotonic() + timeout
     while time.monotonic() < end:
