@@ -21,6 +21,7 @@ from textual.widgets import Input
 from textual.worker import Worker, WorkerState
 
 from hil.campaign.events import PlanReady, RunStarted
+from hil.errors import EXIT_ABORTED, EXIT_FAILED, EXIT_FAULT, EXIT_INTERRUPTED, EXIT_OK
 from hil.tui.messages import (
     CampaignLoaded,
     EngineEvent,
@@ -40,7 +41,7 @@ from hil.tui.screens.pose_plan import PlanScreen
 from hil.tui.screens.results import ResultsScreen
 from hil.tui.screens.run import RunScreen
 from hil.tui.screens.station import StationScreen
-from hil.tui.session import STOP_WAIT, Session, TuiOptions
+from hil.tui.session import CLOSE_WAIT, STOP_WAIT, Session, TuiOptions
 from hil.tui.state import RunState
 from hil.tui.widgets.nav import SCREENS
 from hil.tui.words import plain
@@ -48,6 +49,12 @@ from hil.tui.words import plain
 __all__ = ["HilApp", "TuiOptions", "create_app"]
 
 POLL_SECONDS = 2.0  # station status refresh while idle
+#: The app's exit code by the run's final status: as ``hil calibrate``'s. A quit mid-run leaves the
+#: campaign interrupted (resumable), the code of an interruption, not of an abort (final).
+EXIT_CODES = {"accepted": EXIT_OK, "rejected": EXIT_FAILED, "aborted": EXIT_ABORTED,
+              "interrupted": EXIT_INTERRUPTED}
+#: The run's phases that compute without moving the arm (and cannot be cut short): a quit does not wait.
+COMPUTING = frozenset({"select", "identify", "validate"})
 
 
 class HilApp(App[int]):
@@ -174,9 +181,29 @@ class HilApp(App[int]):
             self._stop_dialog.stage(stage)
 
     def _stop_run_and_quit(self) -> None:
+        """The arm first (`Session.interrupt`: the engine sends its stop at once), then the closing."""
         self._stop_screen("stopping the arm; the campaign stays resumable...")
-        self._work(self.session.interrupt, "stop")
-        self.set_timer(STOP_WAIT, self._give_up_on_run)
+
+        def stop() -> None:
+            self.session.interrupt()
+            self.call_from_thread(self._arm_stopped)
+
+        self._work(stop, "stop")
+
+    def _arm_stopped(self) -> None:
+        """The stop is sent. A run that is measuring ends itself within `STOP_WAIT` (recording the
+        campaign interrupted); one in a computation (selection, identification) moves nothing and
+        cannot be cut short, so it is not waited for: the campaign is marked interrupted here."""
+        if self._closing_station:
+            return
+        computing = self.run_state.phase in COMPUTING
+        wait = 0.0 if computing else STOP_WAIT
+        self._stop_screen(f"the arm is stopped. Saving the campaign as interrupted (resumable) and "
+                          f"closing the station: the app closes within {wait + CLOSE_WAIT:.0f} s.")
+        if computing:
+            self._give_up_on_run()
+        else:
+            self.set_timer(wait, self._give_up_on_run)
 
     def _give_up_on_run(self) -> None:
         """The run did not end in time (busy computing): mark its campaign interrupted and close."""
@@ -188,7 +215,7 @@ class HilApp(App[int]):
             self.session.abandon_run()
             self.call_from_thread(self._close_station)
 
-        self.exit_code = 4
+        self.exit_code = EXIT_INTERRUPTED
         self._work(give_up, "stop")
 
     def _close_station(self) -> None:
@@ -196,8 +223,10 @@ class HilApp(App[int]):
         if self._closing_station:
             return
         self._closing_station = True
-        if self._stop_dialog is not None and self.session.run_active is False:
-            self._stop_dialog.stage("closing the station...")
+        if self._stop_dialog is not None:
+            saved = ("the arm is stopped and the campaign saved as interrupted (resumable); "
+                     if self.session.quitting else "")
+            self._stop_dialog.stage(f"{saved}closing the station (within {CLOSE_WAIT:.0f} s)...")
 
         def close() -> None:
             self.session.shutdown()
@@ -353,7 +382,7 @@ class HilApp(App[int]):
                 widget.refresh()
 
     def on_run_ended(self, message: RunEnded) -> None:
-        self.exit_code = {"accepted": 0, "rejected": 1, "aborted": 4, "interrupted": 4}.get(message.status, 3)
+        self.exit_code = EXIT_CODES.get(message.status, EXIT_FAULT)
         self.run_state.end(message.status, message.detail)
         self.views["run"].refresh_bindings()
         if message.quitting or self._stop_dialog is not None:
