@@ -53,6 +53,20 @@ POLL_SECONDS = 2.0  # station status refresh while idle
 #: campaign interrupted (resumable), the code of an interruption, not of an abort (final).
 EXIT_CODES = {"accepted": EXIT_OK, "rejected": EXIT_FAILED, "aborted": EXIT_ABORTED,
               "interrupted": EXIT_INTERRUPTED}
+#: The simulated station's faults in the command palette (--sim): (fault, title, its arguments, what it
+#: does, in the operator's words); the Help screen lists them too.
+SIMULATOR_FAULTS: tuple[tuple[str, str, dict[str, Any], str], ...] = (
+    ("protective_stop", "Simulator: protective stop", {}, "the arm stops as if it hit something"),
+    ("clear", "Simulator: clear the protective stop", {}, "unlocks it, as the teach pendant would"),
+    ("block_beam", "Simulator: block the tracker beam", {"on": True},
+     "something comes between the tracker and the SMR"),
+    ("block_beam", "Simulator: unblock the tracker beam", {"on": False},
+     "the line of sight is clear again; the tracker locks back on"),
+    ("emergency_stop", "Simulator: emergency stop", {}, "presses the emergency stop button"),
+    ("release_emergency_stop", "Simulator: release the emergency stop", {}, "twists the button out"),
+    ("power_on", "Simulator: power the arm on", {}, "as on the teach pendant, after an emergency stop"),
+    ("brake_release", "Simulator: release the brakes", {}, "as on the teach pendant, after power on"),
+)
 #: The run's phases that compute without moving the arm (and cannot be cut short): a quit does not wait.
 COMPUTING = frozenset({"select", "identify", "validate"})
 
@@ -79,6 +93,7 @@ class HilApp(App[int]):
         self.exit_code = 0
         self._stop_dialog: Stopping | None = None  # shown from the quit's "yes" until the app exits
         self._closing_station = False  # the station is being closed: the app exits when it is
+        self._latest_asked = False  # Results asked the store for its latest campaign (at start-up)
         self.views: dict[str, HilScreen] = {
             "station": StationScreen(), "plan": PlanScreen(), "run": RunScreen(),
             "results": ResultsScreen(), "history": HistoryScreen()}
@@ -128,7 +143,7 @@ class HilApp(App[int]):
 
     def action_help(self) -> None:
         if not isinstance(self.screen, HelpScreen):
-            self.push_screen(HelpScreen())
+            self.push_screen(HelpScreen(simulator=self.options.sim))
 
     def nav_status(self) -> Text:
         """The right-hand side of the navigation bar."""
@@ -249,12 +264,15 @@ class HilApp(App[int]):
         self._work(self.session.poll, "poll", exclusive=True)
 
     def on_station_changed(self, _: StationChanged) -> None:
-        self._refresh("station")
+        self._refresh("station", "plan")  # the Plan panel's constraints come with the station's config
         for widget in self.screen.query("NavBar"):
             widget.refresh()
         plan = self.views["plan"]
         if isinstance(plan, PlanScreen) and plan.is_mounted and not plan.query_one("#in-poses", Input).value:
             plan.load_fields()
+        if not self._latest_asked and self.session.store is not None:  # the store is open: Results
+            self._latest_asked = True  # shows its latest campaign until a run or History shows another
+            self._work(self.session.load_latest, "load")
 
     # --- plan ----------------------------------------------------------------------------------------
     def start_selection(self, values: dict[str, Any]) -> None:
@@ -406,8 +424,10 @@ class HilApp(App[int]):
     def on_campaign_loaded(self, message: CampaignLoaded) -> None:
         results = self.views["results"]
         assert isinstance(results, ResultsScreen)
+        if message.latest and results.record is not None:
+            return  # a run or History was quicker: theirs stays
         results.show(message.record)
-        if getattr(self, "_switch_to_results", True):
+        if not message.latest and getattr(self, "_switch_to_results", True):
             self.action_show("results")
 
     def start_history(self) -> None:
@@ -454,17 +474,8 @@ class HilApp(App[int]):
         yield SystemCommand("Abort run", "ends the campaign as aborted (Run, a)", self.action_abort)
         yield SystemCommand("Help", "every key (?)", self.action_help)
         if self.options.sim:
-            for fault, title, args in (
-                    ("protective_stop", "Simulator: protective stop", {}),
-                    ("clear", "Simulator: clear the protective stop", {}),
-                    ("block_beam", "Simulator: block the tracker beam", {"on": True}),
-                    ("block_beam", "Simulator: unblock the tracker beam", {"on": False}),
-                    ("emergency_stop", "Simulator: emergency stop", {}),
-                    ("release_emergency_stop", "Simulator: release the emergency stop", {}),
-                    ("power_on", "Simulator: power the arm on", {}),
-                    ("brake_release", "Simulator: release the brakes", {})):
-                yield SystemCommand(title, f"inject {fault} into the simulated station",
-                                    lambda f=fault, a=args: self._inject(f, a))
+            for fault, title, args, what in SIMULATOR_FAULTS:
+                yield SystemCommand(title, what, lambda f=fault, a=args: self._inject(f, a))
         yield from super().get_system_commands(screen)
 
 

@@ -629,6 +629,17 @@ class Session:
         except Exception as exc:
             self.notice(f"history: {_error(exc)}", "error")
 
+    def load_latest(self) -> None:
+        """The store's latest campaign, for the Results screen at start-up (none: nothing posted)."""
+        if self.store is None:
+            return
+        try:
+            rows = self.store.campaigns(1)
+            if rows:
+                self.post(CampaignLoaded(self.store.campaign(rows[0].id), latest=True))
+        except Exception as exc:
+            self.notice(f"the latest campaign: {_error(exc)}", "error")
+
     def load_campaign(self, campaign: str) -> None:
         if self.store is None:
             return
