@@ -21,6 +21,7 @@ from textual.widgets import Input
 from textual.worker import Worker, WorkerState
 
 from hil.campaign.events import PlanReady, RunStarted
+from hil.errors import EXIT_ABORTED, EXIT_FAILED, EXIT_FAULT, EXIT_INTERRUPTED, EXIT_OK
 from hil.tui.messages import (
     CampaignLoaded,
     EngineEvent,
@@ -40,7 +41,7 @@ from hil.tui.screens.pose_plan import PlanScreen
 from hil.tui.screens.results import ResultsScreen
 from hil.tui.screens.run import RunScreen
 from hil.tui.screens.station import StationScreen
-from hil.tui.session import STOP_WAIT, Session, TuiOptions
+from hil.tui.session import CLOSE_WAIT, STOP_WAIT, Session, TuiOptions
 from hil.tui.state import RunState
 from hil.tui.widgets.nav import SCREENS
 from hil.tui.words import plain
@@ -48,6 +49,26 @@ from hil.tui.words import plain
 __all__ = ["HilApp", "TuiOptions", "create_app"]
 
 POLL_SECONDS = 2.0  # station status refresh while idle
+#: The app's exit code by the run's final status: as ``hil calibrate``'s. A quit mid-run leaves the
+#: campaign interrupted (resumable), the code of an interruption, not of an abort (final).
+EXIT_CODES = {"accepted": EXIT_OK, "rejected": EXIT_FAILED, "aborted": EXIT_ABORTED,
+              "interrupted": EXIT_INTERRUPTED}
+#: The simulated station's faults in the command palette (--sim): (fault, title, its arguments, what it
+#: does, in the operator's words); the Help screen lists them too.
+SIMULATOR_FAULTS: tuple[tuple[str, str, dict[str, Any], str], ...] = (
+    ("protective_stop", "Simulator: protective stop", {}, "the arm stops as if it hit something"),
+    ("clear", "Simulator: clear the protective stop", {}, "unlocks it, as the teach pendant would"),
+    ("block_beam", "Simulator: block the tracker beam", {"on": True},
+     "something comes between the tracker and the SMR"),
+    ("block_beam", "Simulator: unblock the tracker beam", {"on": False},
+     "the line of sight is clear again; the tracker locks back on"),
+    ("emergency_stop", "Simulator: emergency stop", {}, "presses the emergency stop button"),
+    ("release_emergency_stop", "Simulator: release the emergency stop", {}, "twists the button out"),
+    ("power_on", "Simulator: power the arm on", {}, "as on the teach pendant, after an emergency stop"),
+    ("brake_release", "Simulator: release the brakes", {}, "as on the teach pendant, after power on"),
+)
+#: The run's phases that compute without moving the arm (and cannot be cut short): a quit does not wait.
+COMPUTING = frozenset({"select", "identify", "validate"})
 
 
 class HilApp(App[int]):
@@ -72,6 +93,7 @@ class HilApp(App[int]):
         self.exit_code = 0
         self._stop_dialog: Stopping | None = None  # shown from the quit's "yes" until the app exits
         self._closing_station = False  # the station is being closed: the app exits when it is
+        self._latest_asked = False  # Results asked the store for its latest campaign (at start-up)
         self.views: dict[str, HilScreen] = {
             "station": StationScreen(), "plan": PlanScreen(), "run": RunScreen(),
             "results": ResultsScreen(), "history": HistoryScreen()}
@@ -121,7 +143,7 @@ class HilApp(App[int]):
 
     def action_help(self) -> None:
         if not isinstance(self.screen, HelpScreen):
-            self.push_screen(HelpScreen())
+            self.push_screen(HelpScreen(simulator=self.options.sim))
 
     def nav_status(self) -> Text:
         """The right-hand side of the navigation bar."""
@@ -174,9 +196,29 @@ class HilApp(App[int]):
             self._stop_dialog.stage(stage)
 
     def _stop_run_and_quit(self) -> None:
+        """The arm first (`Session.interrupt`: the engine sends its stop at once), then the closing."""
         self._stop_screen("stopping the arm; the campaign stays resumable...")
-        self._work(self.session.interrupt, "stop")
-        self.set_timer(STOP_WAIT, self._give_up_on_run)
+
+        def stop() -> None:
+            self.session.interrupt()
+            self.call_from_thread(self._arm_stopped)
+
+        self._work(stop, "stop")
+
+    def _arm_stopped(self) -> None:
+        """The stop is sent. A run that is measuring ends itself within `STOP_WAIT` (recording the
+        campaign interrupted); one in a computation (selection, identification) moves nothing and
+        cannot be cut short, so it is not waited for: the campaign is marked interrupted here."""
+        if self._closing_station:
+            return
+        computing = self.run_state.phase in COMPUTING
+        wait = 0.0 if computing else STOP_WAIT
+        self._stop_screen(f"the arm is stopped. Saving the campaign as interrupted (resumable) and "
+                          f"closing the station: the app closes within {wait + CLOSE_WAIT:.0f} s.")
+        if computing:
+            self._give_up_on_run()
+        else:
+            self.set_timer(wait, self._give_up_on_run)
 
     def _give_up_on_run(self) -> None:
         """The run did not end in time (busy computing): mark its campaign interrupted and close."""
@@ -188,7 +230,7 @@ class HilApp(App[int]):
             self.session.abandon_run()
             self.call_from_thread(self._close_station)
 
-        self.exit_code = 4
+        self.exit_code = EXIT_INTERRUPTED
         self._work(give_up, "stop")
 
     def _close_station(self) -> None:
@@ -196,8 +238,10 @@ class HilApp(App[int]):
         if self._closing_station:
             return
         self._closing_station = True
-        if self._stop_dialog is not None and self.session.run_active is False:
-            self._stop_dialog.stage("closing the station...")
+        if self._stop_dialog is not None:
+            saved = ("the arm is stopped and the campaign saved as interrupted (resumable); "
+                     if self.session.quitting else "")
+            self._stop_dialog.stage(f"{saved}closing the station (within {CLOSE_WAIT:.0f} s)...")
 
         def close() -> None:
             self.session.shutdown()
@@ -220,12 +264,15 @@ class HilApp(App[int]):
         self._work(self.session.poll, "poll", exclusive=True)
 
     def on_station_changed(self, _: StationChanged) -> None:
-        self._refresh("station")
+        self._refresh("station", "plan")  # the Plan panel's constraints come with the station's config
         for widget in self.screen.query("NavBar"):
             widget.refresh()
         plan = self.views["plan"]
         if isinstance(plan, PlanScreen) and plan.is_mounted and not plan.query_one("#in-poses", Input).value:
             plan.load_fields()
+        if not self._latest_asked and self.session.store is not None:  # the store is open: Results
+            self._latest_asked = True  # shows its latest campaign until a run or History shows another
+            self._work(self.session.load_latest, "load")
 
     # --- plan ----------------------------------------------------------------------------------------
     def start_selection(self, values: dict[str, Any]) -> None:
@@ -353,7 +400,7 @@ class HilApp(App[int]):
                 widget.refresh()
 
     def on_run_ended(self, message: RunEnded) -> None:
-        self.exit_code = {"accepted": 0, "rejected": 1, "aborted": 4, "interrupted": 4}.get(message.status, 3)
+        self.exit_code = EXIT_CODES.get(message.status, EXIT_FAULT)
         self.run_state.end(message.status, message.detail)
         self.views["run"].refresh_bindings()
         if message.quitting or self._stop_dialog is not None:
@@ -377,8 +424,10 @@ class HilApp(App[int]):
     def on_campaign_loaded(self, message: CampaignLoaded) -> None:
         results = self.views["results"]
         assert isinstance(results, ResultsScreen)
+        if message.latest and results.record is not None:
+            return  # a run or History was quicker: theirs stays
         results.show(message.record)
-        if getattr(self, "_switch_to_results", True):
+        if not message.latest and getattr(self, "_switch_to_results", True):
             self.action_show("results")
 
     def start_history(self) -> None:
@@ -425,17 +474,8 @@ class HilApp(App[int]):
         yield SystemCommand("Abort run", "ends the campaign as aborted (Run, a)", self.action_abort)
         yield SystemCommand("Help", "every key (?)", self.action_help)
         if self.options.sim:
-            for fault, title, args in (
-                    ("protective_stop", "Simulator: protective stop", {}),
-                    ("clear", "Simulator: clear the protective stop", {}),
-                    ("block_beam", "Simulator: block the tracker beam", {"on": True}),
-                    ("block_beam", "Simulator: unblock the tracker beam", {"on": False}),
-                    ("emergency_stop", "Simulator: emergency stop", {}),
-                    ("release_emergency_stop", "Simulator: release the emergency stop", {}),
-                    ("power_on", "Simulator: power the arm on", {}),
-                    ("brake_release", "Simulator: release the brakes", {})):
-                yield SystemCommand(title, f"inject {fault} into the simulated station",
-                                    lambda f=fault, a=args: self._inject(f, a))
+            for fault, title, args, what in SIMULATOR_FAULTS:
+                yield SystemCommand(title, what, lambda f=fault, a=args: self._inject(f, a))
         yield from super().get_system_commands(screen)
 
 

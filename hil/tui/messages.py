@@ -67,6 +67,7 @@ class CampaignLoaded(Message):
     """A campaign record read from the store, for the Results screen."""
 
     record: Any  # hil.store.CampaignRecord
+    latest: bool = False  # the store's latest, at start-up: shown on Results, not switched to
 
 
 @dataclass

@@ -13,8 +13,9 @@ run from the terminal app is the same campaign as a headless one. The difference
   (from the app or ``hil calibrate``) continues it. An emergency stop ends the run the same way: the
   campaign waits for the operator to recover the arm and resume it;
 * the run works on a daemon thread of its own (`start_run`), not on one of Textual's workers, which
-  the process waits for on exit: a quit never waits for a run stuck in a long computation — after
-  `STOP_WAIT` seconds the app marks the campaign interrupted itself (`abandon_run`) and closes.
+  the process waits for on exit: a quit never waits for a run stuck in a long computation — the app
+  marks the campaign interrupted itself (`abandon_run`) and closes, at once during a computation,
+  after `STOP_WAIT` seconds if a measuring run has not ended by then.
 
 The simulated station's process is started and stopped by one long-lived thread (`_host_main`), which
 keeps it for the app's lifetime; the simulator watches its parent's pid and exits when this process
@@ -61,7 +62,8 @@ log = logging.getLogger(__name__)
 
 INTERRUPTED = "interrupted"  # not in hil.store.FINISHED: resumable
 QUIT_REASON = "quit from the terminal app mid-run; resumable"
-STOP_WAIT = 8.0  # seconds a quit waits for the run to stop before marking the campaign itself
+STOP_WAIT = 8.0  # seconds a quit waits for a measuring run to stop before marking the campaign itself
+CLOSE_WAIT = 15.0  # seconds closing the station may take at most (devices, store, simulator)
 
 #: Export actions of the Results screen: key -> (file suffix, hil.calibration.exports format or "html").
 EXPORTS: dict[str, tuple[str, str]] = {
@@ -191,7 +193,7 @@ class Session:
         finally:
             self.ready.set()
 
-    def shutdown(self, timeout: float = 15.0) -> None:
+    def shutdown(self, timeout: float = CLOSE_WAIT) -> None:
         """Close the devices, the store and the simulator (waits for the station thread)."""
         self._stop.set()
         if self._host is not None:
@@ -626,6 +628,17 @@ class Session:
             self.post(HistoryLoaded(self.store.campaigns(limit), self.store.location))
         except Exception as exc:
             self.notice(f"history: {_error(exc)}", "error")
+
+    def load_latest(self) -> None:
+        """The store's latest campaign, for the Results screen at start-up (none: nothing posted)."""
+        if self.store is None:
+            return
+        try:
+            rows = self.store.campaigns(1)
+            if rows:
+                self.post(CampaignLoaded(self.store.campaign(rows[0].id), latest=True))
+        except Exception as exc:
+            self.notice(f"the latest campaign: {_error(exc)}", "error")
 
     def load_campaign(self, campaign: str) -> None:
         if self.store is None:

@@ -30,14 +30,27 @@ HELP += ("A run pauses by itself when the beam is lost, on a protective stop or 
          "emergency stop does: the next start (here or hil calibrate) continues it.")
 
 
+#: With --sim, the faults the command palette injects into the simulated station.
+SIMULATOR_HELP = ("[b]Simulator[/b] (ctrl+p) block the tracker beam, unblock it; protective stop,\n"
+                  "          clear it; emergency stop, release it; power on; release brakes\n\n")
+
+
 class HelpScreen(ModalScreen[None]):
-    """Every key of the app on one page."""
+    """Every key of the app on one page (and the simulator's faults, with --sim)."""
 
     BINDINGS: ClassVar[list[BindingType]] = [Binding("escape,question_mark,q", "dismiss", "Close")]
 
+    def __init__(self, simulator: bool = False) -> None:
+        super().__init__()
+        self.simulator = simulator
+
     def compose(self) -> ComposeResult:
+        text = HELP
+        if self.simulator:
+            head, _, tail = HELP.partition("\n\n")
+            text = f"{head}\n{SIMULATOR_HELP}{tail}"
         with Vertical(id="dialog", classes="help"):
-            yield Static(HELP, id="help-text")
+            yield Static(text, id="help-text")
             yield Static("[dim]esc or ? closes[/dim]")
 
 

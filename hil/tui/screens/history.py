@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import time
-from typing import ClassVar
+from typing import Any, ClassVar
 
 from rich.text import Text
 from textual.app import ComposeResult
@@ -13,8 +13,16 @@ from textual.widgets import DataTable, Footer, Static
 from hil.tui.screens.base import HilScreen
 from hil.tui.widgets.nav import NavBar
 
-_STATUS_STYLE = {"accepted": "green", "rejected": "red", "failed": "red", "aborted": "yellow",
-                 "interrupted": "yellow"}
+_STATUS_STYLE = {"accepted": "green", "verified": "green", "rejected": "red", "failed": "red",
+                 "aborted": "yellow", "interrupted": "yellow"}
+
+
+def status_words(summary: Any) -> str:
+    """A campaign's status as ``hil history`` says it: a finished verification (ISO 9283 pose test, no
+    model) is ``verified``, not ``accepted``."""
+    if getattr(summary, "kind", "calibration") == "verification" and summary.status == "accepted":
+        return "verified"
+    return str(summary.status)
 
 
 class HistoryScreen(HilScreen):
@@ -68,8 +76,9 @@ class HistoryScreen(HilScreen):
         table.clear()
         for c in self.rows:
             rms = "-" if c.validation_rms is None else f"{c.validation_rms * 1e3:.4f}"
+            status = status_words(c)
             table.add_row(Text(c.id), Text(time.strftime("%m-%d %H:%M", time.localtime(c.updated))),
-                          Text(c.robot), Text(c.status, style=_STATUS_STYLE.get(c.status, "")),
+                          Text(c.robot), Text(status, style=_STATUS_STYLE.get(status, "")),
                           Text(f"{c.measured}/{c.planned}"), Text(rms, justify="right"))
         if self.rows:
             table.move_cursor(row=min(max(cursor, 0), len(self.rows) - 1))

@@ -19,6 +19,7 @@ from textual.containers import Horizontal
 from textual.widgets import DataTable, Footer, Static
 
 from hil.calibration.validation_precision import describe_precision
+from hil.store.records import VERIFICATION
 from hil.tui.screens.base import HilScreen
 from hil.tui.widgets.nav import NavBar
 
@@ -86,12 +87,25 @@ class ResultsScreen(HilScreen):
         if self.record is None or record.id != self.record.id:
             self.written, self.export_error = [], ""
         self.record = record
+        self.refresh_bindings()  # the export keys it offers (`check_action`)
         self.refresh_view()
 
     def exported(self, paths: list[str], error: str) -> None:
         self.written = list(dict.fromkeys([*self.written, *paths]))
         self.export_error = error
         self.refresh_view()
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        """Offer an export key only when there is that to export: a model (model, URDF, ROS YAML, all),
+        a finished calibration's result (the HTML report)."""
+        if action != "export":
+            return True
+        rec = self.record
+        if rec is None:
+            return False
+        if parameters and parameters[0] == "report":
+            return bool(rec.result) and "model" in rec.result
+        return rec.model is not None
 
     def action_export(self, kind: str) -> None:
         if self.record is None:
@@ -116,6 +130,11 @@ class ResultsScreen(HilScreen):
             self._exports()
             return
         s = rec.summary
+        if s.kind == VERIFICATION:
+            self._verification(rec)
+            return
+        self.query_one("#stats").border_title = "Validation, held-out poses, mm"
+        self.query_one("#fit").border_title = "Fit"
         accept = ((rec.config or {}).get("campaign") or {}).get("acceptance")
         v = rec.validation
         if v is not None:
@@ -145,6 +164,41 @@ class ResultsScreen(HilScreen):
         model = rec.model
         for p in (model.doc.get("parameters") or []) if model is not None else []:
             table.add_row(*parameter_cells(p))
+        self._exports()
+
+    def _verification(self, rec: Any) -> None:
+        """An ISO 9283 pose test (``hil verify``): its figures, not a calibration's (it has no model)."""
+        s = rec.summary
+        doc = rec.result if isinstance(rec.result, dict) else {}
+        results = doc.get("results") if isinstance(doc.get("results"), dict) else {}
+        word = "VERIFIED" if s.status == "accepted" else s.status.upper()
+        style = "bold white on green" if s.status == "accepted" else "bold reverse"
+        line = Text.assemble((f" {word} ", style), "  ", (rec.id, "bold"),
+                             f"  verification (ISO 9283 pose test), {s.measured}/{s.planned} poses")
+        if rec.detail:
+            line.append(f"\n{rec.detail}", "dim")
+        self.query_one("#verdict", Static).update(line)
+        stats = self.query_one("#stats", Static)
+        stats.border_title = "ISO 9283 worst pose, mm"
+        grid = Table("", "AP", "RP", "AP mean", box=None, padding=(0, 1), show_edge=False)
+        for mode, r in results.items():
+            r = r if isinstance(r, dict) else {}
+            grid.add_row(str(mode)[:7] if len(results) > 2 else str(mode), _mm(r.get("AP_max")),
+                         _mm(r.get("RP_max")), _mm(r.get("AP_mean")))
+        if not results:
+            grid.add_row("no figures yet", "", "", "")
+        stats.update(grid)
+        fit = self.query_one("#fit", Static)
+        fit.border_title = "Test"
+        info = Table.grid(padding=(0, 1))
+        info.add_column(style="dim")
+        info.add_column()
+        info.add_row("cycles", str(doc.get("cycles", "-")))
+        model = doc.get("model")
+        info.add_row("model", str(model.get("source", "-")) if isinstance(model, dict) else str(model or "-"))
+        info.add_row("status", s.status)
+        fit.update(info)
+        self.query_one("#params", DataTable).clear()
         self._exports()
 
     @staticmethod

@@ -21,10 +21,11 @@ from hil.tui.widgets.nav import NavBar
 from hil.tui.widgets.plot import PlotView, Series
 from hil.tui.words import kind_words
 
-#: The table's columns, most telling first: at 80 columns everything up to "measured" is in view and
-#: the joint targets (the widest, the least read) scroll in from the right.
+#: The table's columns, most telling first; at 80 columns every one is in view, whole. The joint targets
+#: (six angles, the widest and least read) are on the line below the table, for the pose under the
+#: cursor (`pose_line`): the current one unless the operator moves the cursor (up/down).
 COLUMNS = (("#", "idx"), ("role", "role"), ("status", "status"), ("dev [mm]", "dev"), ("Δq [mdeg]", "dq"),
-           ("measured [mm]", "p"), ("target q [deg]", "target"))
+           ("measured [mm]", "p"))
 _ROLE = {"bootstrap": "boot", "calibration": "cal", "validation": "val"}
 _STATUS = {"moving": ("moving", "yellow"), "reached": ("measuring", "yellow"), "skipped": ("skipped", "red"),
            "measured": ("measured", "")}
@@ -64,7 +65,6 @@ def row_cells(row: PoseRow, acceptance: float | None = None,
               outlier: float | None = None) -> tuple[Text, ...]:
     """The cells of one pose, in `COLUMNS` order (deviations coloured by `deviation_style`)."""
     status, style = _STATUS.get(row.status, (row.status, ""))
-    target = " ".join(f"{math.degrees(v):4.0f}" for v in row.target) if row.target else "-"
     dq = "-"
     if row.q is not None and row.target:
         dq = f"{1e3 * math.degrees(float(np.max(np.abs(np.subtract(row.q, row.target))))):.1f}"
@@ -73,7 +73,21 @@ def row_cells(row: PoseRow, acceptance: float | None = None,
     return (Text(str(row.index), justify="right"), Text(_ROLE.get(row.role, row.role)),
             Text(status, style=style),
             Text(dev, style=deviation_style(row.deviation, acceptance, outlier), justify="right"),
-            Text(dq, justify="right"), Text(p), Text(target, style="dim"))
+            Text(dq, justify="right"), Text(p))
+
+
+def pose_line(row: PoseRow | None) -> Text:
+    """The pose under the table's cursor: its joint targets, whole, and why it was skipped."""
+    if row is None:
+        return Text()
+    role = _ROLE.get(row.role, row.role)
+    text = Text.assemble((f"pose {row.index} {role}", "bold"), "  ")
+    if row.target:
+        text.append("target q [deg] ", "dim")
+        text.append(" ".join(f"{math.degrees(v):.1f}" for v in row.target))
+    if row.status == "skipped" and row.reason:
+        text.append(("  " if row.target else "") + f"skipped: {row.reason}", "red")
+    return text
 
 
 def pose_counts(run: RunState) -> tuple[int, int, int, int]:
@@ -103,6 +117,7 @@ class RunScreen(HilScreen):
     def __init__(self) -> None:
         super().__init__()
         self._shown: dict[str, tuple[tuple[str, str], ...]] = {}  # row key -> cells (text, style) as shown
+        self._followed = -1  # the row the cursor was put on to follow the current pose
 
     def compose(self) -> ComposeResult:
         yield NavBar("run")
@@ -115,8 +130,9 @@ class RunScreen(HilScreen):
         yield drift
         table: DataTable[Text] = DataTable(id="poses", cursor_type="row", zebra_stripes=True)
         for label, key in COLUMNS:
-            table.add_column(Text(label), key=key)  # Text: "[deg]" is not markup
+            table.add_column(Text(label), key=key)  # Text: "[mm]" is not markup
         yield table
+        yield Static(id="pose-line")
         yield PlotView("deviation from nominal [mm]", y_floor=0.0, x_label="point", integer_x=True,
                        id="errors")
         yield Footer()
@@ -153,15 +169,13 @@ class RunScreen(HilScreen):
         return float(self.hil.session.run_config().campaign["acceptance"])
 
     def _errors(self, run: RunState) -> None:
-        """The deviations in measuring order, the acceptance threshold and the outliers (as the table)."""
+        """The deviations from the nominal model in measuring order, and the outliers (as the table).
+
+        No acceptance line: the acceptance threshold judges the validation RMS after calibration, not
+        how far the uncalibrated arm is from nominal (millimetres, which calibration removes)."""
         d = 1e3 * np.asarray(run.deviations, float)
         x = np.arange(1, len(d) + 1, dtype=float)
         series = [Series(x, d, style="yellow", line=True, label="deviation")]
-        acceptance = self._acceptance()
-        if acceptance is not None and len(d):
-            ends = np.array([x[0], x[-1]])
-            series.append(Series(ends, np.full(2, 1e3 * acceptance), style="green", line=True,
-                                 label=f"acceptance {1e3 * acceptance:g}"))
         level = outlier_level(list(run.deviations))
         if level is not None and np.any(d > 1e3 * level):
             out = d > 1e3 * level
@@ -242,11 +256,14 @@ class RunScreen(HilScreen):
             step.update(Text(f"finished: {detail}" if detail else "finished",
                              style=_state_style(run.finished.status)))
             return
-        current = next((r for r in reversed(run.rows.values()) if r.status in ("moving", "reached")), None)
+        current = _current(run)
         phase = f"{run.phase}: {run.detail}" if run.detail else run.phase
         if current is not None and run.phase in ("measure", "bootstrap"):
             verb = "moving to" if current.status == "moving" else "measuring"
             phase = f"{run.phase}: {verb} pose {current.index} ({current.role})"
+        elif run.phase == "measure":  # between poses (a pause, the reference pose): the count now,
+            # not the one the phase started with
+            phase = f"measure: {measured} of {planned} poses measured"
         step.update(Text(phase or "starting...", style="italic"))
 
     def _table(self, run: RunState) -> None:
@@ -255,7 +272,8 @@ class RunScreen(HilScreen):
         if any(key not in keys for key in self._shown):  # a new run: start over
             table.clear()
             self._shown = {}
-        at_end = table.cursor_row >= table.row_count - 1
+        # the cursor follows the current pose unless the operator moved it elsewhere
+        follow = table.cursor_row >= table.row_count - 1 or table.cursor_row == self._followed
         acceptance, outlier = self._acceptance(), outlier_level(list(run.deviations))
         for (role, index), row in run.rows.items():
             key = f"{role}:{index}"
@@ -269,8 +287,35 @@ class RunScreen(HilScreen):
             else:
                 table.add_row(*cells, key=key)
             self._shown[key] = plain
-        if at_end and table.row_count:
-            table.move_cursor(row=table.row_count - 1)
+        current = _current(run)
+        if run.suspended is not None or follow:  # a suspended pose is always brought into view
+            row_index = (table.get_row_index(f"{current.role}:{current.index}") if current is not None
+                         else table.row_count - 1)
+            if row_index >= 0:
+                self._followed = row_index
+                table.move_cursor(row=row_index, animate=False)
+                # again once laid out: a banner that appears with the suspension shrinks the table
+                self.call_after_refresh(table.move_cursor, row=row_index, animate=False)
+        self._pose_line(run)
+
+    def _pose_line(self, run: RunState) -> None:
+        table: DataTable[Text] = self.query_one("#poses", DataTable)
+        row = None
+        if table.row_count and 0 <= table.cursor_row < table.row_count:
+            key = table.coordinate_to_cell_key((table.cursor_row, 0)).row_key.value
+            role, _, index = str(key).partition(":")
+            row = run.rows.get((role, int(index)))
+        self.query_one("#pose-line", Static).update(pose_line(row))
+
+    def on_data_table_row_highlighted(self, event: DataTable.RowHighlighted) -> None:
+        """The operator moved the cursor: the pose line shows that pose."""
+        if self.is_mounted:
+            self._pose_line(self.hil.run_state)
+
+
+def _current(run: RunState) -> PoseRow | None:
+    """The pose the run is on (moving to it or measuring it), if any."""
+    return next((r for r in reversed(run.rows.values()) if r.status in ("moving", "reached")), None)
 
 
 def _state_style(state: str) -> str:

@@ -21,7 +21,7 @@ _PHASE_STYLE = {"connected": "bold green", "in run": "bold cyan", "connecting": 
 def _kv(rows: list[tuple[str, str, str]]) -> Table:
     table = Table.grid(padding=(0, 1))
     table.add_column(style="dim", no_wrap=True, min_width=8)
-    table.add_column(no_wrap=True, overflow="ellipsis")
+    table.add_column(overflow="fold")  # wrapped, never cut (a long tracker URL, a robot's fault)
     for key, value, style in rows:
         table.add_row(key, Text(value or "-", style=style))
     return table

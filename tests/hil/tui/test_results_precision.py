@@ -17,7 +17,9 @@ PRECISION = {"design": "clustered", "poses": 4, "clusters": 2, "rms_standard_err
 def test_the_results_screen_shows_the_standard_error_under_the_verdict() -> None:
     async def scenario() -> str:
         app = offline_app()
-        shown = dataclasses.replace(record(), result={"validation": {"precision": PRECISION}})
+        finished = record()
+        result = {**finished.result, "validation": {"precision": PRECISION}}  # a finished campaign's
+        shown = dataclasses.replace(finished, result=result)
         async with app.run_test(size=SIZE) as pilot:
             app.post_message(CampaignLoaded(shown))
             await pilot.pause()

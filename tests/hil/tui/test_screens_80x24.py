@@ -326,3 +326,122 @@ def test_a_state_change_before_a_screens_widgets_are_mounted_waits_for_its_mount
             station.redraw()
             app._refresh()  # what a station event does
     asyncio.run(scenario())
+
+
+# --- second round, items 8, 9, 12 and 13: the Run screen at 80x24 -------------------------------------
+def _pose_events(count: int, target: list[float]) -> list:
+    """A run of `count` calibration poses, all measured but the last, which is on its way."""
+    from hil.campaign.events import PhaseChanged, PoseStarted, StateChanged
+
+    cid = "20231114-221320-abcd"
+    ev = [RunStarted(campaign=cid, t=T0, robot="ur5e", station="simulated station", poses=count),
+          StateChanged(campaign=cid, t=T0, state="running", previous="idle"),
+          PhaseChanged(campaign=cid, t=T0 + 1, phase="measure",
+                       detail=f"{count} of {count} poses to measure")]
+    for k in range(count):
+        ev.append(PoseStarted(campaign=cid, t=T0 + 2 + k, index=k, role="calibration", target=target))
+        if k < count - 1:
+            ev.append(PointMeasured(campaign=cid, t=T0 + 2.5 + k, index=k, role="calibration",
+                                    q=target, p=[-1.2345, 2.3456, 0.1234], p_spread=[0] * 3, samples=5,
+                                    deviation=3.5e-3, target=target))
+    return ev
+
+
+async def _run_screen(events):
+    app = offline_app()
+    pilot_cm = app.run_test(size=SIZE)
+    pilot = await pilot_cm.__aenter__()
+    for event in events:
+        app.post_message(EngineEvent(event))
+    await pilot.pause()
+    await pilot.press("3")
+    await pilot.pause()
+    await pilot.pause()
+    return app, pilot, pilot_cm
+
+
+def test_run_screen_shows_every_number_of_the_current_pose_uncut():
+    target = [np.radians(v) for v in (-164.2, -117.5, 107.0, -35.4, 90.0, 175.3)]
+
+    async def scenario():
+        app, _, cm = await _run_screen(_pose_events(9, target))
+        try:
+            text = screen_text(app)
+            for value in ("-164.2", "-117.5", "107.0", "-35.4", "90.0", "175.3"):
+                assert value in text, text  # the target of the pose under the cursor, whole
+            measured = [line for line in text.splitlines() if "measured" in line and "cal" in line]
+            assert measured and all("-1234.5 2345.6 123.4" in line for line in measured), text
+            assert all(len(line) <= 80 for line in text.splitlines())
+        finally:
+            await cm.__aexit__(None, None, None)
+
+    asyncio.run(scenario())
+
+
+def test_run_screen_lines_are_whole_and_indented_and_the_deviation_plot_has_no_acceptance_line():
+    from hil.campaign.events import PhaseChanged, WarmupProgress
+
+    cid = "20231114-221320-abcd"
+    events = [*_pose_events(3, [0.1] * 6),
+              PhaseChanged(campaign=cid, t=T0 + 20, phase="warmup",
+                           detail="cycling 14 calibration poses; the reference pose is measured every "
+                                  "120 s until the arm is warm")]
+    events.append(WarmupProgress(campaign=cid, t=T0 + 30, elapsed=300.0, moved=7.6e-6, interval=134.0,
+                                 limit=10e-6, max_time=3600.0))
+
+    async def scenario():
+        app, _, cm = await _run_screen(events)
+        try:
+            text = screen_text(app)
+            lines = text.splitlines()
+            assert all(not line or line.startswith(" ") for line in lines), text  # nothing at column 0
+            joined = " ".join(" ".join(lines).split())
+            assert "measured every 120 s until the arm is warm" in joined, text
+            assert "acceptance" not in text  # the deviation from nominal is not what acceptance judges
+        finally:
+            await cm.__aexit__(None, None, None)
+
+    asyncio.run(scenario())
+
+
+def test_a_suspended_pose_stays_in_view():
+    from hil.campaign.events import StateChanged, Suspended
+
+    cid = "20231114-221320-abcd"
+    events = [*_pose_events(33, [0.1] * 6),
+              StateChanged(campaign=cid, t=T0 + 50, state="suspended", previous="running"),
+              Suspended(campaign=cid, t=T0 + 50, kind="beam_lost",
+                        message="clear the line of sight between the tracker and the SMR; the run resumes "
+                                "by itself", timeout=60.0, on_timeout="skip")]
+
+    async def scenario():
+        app, pilot, cm = await _run_screen(events)
+        try:
+            await pilot.pause(0.2)
+            rows = [line.split() for line in screen_text(app).splitlines()]
+            assert ["32", "cal", "moving"] in [r[:3] for r in rows], screen_text(app)
+        finally:
+            await cm.__aexit__(None, None, None)
+
+    asyncio.run(scenario())
+
+
+def test_the_step_line_counts_the_poses_measured_so_far_not_the_phase_start():
+    from hil.campaign.events import StateChanged
+
+    cid = "20231114-221320-abcd"
+    events = [*_pose_events(6, [0.1] * 6)[:-1],  # pose 5 started, then:
+              StateChanged(campaign=cid, t=T0 + 40, state="paused", previous="running"),
+              StateChanged(campaign=cid, t=T0 + 41, state="running", previous="paused")]
+    events = [e for e in events if getattr(e, "index", None) != 5]  # all started poses measured
+
+    async def scenario():
+        app, _, cm = await _run_screen(events)
+        try:
+            text = screen_text(app)
+            assert "6 of 6 poses to measure" not in text, text
+            assert "5 of 6" in text, text
+        finally:
+            await cm.__aexit__(None, None, None)
+
+    asyncio.run(scenario())

@@ -67,7 +67,8 @@ def record() -> CampaignRecord:
              "after": {"count": 4, "mean": 8.9e-6, "rms": 9.6e-6, "max": 1.35e-5}}
     return CampaignRecord(summary=summary(), robot=RobotIdentity("ur5e", "20235500001"),
                           config=default_config().as_dict(), config_hash="0" * 64, plan=None, detail="",
-                          result=None, software="0.1.0", models=[ModelRecord(1, T0, 3e-6, doc)],
+                          result={"model": doc}, software="0.1.0",  # finished: it has a report
+                          models=[ModelRecord(1, T0, 3e-6, doc)],
                           validations=[ValidationRecord(1, T0, 1, stats["before"], stats["after"], True,
                                                         None)])
 

@@ -13,7 +13,9 @@ import pytest
 
 from drivers.robot.errors import EmergencyStop
 from hil.campaign.events import PointMeasured, Resumed, Suspended
+from hil.errors import EXIT_INTERRUPTED
 from hil.tui.screens.dialogs import Confirm, Stopping
+from hil.tui.session import STOP_WAIT
 from hil.tui.state import StationState
 from tests.hil.tui.conftest import press_to_close, screen_text, wait_for
 from tests.hil.tui.fake_station import FakeStation
@@ -55,8 +57,11 @@ def test_every_way_out_mid_run_asks_once_stops_the_arm_now_and_leaves_the_campai
             assert time.monotonic() - t0 < 5
             assert shown and all(on_screen for _, on_screen in shown), shown
             assert "stopping the arm" in shown[0][0]
+            # once the stop is sent, the screen says so, and how long the closing may take
+            stopped = [stage for stage, _ in shown if "the arm is stopped" in stage]
+            assert stopped and "closes within" in stopped[0], shown
         assert st.arm.stopped_while_holding  # the move in progress was stopped, not finished
-        assert app.return_value == 4
+        assert app.return_value == EXIT_INTERRUPTED  # resumable: as `hil calibrate` interrupted
         campaign = app.run_state.campaign
         assert app.run_state.finished.status == "interrupted"
         record = st.store.campaign(campaign)
@@ -82,7 +87,6 @@ def test_a_quit_while_the_run_is_busy_computing_still_closes_within_seconds(tmp_
         return choose
 
     monkeypatch.setattr("hil.campaign.chooser.campaign_chooser", slow_chooser)
-    monkeypatch.setattr("hil.tui.app.STOP_WAIT", 0.5)
 
     async def scenario():
         app = st.app(seed=1)
@@ -91,8 +95,12 @@ def test_a_quit_while_the_run_is_busy_computing_still_closes_within_seconds(tmp_
             await wait_for(pilot, busy.is_set, 30, "the selection under way")
             await pilot.press("q")
             await wait_for(pilot, lambda: isinstance(app.screen, Confirm), 5, "the question")
+            t0 = time.monotonic()
             await press_to_close(pilot, "y", 10)
-        assert app.return_value == 4
+            # nothing moves during a computation: no waiting for it to end (STOP_WAIT is for a run
+            # that is measuring), only the closing of the station
+            assert time.monotonic() - t0 < STOP_WAIT / 2
+        assert app.return_value == EXIT_INTERRUPTED
         return app.session.run_campaign
 
     try:
