@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from alembic import command as alembic_command
 from sqlalchemy import event
 
 from hil.campaign.events import (
@@ -45,7 +46,6 @@ from hil.store import (
     default_path,
     resolve_path,
 )
-from hil.store import migrate as migrate_mod
 from tests.hil.store.legacy_schema import make_legacy
 from tests.hil.store.raw import Raw, raw
 
@@ -134,13 +134,13 @@ def test_upgrade_from_v1(db):
 def test_failed_upgrade_leaves_the_old_version(db, monkeypatch):
     _v1_database(db)
 
-    real = migrate_mod.command.upgrade
+    real = alembic_command.upgrade
 
     def broken(cfg, revision):
         real(cfg, "0002")  # the next revision ran...
         raise RuntimeError("upgrade failed half-way")  # ...and then something failed
 
-    monkeypatch.setattr(migrate_mod.command, "upgrade", broken)
+    monkeypatch.setattr(alembic_command, "upgrade", broken)
     with pytest.raises(RuntimeError):
         Store.open(db)
     conn = sqlite3.connect(db)
