@@ -12,14 +12,17 @@ import os
 import sys
 import time
 from collections import Counter
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from hil.cli.support.export_formats import FORMATS, format_of
 from hil.cli.support.options import bounded_int
 from hil.cli.support.output import mm, print_json
 from hil.errors import InputError
 from hil.jobs.outcome import EXIT_OK
-from hil.store import INTERRUPTED, ROLES, CampaignRecord, CampaignSummary, Store, resolve_location
+from hil.store.records import INTERRUPTED, ROLES
+
+if TYPE_CHECKING:  # the Store (SQLAlchemy) is imported when a command opens it, not for its --help
+    from hil.store import CampaignRecord, CampaignSummary, Store
 
 
 def _add_db_options(p: argparse.ArgumentParser) -> None:
@@ -61,6 +64,8 @@ def _open(args: argparse.Namespace) -> Store:
         from hil.station.config import load_config
 
         config = load_config(args.config)
+    from hil.store import Store, resolve_location
+
     return Store.open(resolve_location(args.db, config), readonly=True)  # read-only media too
 
 

@@ -15,9 +15,22 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from hil.store.database import is_postgres
-
 ENV_VAR = "HIL_DB"
+
+#: URL schemes that name a PostgreSQL server (the ``+driver`` forms SQLAlchemy users write included).
+POSTGRES_SCHEMES = ("postgresql", "postgres", "postgresql+psycopg")
+
+
+def is_url(text: str | os.PathLike[str]) -> bool:
+    """True for a database URL (``postgresql://…``, ``sqlite:///…``), False for a file path."""
+    scheme = str(text).split("://", 1)[0] if "://" in str(text) else ""
+    return scheme.lower() in (*POSTGRES_SCHEMES, "sqlite")
+
+
+def is_postgres(text: str | os.PathLike[str]) -> bool:
+    return is_url(text) and str(text).split("://", 1)[0].lower() in POSTGRES_SCHEMES
+
+
 
 
 def default_path(env: Mapping[str, str] | None = None) -> Path:

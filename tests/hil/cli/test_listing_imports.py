@@ -5,6 +5,7 @@ by ``bench/cli_startup.py``)."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -50,13 +51,13 @@ def db(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
-def loaded_by(argv: list[str]) -> tuple[int, list[str]]:
-    """(exit code, the modules of `HEAVY` loaded) after `hil ARGV` in a fresh interpreter."""
+def loaded_by(argv: list[str], modules: tuple[str, ...] = HEAVY) -> tuple[int, list[str]]:
+    """(exit code, the `modules` loaded) after `hil ARGV` in a fresh interpreter."""
     code = ("import contextlib, io, sys\n"
             "from hil.cli import main\n"
             "with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):\n"
             f"    rc = main({argv!r})\n"
-            f"print(rc, ','.join(m for m in {HEAVY!r} if m in sys.modules))")
+            f"print(rc, ','.join(m for m in {modules!r} if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     rc, _, loaded = out.stdout.strip().partition(" ")
@@ -74,3 +75,32 @@ def test_the_export_formats_a_listing_offers_are_the_exporters(db: Path) -> None
     assert {export_formats.format_of(f"m{s}") for s in (".urdf", ".XML", ".yaml", ".yml", ".json", "")} \
         == set(FORMATS)
     assert export_formats.format_of("m.urdf", "json") == "json"
+
+
+def test_identify_imports_neither_the_store_nor_scipy_stats(tmp_path: Path) -> None:
+    """``hil identify`` checks its output against the store's path without opening (or importing) the
+    store, and its outlier test's F distribution comes from scipy.special: scipy.stats' import was a
+    second of its start-up."""
+    import numpy as np
+
+    from hil.calibration.measurements import write_measurements
+    from hil.calibration.synthetic import Noise, measure, random_configurations, random_truth
+
+    rng = np.random.default_rng(3)
+    q, p = measure(random_truth("ur5e", rng), random_configurations("ur5e", 40, rng), Noise(), rng)
+    write_measurements(tmp_path / "m.csv", q, p)
+    code = ("import contextlib, io, sys\n"
+            "from hil.cli import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):\n"
+            f"    rc = main(['identify', '--robot', 'ur5e', '--measurements', {str(tmp_path / 'm.csv')!r}, "
+            f"'--out', {str(tmp_path / 'model.json')!r}])\n"
+            "print(rc, ','.join(m for m in ('sqlalchemy', 'scipy.stats') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300,
+                         env={**os.environ, "XDG_DATA_HOME": str(tmp_path / "data")})
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["0"], out.stdout
+    assert (tmp_path / "model.json").exists()
+
+
+def test_a_listings_help_does_not_import_the_store() -> None:
+    assert loaded_by(["history", "--help"], (*HEAVY, "sqlalchemy")) == (0, [])
