@@ -144,8 +144,12 @@ def run_verification(request: VerificationRequest, *, subscribers: Sequence[Call
             taken.store.on_outage = outage_words(say)
 
             def started(campaign: str, resumed: bool) -> None:
-                say(f"{'resuming' if resumed else 'starting'} verification {campaign}"
-                    f"{'' if model else ' (no --model: uncompensated only)'}", "information")
+                # the run's start itself ("starting verification …", its visits, cycles and modes) is
+                # the front-end's to show from RunStarted (the CLI's progress): said here too, it was
+                # printed twice; what only the job knows is why the test is uncompensated only
+                if model is None:
+                    say(f"verification {campaign}: no --model, so the uncompensated test only (the "
+                        "controller's own model)", "information")
 
             try:
                 done = verify(taken.store, taken.devices, config, setup.identity, taken.robot.as_dict(),
