@@ -79,7 +79,7 @@ def _check_outputs(args: argparse.Namespace) -> None:
         return
     from hil.cli.support.output_paths import campaign_store
 
-    db, where = campaign_store(args.db, args.config)
+    db, where = campaign_store(args.db, args.config, sim=args.sim)
     inputs = {"--config": args.config, "--truth": args.truth, "--model": args.model}
     if args.out:
         check_output(args.out, field="--out", inputs=inputs, store=db, store_field=where)

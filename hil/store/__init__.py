@@ -18,7 +18,14 @@ May import: `hil.campaign.events` (what it records), `hil.campaign.ids` (a campa
 
 from typing import TYPE_CHECKING
 
-from hil.store.paths import ENV_VAR, default_path, is_postgres, resolve_location, resolve_path
+from hil.store.paths import (
+    ENV_VAR,
+    default_path,
+    is_postgres,
+    resolve_location,
+    resolve_path,
+    simulated_path,
+)
 
 if TYPE_CHECKING:
     from hil.campaign.ids import new_campaign_id
@@ -91,4 +98,5 @@ __all__ = [
     "new_campaign_id",
     "resolve_location",
     "resolve_path",
+    "simulated_path",
 ]

@@ -44,7 +44,9 @@ from hil.store import (
     UnknownCampaignError,
     config_hash,
     default_path,
+    resolve_location,
     resolve_path,
+    simulated_path,
 )
 from tests.hil.store.legacy_schema import make_legacy
 from tests.hil.store.raw import Raw, raw
@@ -200,6 +202,16 @@ def test_paths(tmp_path, monkeypatch):
     monkeypatch.setenv("HIL_DB", str(tmp_path / "env.db"))
     with Store.open() as s:
         assert s.path == tmp_path / "env.db"
+
+
+def test_a_simulated_stations_store_is_its_own_whatever_hil_db_says():
+    """--sim: the simulated stations' store beside the default, never $HIL_DB's (the plant's history);
+    --db names any store, that one included."""
+    env = {"XDG_DATA_HOME": "/d", "HIL_DB": "postgresql://hil@plant/hil"}
+    assert resolve_location(None, None, env, simulated=True) == Path("/d/hil/sim.db") == simulated_path(env)
+    assert resolve_location(None, None, env) == "postgresql://hil@plant/hil"
+    assert resolve_location("/mine.db", None, env, simulated=True) == Path("/mine.db")
+    assert resolve_location("postgresql://hil@plant/hil", None, env, simulated=True) == env["HIL_DB"]
 
 
 # --- recording and reading back -----------------------------------------------------------------
