@@ -32,7 +32,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--candidates", type=CANDIDATES, help="selector candidates (overrides the config)")
     p.add_argument("--accept", type=rms_threshold, metavar="METRES",
                    help=f"validation RMS threshold, {RMS_THRESHOLD_HELP}; overrides the config")
-    p.add_argument("--db", metavar="PATH", help="campaign database (default: config, $HIL_DB, data dir)")
+    p.add_argument("--db", metavar="PATH",
+                   help="campaign database (default: config, $HIL_DB, data dir; with --sim: the simulated "
+                        "stations' sim.db in the data dir, never $HIL_DB)")
     p.add_argument("--out-dir", default=".", metavar="DIR", help="where exports go (default: here)")
     add_tracker_protocol(p)
     p.set_defaults(func=run, cycles=1)

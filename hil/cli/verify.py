@@ -50,7 +50,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "test; without it, the uncompensated test only")
     p.add_argument("--cycles", type=VERIFY_CYCLES, default=None,
                    help="cycles of P1, P5, P4, P3, P2 (default: verify.cycles, 30)")
-    p.add_argument("--db", metavar="PATH", help="campaign database (default: config, $HIL_DB, data dir)")
+    p.add_argument("--db", metavar="PATH",
+                   help="campaign database (default: config, $HIL_DB, data dir; with --sim: the simulated "
+                        "stations' sim.db in the data dir, never $HIL_DB)")
     again = p.add_mutually_exclusive_group()
     again.add_argument("--resume", action="store_true", help="continue the last unfinished verification")
     again.add_argument("--new", action="store_true",

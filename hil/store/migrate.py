@@ -14,8 +14,8 @@ store newer than it knows instead of writing into tables it does not understand.
 
 Alembic is imported only to change a schema (or to ask the migrations on disk for their head): opening
 a store that is already at `HEAD` — every read, and every write after the first — reads the revision
-from ``alembic_version`` itself, so a listing does not pay Alembic's import (about a third of
-``hil history``'s start before it; bench/cli_startup.py).
+from ``alembic_version`` itself, so a listing does not pay Alembic's import (a fifth of
+``hil history``'s start-up before; bench/cli_startup.py).
 """
 
 from __future__ import annotations
