@@ -27,6 +27,8 @@ simulated seconds with a cold laser).
 
 from __future__ import annotations
 
+import hashlib
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -174,7 +176,22 @@ def start_station(robot: str = "ur5e", truth: str | None = None, speed: float = 
     from mocks.ur.testing import start_sim
 
     spec = station_spec(truth, seed, acceptance_angle, baudrate, rigid)
-    # each seed is another arm of a fleet (its own truth), so its own serial number, as a plant's robots
-    # have: seed 1 is 20235500001, the controller's default
-    serial = f"202355{seed % 100_000:05d}"
+    serial = simulated_serial(robot, seed, truth, rigid)
     return start_sim(SimConfig(robot=robot, speed=speed, seed=seed, serial=serial), services=[spec])
+
+
+def simulated_serial(robot: str, seed: int, truth: str | None = None, rigid: bool = False) -> str:
+    """The serial number a simulated arm's controller reports (dashboard ``get serial number``).
+
+    Each simulated arm is a robot of its own, as each arm of a plant is: the serial is derived from
+    what makes the arm — its type, the seed of its random truth, noise and start pose, the truth file's
+    bytes (sha256) and whether it is rigid — so the same simulated arm always has the same serial (a
+    re-run resumes its campaign, which is found by serial) and two different ones never share one (on
+    one machine they would refuse each other as one robot driven twice; the seed alone once made every
+    UR5e and UR10e of seed 1 serial 20235500001). 11 digits like a UR serial (ur_rtde refuses a serial
+    that is not a number), beginning ``9999`` where a real one has its year of manufacture, so a
+    simulated robot is recognisable in any listing; the other 7 digits come from the arm's hash.
+    """
+    truth_sha = hashlib.sha256(Path(truth).read_bytes()).hexdigest() if truth else ""
+    key = f"{robot.lower()}|seed={int(seed)}|truth={truth_sha}|rigid={bool(rigid)}"
+    return f"9999{int(hashlib.sha256(key.encode()).hexdigest(), 16) % 10**7:07d}"

@@ -12,11 +12,12 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
-from typing import Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
-import numpy as np
+if TYPE_CHECKING:  # numpy only in annotations but one method's: a store reader imports this module
+    import numpy as np
 
-from drivers.robot.kinematics_info import KinematicsInfo
+    from drivers.robot.kinematics_info import KinematicsInfo
 
 TWO_PI = 2 * math.pi
 
@@ -107,6 +108,8 @@ class KeepInZone:
     upper: tuple[float, float, float]
 
     def contains(self, p: np.ndarray) -> bool:
+        import numpy as np
+
         return bool(np.all(np.asarray(p[:3]) >= self.lower) and np.all(np.asarray(p[:3]) <= self.upper))
 
 

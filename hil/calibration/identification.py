@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg
-import scipy.stats
+import scipy.special
 from scipy.spatial.transform import Rotation
 
 from hil.arm.geometry import Geometry
@@ -253,7 +253,9 @@ def _worst_outlier(Jp: np.ndarray, res: np.ndarray, inv: np.ndarray) -> tuple[in
     ssr = float(np.sum(res * res))
     s2_loo = np.maximum(ssr - qi, 1e-300) / (dof - 3)
     F = qi / (3.0 * s2_loo)
-    pvals = scipy.stats.f.sf(F, 3, dof - 3)
+    # the F distribution's survival function, scipy.stats.f.sf(F, 3, dof - 3) without scipy.stats:
+    # importing it took a second of `hil identify`'s start-up (bench/cli_startup.py)
+    pvals = scipy.special.fdtrc(3, dof - 3, F)
     k = int(np.argmin(pvals))
     return k, float(pvals[k])
 

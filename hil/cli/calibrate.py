@@ -107,7 +107,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-warmup", action="store_true",
                    help="measure without warming the arm up first (it has been running already); "
                         "overrides warmup.enabled, the drift watch stays as configured")
-    p.add_argument("--db", metavar="PATH", help="campaign database (default: config, $HIL_DB, data dir)")
+    p.add_argument("--db", metavar="PATH",
+                   help="campaign database (default: config, $HIL_DB, data dir; with --sim: the simulated "
+                        "stations' sim.db in the data dir, never $HIL_DB)")
     again = p.add_mutually_exclusive_group()
     again.add_argument("--resume", action="store_true", help="continue the last unfinished campaign")
     again.add_argument("--new", action="store_true", help="start a new campaign even if one is unfinished")
@@ -192,7 +194,7 @@ def _check_outputs(args: argparse.Namespace) -> None:
         return
     from hil.cli.support.output_paths import campaign_store
 
-    db, where = campaign_store(args.db, args.config)
+    db, where = campaign_store(args.db, args.config, sim=args.sim)
     inputs = {"--config": args.config, "--truth": args.truth}
     if args.out:
         check_output(args.out, field="--out", inputs=inputs, store=db, store_field=where)

@@ -12,21 +12,17 @@ import os
 import sys
 import time
 from collections import Counter
-from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from hil.calibration.exports import FORMATS, export
+from hil.cli.support.export_formats import FORMATS, format_of
 from hil.cli.support.options import bounded_int
 from hil.cli.support.output import mm, print_json
 from hil.errors import InputError
-from hil.files.outputs import atomic_write_text, check_output
 from hil.jobs.outcome import EXIT_OK
-from hil.station.config import load_config
-from hil.store import INTERRUPTED, ROLES, CampaignRecord, CampaignSummary, Store, resolve_location
+from hil.store.records import INTERRUPTED, ROLES
 
-# File suffixes that say which export format is meant when --format is not given.
-_SUFFIX_FORMATS = {".urdf": "urdf", ".xml": "urdf", ".yaml": "ros-kinematics", ".yml": "ros-kinematics",
-                   ".json": "json"}
+if TYPE_CHECKING:  # the Store (SQLAlchemy) is imported when a command opens it, not for its --help
+    from hil.store import CampaignRecord, CampaignSummary, Store
 
 
 def _add_db_options(p: argparse.ArgumentParser) -> None:
@@ -63,7 +59,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _open(args: argparse.Namespace) -> Store:
-    config = load_config(args.config) if args.config else None
+    config = None
+    if args.config:
+        from hil.station.config import load_config
+
+        config = load_config(args.config)
+    from hil.store import Store, resolve_location
+
     return Store.open(resolve_location(args.db, config), readonly=True)  # read-only media too
 
 
@@ -119,24 +121,24 @@ def run_history(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _export_format(args: argparse.Namespace) -> str:
-    if args.format:
-        return str(args.format)
-    return _SUFFIX_FORMATS.get(Path(args.export_model).suffix.lower(), "json")
-
-
 def _export(args: argparse.Namespace, store: Store, rec: CampaignRecord) -> list[str]:
-    from hil.arm.geometry import Geometry  # pinocchio: only when exporting
+    """Write what ``--export-model`` and ``--export-measurements`` ask for: their libraries (numpy,
+    pinocchio) are imported only then, so that showing a campaign does not pay for them."""
+    written: list[str] = []
+    if not (args.export_model or args.export_measurements):
+        return written
+    from hil.arm.geometry import Geometry
+    from hil.calibration.exports import export
     from hil.calibration.measurements import write_measurements
+    from hil.files.outputs import atomic_write_text
 
-    written = []
     if args.export_model:
         if rec.model is None:
             raise InputError(f"campaign {rec.id}: has no calibrated model yet (status {rec.summary.status})")
         source = f"campaign {rec.id}"
         geometry = Geometry.from_dict(rec.model.doc, source=source)
-        atomic_write_text(args.export_model, export(rec.model.doc, geometry, _export_format(args),
-                                                    source=source))
+        fmt = format_of(args.export_model, args.format)
+        atomic_write_text(args.export_model, export(rec.model.doc, geometry, fmt, source=source))
         written.append(args.export_model)
     if args.export_measurements:
         q, p = store.arrays(rec.id, args.role)
@@ -203,6 +205,7 @@ def _check_exports(args: argparse.Namespace) -> None:
     if not (args.export_model or args.export_measurements):
         return
     from hil.cli.support.output_paths import campaign_store
+    from hil.files.outputs import check_output
 
     db, where = campaign_store(args.db, args.config)
     inputs = {"--config": args.config}

@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from hil.calibration.exports import FORMATS
+from hil.cli.support.export_formats import FORMATS
 from hil.cli.support.options import finite_float
 from hil.cli.support.output import print_json
 from hil.cli.support.store_options import add_store_options, clip, mm, open_store, when, where

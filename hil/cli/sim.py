@@ -31,6 +31,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         if action.dest == "robot":  # unset unless given: the truth's robot then, not a silent UR5e
             action.default = None
             action.help = "robot model (default: the --truth's, else ur5e; with --truth both must agree)"
+        if action.dest == "serial":  # unset unless given: the simulated arm's own (mocks.station)
+            action.default = None
+            action.help = ("serial number the simulated controller reports (default: the simulated arm's "
+                           "own, from --robot, --seed and --truth; the same arm always has the same)")
         if action.dest in _RANGES:  # checked by argparse: one line and exit 2, before anything serves
             action.type = _RANGES[action.dest]
     # RS-232 rates, as tracker.baudrate in the station configuration
@@ -70,7 +74,6 @@ _RANGES = {
 
 
 _MISSING_HELP = {
-    "serial": "serial number the simulated controller reports",
     "seed": "random seed of the hidden truth (when no --truth), the tracker's noise and the start pose",
 }
 
@@ -79,7 +82,7 @@ def _summary(out: dict[str, Any]) -> str:
     robot, tracker = out["robot"], out["tracker"]
     return "\n".join([
         f"robot    {robot['address']}  (RTDE {robot['rtde_port']}, dashboard {robot['dashboard_port']}, "
-        f"script {robot['script_port']}, faults {robot['control_port']})",
+        f"script {robot['script_port']}, faults {robot['control_port']}), serial {robot['serial']}",
         f"tracker  GeoCOM {tracker['url']}  (pty {tracker['pty']})",
         f"tracker  emScon {tracker['emscon_url']}",
         "serving until Ctrl-C (--json prints this and the hidden truth as JSON)",
@@ -100,6 +103,10 @@ def run(args: argparse.Namespace) -> int:
         claims.append(Claim(geometry.robot, f"the truth {args.truth} is for {geometry.robot}"))
     # the controller simulates (and reports) the arm the truth describes: a disagreement is refused
     args.robot = agreed_robot(claims, default="ur5e")
+    if args.serial is None:  # each simulated arm its own robot, as `hil calibrate --sim`'s (mocks.station)
+        from mocks.station import simulated_serial
+
+        args.serial = simulated_serial(args.robot, args.seed, args.truth)
     try:
         config = config_from_args(args)
     except ValueError as exc:
@@ -107,8 +114,8 @@ def run(args: argparse.Namespace) -> int:
 
     def ready(info: dict[str, Any]) -> None:
         station = info["services"][0]
-        out = {"robot": {k: info[k] for k in ("address", "rtde_port", "dashboard_port", "script_port",
-                                              "control_port")},
+        out = {"robot": {**{k: info[k] for k in ("address", "rtde_port", "dashboard_port", "script_port",
+                                                 "control_port")}, "serial": args.serial},
                "tracker": {"url": station["tracker_url"], "pty": station["tracker_pty"],
                            "emscon_url": station["tracker_emscon_url"]},
                "truth": station["truth"]}

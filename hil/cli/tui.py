@@ -32,7 +32,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--candidates", type=CANDIDATES, help="selector candidates (overrides the config)")
     p.add_argument("--accept", type=rms_threshold, metavar="METRES",
                    help=f"validation RMS threshold, {RMS_THRESHOLD_HELP}; overrides the config")
-    p.add_argument("--db", metavar="PATH", help="campaign database (default: config, $HIL_DB, data dir)")
+    p.add_argument("--db", metavar="PATH",
+                   help="campaign database (default: config, $HIL_DB, data dir; with --sim: the simulated "
+                        "stations' sim.db in the data dir, never $HIL_DB)")
     p.add_argument("--out-dir", default=".", metavar="DIR", help="where exports go (default: here)")
     add_tracker_protocol(p)
     p.set_defaults(func=run, cycles=1)
@@ -40,9 +42,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def options_from(args: argparse.Namespace) -> object:
     """`TuiOptions` from the command line; bad input raises InputError before the app starts."""
+    from hil.cli.support.output import say
     from hil.cli.support.station_options import station_source
     from hil.files.outputs import check_output_dir
     from hil.jobs.calibration import check_pose_count
+    from hil.jobs.station import store_location
     from hil.station.robot_type import Claim, agreed_robot, option_claim
     from hil.tui.session import TuiOptions
 
@@ -59,8 +63,11 @@ def options_from(args: argparse.Namespace) -> object:
         geometry, _ = load_truth(args.truth)  # a bad truth fails here, naming the key
         claims.append(Claim(geometry.robot, f"the truth {args.truth} is for {geometry.robot}"))
     robot = agreed_robot(claims, default="ur5e")  # --robot and the truth must agree, before the app starts
+    # a simulated station's campaigns go to the simulated stations' store unless --db names one (said
+    # on stderr before the app takes the screen), never to $HIL_DB's or the default: the plant's
+    db = str(store_location(args.db, source, None, say))
     return TuiOptions(sim=True, speed=args.speed, seed=args.seed, robot=robot,
-                      truth=args.truth, tracker_protocol=args.tracker_protocol or "geocom", db=args.db,
+                      truth=args.truth, tracker_protocol=args.tracker_protocol or "geocom", db=db,
                       out_dir=args.out_dir, overrides=source.overrides)
 
 
@@ -82,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
     from hil.tui.app import create_app
 
     options = options_from(args)
-    check_store(args.db, getattr(options, "config", None))
+    check_store(getattr(options, "db", None), getattr(options, "config", None))
     app = create_app(options)  # type: ignore[arg-type]
     code = app.run()
     return int(code or 0)

@@ -50,7 +50,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "test; without it, the uncompensated test only")
     p.add_argument("--cycles", type=VERIFY_CYCLES, default=None,
                    help="cycles of P1, P5, P4, P3, P2 (default: verify.cycles, 30)")
-    p.add_argument("--db", metavar="PATH", help="campaign database (default: config, $HIL_DB, data dir)")
+    p.add_argument("--db", metavar="PATH",
+                   help="campaign database (default: config, $HIL_DB, data dir; with --sim: the simulated "
+                        "stations' sim.db in the data dir, never $HIL_DB)")
     again = p.add_mutually_exclusive_group()
     again.add_argument("--resume", action="store_true", help="continue the last unfinished verification")
     again.add_argument("--new", action="store_true",
@@ -79,7 +81,7 @@ def _check_outputs(args: argparse.Namespace) -> None:
         return
     from hil.cli.support.output_paths import campaign_store
 
-    db, where = campaign_store(args.db, args.config)
+    db, where = campaign_store(args.db, args.config, sim=args.sim)
     inputs = {"--config": args.config, "--truth": args.truth, "--model": args.model}
     if args.out:
         check_output(args.out, field="--out", inputs=inputs, store=db, store_field=where)

@@ -23,7 +23,14 @@ from typing import TYPE_CHECKING, Any, Literal
 from hil.campaign.events import Event, EventBus
 from hil.errors import InputError
 from hil.jobs.outcome import EXIT_FAULT, EXIT_OK, JobOutcome
-from hil.jobs.station import StationSetup, StationSource, TakenStation, station_setup, take_station
+from hil.jobs.station import (
+    StationSetup,
+    StationSource,
+    TakenStation,
+    station_setup,
+    store_location,
+    take_station,
+)
 from hil.jobs.words import Say, outage_words, quiet
 
 if TYPE_CHECKING:
@@ -45,7 +52,7 @@ class CalibrationRequest:
     """
 
     source: StationSource  # the station: a configuration, or the simulated one
-    db: str | None = None  # the store (None: $HIL_DB, the configuration's, the user's default)
+    db: str | None = None  # the store (None: a simulated station's own; else $HIL_DB, config, default)
     no_warmup: bool = False  # the arm has been running: measure without warming it up
     validation_cycles: int = 1  # visits of each validation pose (>1 adds ISO 9283 AP/RP)
     resume: Resume = "find"
@@ -232,7 +239,6 @@ def calibrate(request: CalibrationRequest, *, subscribers: Sequence[Callable[[Ev
     request's source, the store, the arm taken, the campaign, and ``--verify``'s pose test. Bad input
     raises InputError before anything moves; a device that cannot be reached is a fault (exit 3), said."""
     from hil.station.devices import HARDWARE_ERRORS
-    from hil.store import resolve_location
 
     with station_setup(request.source) as setup:
         if request.no_warmup:  # not part of what identifies the campaign (`hil.store.hashing`)
@@ -245,7 +251,7 @@ def calibrate(request: CalibrationRequest, *, subscribers: Sequence[Callable[[Ev
             after = VerifyAfter.of(setup.config, request.verify, request.speed,
                                    sim=request.source.sim is not None)
         # a file, or a PostgreSQL server (opened now: reachable?)
-        location = resolve_location(request.db, setup.config)
+        location = store_location(request.db, request.source, setup.config, say)
         with contextlib.ExitStack() as stack:
             try:
                 taken = stack.enter_context(take_station(setup.config, what="hil calibrate", store=location))

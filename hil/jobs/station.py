@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any
 
 from drivers.robot.model import RobotIdentity
 from hil.errors import InputError
+from hil.jobs.words import Say, quiet, simulated_store_words
 from hil.station.config import StationConfig, check_runnable, load_config
 from hil.station.robot_type import Claim, agreed_robot, check_controller, config_claim, option_claim
 
@@ -132,6 +133,23 @@ class TakenStation:
         if not self.devices_closed:
             self.devices_closed = True
             self.devices.close()
+
+
+def store_location(db: str | None, source: StationSource, config: StationConfig | None,
+                   say: Say = quiet) -> Any:
+    """Where a job on `source` keeps its campaigns (`hil.store.resolve_location`): `db` (``--db``) if
+    given; else a simulated station's go to the simulated stations' own store, never ``$HIL_DB``'s or
+    the default (the plant's history; `hil.store.paths`), and the job says where; else ``$HIL_DB``, the
+    configuration's ``store.url``, the user's default."""
+    import os
+
+    from hil.store.paths import ENV_VAR, resolve_location
+
+    if source.sim is None or db:
+        return resolve_location(db, config)
+    location = resolve_location(None, simulated=True)
+    say(simulated_store_words(location, bool(os.environ.get(ENV_VAR))), "information")
+    return location
 
 
 def open_existing_store(location: Any, config: StationConfig) -> Store | None:

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from hil.errors import InputError
 from hil.jobs.outcome import EXIT_BAD_INPUT, EXIT_FAULT, JobOutcome
-from hil.jobs.station import StationSource, TakenStation, station_setup, take_station
+from hil.jobs.station import StationSource, TakenStation, station_setup, store_location, take_station
 from hil.jobs.words import Say, outage_words, quiet
 
 if TYPE_CHECKING:
@@ -123,7 +123,7 @@ def run_verification(request: VerificationRequest, *, subscribers: Sequence[Call
     ``hil-verification/1``, None unless it finished."""
     from hil.campaign.engine import RealClock
     from hil.station.devices import HARDWARE_ERRORS
-    from hil.store import FINISHED, StoreError, resolve_location
+    from hil.store import FINISHED, StoreError
     from hil.verify.session import verify
 
     model = request.model
@@ -133,7 +133,7 @@ def run_verification(request: VerificationRequest, *, subscribers: Sequence[Call
         # before anything connects: a cube beyond reach is bad input
         cube = checked_cube(config, request.source.sim is not None, model.geometry.smr if model else None)
         cycles = request.cycles or config.verify["cycles"]
-        location = resolve_location(request.db, config)
+        location = store_location(request.db, request.source, config, say)
         with contextlib.ExitStack() as stack:
             try:
                 taken = stack.enter_context(take_station(config, what="hil verify", store=location))
@@ -144,8 +144,12 @@ def run_verification(request: VerificationRequest, *, subscribers: Sequence[Call
             taken.store.on_outage = outage_words(say)
 
             def started(campaign: str, resumed: bool) -> None:
-                say(f"{'resuming' if resumed else 'starting'} verification {campaign}"
-                    f"{'' if model else ' (no --model: uncompensated only)'}", "information")
+                # the run's start itself ("starting verification …", its visits, cycles and modes) is
+                # the front-end's to show from RunStarted (the CLI's progress): said here too, it was
+                # printed twice; what only the job knows is why the test is uncompensated only
+                if model is None:
+                    say(f"verification {campaign}: no --model, so the uncompensated test only (the "
+                        "controller's own model)", "information")
 
             try:
                 done = verify(taken.store, taken.devices, config, setup.identity, taken.robot.as_dict(),

@@ -27,3 +27,12 @@ def outage_words(say: Say) -> Callable[[str | None], None]:
             say(f"{reason}; the arm waits at its pose", "warning")
 
     return outage
+
+
+def simulated_store_words(location: object, plant_env: bool) -> str:
+    """What a simulated station's job says of its store: its campaigns are kept apart from real ones
+    (`hil.store.paths`), where, and how to list them or choose another. `plant_env`: ``$HIL_DB`` is
+    set (and not used)."""
+    plant = "the real stations' store ($HIL_DB)" if plant_env else "the real stations' store"
+    return (f"simulated station: its campaigns go to {location}, not to {plant}; `hil history --db "
+            f"{location}` lists them, --db chooses another store")

@@ -16,25 +16,61 @@ May import: `hil.campaign.events` (what it records), `hil.campaign.ids` (a campa
 `hil.errors`. Never the CLI or the TUI.
 """
 
-from hil.campaign.ids import new_campaign_id
-from hil.store.core import Store, StoreError, UnknownCampaignError
-from hil.store.database import is_postgres
-from hil.store.hashing import config_hash, measurement_hash
-from hil.store.leases import Lease, LeaseRefused, address_lock
-from hil.store.migrate import SCHEMA_VERSION
-from hil.store.paths import ENV_VAR, default_path, resolve_location, resolve_path
-from hil.store.records import (
-    FINISHED,
-    INTERRUPTED,
-    ROLES,
-    CampaignRecord,
-    CampaignSummary,
-    Measurement,
-    ModelRecord,
-    PlannedPose,
-    RobotIdentity,
-    ValidationRecord,
+from typing import TYPE_CHECKING
+
+from hil.store.paths import (
+    ENV_VAR,
+    default_path,
+    is_postgres,
+    resolve_location,
+    resolve_path,
+    simulated_path,
 )
+
+if TYPE_CHECKING:
+    from hil.campaign.ids import new_campaign_id
+    from hil.store.core import Store, StoreError, UnknownCampaignError
+    from hil.store.hashing import config_hash, measurement_hash
+    from hil.store.leases import Lease, LeaseRefused, address_lock
+    from hil.store.migrate import SCHEMA_VERSION
+    from hil.store.records import (
+        FINISHED,
+        INTERRUPTED,
+        ROLES,
+        CampaignRecord,
+        CampaignSummary,
+        Measurement,
+        ModelRecord,
+        PlannedPose,
+        RobotIdentity,
+        ValidationRecord,
+    )
+
+#: The names beyond where the store lives, by the module that defines them, imported when first asked
+#: for: a command that only asks where the store is (every output path is checked against it) does not
+#: import SQLAlchemy (bench/cli_startup.py).
+_LAZY = {
+    "new_campaign_id": "hil.campaign.ids",
+    "Store": "hil.store.core", "StoreError": "hil.store.core", "UnknownCampaignError": "hil.store.core",
+    "config_hash": "hil.store.hashing", "measurement_hash": "hil.store.hashing",
+    "Lease": "hil.store.leases", "LeaseRefused": "hil.store.leases", "address_lock": "hil.store.leases",
+    "SCHEMA_VERSION": "hil.store.migrate",
+    **{name: "hil.store.records" for name in (
+        "FINISHED", "INTERRUPTED", "ROLES", "CampaignRecord", "CampaignSummary", "Measurement",
+        "ModelRecord", "PlannedPose", "RobotIdentity", "ValidationRecord")},
+}
+
+
+def __getattr__(name: str) -> object:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
 
 __all__ = [
     "ENV_VAR",
@@ -62,4 +98,5 @@ __all__ = [
     "new_campaign_id",
     "resolve_location",
     "resolve_path",
+    "simulated_path",
 ]

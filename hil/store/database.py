@@ -19,7 +19,6 @@ end-of-line cell must never hang on a database.
 
 from __future__ import annotations
 
-import os
 import sqlite3
 from pathlib import Path
 from typing import Any
@@ -28,21 +27,10 @@ from sqlalchemy import Engine, create_engine, event
 from sqlalchemy.engine import make_url
 from sqlalchemy.pool import QueuePool
 
+from hil.store.paths import POSTGRES_SCHEMES, is_postgres, is_url
 from hil.store.sqlite_errors import StoreConnection
 
-#: URL schemes that name a PostgreSQL server (the ``+driver`` forms SQLAlchemy users write included).
-POSTGRES_SCHEMES = ("postgresql", "postgres", "postgresql+psycopg")
-
-
-def is_url(text: str | os.PathLike[str]) -> bool:
-    """True for a database URL (``postgresql://…``, ``sqlite:///…``), False for a file path."""
-    scheme = str(text).split("://", 1)[0] if "://" in str(text) else ""
-    return scheme.lower() in (*POSTGRES_SCHEMES, "sqlite")
-
-
-def is_postgres(text: str | os.PathLike[str]) -> bool:
-    return is_url(text) and str(text).split("://", 1)[0].lower() in POSTGRES_SCHEMES
-
+__all__ = ["POSTGRES_SCHEMES", "display_url", "is_postgres", "is_url", "postgres_engine", "sqlite_engine"]
 
 def display_url(url: str) -> str:
     """The URL with its password hidden: what messages, logs and the history header print."""

@@ -11,19 +11,24 @@ Stores written before Alembic (hil's own numbered steps, version in ``PRAGMA use
 are stamped with the matching revision and upgraded from there, in place. SQLite files keep
 ``user_version`` equal to `SCHEMA_VERSION`, so an older hil, which reads only that, still refuses a
 store newer than it knows instead of writing into tables it does not understand.
+
+Alembic is imported only to change a schema (or to ask the migrations on disk for their head): opening
+a store that is already at `HEAD` — every read, and every write after the first — reads the revision
+from ``alembic_version`` itself, so a listing does not pay Alembic's import (a fifth of
+``hil history``'s start-up before; bench/cli_startup.py).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from alembic import command
-from alembic.config import Config
-from alembic.runtime.migration import MigrationContext
-from alembic.script import ScriptDirectory
 from sqlalchemy import Connection, inspect, text
 
 from hil.errors import InputError
+
+if TYPE_CHECKING:
+    from alembic.config import Config
 
 #: The newest revision this code knows (a test checks it against the migrations' head).
 HEAD = "0005"
@@ -38,6 +43,8 @@ _PG_LOCK = 0x68696C736368
 
 def alembic_config(connection: Connection | None = None) -> Config:
     """An Alembic config without an ini file, pointing at hil's migrations (and `connection`)."""
+    from alembic.config import Config
+
     cfg = Config()
     cfg.set_main_option("script_location", str(_LOCATION))
     if connection is not None:
@@ -47,11 +54,19 @@ def alembic_config(connection: Connection | None = None) -> Config:
 
 def script_head() -> str:
     """The head revision of the migrations on disk (what `HEAD` must equal)."""
+    from alembic.script import ScriptDirectory
+
     return str(ScriptDirectory.from_config(alembic_config()).get_current_head())
 
 
-def _revision(conn: Connection) -> str | None:
-    return MigrationContext.configure(conn).get_current_revision()
+def _revision(conn: Connection, where: str) -> str | None:
+    """The revision ``alembic_version`` holds (None: none yet), read as Alembic's MigrationContext
+    reads it, without importing Alembic. hil's revisions are one line, so one row at most."""
+    found = conn.execute(text("SELECT version_num FROM alembic_version")).scalars().all()
+    if len(found) > 1:
+        raise InputError(f"{where}: alembic_version holds {len(found)} revisions ({', '.join(found)}); "
+                         "hil's schema has one line of revisions: not a store this hil wrote")
+    return str(found[0]) if found else None
 
 
 def _sqlite_user_version(conn: Connection) -> int:
@@ -68,7 +83,7 @@ def found_version(conn: Connection, where: str) -> int:
         raise InputError(f"{where}: database schema version {legacy} is newer than this hil supports "
                          f"({SCHEMA_VERSION}); upgrade hil to read it")
     if "alembic_version" in tables:
-        rev = _revision(conn)
+        rev = _revision(conn, where)
         if rev is None:
             return 0
         try:
@@ -95,6 +110,8 @@ def upgrade(conn: Connection, where: str) -> int:
     found = found_version(conn, where)  # re-read under the lock
     if found >= SCHEMA_VERSION:
         return found
+    from alembic import command
+
     cfg = alembic_config(conn)
     if found and "alembic_version" not in inspect(conn).get_table_names():
         command.stamp(cfg, f"{found:04d}")  # a store from before Alembic: its steps were these revisions

@@ -6,6 +6,12 @@ config's ``store.url`` (or its older spelling ``store.path``; relative file path
 config file's directory, so a station folder can carry its own database), then
 ``$XDG_DATA_HOME/hil/hil.db`` or ``~/.local/share/hil/hil.db``. The environment beats the config
 file so a test cell or a CI job can redirect every command without editing station files.
+
+A simulated station (``--sim``) is not the plant's: its campaigns go to a store of their own,
+``sim.db`` beside the per-user default (`simulated_path`), unless ``--db`` names one. ``HIL_DB`` —
+often the plant's PostgreSQL — is not used for them, so a simulated robot never shows up in ``hil
+robots`` or the fleet report by accident; ``--db`` is how to ask for it (`resolve_location` with
+``simulated=True``).
 """
 
 from __future__ import annotations
@@ -15,9 +21,24 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from hil.store.database import is_postgres
-
 ENV_VAR = "HIL_DB"
+#: the file of the simulated stations' store, beside the per-user default
+SIMULATED_FILE = "sim.db"
+
+#: URL schemes that name a PostgreSQL server (the ``+driver`` forms SQLAlchemy users write included).
+POSTGRES_SCHEMES = ("postgresql", "postgres", "postgresql+psycopg")
+
+
+def is_url(text: str | os.PathLike[str]) -> bool:
+    """True for a database URL (``postgresql://…``, ``sqlite:///…``), False for a file path."""
+    scheme = str(text).split("://", 1)[0] if "://" in str(text) else ""
+    return scheme.lower() in (*POSTGRES_SCHEMES, "sqlite")
+
+
+def is_postgres(text: str | os.PathLike[str]) -> bool:
+    return is_url(text) and str(text).split("://", 1)[0].lower() in POSTGRES_SCHEMES
+
+
 
 
 def default_path(env: Mapping[str, str] | None = None) -> Path:
@@ -29,6 +50,11 @@ def default_path(env: Mapping[str, str] | None = None) -> Path:
     base = env.get("XDG_DATA_HOME", "")
     root = Path(base) if base and os.path.isabs(base) else Path.home() / ".local" / "share"
     return root / "hil" / "hil.db"
+
+
+def simulated_path(env: Mapping[str, str] | None = None) -> Path:
+    """The simulated stations' store: ``sim.db`` beside the per-user default (`default_path`)."""
+    return default_path(env).with_name(SIMULATED_FILE)
 
 
 def _plain(text: str, field: str = "--db") -> str | Path:
@@ -67,11 +93,14 @@ def _config_store_location(config: Any) -> str | Path | None:
 
 
 def resolve_location(path: str | os.PathLike[str] | None = None, config: Any = None,
-                     env: Mapping[str, str] | None = None) -> str | Path:
-    """The store to use: a Path (SQLite file) or a ``postgresql://`` URL (see the module docstring)."""
+                     env: Mapping[str, str] | None = None, *, simulated: bool = False) -> str | Path:
+    """The store to use: a Path (SQLite file) or a ``postgresql://`` URL (see the module docstring).
+    `simulated`: for a simulated station's campaigns: `path`, else `simulated_path`."""
     env = os.environ if env is None else env
     if path is not None and str(path) != "":
         return _plain(str(path))
+    if simulated:
+        return simulated_path(env)
     if env.get(ENV_VAR):
         return _plain(env[ENV_VAR], f"${ENV_VAR}")
     return _config_store_location(config) or default_path(env)

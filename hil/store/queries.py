@@ -12,13 +12,11 @@ from __future__ import annotations
 import dataclasses
 import json
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
 from sqlalchemy import Connection, case, func, literal, select
 
 import hil.store.tables as tb
-from hil.campaign.events import Event
 from hil.errors import InputError
 from hil.store.owner import is_gone
 from hil.store.records import (
@@ -34,6 +32,11 @@ from hil.store.records import (
 )
 from hil.store.rows import floats, loads
 from hil.store.transactions import TransactionalStore
+
+if TYPE_CHECKING:  # a listing needs neither: imported by the two readers that do (bench/cli_startup.py)
+    import numpy as np
+
+    from hil.campaign.events import Event
 
 __all__ = ["StoreQueries", "UnknownCampaignError"]
 
@@ -210,6 +213,8 @@ class StoreQueries(TransactionalStore):
     def arrays(self, campaign: str, role: str = "calibration") -> tuple[np.ndarray, np.ndarray]:
         """Joint angles (n×6) and points (n×3) of `role`'s poses, latest per pose, by pose index:
         the input identification (or validation) needs after a resume."""
+        import numpy as np
+
         ms = [m for m in self.measured_poses(campaign).values() if m.role == role]
         q = np.array([m.q for m in ms], dtype=float).reshape(-1, 6)
         p = np.array([m.p for m in ms], dtype=float).reshape(-1, 3)
@@ -248,6 +253,8 @@ class StoreQueries(TransactionalStore):
 
     def events(self, campaign: str, *, after: int = 0, types: Sequence[str] | None = None) -> list[Event]:
         """The log as Event objects (types this version does not know are left out)."""
+        from hil.campaign.events import Event
+
         return [Event.from_dict(d) for _, d in self.event_log(campaign, after=after, types=types)
                 if d.get("event") in Event.registry]
 

@@ -15,26 +15,18 @@ from __future__ import annotations
 import json
 import secrets
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from sqlalchemy import Connection, func, select
 
 import hil.store.rows as rows
 import hil.store.tables as tb
-from hil.campaign.events import (
-    ControllerModel,
-    Event,
-    ModelIdentified,
-    PointMeasured,
-    PoseSkipped,
-    PoseStarted,
-    RunFinished,
-    RunStarted,
-    StateChanged,
-    ValidationDone,
-)
 from hil.store.owner import this_process
 from hil.store.records import LIVE_STATES, ROLES
 from hil.store.transactions import TransactionalStore
+
+if TYPE_CHECKING:  # the event types are imported where events are recorded: a reader never needs them
+    from hil.campaign.events import Event
 
 __all__ = ["EventRecorder"]
 
@@ -49,6 +41,8 @@ class EventRecorder(TransactionalStore):
         A `RunStarted` is logged with an ``owner`` key added (`hil.store.owner.this_process`): the
         process recording a run's start is the one running it, and readers use it to tell a live run
         from one whose process died (`campaigns` then says ``interrupted``)."""
+        from hil.campaign.events import RunStarted
+
         data = event.to_dict()
         if isinstance(event, RunStarted):
             data["owner"] = this_process()
@@ -78,6 +72,18 @@ class EventRecorder(TransactionalStore):
 
     def _apply(self, conn: Connection, ev: Event) -> None:
         """Write the rows `ev` implies, in the transaction that logs it."""
+        from hil.campaign.events import (
+            ControllerModel,
+            ModelIdentified,
+            PointMeasured,
+            PoseSkipped,
+            PoseStarted,
+            RunFinished,
+            RunStarted,
+            StateChanged,
+            ValidationDone,
+        )
+
         cid, t, where = ev.campaign, float(ev.t), self.location
         if isinstance(ev, RunStarted):  # a new run: the last one's detail (e.g. why it stopped) is old
             rows.set_status(conn, cid, "running", "", None, t, where)

@@ -16,13 +16,11 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import sys
 from collections.abc import Mapping
 from typing import Any
 
-import numpy as np
 from sqlalchemy import Connection, func, select
-from sqlalchemy.dialects import postgresql as pg_dialect
-from sqlalchemy.dialects import sqlite as sqlite_dialect
 
 import hil.store.tables as tb
 from hil import __version__
@@ -37,7 +35,10 @@ def dumps(value: Any) -> str:
     """Compact JSON of plain values, numpy arrays and scalars included."""
 
     def default(obj: Any) -> Any:
-        if isinstance(obj, np.ndarray | np.generic):
+        # numpy is not imported for it: a value can hold an array only once someone imported numpy
+        # (a listing that writes, `hil robot --mark-bad`, never does)
+        np = sys.modules.get("numpy")
+        if np is not None and isinstance(obj, np.ndarray | np.generic):
             return obj.tolist()
         if isinstance(obj, tuple | set | frozenset):
             return list(obj)
@@ -66,6 +67,8 @@ def floats(text: str | None) -> tuple[float, ...] | None:
 
 def vector(value: Any, n: int, what: str) -> tuple[float, ...]:
     """`value` as `n` floats; StoreError naming `what` if it is not that."""
+    import numpy as np
+
     try:
         v = tuple(float(x) for x in np.asarray(value, dtype=float).reshape(-1))
     except (TypeError, ValueError):
@@ -95,8 +98,13 @@ def finite_or_none(value: Any) -> float | None:
 
 
 def dialect_insert(conn: Connection, table: Any) -> Any:
-    """INSERT with this engine's ``ON CONFLICT`` support (both dialects spell it the same in SQL)."""
-    return (pg_dialect.insert if conn.dialect.name == "postgresql" else sqlite_dialect.insert)(table)
+    """INSERT with this engine's ``ON CONFLICT`` support (both dialects spell it the same in SQL).
+    The dialect is imported here, by the writes: a reader of an SQLite store never loads PostgreSQL's."""
+    if conn.dialect.name == "postgresql":
+        from sqlalchemy.dialects.postgresql import insert
+    else:
+        from sqlalchemy.dialects.sqlite import insert
+    return insert(table)
 
 
 # --- campaigns --------------------------------------------------------------------------------------

@@ -19,15 +19,19 @@ def _file(location: str | Path) -> Path | None:
     return location if isinstance(location, Path) else None
 
 
-def campaign_store(db: str | None = None, config_path: str | None = None) -> tuple[Path | None, str]:
+def campaign_store(db: str | None = None, config_path: str | None = None, *,
+                   sim: bool = False) -> tuple[Path | None, str]:
     """(database file or None for a server, how an error names it) for ``--db`` `db` and ``--config``
-    `config_path`.
+    `config_path`; `sim`: of a simulated station's job, whose campaigns go to the simulated stations'
+    store (`hil.store.paths.simulated_path`) unless ``--db`` names one.
 
     The config is read only when it decides (no ``--db``, no ``$HIL_DB``): a bad one is then an
     InputError naming it, as the command would give anyway.
     """
     if db:
         return _file(resolve_location(db)), "--db"
+    if sim:
+        return _file(resolve_location(None, simulated=True)), "the simulated stations' store"
     if os.environ.get(ENV_VAR):
         return _file(resolve_location(None)), f"${ENV_VAR}"
     config = None

@@ -27,10 +27,13 @@ def add_store_options(p: argparse.ArgumentParser, *, json: bool = True) -> None:
 def open_store(args: argparse.Namespace, *, readonly: bool = True) -> Store:
     """The store `args` name, opened read-only unless asked; a missing one is bad input (exit 2): a
     command that reads (or marks) never creates a database."""
-    from hil.station.config import load_config
     from hil.store import Store
 
-    config = load_config(args.config) if args.config else None
+    config = None
+    if args.config:  # the station's configuration is read only when it names the store
+        from hil.station.config import load_config
+
+        config = load_config(args.config)
     return Store.open(args.db or None, config=config, readonly=readonly, create=False)
 
 

@@ -19,6 +19,7 @@ import pytest
 from hil.calibration.model_file import truth_document, write_json
 from hil.calibration.synthetic import Noise, random_truth
 from hil.cli import main
+from mocks.station import simulated_serial
 
 EXAMPLES = Path(__file__).parents[3] / "hil" / "moveb" / "examples"
 
@@ -107,6 +108,17 @@ def test_sim_simulates_and_reports_the_truths_robot(tmp_path: Path, no_server: l
     assert [c.robot for c in no_server] == ["ur10e"]
 
 
+def test_sim_reports_the_simulated_arms_own_serial(tmp_path: Path, no_server: list) -> None:
+    """`hil sim`'s controller reports the simulated arm's serial (`mocks.station.simulated_serial`), as
+    `hil calibrate --sim`'s does, not one serial for every arm; --serial still chooses one."""
+    truth = _truth(tmp_path / "t.json", "ur10e")
+    assert main(["sim", "--truth", truth, "--seed", "7"]) == 0
+    assert main(["sim", "--seed", "7"]) == 0
+    assert main(["sim", "--serial", "20235512345"]) == 0
+    assert [c.serial for c in no_server] == [simulated_serial("ur10e", 7, truth), simulated_serial("ur5e", 7),
+                                             "20235512345"]
+
+
 @pytest.fixture
 def no_app(monkeypatch: pytest.MonkeyPatch) -> list:
     """`hil tui` never opens the app: the options it would open it with are recorded instead."""
@@ -129,6 +141,21 @@ def test_tui_refuses_a_robot_its_truth_contradicts(tmp_path: Path, no_app: list,
     truth = _truth(tmp_path / "t10.json", "ur10e")  # without --robot: the truth's
     assert main(["tui", "--sim", "--truth", truth, "--out-dir", str(tmp_path)]) == 0
     assert [o.robot for o in no_app] == ["ur10e"]
+
+
+def test_tui_sim_keeps_its_campaigns_in_the_simulated_stations_store(
+        tmp_path: Path, no_app: list, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """`hil tui --sim` without --db opens the simulated stations' store, not $HIL_DB's (the plant's), and
+    says so before the app takes the screen; --db is obeyed."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "data"))
+    monkeypatch.setenv("HIL_DB", str(tmp_path / "plant.db"))
+    assert main(["tui", "--sim", "--out-dir", str(tmp_path)]) == 0
+    sim_db = tmp_path / "data" / "hil" / "sim.db"
+    assert no_app[-1].db == str(sim_db)
+    assert f"hil: simulated station: its campaigns go to {sim_db}" in capsys.readouterr().err
+    assert main(["tui", "--sim", "--db", str(tmp_path / "mine.db"), "--out-dir", str(tmp_path)]) == 0
+    assert no_app[-1].db == str(tmp_path / "mine.db")
 
 
 def test_tui_config_refuses_a_robot_option_it_contradicts(tmp_path: Path, no_app: list,

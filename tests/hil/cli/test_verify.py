@@ -157,6 +157,17 @@ def test_without_a_model_only_the_uncompensated_test_in_a_fitted_frame(tmp_path,
     assert doc["tool"]["faces"]["from"] == "start pose"
 
 
+def test_the_start_of_a_verification_is_said_once(tmp_path, monkeypatch, capsys):
+    """The progress says "starting verification …" (with its visits, cycles and modes); the job said
+    it again. Without --model the job says only why the test is uncompensated."""
+    st = Station(tmp_path, monkeypatch)
+    assert st.verify(model=False) == 0
+    lines = capsys.readouterr().err.splitlines()
+    started = [line for line in lines if "starting verification" in line]
+    assert len(started) == 1 and started[0].endswith("cycles, uncompensated)"), lines
+    assert sum("no --model" in line for line in lines) == 1, lines
+
+
 def test_calibrate_verify_embeds_the_verification_of_the_new_model(tmp_path, monkeypatch, capsys):
     st = Station(tmp_path, monkeypatch, kinematics=True)
     tracker = ", ".join(map(str, st.truth.tracker.translation + 0.05))

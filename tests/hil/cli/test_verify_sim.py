@@ -5,6 +5,7 @@ compensated test is limited by the tracker's and the encoders' noise only. About
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -13,6 +14,8 @@ import numpy as np
 
 from hil.calibration.model_file import truth_document
 from hil.calibration.synthetic import Noise, random_truth
+from hil.store import Store
+from mocks.station import simulated_serial
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -35,3 +38,21 @@ def test_verify_on_the_simulated_station_with_the_true_model(tmp_path: Path) -> 
     assert comp["AP_max"] < 5e-5  # 20 µm tracker noise over 5 samples, encoder noise, 2 cycles
     assert unc["AP_max"] > 5 * comp["AP_max"]
     assert doc["truth"]["format"] == "hil-truth/1" and doc["frame"]["source"] == "model"
+
+
+def test_a_simulated_station_keeps_its_campaigns_apart_from_the_plants(tmp_path: Path) -> None:
+    """Without --db a simulated station's verification goes to the simulated stations' store (sim.db
+    beside the default), not to $HIL_DB (the plant's history, where it showed up in hil robots and the
+    fleet report), and says so; its robot is the simulated arm's own serial."""
+    plant, data = tmp_path / "plant.db", tmp_path / "data"
+    env = {**os.environ, "HIL_DB": str(plant), "XDG_DATA_HOME": str(data)}
+    cmd = [sys.executable, "-m", "hil", "verify", "--sim", "--speed", "100", "--cycles", "2", "--seed", "4"]
+    done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=240, env=env)
+    assert done.returncode == 0, done.stderr[-3000:]
+    sim = data / "hil" / "sim.db"
+    assert not plant.exists() and sim.exists()
+    said = [line for line in done.stderr.splitlines() if line.startswith("hil: simulated station:")]
+    assert len(said) == 1 and str(sim) in said[0] and "$HIL_DB" in said[0], done.stderr[-3000:]
+    with Store.open(sim, readonly=True) as store:
+        (campaign,) = store.campaigns()
+        assert store.campaign(campaign.id).robot.serial == simulated_serial("ur5e", 4)

@@ -278,3 +278,24 @@ def test_the_sources_the_options_name() -> None:
         assert setup.identity == setup.config.as_dict() and setup.truth is None
     sim = StationSource.of(config=None, sim=True, speed=4.0, seed=7, robot="ur10e")
     assert sim.sim == SimulatedSpec("ur10e", None, 4.0, 7, "geocom") and sim.speed == 4.0
+
+
+def test_a_simulated_stations_campaigns_go_to_their_own_store_and_it_is_said(tmp_path, monkeypatch) -> None:
+    """--sim without --db: the simulated stations' store, whatever $HIL_DB says (the plant's), said
+    once; --db is obeyed for both; a real station's store is $HIL_DB's, silently."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "data"))
+    monkeypatch.setenv("HIL_DB", str(tmp_path / "plant.db"))
+    said: list[tuple[str, str]] = []
+
+    def say(text: str, severity: str = "information") -> None:
+        said.append((text, severity))
+
+    sim = StationSource.of(config=None, sim=True)
+    config = default_config().with_overrides(tracker__url="socket://127.0.0.3:1")
+    real = StationSource.of(config=config, sim=False)
+    sim_db = tmp_path / "data" / "hil" / "sim.db"
+    assert job_station.store_location(None, sim, None, say) == sim_db
+    assert len(said) == 1 and str(sim_db) in said[0][0] and "$HIL_DB" in said[0][0]
+    assert job_station.store_location(str(tmp_path / "mine.db"), sim, None, say) == tmp_path / "mine.db"
+    assert job_station.store_location(None, real, config, say) == tmp_path / "plant.db"
+    assert len(said) == 1

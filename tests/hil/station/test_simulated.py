@@ -3,10 +3,16 @@ where the SMR sits on the flange."""
 
 from __future__ import annotations
 
+import json
+import socket
+
 import numpy as np
 
 from hil.arm.payload import Payload, gravity_of_mounting
+from hil.calibration.model_file import truth_document
+from hil.calibration.synthetic import Noise, random_truth
 from hil.station.simulated import operator_knowledge, simulated_station
+from mocks.station import simulated_serial
 
 
 def test_the_config_carries_the_truths_payload_but_not_its_compliance() -> None:
@@ -41,3 +47,29 @@ def test_the_config_knows_the_smr_offset_from_its_holders_drawing() -> None:
     with simulated_station("ur5e", speed=10.0, seed=2) as (config, _identity, truth, _sim):
         offset = np.array(config.values["smr"]["offset"])
         assert np.abs(offset - np.array(truth["smr"])).max() <= 0.25e-3
+
+
+def _serial(sim) -> str:
+    """What the simulated controller's dashboard answers to ``get serial number``."""
+    with socket.create_connection((sim.address, sim.info["dashboard_port"]), timeout=10) as conn:
+        stream = conn.makefile("rw", encoding="ascii", newline="\n")
+        stream.readline()  # the greeting
+        stream.write("get serial number\n")
+        stream.flush()
+        return stream.readline().strip()
+
+
+def test_each_simulated_arm_is_a_robot_of_its_own_and_keeps_its_serial(tmp_path) -> None:
+    """The serial is the simulated arm's: another robot type, seed or truth is another robot (two
+    stations on one machine once both reported 20235500001 and refused each other), the same arm is the
+    same robot (a re-run resumes its campaign, found by serial)."""
+    truth = tmp_path / "truth.json"
+    truth.write_text(json.dumps(truth_document(random_truth("ur5e", np.random.default_rng(5)), Noise())))
+    serials = []
+    for robot, seed, truth_file in (("ur5e", 1, None), ("ur10e", 1, None), ("ur5e", 2, None),
+                                    ("ur5e", 1, str(truth)), ("ur5e", 1, None)):
+        with simulated_station(robot, truth_file, speed=10.0, seed=seed) as (_config, _identity, _truth, sim):
+            serials.append(_serial(sim))
+    assert len(set(serials[:4])) == 4 and serials[4] == serials[0], serials
+    assert all(s.startswith("9999") and len(s) == 11 and s.isdigit() for s in serials), serials
+    assert serials[0] == simulated_serial("ur5e", 1)

@@ -102,8 +102,8 @@ def _v4_store(location: str) -> None:
 def test_a_v4_store_upgrades_to_v5_in_place(location, monkeypatch):
     _v4_store(location)
     upgrades: list[str] = []
-    real = migrate_mod.command.upgrade
-    monkeypatch.setattr(migrate_mod.command, "upgrade",
+    real = command.upgrade
+    monkeypatch.setattr(command, "upgrade",
                         lambda config, revision, *a, **k: (upgrades.append(revision), real(config, revision)))
     with Store.open(location) as s:
         assert upgrades == ["0005"] and SCHEMA_VERSION == 5

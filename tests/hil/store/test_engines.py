@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 import psycopg
 import pytest
+from alembic import command as alembic_command
 from sqlalchemy import inspect
 
 import hil.store.tables as tb
@@ -118,13 +119,13 @@ def store(location):
 def upgrades(monkeypatch) -> list[str]:
     """Every Alembic upgrade run (the revision it aimed at), wherever it comes from."""
     calls: list[str] = []
-    real = migrate_mod.command.upgrade
+    real = alembic_command.upgrade
 
     def counting(config, revision, *args, **kwargs):
         calls.append(revision)
         return real(config, revision, *args, **kwargs)
 
-    monkeypatch.setattr(migrate_mod.command, "upgrade", counting)
+    monkeypatch.setattr(alembic_command, "upgrade", counting)
     return calls
 
 
@@ -485,6 +486,27 @@ def test_a_newer_database_is_refused(location):
     else:
         with sqlite3.connect(location) as conn:
             assert conn.execute("SELECT version_num FROM alembic_version").fetchone() == ("0099",)
+
+
+def test_a_store_at_the_head_is_opened_without_importing_alembic(location):
+    """Alembic is for changing a schema: opening a store already at the head — to read it, or to write
+    into it — reads its revision without importing Alembic (a third of ``hil history``'s start-up)."""
+    Store.open(location).close()
+    code = ("import sys\nfrom hil.store import Store\n"
+            f"Store.open({location!r}, readonly=True).close()\nStore.open({location!r}).close()\n"
+            "print('alembic' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert (out.returncode, out.stdout.strip()) == (0, "False"), out.stderr
+
+
+def test_a_store_with_two_revisions_is_refused(location):
+    """hil's revisions are one line: two rows in alembic_version are not a store it wrote (bad input,
+    named), whether opened to read or to write."""
+    with Store.open(location) as s:
+        raw(s).execute("INSERT INTO alembic_version (version_num) VALUES ('0004')")
+    for readonly in (False, True):
+        with pytest.raises(InputError, match=r"alembic_version holds 2 revisions \(000[45], 000[45]\)"):
+            Store.open(location, readonly=readonly)
 
 
 def test_a_database_with_a_campaigns_table_but_no_revision_is_refused_untouched(location):
@@ -935,7 +957,7 @@ def test_an_sqlite_store_from_before_alembic_upgrades_in_place(tmp_path, version
         assert count(s, "SELECT count(*) FROM events WHERE uid IS NOT NULL") == 1
         assert s.leases() == []
     stamps: list[str] = []
-    monkeypatch.setattr(migrate_mod.command, "stamp", lambda cfg, rev, *a, **k: stamps.append(rev))
+    monkeypatch.setattr(alembic_command, "stamp", lambda cfg, rev, *a, **k: stamps.append(rev))
     with Store.open(path) as s:  # a second open: nothing to upgrade
         assert s.find_resumable(old["config"], ROBOT.serial) == LEGACY_ID
         assert sorted(s.measured_poses(LEGACY_ID)) == [0, 1, 3]

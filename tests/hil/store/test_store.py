@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from alembic import command as alembic_command
 from sqlalchemy import event
 
 from hil.campaign.events import (
@@ -43,9 +44,10 @@ from hil.store import (
     UnknownCampaignError,
     config_hash,
     default_path,
+    resolve_location,
     resolve_path,
+    simulated_path,
 )
-from hil.store import migrate as migrate_mod
 from tests.hil.store.legacy_schema import make_legacy
 from tests.hil.store.raw import Raw, raw
 
@@ -134,13 +136,13 @@ def test_upgrade_from_v1(db):
 def test_failed_upgrade_leaves_the_old_version(db, monkeypatch):
     _v1_database(db)
 
-    real = migrate_mod.command.upgrade
+    real = alembic_command.upgrade
 
     def broken(cfg, revision):
         real(cfg, "0002")  # the next revision ran...
         raise RuntimeError("upgrade failed half-way")  # ...and then something failed
 
-    monkeypatch.setattr(migrate_mod.command, "upgrade", broken)
+    monkeypatch.setattr(alembic_command, "upgrade", broken)
     with pytest.raises(RuntimeError):
         Store.open(db)
     conn = sqlite3.connect(db)
@@ -200,6 +202,16 @@ def test_paths(tmp_path, monkeypatch):
     monkeypatch.setenv("HIL_DB", str(tmp_path / "env.db"))
     with Store.open() as s:
         assert s.path == tmp_path / "env.db"
+
+
+def test_a_simulated_stations_store_is_its_own_whatever_hil_db_says():
+    """--sim: the simulated stations' store beside the default, never $HIL_DB's (the plant's history);
+    --db names any store, that one included."""
+    env = {"XDG_DATA_HOME": "/d", "HIL_DB": "postgresql://hil@plant/hil"}
+    assert resolve_location(None, None, env, simulated=True) == Path("/d/hil/sim.db") == simulated_path(env)
+    assert resolve_location(None, None, env) == "postgresql://hil@plant/hil"
+    assert resolve_location("/mine.db", None, env, simulated=True) == Path("/mine.db")
+    assert resolve_location("postgresql://hil@plant/hil", None, env, simulated=True) == env["HIL_DB"]
 
 
 # --- recording and reading back -----------------------------------------------------------------
