@@ -80,9 +80,10 @@ _MISSING_HELP = {
 
 def _summary(out: dict[str, Any]) -> str:
     robot, tracker = out["robot"], out["tracker"]
+    serial = f", serial {robot['serial']}" if robot.get("serial") else ""
     return "\n".join([
         f"robot    {robot['address']}  (RTDE {robot['rtde_port']}, dashboard {robot['dashboard_port']}, "
-        f"script {robot['script_port']}, faults {robot['control_port']}), serial {robot['serial']}",
+        f"script {robot['script_port']}, faults {robot['control_port']}){serial}",
         f"tracker  GeoCOM {tracker['url']}  (pty {tracker['pty']})",
         f"tracker  emScon {tracker['emscon_url']}",
         "serving until Ctrl-C (--json prints this and the hidden truth as JSON)",
