@@ -25,18 +25,33 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 
-def distance_to_path(points: np.ndarray, path: np.ndarray) -> np.ndarray:
-    """Distance of each point to the polyline `path` (nearest vertex, then its two segments)."""
+def project_onto_path(points: np.ndarray, path: np.ndarray,
+                      path_s: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(distance of each point to the polyline `path`, arc length of its nearest point on it).
+
+    The nearest vertex, then the exact foot on its two segments; the arc length (with `path_s`, the
+    vertices' arc lengths; else zeros) is the foot's, not the vertex's, so a figure built on it is not
+    off by half the polyline's spacing."""
     _, idx = cKDTree(path).query(points)
     best = np.full(len(points), np.inf)
+    where = np.zeros(len(points))
     for off in (-1, 0):
         j = np.clip(idx + off, 0, len(path) - 2)
         a, b = path[j], path[j + 1]
         ab = b - a
         t = np.clip(np.einsum("ij,ij->i", points - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab),
                                                                         1e-300), 0.0, 1.0)
-        best = np.minimum(best, np.linalg.norm(points - (a + t[:, None] * ab), axis=1))
-    return best
+        d = np.linalg.norm(points - (a + t[:, None] * ab), axis=1)
+        closer = d < best
+        best = np.where(closer, d, best)
+        if path_s is not None:
+            where = np.where(closer, path_s[j] + t * (path_s[j + 1] - path_s[j]), where)
+    return best, where
+
+
+def distance_to_path(points: np.ndarray, path: np.ndarray) -> np.ndarray:
+    """Distance of each point to the polyline `path` (nearest vertex, then its two segments)."""
+    return project_onto_path(points, path)[0]
 
 
 @dataclass(frozen=True)
@@ -103,15 +118,16 @@ def path_accuracy(commanded: np.ndarray, measured: np.ndarray, corners: np.ndarr
     """ISO 9283-style figures in mm (module docstring); a corner not covered has no measured value.
 
     With the commanded polyline's arc lengths `commanded_s`, each corner's resolution too: the
-    measured points are placed on the path by where they are (their nearest commanded point), not
-    by their time stamps, so a late or early stamp cannot pick the wrong two points around a corner.
+    measured points are placed on the path by where they are (the foot of each on the commanded path,
+    `project_onto_path`), not by their time stamps, so a late or early stamp cannot pick the wrong two
+    points around a corner; and by the exact foot, not the nearest commanded sample, so a corner's
+    measured figure stays within its commanded one plus the largest deviation plus this resolution.
     """
-    dev = distance_to_path(measured, commanded)
+    dev, measured_s = project_onto_path(measured, commanded, commanded_s)
     resolution: list[float | None] | None = None
     if commanded_s is not None and len(corners):
-        tree = cKDTree(commanded)
-        resolution = corner_resolution(commanded, commanded_s, commanded_s[tree.query(measured)[1]],
-                                       commanded_s[tree.query(corners)[1]])
+        resolution = corner_resolution(commanded, commanded_s, measured_s,
+                                       project_onto_path(corners, commanded, commanded_s)[1])
     at_corner: list[float | None] = []
     if len(corners) and len(measured) > 1:
         at_corner = distance_to_path(corners, measured).tolist()
