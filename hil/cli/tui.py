@@ -76,13 +76,12 @@ def check_store(db: str | None, config: object | None) -> None:
     program's database, a newer hil's): on a full-screen app the error would otherwise appear only
     after the operator connected the arm. An existing store is opened and closed again; a missing one
     is left for the app to create."""
-    from pathlib import Path
+    from hil.jobs.station import open_existing_store
+    from hil.store import resolve_location
 
-    from hil.store import Store, resolve_location
-
-    path = resolve_location(db, config)
-    if not isinstance(path, Path) or path.exists():  # a server: reachable, a hil store, not newer
-        Store.open(path).close()
+    store = open_existing_store(resolve_location(db, config), config)  # a server: reachable, not newer
+    if store is not None:
+        store.close()
 
 
 def run(args: argparse.Namespace) -> int:

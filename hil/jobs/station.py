@@ -152,7 +152,7 @@ def store_location(db: str | None, source: StationSource, config: StationConfig 
     return location
 
 
-def open_existing_store(location: Any, config: StationConfig) -> Store | None:
+def open_existing_store(location: Any, config: StationConfig | None) -> Store | None:
     """The store at `location` if it exists (a server always does), opened now so that a damaged or a
     newer one is refused before the arm is touched; None for a file still to be created."""
     from hil.store import Store
