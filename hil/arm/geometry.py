@@ -22,6 +22,7 @@ import numpy as np
 import pinocchio as pin
 
 from hil.arm.catalog import RobotSpec, get_robot
+from hil.arm.joint_errors import JointErrors, block_of
 from hil.arm.payload import FLOOR_GRAVITY, Payload, parse_gravity
 from hil.arm.thermal import Thermal
 from hil.errors import InputError
@@ -54,7 +55,8 @@ class Geometry:
     The optional non-geometric blocks (docs/design.md, Contracts: non-geometric errors): `compliance`
     (rad/Nm per joint; None is a rigid
     arm), the `payload` it carries (None: nothing), `gravity` in the base frame (the mounting) and, in
-    a simulator's truth only, `thermal` growth. `Kinematics` applies the compliance for the payload.
+    a simulator's truth only, `thermal` growth; the angle-dependent `joint_errors` and the joints'
+    `lost_motion` (rad; `hil.arm.joint_errors`). `Kinematics` applies them all to the encoder angles.
     """
 
     robot: str
@@ -66,6 +68,8 @@ class Geometry:
     payload: Payload | None = None
     gravity: np.ndarray = field(default_factory=lambda: FLOOR_GRAVITY.copy())
     thermal: Thermal | None = None
+    joint_errors: JointErrors | None = None
+    lost_motion: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if len(self.joints) != 6:
@@ -77,11 +81,28 @@ class Geometry:
         if self.compliance is not None:
             self.compliance = np.array(self.compliance, dtype=float).reshape(6)
         self.gravity = np.array(self.gravity, dtype=float).reshape(3)
+        if self.lost_motion is not None:
+            self.lost_motion = np.array(self.lost_motion, dtype=float).reshape(6)
 
     @property
     def compliant(self) -> bool:
         """Whether the arm sags under gravity (a compliance block with a non-zero value)."""
         return self.compliance is not None and bool(np.any(self.compliance != 0.0))
+
+    @property
+    def has_joint_errors(self) -> bool:
+        """Whether the link angles carry angle-dependent errors (a non-empty `joint_errors`)."""
+        return self.joint_errors is not None and not self.joint_errors.empty
+
+    @property
+    def has_lost_motion(self) -> bool:
+        """Whether the links lag their encoders in the direction of the last motion."""
+        return self.lost_motion is not None and bool(np.any(self.lost_motion != 0.0))
+
+    @property
+    def encoder_exact(self) -> bool:
+        """Whether the link angles equal the encoder readings (no sag, joint errors or lost motion)."""
+        return not (self.compliant or self.has_joint_errors or self.has_lost_motion)
 
     @property
     def spec(self) -> RobotSpec:
@@ -107,7 +128,15 @@ class Geometry:
     def copy(self) -> Geometry:
         return Geometry(self.robot, list(self.joints), self.flange, self.smr.copy(), self.tracker,
                         None if self.compliance is None else self.compliance.copy(), self.payload,
-                        self.gravity.copy(), self.thermal)
+                        self.gravity.copy(), self.thermal, self.joint_errors,
+                        None if self.lost_motion is None else self.lost_motion.copy())
+
+    def ideal(self) -> Geometry:
+        """The same arm without angle-dependent joint errors and lost motion (hil's arm before they were
+        modelled: geometry, compliance, payload and warm-up only)."""
+        out = self.copy()
+        out.joint_errors, out.lost_motion = None, None
+        return out
 
     def rigid(self) -> Geometry:
         """The same arm without its non-geometric blocks (what URDF and ROS YAML can hold)."""
@@ -147,7 +176,8 @@ class Geometry:
         }
 
     def non_geometric_dict(self) -> dict[str, Any]:
-        """The optional blocks this arm has (compliance, payload, gravity when not floor, thermal)."""
+        """The optional blocks this arm has (compliance, payload, gravity when not floor, thermal, joint
+        errors, lost motion)."""
         out: dict[str, Any] = {}
         if self.compliance is not None:
             out["compliance"] = [float(v) for v in self.compliance]
@@ -157,6 +187,10 @@ class Geometry:
             out["gravity"] = [float(v) for v in self.gravity]
         if self.thermal is not None:
             out["thermal"] = self.thermal.to_dict()
+        if self.joint_errors is not None:
+            out["joint_errors"] = self.joint_errors.to_list()
+        if self.lost_motion is not None:
+            out["lost_motion"] = [float(v) for v in self.lost_motion]
         return out
 
     @classmethod
@@ -188,7 +222,9 @@ class Geometry:
                    if data.get("gravity") is not None else FLOOR_GRAVITY.copy())
         thermal = (Thermal.from_dict(data["thermal"], f"{source}: thermal")
                    if data.get("thermal") is not None else None)
-        return cls(spec.name, parsed, flange, smr, tracker, compliance, payload, gravity, thermal)
+        joint_errors, lost_motion = block_of(data, source)
+        return cls(spec.name, parsed, flange, smr, tracker, compliance, payload, gravity, thermal,
+                   joint_errors, lost_motion)
 
 
 def _require(data: Mapping[str, Any], key: str, source: str) -> Any:

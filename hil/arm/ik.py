@@ -7,11 +7,12 @@ solves the calibrated chain itself. It is seeded from the previous sample along 
 the current branch; a target it cannot reach, or one that leaves the joint limits, raises
 `UnreachableError` (never a silently clamped or nearby answer).
 
-A compliant model (`Geometry.compliance`) is solved in two steps: the rigid chain gives the link angles
-that put the flange at the target, then the encoder angles are the fixed point of
-q = q_link + c ⊙ g(q) (the link lags its encoder by c ⊙ g,
-docs/design.md, Contracts: non-geometric errors), a contraction by about
-c·∂g/∂q ≈ 10⁻³ per step, so a few steps reach the tolerance.
+A model whose links do not sit at their encoder angles (compliance, angle-dependent joint errors;
+docs/design.md, Contracts: non-geometric errors) is solved in two steps: the rigid chain gives the link
+angles that put the flange at the target, then the encoder angles are the fixed point of
+q ← q + (q_link − link(q)), link(q) = q − c ⊙ g(q) + e(q) being the model's map. Its contraction factor is
+the map's departure from the identity, c·∂g/∂q + ∂e/∂q ≈ 10⁻³ per step, so a few steps reach the
+tolerance. Lost motion is not applied: IK is told nothing about how the joint will approach.
 """
 
 from __future__ import annotations
@@ -55,7 +56,7 @@ def solve_ik(kin: Kinematics, target: pin.SE3, seed: np.ndarray, *, tolerance: f
     else:
         raise UnreachableError(f"IK did not converge (pose error {err:.3g}): the target is out of reach "
                                "or at a singularity")
-    if kin.geometry.compliant:
+    if not kin.geometry.encoder_exact:
         q = _encoder_angles(kin, q, tolerance)
     lo, hi = model.lowerPositionLimit, model.upperPositionLimit
     # a revolute joint reaches the same pose a turn away: take the turn nearest the seed that lies
@@ -72,15 +73,15 @@ def solve_ik(kin: Kinematics, target: pin.SE3, seed: np.ndarray, *, tolerance: f
 
 
 def _encoder_angles(kin: Kinematics, q_link: np.ndarray, tolerance: float) -> np.ndarray:
-    """The encoder angles whose sagging link angles are `q_link` (fixed point, see the docstring)."""
-    c = kin.geometry.compliance
+    """The encoder angles whose link angles are `q_link` (fixed point, see the docstring)."""
     q = q_link.copy()
     for _ in range(50):
-        nxt = q_link + c * kin.gravity.torques(q)[0]
+        nxt = q + (q_link - kin.link_angles(q)[0])
         if np.max(np.abs(nxt - q)) < 1e-3 * tolerance:
             return nxt
         q = nxt
-    raise UnreachableError("IK: the sag under gravity does not settle (compliance too large)")
+    raise UnreachableError("IK: the encoder angles of these link angles do not settle (compliance or "
+                           "joint errors too large)")
 
 
 def solve_path(kin: Kinematics, targets: list[pin.SE3], seed: np.ndarray, max_step: float = 0.05,

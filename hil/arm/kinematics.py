@@ -11,6 +11,10 @@ and, when the arm is compliant (docs/design.md, Contracts: non-geometric errors)
 
 * c_j (rad/Nm): the link lags its encoder, q_link = q − c ⊙ g(q)                (6, ``compliance.j1 … j6``)
 
+A geometry may also carry angle-dependent joint errors e(q) and lost motion h (`hil.arm.joint_errors`):
+`link_angles` applies them after the sag, and `joint_sensitivities` gives the columns through which
+any link-angle error reaches the measured point.
+
 A measured point is p = T_bt⁻¹ · T_base_flange(q_link) · s (the tracker frame); every forward kinematics
 here evaluates at the link angles of the geometry's compliance and payload (`hil.arm.gravity`), so all
 that predicts positions (fk, validation, compensation) applies the sag. Only 27 combinations are
@@ -112,17 +116,34 @@ class Kinematics:
             self._gravity = GravityModel(self.geometry)
         return self._gravity
 
-    def link_angles(self, q: np.ndarray) -> np.ndarray:
-        """(N, 6) link angles at encoder readings `q`: q − c ⊙ g(q) on a compliant arm, else `q`."""
-        Q = as_configurations(q)
-        if not self.geometry.compliant:
+    def link_angles(self, q: np.ndarray, directions: np.ndarray | None = None) -> np.ndarray:
+        """(N, 6) link angles at encoder readings `q`: q − c ⊙ τ(q) + e(q) − h ⊙ d (docs/design.md,
+        Contracts: non-geometric errors), each term where the geometry has it.
+
+        `directions` (6 or (N, 6), each −1, 0 or +1) is the sign of each joint's last motion before the
+        reading, which lost motion needs; None: no lost motion is applied (a model told nothing about
+        the approach predicts the middle of the lost-motion band).
+        """
+        return self._link_angles(as_configurations(q), directions)
+
+    def _link_angles(self, Q: np.ndarray, directions: np.ndarray | None,
+                     torques: np.ndarray | None = None) -> np.ndarray:
+        g = self.geometry
+        if g.encoder_exact:
             return Q
-        return Q - self.geometry.compliance * self.gravity.torques(Q)
+        out = Q.copy()
+        if g.compliant:
+            out -= g.compliance * (self.gravity.torques(Q) if torques is None else torques)
+        if g.has_joint_errors:
+            out += g.joint_errors.offsets(Q)
+        if g.has_lost_motion and directions is not None:
+            out -= g.lost_motion * np.broadcast_to(np.asarray(directions, dtype=float), Q.shape)
+        return out
 
     # --- forward kinematics --------------------------------------------------------------------
-    def joint_frames(self, q: np.ndarray) -> np.ndarray:
+    def joint_frames(self, q: np.ndarray, directions: np.ndarray | None = None) -> np.ndarray:
         """(N, 7, 4, 4): the six joint frames (after their rotation) and the flange, base frame."""
-        Q = self.link_angles(q)
+        Q = self.link_angles(q, directions)
         out = np.empty((len(Q), 7, 4, 4))
         model, data, flange = self.model, self.data, self.geometry.flange
         for n, qn in enumerate(Q):
@@ -132,9 +153,10 @@ class Kinematics:
             out[n, 6] = (data.oMi[6] * flange).homogeneous
         return out
 
-    def flange_poses(self, q: np.ndarray) -> np.ndarray:
-        """(N, 4, 4) flange poses in the robot base frame (the controller's TCP with no offset)."""
-        Q = self.link_angles(q)
+    def flange_poses(self, q: np.ndarray, directions: np.ndarray | None = None) -> np.ndarray:
+        """(N, 4, 4) flange poses in the robot base frame (the controller's TCP with no offset);
+        `directions` as in `link_angles`."""
+        Q = self.link_angles(q, directions)
         out = np.empty((len(Q), 4, 4))
         model, data, flange = self.model, self.data, self.geometry.flange
         for n, qn in enumerate(Q):
@@ -142,13 +164,15 @@ class Kinematics:
             out[n] = (data.oMi[6] * flange).homogeneous
         return out
 
-    def points(self, q: np.ndarray, frame: str = "tracker", point: str = "smr") -> np.ndarray:
-        """(N, 3) positions of the SMR centre (or the flange origin) in the tracker or base frame."""
+    def points(self, q: np.ndarray, frame: str = "tracker", point: str = "smr",
+               directions: np.ndarray | None = None) -> np.ndarray:
+        """(N, 3) positions of the SMR centre (or the flange origin) in the tracker or base frame;
+        `directions` as in `link_angles`."""
         if frame not in ("tracker", "base"):
             raise ValueError(f"frame must be 'tracker' or 'base', not {frame!r}")
         if point not in ("smr", "flange"):
             raise ValueError(f"point must be 'smr' or 'flange', not {point!r}")
-        F = self.flange_poses(q)
+        F = self.flange_poses(q, directions)
         local = self.geometry.smr if point == "smr" else np.zeros(3)
         p = np.einsum("nij,j->ni", F[:, :3, :3], local) + F[:, :3, 3]
         if frame == "tracker":
@@ -157,8 +181,8 @@ class Kinematics:
         return p
 
     # --- identification Jacobian ---------------------------------------------------------------
-    def point_and_jacobian(self, q: np.ndarray, compliance: bool = False
-                           ) -> tuple[np.ndarray, np.ndarray]:
+    def point_and_jacobian(self, q: np.ndarray, compliance: bool = False,
+                           directions: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """SMR positions in the tracker frame (N, 3) and their Jacobian (N, 3, 51), or (N, 3, 57)
         with the compliance columns when `compliance` is set.
 
@@ -170,7 +194,7 @@ class Kinematics:
         Q = as_configurations(q)
         n = len(Q)
         torques = self.gravity.torques(Q) if (compliance or self.geometry.compliant) else None
-        Q_link = Q if not self.geometry.compliant else Q - self.geometry.compliance * torques
+        Q_link = self._link_angles(Q, directions, torques)
         J_joint = np.empty((n, 3, 36))
         R6 = np.empty((n, 3, 3))
         p_base = np.empty((n, 3))
@@ -203,6 +227,27 @@ class Kinematics:
             dp_dq = np.cross(axes, p_base[:, None, :] - origins)  # (n, 6, 3) base frame
             J[:, :, COMPLIANCE_SLICE] = np.einsum("ij,nkj->nik", Rt, dp_dq) * -torques[:, None, :]
         return p, J
+
+    def joint_sensitivities(self, q: np.ndarray, directions: np.ndarray | None = None) -> np.ndarray:
+        """(N, 3, 6) ∂p/∂q_link: how the SMR (tracker frame) moves per radian of each link angle.
+
+        Every link-angle error enters the point through this: the compliance, joint-error and
+        lost-motion columns of an identification are these columns times ∂q_link/∂(their parameter).
+        """
+        Q_link = self.link_angles(q, directions)
+        n = len(Q_link)
+        axes = np.empty((n, 6, 3))
+        origins = np.empty((n, 6, 3))
+        p_base = np.empty((n, 3))
+        model, data, placement = self.model, self.data, self._smr_placement
+        for k, qk in enumerate(Q_link):
+            pin.forwardKinematics(model, data, qk)
+            for j in range(6):
+                axes[k, j] = data.oMi[j + 1].rotation[:, 2]
+                origins[k, j] = data.oMi[j + 1].translation
+            p_base[k] = data.oMi[6].act(placement.translation)
+        dp_dq = np.cross(axes, p_base[:, None, :] - origins)  # (n, 6, 3) base frame
+        return np.einsum("ij,nkj->nik", self._tracker_inv.rotation, dp_dq)
 
     def jacobian(self, q: np.ndarray, params: np.ndarray | None = None) -> np.ndarray:
         """(N, 3, P) identification Jacobian, restricted to the parameter indices `params`
