@@ -61,7 +61,7 @@ class Form:
     """One way of writing a quantity: its column names (lower case, without unit suffix), what each
     holds ("angle", "length" or "number"), and how it is named in messages."""
 
-    kind: str  # "joints", "position" or "orientation"
+    kind: str  # "joint", "position" or "orientation"
     name: str
     columns: tuple[str, ...]
     quantities: tuple[str, ...]
@@ -72,17 +72,17 @@ class Form:
 
 
 JOINT_FORMS: tuple[Form, ...] = (
-    Form("joints", "q1..q6", JOINT_NAMES, ("angle",) * 6),
-    Form("joints", "URDF joint names", URDF_JOINT_NAMES, ("angle",) * 6),
+    Form("joint", "q1..q6", JOINT_NAMES, ("angle",) * 6),
+    Form("joint", "URDF joint names", URDF_JOINT_NAMES, ("angle",) * 6),
 )
 CARTESIAN = Form("position", "Cartesian", ("x", "y", "z"), ("length",) * 3)
 MARKERS = Form("position", "markers (FIGAROH)", ("x1", "y1", "z1"), ("length",) * 3)
 #: Leica's polar reading: Hz (horizontal angle, clockwise), V (zenith angle), slope distance; GeoCOM's
 #: TMC_GetSimpleMea and emScon's spherical clockwise system (ES_CS_SCW) report these three.
-POLAR = Form("position", "polar (Hz, V, slope distance)", ("hz", "v", "d"), ("angle", "angle", "length"))
+POLAR = Form("position", "polar", ("hz", "v", "d"), ("angle", "angle", "length"))
 POSITION_FORMS: tuple[Form, ...] = (CARTESIAN, MARKERS, POLAR)
-RPY = Form("orientation", "roll, pitch, yaw", ("roll", "pitch", "yaw"), ("angle",) * 3)
-RPY_FIGAROH = Form("orientation", "roll, pitch, yaw (FIGAROH)", ("phix1", "phiy1", "phiz1"), ("angle",) * 3)
+RPY = Form("orientation", "roll-pitch-yaw", ("roll", "pitch", "yaw"), ("angle",) * 3)
+RPY_FIGAROH = Form("orientation", "FIGAROH roll-pitch-yaw", ("phix1", "phiy1", "phiz1"), ("angle",) * 3)
 ROTATION_VECTOR = Form("orientation", "rotation vector", ("rx", "ry", "rz"), ("angle",) * 3)
 QUATERNION = Form("orientation", "quaternion", ("qw", "qx", "qy", "qz"), ("number",) * 4)
 ORIENTATION_FORMS: tuple[Form, ...] = (RPY, RPY_FIGAROH, ROTATION_VECTOR, QUATERNION)
@@ -323,7 +323,8 @@ def _angles_in_range(rows: Rows, lines: np.ndarray, names: Sequence[str], values
     for j, c in enumerate(names):
         bad = np.zeros_like(values, dtype=bool)
         bad[:, j] = np.abs(values[:, j]) > ANGLE_RANGE
-        hint = "; declare degrees or gon with a suffix (_deg, _gon)" if rows.header.columns[c].unit == "rad" else ""
+        read_as_radians = rows.header.columns[c].unit == "rad"
+        hint = "; declare degrees or gon with a suffix (_deg, _gon)" if read_as_radians else ""
         _check(rows, lines, names, values, bad, f"is more than a turn ({math.degrees(ANGLE_RANGE):g}°){hint}")
 
 

@@ -150,7 +150,8 @@ def _out_of_range(col: str, value: float) -> str:
     return f"{value:g} {unit} is {what} ({low:.4g} to {high:.4g} {unit})"
 
 
-def read_joints(path: str | os.PathLike[str], joint_units: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+def read_joints(path: str | os.PathLike[str],
+                joint_units: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Joint configurations (m, 6) in radians and their line numbers from a CSV with a joint form
     (q1..q6 or the URDF's names; degrees declared by a ``_deg`` suffix or `joint_units` "deg")."""
     return forms.joints(forms.read_rows(path), joint_units)
@@ -164,6 +165,20 @@ def read_measurements(path: str | os.PathLike[str], joint_units: str | None = No
     p, reflectors, _ = forms.positions(rows, lines)
     rotation, _ = forms.rotations(rows, lines)
     return Measurements(q, p, lines, rows.header.source, rows.sha256, rotation, reflectors)
+
+
+def unused_by_position_fit(meas: Measurements, user: str = "the fit") -> list[str]:
+    """One sentence for each part of a file that a fit of positions leaves unused: the orientations
+    of a 6-D file, the reflectors after the first. Said rather than dropped silently, so a user knows
+    the figures rest on the positions of the first reflector alone."""
+    notes = []
+    if meas.rotation is not None:
+        notes.append(f"{meas.source}: {len(meas)} orientations read but not used: {user} uses the "
+                     f"positions only")
+    if meas.reflectors is not None and meas.reflectors.shape[1] > 1:
+        notes.append(f"{meas.source}: {meas.reflectors.shape[1]} reflectors per pose read; {user} uses "
+                     f"the first (x1,y1,z1) only")
+    return notes
 
 
 def write_measurements(path: str | os.PathLike[str], q: np.ndarray, p: np.ndarray) -> None:
