@@ -175,3 +175,15 @@ def test_unknown_unit_suffixes_are_other_columns(tmp_path):
     text = f"{JOINTS},x_mm,y_mm,z_mm,note\n{Q0},1000,-2000,30,hi\n"
     meas = read_measurements(write(tmp_path, text, "mm.csv"))
     np.testing.assert_allclose(meas.p[0], [1.0, -2.0, 0.03], rtol=0, atol=1e-15)
+
+
+def test_figaroh_angles_read_as_pinocchio_composes_them(tmp_path, rng):
+    """FIGAROH turns phix,phiy,phiz into a matrix with pinocchio's rpyToMatrix: the reader agrees."""
+    import pinocchio as pin
+
+    rpy = rng.uniform(-math.pi, math.pi, size=(5, 3))
+    path = write(tmp_path, "x1,y1,z1,phix1,phiy1,phiz1," + URDF + "\n"
+                 + rows(np.hstack([np.ones((5, 3)), rpy, np.zeros((5, 6))])))
+    meas = read_measurements(path)
+    for k in range(5):
+        np.testing.assert_allclose(meas.rotation[k], pin.rpy.rpyToMatrix(rpy[k]), rtol=0, atol=1e-12)
