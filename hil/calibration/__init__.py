@@ -1,6 +1,8 @@
 """Turning measurements into a model: tables, identification, model files, exports, synthetic truths.
 
 * `measurements` — the measurements CSV (q1..q6, x, y, z) read and written;
+* `measurement_forms` — the other forms instruments write (degrees, URDF joint names, polar Hz/V/D,
+  an orientation per pose, several markers), read into radians and metres;
 * `identification` — tracker alignment, Levenberg–Marquardt on SE(3), outlier rejection, validation;
 * `model_file` — the ``hil-model/1`` and ``hil-truth/1`` JSON documents;
 * `exports` — URDF, ROS kinematics YAML and JSON exports of a model;
@@ -9,5 +11,6 @@
 * `selection` — the glue to the `selector` package: hil's model as its `PoseModel`, ``hil select``.
 
 No I/O with devices, no campaign state: pure computations on files and arrays.
-May import: `hil.arm`, `hil.files`, `hil.errors`, `selector`.
+May import: `hil.arm`, `hil.files`, `hil.errors`, `selector`, and `drivers.tracker.geometry` (the one
+polar↔Cartesian conversion, for polar measurement files).
 """

@@ -1,9 +1,11 @@
 """Reading and writing measurement and joint CSV files (docs/design.md, Contracts: measurements CSV).
 
-A measurements file has the header ``q1,q2,q3,q4,q5,q6,x,y,z`` (joint radians, SMR position in the
-tracker frame in metres); extra columns are allowed and ignored. Every problem is reported as an
-InputError naming the file, the line and the column, because these files come from other tools and
-people and the first thing a user needs is where to look.
+hil writes the header ``q1,q2,q3,q4,q5,q6,x,y,z`` (joint radians, SMR position in the tracker frame in
+metres); it reads that and the other forms real instruments write (`measurement_forms`: joints in
+degrees or under the URDF's names, polar tracker readings, an orientation per pose, several
+reflectors); extra columns are allowed and ignored. Every problem is reported as an InputError naming
+the file, the line and the column, because these files come from other tools and people and the first
+thing a user needs is where to look.
 """
 
 from __future__ import annotations
@@ -16,7 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hil.arm.catalog import ROBOT_NAMES, get_robot
+from hil.calibration import measurement_forms as forms
+from hil.calibration.measurement_forms import JOINT_RANGES, TRACKER_RANGE
 from hil.errors import InputError
 from hil.files.inputs import csv_rows, decode_input_text, read_input_bytes
 from hil.files.outputs import atomic_write_text, format_csv
@@ -24,24 +27,11 @@ from hil.files.outputs import atomic_write_text, format_csv
 JOINT_COLUMNS: tuple[str, ...] = ("q1", "q2", "q3", "q4", "q5", "q6")
 POINT_COLUMNS: tuple[str, ...] = ("x", "y", "z")
 
-#: Farthest a laser tracker measures (m): the Leica AT960's range is 80 m in radius, the longest of
-#: the trackers hil drives. A coordinate beyond it is a unit mistake or a corrupted file.
-TRACKER_RANGE = 80.0
-#: How far (rad) a joint reading may lie beyond the joint limits before it is refused: readings at a
-#: limit overshoot it by encoder noise at most, so anything past this was not read from a UR arm.
-JOINT_LIMIT_MARGIN = 0.1
-
-
 def _column_ranges() -> dict[str, tuple[float, float, str]]:
-    """The plausible range of every column hil knows, and its unit.
-
-    A file does not say which arm it came from, so a joint column accepts what any catalog arm's
-    limits allow (plus `JOINT_LIMIT_MARGIN`); the points must lie within a tracker's range.
-    """
-    specs = [get_robot(n) for n in ROBOT_NAMES]
-    out = {c: (float(min(s.lower[j] for s in specs)) - JOINT_LIMIT_MARGIN,
-               float(max(s.upper[j] for s in specs)) + JOINT_LIMIT_MARGIN, "rad")
-           for j, c in enumerate(JOINT_COLUMNS)}
+    """The plausible range of every column of hil's own form, and its unit (`measurement_forms`
+    holds the reasons: a joint within any catalog arm's limits plus `JOINT_LIMIT_MARGIN`, a point
+    within `TRACKER_RANGE`)."""
+    out = {c: (low, high, "rad") for c, (low, high) in zip(JOINT_COLUMNS, JOINT_RANGES, strict=True)}
     out.update({c: (-TRACKER_RANGE, TRACKER_RANGE, "m") for c in POINT_COLUMNS})
     return out
 
@@ -64,19 +54,29 @@ class Table:
 
 @dataclass(frozen=True)
 class Measurements:
-    """Joint configurations and the tracker's SMR positions, one row per pose."""
+    """Joint configurations and the tracker's SMR positions, one row per pose.
+
+    `rotation` and `reflectors` are there when the file had them: the orientation of the measured frame
+    (a camera's, a 6-DoF probe's) in the instrument frame, and every reflector of a pose when it
+    carried several (FIGAROH's markers). `p` is always the first reflector's position, so a caller that
+    knows only positions reads every file the same way.
+    """
 
     q: np.ndarray  # (m, 6) radians
     p: np.ndarray  # (m, 3) metres, tracker frame
     lines: np.ndarray  # (m,) 1-based line numbers in the source file
     source: str = "<memory>"
     sha256: str = ""
+    rotation: np.ndarray | None = None  # (m, 3, 3) measured frame -> instrument frame
+    reflectors: np.ndarray | None = None  # (m, R, 3) metres; reflectors[:, 0] == p
 
     def __len__(self) -> int:
         return len(self.q)
 
     def subset(self, mask: np.ndarray) -> Measurements:
-        return Measurements(self.q[mask], self.p[mask], self.lines[mask], self.source, self.sha256)
+        return Measurements(self.q[mask], self.p[mask], self.lines[mask], self.source, self.sha256,
+                            None if self.rotation is None else self.rotation[mask],
+                            None if self.reflectors is None else self.reflectors[mask])
 
     @classmethod
     def from_arrays(cls, q: np.ndarray, p: np.ndarray, source: str = "<memory>",
@@ -150,18 +150,35 @@ def _out_of_range(col: str, value: float) -> str:
     return f"{value:g} {unit} is {what} ({low:.4g} to {high:.4g} {unit})"
 
 
-def read_joints(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
-    """Joint configurations (m, 6) and their line numbers from a CSV with columns q1..q6."""
-    table = read_table(path, JOINT_COLUMNS)
-    return np.column_stack([table.columns[c] for c in JOINT_COLUMNS]), table.lines
+def read_joints(path: str | os.PathLike[str],
+                joint_units: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Joint configurations (m, 6) in radians and their line numbers from a CSV with a joint form
+    (q1..q6 or the URDF's names; degrees declared by a ``_deg`` suffix or `joint_units` "deg")."""
+    return forms.joints(forms.read_rows(path), joint_units)
 
 
-def read_measurements(path: str | os.PathLike[str]) -> Measurements:
-    """A measurements CSV (q1..q6, x, y, z) as `Measurements`."""
-    table = read_table(path, JOINT_COLUMNS + POINT_COLUMNS)
-    q = np.column_stack([table.columns[c] for c in JOINT_COLUMNS])
-    p = np.column_stack([table.columns[c] for c in POINT_COLUMNS])
-    return Measurements(q, p, table.lines, table.source, table.sha256)
+def read_measurements(path: str | os.PathLike[str], joint_units: str | None = None) -> Measurements:
+    """A measurements CSV in any form `measurement_forms` knows, as `Measurements` in radians and
+    metres; `joint_units` ("rad" or "deg") declares the unit of joint columns without a suffix."""
+    rows = forms.read_rows(path)
+    q, lines = forms.joints(rows, joint_units)
+    p, reflectors, _ = forms.positions(rows, lines)
+    rotation, _ = forms.rotations(rows, lines)
+    return Measurements(q, p, lines, rows.header.source, rows.sha256, rotation, reflectors)
+
+
+def unused_by_position_fit(meas: Measurements, user: str = "the fit") -> list[str]:
+    """One sentence for each part of a file that a fit of positions leaves unused: the orientations
+    of a 6-D file, the reflectors after the first. Said rather than dropped silently, so a user knows
+    the figures rest on the positions of the first reflector alone."""
+    notes = []
+    if meas.rotation is not None:
+        notes.append(f"{meas.source}: {len(meas)} orientations read but not used: {user} uses the "
+                     f"positions only")
+    if meas.reflectors is not None and meas.reflectors.shape[1] > 1:
+        notes.append(f"{meas.source}: {meas.reflectors.shape[1]} reflectors per pose read; {user} uses "
+                     f"the first (x1,y1,z1) only")
+    return notes
 
 
 def write_measurements(path: str | os.PathLike[str], q: np.ndarray, p: np.ndarray) -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from hil.cli.support.options import PAYLOAD_HELP, payload_or_none
+from hil.cli.support.options import PAYLOAD_HELP, add_joint_units, payload_or_none
 from hil.cli.support.output import wrote
 from hil.jobs.outcome import EXIT_OK
 
@@ -12,10 +12,12 @@ from hil.jobs.outcome import EXIT_OK
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("fk", help="forward kinematics of a model",
                        description="Write x,y,z (metres) of the SMR or flange for each row of a joints "
-                                   "CSV (q1..q6, radians).")
+                                   "CSV (q1..q6 in radians, q1_deg..q6_deg in degrees, or the URDF's "
+                                   "joint names).")
     p.add_argument("--model", required=True, metavar="model.json", help="hil-model/1 or hil-truth/1")
     p.add_argument("--joints", required=True, metavar="Q.csv",
-                   help="joint configurations: CSV with columns q1..q6 (radians)")
+                   help="joint configurations: CSV with columns q1..q6 (radians) or another joint form")
+    add_joint_units(p)
     p.add_argument("--frame", choices=("tracker", "base"), default="tracker",
                    help="frame of the positions written: the tracker's (as it would measure them) or "
                         "the robot base's")
@@ -42,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
     payload = payload_or_none(args.payload)
     if payload is not None:
         geometry = geometry.with_payload(payload if payload.mass > 0 else None)
-    q, _ = read_joints(args.joints)
+    q, _ = read_joints(args.joints, args.joint_units)
     points = Kinematics(geometry).points(q, frame=args.frame, point=args.point)
     atomic_write_text(args.out, format_csv(("x", "y", "z"), points))
     wrote(args.out, f"{len(points)} positions, {args.point} in the {args.frame} frame")

@@ -6,8 +6,8 @@ import argparse
 from typing import TYPE_CHECKING
 
 from hil.arm.catalog import ROBOT_NAMES, get_robot
-from hil.cli.support.options import PAYLOAD_HELP, payload_or_none, triplet_or_none
-from hil.cli.support.output import mm, print_json, wrote
+from hil.cli.support.options import PAYLOAD_HELP, add_joint_units, payload_or_none, triplet_or_none
+from hil.cli.support.output import mm, print_json, say, wrote
 from hil.jobs.outcome import EXIT_OK
 
 if TYPE_CHECKING:
@@ -17,11 +17,14 @@ if TYPE_CHECKING:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("identify", help="identify a calibrated model from measurements",
                        description="Fit the kinematic parameters of a UR arm to SMR positions measured "
-                                   "by a tracker (CSV q1..q6,x,y,z) and write a hil-model/1 JSON.")
+                                   "by a tracker (CSV q1..q6,x,y,z, or another form of docs/design.md: "
+                                   "joints in degrees, polar hz,v,d, FIGAROH's x1,y1,z1,phix1,…) and "
+                                   "write a hil-model/1 JSON.")
     p.add_argument("--robot", required=True, help=f"robot type ({', '.join(ROBOT_NAMES)})")
     p.add_argument("--measurements", required=True, metavar="M.csv", help="measurements CSV")
     p.add_argument("--smr", metavar="X,Y,Z", help="rough SMR offset in the flange frame (m)")
     p.add_argument("--validation", metavar="V.csv", help="held-out measurements to validate on")
+    add_joint_units(p)
     p.add_argument("--no-reject", action="store_true", help="keep every pose (no outlier rejection)")
     p.add_argument("--compliance", action="store_true",
                    help="identify the joints' compliance (rad/Nm) with the geometry, for --payload")
@@ -48,7 +51,7 @@ def summary(fit: FitResult) -> dict:
 def run(args: argparse.Namespace) -> int:
     from hil.arm.payload import gravity_of_mounting
     from hil.calibration.identification import identify, validate
-    from hil.calibration.measurements import read_measurements
+    from hil.calibration.measurements import read_measurements, unused_by_position_fit
     from hil.calibration.model_file import model_document, write_json
     from hil.cli.support.output_paths import campaign_store
     from hil.files.outputs import check_output
@@ -59,8 +62,8 @@ def run(args: argparse.Namespace) -> int:
                  inputs={"--measurements": args.measurements, "--validation": args.validation})
     robot = get_robot(args.robot).name
     smr = triplet_or_none(args.smr, "--smr", max_length=MAX_SMR_OFFSET, where="of the flange")
-    meas = read_measurements(args.measurements)
-    held_out = read_measurements(args.validation) if args.validation else None
+    meas = read_measurements(args.measurements, args.joint_units)
+    held_out = read_measurements(args.validation, args.joint_units) if args.validation else None
     payload = payload_or_none(args.payload)
     mounting = triplet_or_none(args.mounting, "--mounting")
     fit = identify(meas, robot, smr, reject_outliers=not args.no_reject, compliance=args.compliance,
@@ -69,7 +72,12 @@ def run(args: argparse.Namespace) -> int:
     validation = validate(fit.geometry, held_out).as_dict() if held_out is not None else None
     write_json(args.out, model_document(fit, validation))
     wrote(args.out, f"hil-model/1, {len(fit.indices)} parameters")
+    notes = unused_by_position_fit(meas) + (unused_by_position_fit(held_out) if held_out is not None else [])
+    for note in notes:
+        say(note)
     info = summary(fit)
+    if notes:
+        info["notes"] = notes
     if validation is not None:
         info["validation"] = validation
     if args.json:

@@ -5,21 +5,23 @@ from __future__ import annotations
 import argparse
 
 from hil.calibration.identification import validate
-from hil.calibration.measurements import read_measurements
+from hil.calibration.measurements import read_measurements, unused_by_position_fit
 from hil.calibration.model_file import load_geometry
-from hil.cli.support.options import RMS_THRESHOLD_HELP, rms_threshold
-from hil.cli.support.output import mm, print_json
+from hil.cli.support.options import RMS_THRESHOLD_HELP, add_joint_units, rms_threshold
+from hil.cli.support.output import mm, print_json, say
 from hil.jobs.outcome import EXIT_FAILED, EXIT_OK
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("validate", help="check a model against held-out measurements",
                        description="Distances between a model's predicted SMR positions and measured "
-                                   "ones (CSV q1..q6,x,y,z). Exit code 1 when --max-rms is exceeded.")
+                                   "ones (CSV q1..q6,x,y,z or another form of docs/design.md). Exit "
+                                   "code 1 when --max-rms is exceeded.")
     p.add_argument("--model", required=True, metavar="model.json",
                    help="model to check (hil-model/1, or a hil-truth/1 to see the noise floor)")
     p.add_argument("--measurements", required=True, metavar="V.csv",
-                   help="measurements the model was not fitted to: CSV q1..q6,x,y,z")
+                   help="measurements the model was not fitted to: CSV q1..q6,x,y,z (or another form)")
+    add_joint_units(p)
     p.add_argument("--max-rms", type=rms_threshold, metavar="METRES",
                    help=f"acceptance threshold on the RMS, {RMS_THRESHOLD_HELP}")
     p.add_argument("--json", action="store_true", help="print the statistics as JSON")
@@ -28,10 +30,15 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     geometry, _ = load_geometry(args.model)
-    stats = validate(geometry, read_measurements(args.measurements))
+    meas = read_measurements(args.measurements, args.joint_units)
+    stats = validate(geometry, meas)
+    notes = unused_by_position_fit(meas, "validation")
+    for note in notes:
+        say(note)
     passed = args.max_rms is None or stats.rms <= args.max_rms
     if args.json:
-        print_json({**stats.as_dict(), "max_rms": args.max_rms, "passed": passed})
+        print_json({**stats.as_dict(), "max_rms": args.max_rms, "passed": passed,
+                    **({"notes": notes} if notes else {})})
     else:
         print(f"{stats.count} poses: mean {mm(stats.mean)}  RMS {mm(stats.rms)}  max {mm(stats.max)}"
               + ("" if args.max_rms is None else ("  PASS" if passed else "  FAIL")))

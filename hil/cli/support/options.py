@@ -51,6 +51,18 @@ def payload_or_none(text: str | None, option: str = "--payload") -> Any:
     return Payload.from_dict({"mass": values[0], "com": com}, option)
 
 
+#: ``--joint-units``: the unit of joint columns whose names carry no unit suffix (docs/design.md, Contracts:
+#: Measurements CSV). Declared, never guessed from the values.
+JOINT_UNITS: tuple[str, ...] = ("rad", "deg")
+JOINT_UNITS_HELP = ("unit of the joint columns whose names carry no unit suffix (default rad; a header "
+                    "q1_deg..q6_deg declares degrees itself)")
+
+
+def add_joint_units(parser: Any) -> None:
+    """The ``--joint-units rad|deg`` option of every command that reads joint angles from a CSV."""
+    parser.add_argument("--joint-units", choices=JOINT_UNITS, default=None, help=JOINT_UNITS_HELP)
+
+
 #: Largest plausible RMS acceptance threshold (m): a calibrated arm is judged on tenths of a millimetre,
 #: so a larger value is a threshold typed in millimetres (``--accept 0.1`` would pass at 100 mm).
 MAX_RMS_THRESHOLD = 0.01

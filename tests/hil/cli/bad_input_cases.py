@@ -233,6 +233,15 @@ def csv_columns(name: str, columns: Sequence[int], value: str) -> Callable[[Path
     return make
 
 
+def csv_header_as(name: str, header: str, extra: str = "") -> Callable[[Path], str]:
+    """`name` with its header replaced by `header` and `extra` appended to every data line: the same
+    numbers declared in another form (a measurements form of docs/design.md, or a broken one)."""
+    def make(d: Path) -> str:
+        lines = _lines(d, name)
+        return "\n".join([header, *(line + extra for line in lines[1:])]) + "\n"
+    return make
+
+
 def csv_head(name: str, rows: int) -> Callable[[Path], str]:
     return lambda d: "\n".join(_lines(d, name)[:rows + 1]) + "\n"
 
@@ -426,6 +435,54 @@ def _cases() -> list[Case]:
             fname = f"{ident}.csv"
             add(cmd, f"{option}:{ident}", argv_of("{dir}/" + fname), [fname], files={fname: content})
 
+    def bad_forms(cmd: str, argv_of: Callable[[str], list[str]], name: str, xyz: bool = True) -> None:
+        """`name` in a header form that is incomplete, ambiguous or contradicts ``--joint-units``
+        (docs/design.md, Contracts: Measurements CSV), and ``--joint-units`` itself wrong."""
+        joints_deg = ",".join(f"q{i}_deg" for i in range(1, 7))
+        tail = ",x,y,z" if xyz else ""
+        variants: list[tuple[str, Content, list[str], list[str]]] = [
+            ("joint-degrees-as-radians", csv_with(name, 3, 0, "90"), [], ["q1_deg", "--joint-units deg"]),
+            ("mixed-joint-units", csv_header_as(name, "q1_deg,q2,q3,q4,q5,q6" + tail), [], ["mix units"]),
+            ("degrees-but-joint-units-rad", csv_header_as(name, joints_deg + tail), ["--joint-units", "rad"],
+             ["--joint-units", "deg"]),
+            ("two-joint-forms", csv_header_as(name, "q1,q2,q3,q4,q5,q6" + tail + ",shoulder_pan_joint,"
+                                              "shoulder_lift_joint,elbow_joint,wrist_1_joint,wrist_2_joint,"
+                                              "wrist_3_joint", ",0,0,0,0,0,0"), [], ["keep one joint form"]),
+            ("no-joint-form", csv_header_as(name, "a1,a2,a3,a4,a5,a6" + tail), [], ["no joint columns"]),
+        ]
+        if xyz:
+            q = "q1,q2,q3,q4,q5,q6"
+            variants += [
+                ("no-position-form", csv_header_as(name, f"{q},a,b,c"), [], ["no position columns"]),
+                ("polar-without-distance", csv_header_as(name, f"{q},hz,v,c"), [], ["missing column(s) d"]),
+                ("cartesian-and-polar", csv_header_as(name, f"{q},x,y,z,hz,v,d", ",0.1,1.5,2"), [],
+                 ["x,y,z", "hz,v,d"]),
+                ("polar-zero-distance", csv_header_as(name, f"{q},a,b,c,hz,v,d", ",0.1,1.5,0"), [],
+                 ["column d", "distance"]),
+                ("polar-degrees-as-radians", csv_header_as(name, f"{q},a,b,c,hz,v,d", ",120,80,2"), [],
+                 ["column hz", "_deg"]),
+                ("marker-without-z2", csv_header_as(name, f"{q},x1,y1,z1,x2,y2", ",0.1,0.2"), [],
+                 ["marker 2", "z2"]),
+                ("marker-gap", csv_header_as(name, f"{q},x1,y1,z1,x3,y3,z3", ",0.1,0.2,0.3"), [],
+                 ["marker 3"]),
+                ("quaternion-not-unit", csv_header_as(name, f"{q},x,y,z,qw,qx,qy,qz", ",1,1,0,0"), [],
+                 ["qw,qx,qy,qz", "unit quaternion"]),
+                ("rpy-without-yaw", csv_header_as(name, f"{q},x,y,z,roll,pitch", ",0,0"), [],
+                 ["missing column(s) yaw"]),
+                ("rpy-degrees-as-radians", csv_header_as(name, f"{q},x,y,z,roll,pitch,yaw", ",90,0,0"), [],
+                 ["column roll", "_deg"]),
+            ]
+        for ident, content, options, names in variants:
+            fname = f"{ident}.csv"
+            add(cmd, f"{option_of(cmd)}:{ident}", [*argv_of("{dir}/" + fname), *options], [fname, *names],
+                files={fname: content})
+        for v in ("grad", "", "DEG"):
+            add(cmd, f"--joint-units={v}", [*argv_of(f"{{dir}}/{name}"), f"--joint-units={v}"],
+                ["--joint-units"])
+
+    def option_of(cmd: str) -> str:
+        return "--joints" if cmd == "fk" else "--measurements"
+
     def bad_program(cmd: str, argv_of: Callable[[str], list[str]]) -> None:
         bad_files(cmd, argv_of, "PROGRAM", "MOVEB")
         variants: list[tuple[str, Content]] = [
@@ -585,6 +642,8 @@ def _cases() -> list[Case]:
                                       *out_model], ["--robot"])
     bad_csv("identify", lambda p: ["identify", "--robot", "ur5e", "--measurements", p, *out_model],
             "--measurements", "measurements.csv")
+    bad_forms("identify", lambda p: ["identify", "--robot", "ur5e", "--measurements", p, *out_model],
+              "measurements.csv")
     for ident_, content in (("too-few-rows", csv_head("measurements.csv", 8)),
                             ("constant-xyz", csv_columns("measurements.csv", (6, 7, 8), "1.0")),
                             ("constant-q1", csv_columns("measurements.csv", (0,), "0.1"))):
@@ -620,6 +679,8 @@ def _cases() -> list[Case]:
              "--model", "model.json")
     bad_csv("validate", lambda p: ["validate", "--model", f"{d}/model.json", "--measurements", p],
             "--measurements", "validation.csv")
+    bad_forms("validate", lambda p: ["validate", "--model", f"{d}/model.json", "--measurements", p],
+              "validation.csv")
 
     # ---------------------------------------------------------------- fk
     fk = ["fk", "--model", f"{d}/model.json", "--joints", f"{d}/joints.csv"]
@@ -627,6 +688,8 @@ def _cases() -> list[Case]:
              "--model", "model.json")
     bad_csv("fk", lambda p: ["fk", "--model", f"{d}/model.json", "--joints", p, "--out", f"{d}/p.csv"],
             "--joints", "joints.csv", xyz=False)
+    bad_forms("fk", lambda p: ["fk", "--model", f"{d}/model.json", "--joints", p, "--out", f"{d}/p.csv"],
+              "joints.csv", xyz=False)
     add("fk", "--frame=moon", [*fk, "--frame", "moon", "--out", f"{d}/p.csv"], ["--frame"])
     add("fk", "--point=elbow", [*fk, "--point", "elbow", "--out", f"{d}/p.csv"], ["--point"])
     add("fk", "--out=--joints", [*fk, "--out", f"{d}/joints.csv"], ["joints.csv"])
