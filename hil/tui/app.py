@@ -110,8 +110,10 @@ class HilApp(App[int]):
 
     def on_unmount(self) -> None:
         # Every way out goes through action_quit_app, which has done this already (with a visible
-        # "stopping..."); this is the last resort when the app ends otherwise.
-        if self.session.run_active:
+        # "stopping..."); this is the last resort when the app ends otherwise. A run the quit gave
+        # up (busy computing, its campaign marked interrupted) is not waited for again: that wait
+        # once held the closed app for STOP_WAIT seconds after the screen was restored.
+        if self.session.run_active and not self.session.run_given_up:
             self.session.interrupt()
             if not self.session.wait_for_run(STOP_WAIT):
                 self.session.abandon_run()

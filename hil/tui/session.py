@@ -537,6 +537,12 @@ class Session:
         if engine is not None:
             engine.request_interrupt(QUIT_REASON)
 
+    @property
+    def run_given_up(self) -> bool:
+        """Whether `abandon_run` gave the run up: its campaign is marked and its writes are dropped,
+        so nothing is left to wait for, however long its thread still computes."""
+        return self._gate.abandoned
+
     def wait_for_run(self, timeout: float) -> bool:
         """Wait (bounded) for the run thread to end; True if no run is left."""
         thread = self._run_thread
