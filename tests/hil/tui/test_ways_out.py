@@ -59,7 +59,7 @@ def test_every_way_out_mid_run_asks_once_stops_the_arm_now_and_leaves_the_campai
             assert "stopping the arm" in shown[0][0]
             # once the stop is sent, the screen says so, and how long the closing may take
             stopped = [stage for stage, _ in shown if "the arm is stopped" in stage]
-            assert stopped and "closes within" in stopped[0], shown
+            assert stopped and "the app closes in a few seconds (at most" in stopped[0], shown
         assert st.arm.stopped_while_holding  # the move in progress was stopped, not finished
         assert app.return_value == EXIT_INTERRUPTED  # resumable: as `hil calibrate` interrupted
         campaign = app.run_state.campaign
