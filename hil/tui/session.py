@@ -107,6 +107,13 @@ def _error(exc: BaseException) -> str:
     return plain(exc)
 
 
+def _is_verification(record: Any) -> bool:
+    """Whether a stored campaign is an ISO 9283 pose test (``hil verify``), whose report is its own."""
+    from hil.store.records import VERIFICATION
+
+    return getattr(record.summary, "kind", "") == VERIFICATION
+
+
 def _dotted(overrides: dict[str, Any]) -> dict[str, Any]:
     return {k.replace(".", "__"): v for k, v in overrides.items()}
 
@@ -668,7 +675,13 @@ class Session:
             for kind in kinds:
                 suffix, fmt = EXPORTS[kind]
                 path = out / f"{record.id}{suffix}"
-                if fmt == "html":
+                if fmt == "html" and _is_verification(record):  # the pose test's own page, as `hil
+                    from hil.report.data import check_verification  # verify --report` writes it
+                    from hil.report.verification import write_verification_report
+
+                    check_verification(record.result or {}, f"campaign {record.id}")
+                    write_verification_report(record.result, path)
+                elif fmt == "html":
                     if not record.result or "model" not in record.result:
                         raise InputError(f"campaign {record.id} has no finished result to report")
                     write_report(report_data_from_result(record.result, source=f"campaign {record.id}"),
