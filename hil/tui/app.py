@@ -348,7 +348,8 @@ class HilApp(App[int]):
             elif choice == "new":
                 self.session.start_run(None)
 
-        self.push_screen(ResumeDialog(message.campaign, message.measured, message.planned), answer)
+        self.push_screen(ResumeDialog(message.campaign, message.measured, message.planned,
+                                      message.bootstrap), answer)
 
     def action_pause(self) -> None:
         if not self.session.run_active or self.session.engine is None:

@@ -290,7 +290,8 @@ class Session:
         except Exception as exc:
             log.info("looking for an unfinished campaign: %s", technical(exc))
             return
-        st.unfinished = (campaign, summary.measured, summary.planned) if campaign and summary else None
+        st.unfinished = ((campaign, summary.measured, summary.planned, summary.bootstrap_measured)
+                         if campaign and summary else None)
 
     def disconnect(self) -> None:
         with self._device_lock:
@@ -415,7 +416,8 @@ class Session:
             self.store.check_claim(campaign, serial or "")
             if campaign is not None:
                 summary = self.store.campaign(campaign).summary
-                self.post(ResumeQuestion(campaign, summary.measured, summary.planned))
+                self.post(ResumeQuestion(campaign, summary.measured, summary.planned,
+                                         summary.bootstrap_measured))
                 return
         except LeaseRefused as exc:
             self.notice(str(exc), "warning")
