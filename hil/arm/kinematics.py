@@ -34,11 +34,11 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
-import scipy.linalg
 
 from hil.arm.catalog import RobotSpec, get_robot
 from hil.arm.geometry import Geometry, pose
 from hil.arm.payload import FLOOR_GRAVITY, Payload
+from hil.arm.pivoted_qr import pivoted_qr
 
 _AXES = ("tx", "ty", "tz", "rx", "ry", "rz")
 
@@ -322,10 +322,11 @@ def select_identifiable(J: np.ndarray, tol: float = RANK_TOLERANCE) -> np.ndarra
     """Indices of a maximal set of independent columns of the stacked Jacobian `J` (rows × 51, or
     × 57 with the compliance columns, which come last: geometry wins where they are equivalent).
 
-    Pivoted QR (LAPACK geqp3) on unit-norm columns, group by group in `_GROUP_ORDER`: each group's
-    columns are first projected on the complement of the columns already chosen, and pivoted QR then
-    keeps those whose residual exceeds `tol`. Within a group the pivoting picks the best-conditioned
-    columns; across groups the order settles exact equivalences so the set is stable.
+    Pivoted QR (`hil.arm.pivoted_qr`: the columns LAPACK's geqp3 picks) on unit-norm columns, group by
+    group in `_GROUP_ORDER`: each group's columns are first projected on the complement of the columns
+    already chosen, and pivoted QR then keeps those whose residual exceeds `tol`. Within a group the
+    pivoting picks the best-conditioned columns; across groups the order settles exact equivalences so
+    the set is stable.
     """
     J = np.asarray(J, dtype=float)
     norms = np.linalg.norm(J, axis=0)
@@ -337,8 +338,7 @@ def select_identifiable(J: np.ndarray, tol: float = RANK_TOLERANCE) -> np.ndarra
         idx = np.arange(J.shape[1])[group]
         cols = Js[:, idx] - basis @ (basis.T @ Js[:, idx])
         cols[:, norms[idx] == 0] = 0.0
-        q, r, piv = scipy.linalg.qr(cols, mode="economic", pivoting=True)
-        diag = np.abs(np.diag(r))
+        q, diag, piv = pivoted_qr(cols)
         k = int(np.sum(diag > tol))
         chosen.extend(int(i) for i in idx[piv[:k]])
         basis = np.hstack([basis, q[:, :k]])
@@ -349,8 +349,7 @@ def numerical_rank(J: np.ndarray, tol: float = RANK_TOLERANCE) -> int:
     """Rank of `J` with unit-norm columns, by plain pivoted QR (a cross-check of the selection)."""
     norms = np.linalg.norm(J, axis=0)
     Js = J[:, norms > 0] / norms[norms > 0]
-    r = scipy.linalg.qr(Js, mode="r", pivoting=True)[0]
-    d = np.abs(np.diag(r))
+    d = pivoted_qr(Js)[1]
     return int(np.sum(d > tol * d[0]))
 
 

@@ -3,8 +3,10 @@
 The fit is a Levenberg–Marquardt loop written here rather than ``scipy.optimize.least_squares``
 because the step must be applied *multiplicatively* on SE(3) (`kinematics.apply_update`): scipy only
 adds steps to a vector, and an additive update of the twist with the Jacobian taken at zero error
-converges to a biased answer. Everything else comes from libraries (pinocchio for the kinematics,
-scipy for the rigid alignment, QR and the F distribution).
+converges to a biased answer. Everything else comes from libraries: pinocchio for the kinematics,
+numpy for the linear algebra (the Kabsch alignment is one 3 × 3 SVD; the pivoted QR is
+`hil.arm.pivoted_qr`), scipy for the F distribution, imported only when a pose may be an outlier —
+scipy's import was most of ``hil identify``'s start-up.
 
 Steps:
 1. check the data can identify the parameters at all (pose count, joints that never move, rank);
@@ -19,14 +21,11 @@ Steps:
 
 from __future__ import annotations
 
+import math
 import time
-import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg
-import scipy.special
-from scipy.spatial.transform import Rotation
 
 from hil.arm.geometry import Geometry
 from hil.arm.kinematics import (
@@ -43,6 +42,7 @@ from hil.arm.kinematics import (
     numerical_rank,
 )
 from hil.arm.payload import Payload
+from hil.arm.pivoted_qr import pivoted_qr
 from hil.calibration.measurements import Measurements, measurements_sha256
 from hil.errors import HilError, InputError
 
@@ -155,8 +155,7 @@ def check_design(meas: Measurements, robot: str, compliance: bool = False,
     J = Kinematics(generic).jacobian(meas.q, idx).reshape(-1, n)
     if numerical_rank(J) < n:
         norms = np.linalg.norm(J, axis=0)
-        _, r, piv = scipy.linalg.qr(J / norms, mode="economic", pivoting=True)
-        d = np.abs(np.diag(r))
+        _, d, piv = pivoted_qr(J / norms)
         lost = [ALL_PARAMETER_NAMES[idx[piv[k]]] for k in range(n) if d[k] <= 1e-7 * d[0]]
         raise InputError(f"{src}: degenerate pose set: the poses cannot identify {', '.join(lost)} "
                          "(use more distinct poses that move every joint)")
@@ -169,12 +168,23 @@ def check_design(meas: Measurements, robot: str, compliance: bool = False,
                          "identify the arm; check the x,y,z columns")
 
 
+def kabsch_rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The rotation R minimising Σ‖aᵢ − R·bᵢ‖² over centred point sets `a`, `b` (n × 3): Kabsch's
+    (1976) closed form from the SVD of the 3 × 3 cross-covariance, a reflection turned into a rotation.
+
+    What ``scipy.spatial.transform.Rotation.align_vectors`` computes, without its import (0.08 s of
+    ``hil identify``'s start-up, for one 3 × 3 SVD).
+    """
+    U, _, Vt = np.linalg.svd(b.T @ a)
+    flip = np.sign(np.linalg.det(Vt.T @ U.T)) or 1.0
+    return Vt.T @ np.diag([1.0, 1.0, flip]) @ U.T
+
+
 def align_tracker(geometry: Geometry, meas: Measurements) -> Geometry:
     """`geometry` with its tracker pose from a closed-form rigid fit of modelled to measured points."""
     base = Kinematics(geometry).points(meas.q, frame="base")
     ca, cb = meas.p.mean(axis=0), base.mean(axis=0)
-    rot, _ = Rotation.align_vectors(meas.p - ca, base - cb)  # measured ≈ R·base + t
-    R = rot.as_matrix()
+    R = kabsch_rotation(meas.p - ca, base - cb)  # measured ≈ R·base + t
     t = ca - R @ cb
     out = geometry.copy()
     out.tracker.rotation = R.T
@@ -208,9 +218,8 @@ def _levenberg_marquardt(state: _State, q: np.ndarray, p_meas: np.ndarray, idx: 
         D = np.maximum(np.diag(A), 1e-30)
         improved = False
         while lam < 1e12:
-            with warnings.catch_warnings():  # degenerate data: the rank check after the fit says so
-                warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
-                step = scipy.linalg.solve(A + lam * np.diag(D), g, assume_a="pos")
+            # positive definite (D > 0, λ > 0); degenerate data: the rank check after the fit says so
+            step = np.linalg.solve(A + lam * np.diag(D), g)
             full = np.zeros(state.J.shape[2])
             full[idx] = step
             cand = _State.at(apply_update(state.geometry, full), q, state.compliance)
@@ -241,23 +250,52 @@ def _statistics(J: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, float, float]
     return inv, sigma2, float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
 
 
-def _worst_outlier(Jp: np.ndarray, res: np.ndarray, inv: np.ndarray) -> tuple[int, float]:
-    """Index (among the used poses) of the most significant outlier and its F-test p-value."""
+def chi2_3_sf(x: float) -> float:
+    """P(χ² > x) for 3 degrees of freedom, in closed form: erfc(√(x/2)) + √(2x/π)·e^(−x/2)
+    (Abramowitz & Stegun 26.4.4 with ν = 3)."""
+    x = max(x, 0.0)
+    return math.erfc(math.sqrt(x / 2.0)) + math.sqrt(2.0 * x / math.pi) * math.exp(-x / 2.0)
+
+
+def f_3_sf_lower_bound(f: float) -> float:
+    """A lower bound of P(F > f) for F(3, ν₂), whatever ν₂ ≥ 1: P(χ²₃ > max(3f, 3)).
+
+    Why: F = X/Y with X = χ²₃/3 and Y = χ²_ν₂/ν₂ independent, E[Y] = 1, so P(F > f) = E[g(Y)] with
+    g(y) = P(χ²₃ > 3fy). For 3f ≥ 3, g is convex on y ≥ 1/(3f) (χ²₃'s density falls beyond its mode
+    at 1) and concave below; its tangent at y = 1 stays under it on both pieces (at y = 0 it reaches
+    g(1) + 3f·p(3f) ≤ 0.86 < 1 = g(0), p χ²₃'s density), so by Jensen E[g(Y)] ≥ g(1) = P(χ²₃ > 3f).
+    For 3f < 3 the survival function only grows as f falls. The F tail is heavier than χ²'s: the
+    bound tightens as ν₂ grows (tests/hil/calibration/test_identification_outlier_test.py checks it
+    against scipy's F distribution).
+    """
+    return chi2_3_sf(max(3.0 * f, 3.0))
+
+
+def _outlier(Jp: np.ndarray, res: np.ndarray, inv: np.ndarray, level: float) -> tuple[int, float] | None:
+    """(index among the used poses, F-test p-value) of the most significant outlier if its p-value is
+    below `level`, else None.
+
+    The p-values are scipy's F distribution (``scipy.special.fdtrc``), imported only when the largest
+    F statistic could be significant (`f_3_sf_lower_bound`): on data without outliers ``hil identify``
+    then never loads scipy, whose import was most of its start-up (bench/cli_startup.py).
+    """
     m, n = Jp.shape[0], Jp.shape[2]
     dof = 3 * m - n
     if dof - 3 < 1:
-        return -1, 1.0
+        return None
     H = np.einsum("nij,jk,nlk->nil", Jp, inv, Jp)  # leverage blocks
     Q = np.linalg.pinv(np.eye(3) - H)
     qi = np.einsum("ni,nij,nj->n", res, Q, res)
     ssr = float(np.sum(res * res))
     s2_loo = np.maximum(ssr - qi, 1e-300) / (dof - 3)
     F = qi / (3.0 * s2_loo)
-    # the F distribution's survival function, scipy.stats.f.sf(F, 3, dof - 3) without scipy.stats:
-    # importing it took a second of `hil identify`'s start-up (bench/cli_startup.py)
+    if f_3_sf_lower_bound(float(np.max(F))) >= level:
+        return None
+    import scipy.special  # the F distribution's survival function, without scipy.stats (a second)
+
     pvals = scipy.special.fdtrc(3, dof - 3, F)
     k = int(np.argmin(pvals))
-    return k, float(pvals[k])
+    return (k, float(pvals[k])) if pvals[k] < level else None
 
 
 _REGISTRATION = np.r_[np.arange(N_PARAMETERS)[TRACKER_SLICE], np.arange(N_PARAMETERS)[SMR_SLICE]]
@@ -320,9 +358,10 @@ def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
         inv, sigma2, cond = _statistics(Jp.reshape(-1, n), res[used].ravel())
         if not reject_outliers or len(rejected) >= max_reject:
             break
-        k, pval = _worst_outlier(Jp, res[used], inv)
-        if k < 0 or pval >= alpha / used.sum():
+        worst = _outlier(Jp, res[used], inv, alpha / used.sum())
+        if worst is None:
             break
+        k, pval = worst
         row = int(np.flatnonzero(used)[k])
         used[row] = False
         rejected.append(RejectedPose(row, int(meas.lines[row]), float(np.linalg.norm(res[row])), pval))

@@ -44,6 +44,7 @@ class ResumeQuestion(Message):
     campaign: str
     measured: int
     planned: int
+    bootstrap: int = 0  # bootstrap points measured (apart from the campaign's poses)
 
 
 @dataclass

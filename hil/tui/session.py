@@ -107,6 +107,13 @@ def _error(exc: BaseException) -> str:
     return plain(exc)
 
 
+def _is_verification(record: Any) -> bool:
+    """Whether a stored campaign is an ISO 9283 pose test (``hil verify``), whose report is its own."""
+    from hil.store.records import VERIFICATION
+
+    return getattr(record.summary, "kind", "") == VERIFICATION
+
+
 def _dotted(overrides: dict[str, Any]) -> dict[str, Any]:
     return {k.replace(".", "__"): v for k, v in overrides.items()}
 
@@ -283,7 +290,8 @@ class Session:
         except Exception as exc:
             log.info("looking for an unfinished campaign: %s", technical(exc))
             return
-        st.unfinished = (campaign, summary.measured, summary.planned) if campaign and summary else None
+        st.unfinished = ((campaign, summary.measured, summary.planned, summary.bootstrap_measured)
+                         if campaign and summary else None)
 
     def disconnect(self) -> None:
         with self._device_lock:
@@ -408,7 +416,8 @@ class Session:
             self.store.check_claim(campaign, serial or "")
             if campaign is not None:
                 summary = self.store.campaign(campaign).summary
-                self.post(ResumeQuestion(campaign, summary.measured, summary.planned))
+                self.post(ResumeQuestion(campaign, summary.measured, summary.planned,
+                                         summary.bootstrap_measured))
                 return
         except LeaseRefused as exc:
             self.notice(str(exc), "warning")
@@ -537,6 +546,12 @@ class Session:
         if engine is not None:
             engine.request_interrupt(QUIT_REASON)
 
+    @property
+    def run_given_up(self) -> bool:
+        """Whether `abandon_run` gave the run up: its campaign is marked and its writes are dropped,
+        so nothing is left to wait for, however long its thread still computes."""
+        return self._gate.abandoned
+
     def wait_for_run(self, timeout: float) -> bool:
         """Wait (bounded) for the run thread to end; True if no run is left."""
         thread = self._run_thread
@@ -662,7 +677,13 @@ class Session:
             for kind in kinds:
                 suffix, fmt = EXPORTS[kind]
                 path = out / f"{record.id}{suffix}"
-                if fmt == "html":
+                if fmt == "html" and _is_verification(record):  # the pose test's own page, as `hil
+                    from hil.report.data import check_verification  # verify --report` writes it
+                    from hil.report.verification import write_verification_report
+
+                    check_verification(record.result or {}, f"campaign {record.id}")
+                    write_verification_report(record.result, path)
+                elif fmt == "html":
                     if not record.result or "model" not in record.result:
                         raise InputError(f"campaign {record.id} has no finished result to report")
                     write_report(report_data_from_result(record.result, source=f"campaign {record.id}"),

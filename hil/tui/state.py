@@ -62,7 +62,8 @@ class StationState:
     error: str = ""
     fault: str = ""  # a fault the operator must clear by hand, e.g. "EMERGENCY STOP"
     steps: tuple[str, ...] = ()  # what to do about `fault`, in order
-    unfinished: tuple[str, int, int] | None = None  # resumable campaign: id, measured, planned
+    # resumable campaign: id, poses measured, poses planned, bootstrap points measured
+    unfinished: tuple[str, int, int, int] | None = None
 
     @property
     def connected(self) -> bool:

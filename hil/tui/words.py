@@ -93,3 +93,16 @@ def plain(exc: BaseException) -> str:
         where = f": {exc.filename}" if exc.filename else ""
         return f"{exc.strerror or text or 'input/output error'}{where}"
     return text or "an unexpected error (details in the log)"
+
+
+def progress_words(measured: int, planned: int, bootstrap: int = 0) -> str:
+    """How far an unfinished campaign got, as its stored summary says (``hil show``'s count): the
+    campaign's poses once they are chosen, and the bootstrap's points apart — a campaign left during
+    its bootstrap or its pose selection has no poses planned yet but keeps the points it measured,
+    which "0 of ? poses measured" hid."""
+    boot = f"{bootstrap} bootstrap point{'s' if bootstrap != 1 else ''}"
+    if planned:
+        return f"{measured} of {planned} poses measured" + (f" (+ {boot})" if bootstrap else "")
+    if bootstrap:
+        return f"{boot} measured, poses not chosen yet"
+    return "nothing measured yet"

@@ -12,6 +12,8 @@ from textual.containers import Horizontal, Vertical
 from textual.screen import ModalScreen
 from textual.widgets import Button, Static
 
+from hil.tui.words import progress_words
+
 HELP = """\
 [b]Screens[/b]   1 Station  2 Plan  3 Run  4 Results  5 History
 [b]Anywhere[/b]  ? help  q quit (ctrl+c too)  ctrl+p commands  tab next field
@@ -85,14 +87,14 @@ class ResumeDialog(ModalScreen[str]):
                                              Binding("n", "answer('new')", "New"),
                                              Binding("escape", "answer('cancel')", "Cancel")]
 
-    def __init__(self, campaign: str, measured: int, planned: int) -> None:
+    def __init__(self, campaign: str, measured: int, planned: int, bootstrap: int = 0) -> None:
         super().__init__()
-        self.campaign, self.measured, self.planned = campaign, measured, planned
+        self.campaign, self.measured, self.planned, self.bootstrap = campaign, measured, planned, bootstrap
 
     def compose(self) -> ComposeResult:
         with Vertical(id="dialog"):
             yield Static(f"Campaign [b]{self.campaign}[/b] of this station, robot and configuration "
-                         f"is unfinished ({self.measured} of {self.planned or '?'} poses measured).\n"
+                         f"is unfinished ({progress_words(self.measured, self.planned, self.bootstrap)}).\n"
                          "Resume it, measuring only what is missing, or start a new campaign?",
                          id="question")
             with Horizontal(classes="buttons"):

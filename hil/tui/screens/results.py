@@ -21,7 +21,12 @@ from textual.widgets import DataTable, Footer, Static
 from hil.calibration.validation_precision import describe_precision
 from hil.store.records import VERIFICATION
 from hil.tui.screens.base import HilScreen
+from hil.tui.screens.history import status_words
 from hil.tui.widgets.nav import NavBar
+
+#: A pose test's modes as the Results grid names them: whole within the 40-column panel at 80x24
+#: (the full words cut to "uncompen…"/"compensa…"); the verdict line above spells them out.
+MODE_LABELS = {"uncompensated": "uncomp.", "compensated": "comp."}
 
 
 def _mm(v: Any) -> str:
@@ -130,6 +135,8 @@ class ResultsScreen(HilScreen):
             self._exports()
             return
         s = rec.summary
+        if table.display != (s.kind != VERIFICATION):  # a pose test identifies no parameters: no
+            table.display = s.kind != VERIFICATION  # empty table (set on change only: a relayout)
         if s.kind == VERIFICATION:
             self._verification(rec)
             return
@@ -183,7 +190,7 @@ class ResultsScreen(HilScreen):
         grid = Table("", "AP", "RP", "AP mean", box=None, padding=(0, 1), show_edge=False)
         for mode, r in results.items():
             r = r if isinstance(r, dict) else {}
-            grid.add_row(str(mode)[:7] if len(results) > 2 else str(mode), _mm(r.get("AP_max")),
+            grid.add_row(MODE_LABELS.get(str(mode), str(mode)), _mm(r.get("AP_max")),
                          _mm(r.get("RP_max")), _mm(r.get("AP_mean")))
         if not results:
             grid.add_row("no figures yet", "", "", "")
@@ -196,7 +203,7 @@ class ResultsScreen(HilScreen):
         info.add_row("cycles", str(doc.get("cycles", "-")))
         model = doc.get("model")
         info.add_row("model", str(model.get("source", "-")) if isinstance(model, dict) else str(model or "-"))
-        info.add_row("status", s.status)
+        info.add_row("status", status_words(s))  # "verified", as History and `hil history` say
         fit.update(info)
         self.query_one("#params", DataTable).clear()
         self._exports()

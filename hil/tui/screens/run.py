@@ -35,14 +35,19 @@ OUTLIER_FACTOR = 3.0
 OUTLIER_AFTER = 5
 
 
-def deviation_style(deviation: float | None, acceptance: float | None, outlier: float | None) -> str:
-    """Green within the acceptance threshold, yellow above it (the error calibration removes), red
-    above `outlier` (see `OUTLIER_FACTOR`)."""
-    if deviation is None or acceptance is None:
+def deviation_style(deviation: float | None, outlier: float | None) -> str:
+    """Red above `outlier` (`OUTLIER_FACTOR` × the run's median deviation: a point unlike the
+    campaign's others), else uncoloured.
+
+    A deviation from the nominal model is the arm's error before calibration — millimetres on a
+    healthy arm, the very thing calibration removes — not an accuracy figure: judging it against
+    the campaign's acceptance threshold (which is on the validation RMS *after* calibration) once
+    coloured every healthy point "above acceptance". Only the campaign's own spread says whether
+    one point is odd.
+    """
+    if deviation is None or outlier is None or deviation <= outlier:
         return ""
-    if outlier is not None and deviation > outlier:
-        return "bold red"
-    return "green" if deviation <= acceptance else "yellow"
+    return "bold red"
 
 
 def outlier_level(deviations: list[float]) -> float | None:
@@ -61,8 +66,7 @@ def clock(seconds: float | None) -> str:
     return f"{h}:{m // 60:02d}:{m % 60:02d}" if h else f"{m // 60}:{m % 60:02d}"
 
 
-def row_cells(row: PoseRow, acceptance: float | None = None,
-              outlier: float | None = None) -> tuple[Text, ...]:
+def row_cells(row: PoseRow, outlier: float | None = None) -> tuple[Text, ...]:
     """The cells of one pose, in `COLUMNS` order (deviations coloured by `deviation_style`)."""
     status, style = _STATUS.get(row.status, (row.status, ""))
     dq = "-"
@@ -72,7 +76,7 @@ def row_cells(row: PoseRow, acceptance: float | None = None,
     dev = f"{1e3 * row.deviation:.3f}" if row.deviation is not None else "-"
     return (Text(str(row.index), justify="right"), Text(_ROLE.get(row.role, row.role)),
             Text(status, style=style),
-            Text(dev, style=deviation_style(row.deviation, acceptance, outlier), justify="right"),
+            Text(dev, style=deviation_style(row.deviation, outlier), justify="right"),
             Text(dq, justify="right"), Text(p))
 
 
@@ -161,12 +165,6 @@ class RunScreen(HilScreen):
                 self.hil.notify(f"{problem} (Plan screen, 2)", severity="error", timeout=10)
                 return
         await self.app.run_action("app.start_run")
-
-    def _acceptance(self) -> float | None:
-        """The validation RMS threshold of the run (m), the deviations' colour boundary."""
-        if self.hil.session.config is None:
-            return None
-        return float(self.hil.session.run_config().campaign["acceptance"])
 
     def _errors(self, run: RunState) -> None:
         """The deviations from the nominal model in measuring order, and the outliers (as the table).
@@ -274,10 +272,10 @@ class RunScreen(HilScreen):
             self._shown = {}
         # the cursor follows the current pose unless the operator moved it elsewhere
         follow = table.cursor_row >= table.row_count - 1 or table.cursor_row == self._followed
-        acceptance, outlier = self._acceptance(), outlier_level(list(run.deviations))
+        outlier = outlier_level(list(run.deviations))
         for (role, index), row in run.rows.items():
             key = f"{role}:{index}"
-            cells = row_cells(row, acceptance, outlier)
+            cells = row_cells(row, outlier)
             plain = tuple((c.plain, str(c.style)) for c in cells)  # a colour may change alone
             if self._shown.get(key) == plain:
                 continue

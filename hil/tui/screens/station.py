@@ -13,6 +13,7 @@ from textual.widgets import Footer, Static
 
 from hil.tui.screens.base import HilScreen
 from hil.tui.widgets.nav import NavBar
+from hil.tui.words import progress_words
 
 _PHASE_STYLE = {"connected": "bold green", "in run": "bold cyan", "connecting": "yellow",
                 "starting": "yellow", "failed": "bold red", "disconnected": "bold"}
@@ -103,16 +104,17 @@ def fault_text(fault: str, steps: tuple[str, ...], error: str = "") -> Text:
     return text
 
 
-def unfinished_text(unfinished: tuple[str, int, int] | None, line: bool = False) -> Text:
+def unfinished_text(unfinished: tuple[str, int, int, int] | None, line: bool = False) -> Text:
     """The resumable campaign of this station, and how to resume it (`line`: on one line)."""
     if unfinished is None:
         return Text()
-    campaign, measured, planned = unfinished
+    campaign, measured, planned, bootstrap = unfinished
     if line:
+        done = f"{measured}/{planned}" if planned else f"{bootstrap} bootstrap" if bootstrap else "0"
         return Text.assemble(("unfinished ", "bold yellow"), (campaign, "bold"),
-                             f" ({measured}/{planned or '?'} measured): ", ("g resumes it", "bold"))
+                             f" ({done} measured): ", ("g resumes it", "bold"))
     return Text.assemble(("Unfinished campaign ", "bold yellow"), (campaign, "bold"),
-                         f": {measured} of {planned or '?'} poses measured.\n",
+                         f": {progress_words(measured, planned, bootstrap)}.\n",
                          ("g on the Run screen (3) resumes it", "bold"), ", or starts a new one.")
 
 

@@ -392,3 +392,28 @@ def test_report_of_an_unfinished_campaign_says_so(tmp_path, capsys):
     assert str(result) in err and "did not finish" in err and "'aborted'" in err
     assert "no calibrated model" in err and "missing field" not in err
     assert not (tmp_path / "r.html").exists()
+
+
+def test_the_acceptance_threshold_is_drawn_only_against_the_rms_after_calibration(campaign, monkeypatch):
+    """The nominal arm's deviations (the "before" bars, millimetres) are not judged by the acceptance
+    threshold (on the validation RMS after calibration): the per-pose chart of both draws no
+    acceptance line; the histograms draw it on the "after" panel only."""
+    import hil.report.plots as plots
+    import hil.report.render as render
+
+    seen: dict[str, dict] = {}
+    original_bars, original_hist = plots.errors_per_pose, plots.histograms
+
+    def bars(*args, **kwargs):
+        seen.setdefault("bars", kwargs)
+        return original_bars(*args, **kwargs)
+
+    def hist(*args, **kwargs):
+        seen.setdefault("hist", kwargs)
+        return original_hist(*args, **kwargs)
+
+    monkeypatch.setattr(render, "errors_per_pose", bars)
+    monkeypatch.setattr(render, "histograms", hist)
+    render_html(build(campaign), generated="2024-01-01T00:00:00+00:00")
+    assert seen["bars"].get("accept_rms") is None
+    assert seen["hist"].get("accept_rms") == pytest.approx(1e-4)

@@ -14,9 +14,10 @@ import pytest
 from drivers.robot.errors import EmergencyStop
 from hil.campaign.events import PointMeasured, Resumed, Suspended
 from hil.errors import EXIT_INTERRUPTED
-from hil.tui.screens.dialogs import Confirm, Stopping
+from hil.tui.screens.dialogs import Confirm, ResumeDialog, Stopping
 from hil.tui.session import STOP_WAIT
 from hil.tui.state import StationState
+from hil.tui.words import progress_words
 from tests.hil.tui.conftest import press_to_close, screen_text, wait_for
 from tests.hil.tui.fake_station import FakeStation
 
@@ -59,7 +60,7 @@ def test_every_way_out_mid_run_asks_once_stops_the_arm_now_and_leaves_the_campai
             assert "stopping the arm" in shown[0][0]
             # once the stop is sent, the screen says so, and how long the closing may take
             stopped = [stage for stage, _ in shown if "the arm is stopped" in stage]
-            assert stopped and "closes within" in stopped[0], shown
+            assert stopped and "the app closes in a few seconds (at most" in stopped[0], shown
         assert st.arm.stopped_while_holding  # the move in progress was stopped, not finished
         assert app.return_value == EXIT_INTERRUPTED  # resumable: as `hil calibrate` interrupted
         campaign = app.run_state.campaign
@@ -100,6 +101,9 @@ def test_a_quit_while_the_run_is_busy_computing_still_closes_within_seconds(tmp_
             # nothing moves during a computation: no waiting for it to end (STOP_WAIT is for a run
             # that is measuring), only the closing of the station
             assert time.monotonic() - t0 < STOP_WAIT / 2
+        # nor once the app has closed: its unmounting does not wait again for the run it gave up
+        # (the process held the restored terminal for STOP_WAIT more seconds)
+        assert time.monotonic() - t0 < STOP_WAIT / 2
         assert app.return_value == EXIT_INTERRUPTED
         return app.session.run_campaign
 
@@ -237,3 +241,52 @@ def test_station_readings_follow_the_run_events():
     assert (st.safety, st.lock) == ("normal", "locked in")
     assert not st.apply(PointMeasured(campaign="c", index=2, role="calibration", q=[0] * 6, p=[0] * 3,
                                       p_spread=[0] * 3, samples=1))
+
+
+def test_a_campaign_left_before_its_poses_were_chosen_is_announced_with_its_bootstrap_points(
+        tmp_path, monkeypatch):
+    """Quit during the pose selection: the bootstrap's points are kept, and the Station screen, the
+    Run screen and the resume question say so (they said "0 of ? poses measured")."""
+    st = FakeStation(tmp_path, monkeypatch)
+    campaign = st.store.create_campaign(st.config.as_dict(), {"type": "ur5e", "serial": st.arm.info.serial})
+    st.store.save_plan(campaign, [(i, "bootstrap", [0.1 * i] * 6) for i in range(10)])
+    for i in range(10):
+        st.store.record_measurement(campaign, i, "bootstrap", [0.1 * i] * 6, [1.0, 0.0, 0.5])
+    st.store.set_status(campaign, "interrupted")
+
+    async def scenario():
+        app = st.app()
+        app.session.devices = None
+        app.session.station.phase = "disconnected"
+        async with app.run_test(size=SIZE) as pilot:
+            await pilot.press("c")
+            await wait_for(pilot, lambda: app.session.station.unfinished is not None, 10, "the check")
+            await pilot.pause()
+            text = screen_text(app)
+            flat = " ".join(line.strip() for line in text.splitlines() if line.strip())
+            assert f"Unfinished campaign {campaign}: 10 bootstrap points measured, poses not chosen yet." \
+                in flat, text
+            assert "0 of ?" not in flat, text
+            await pilot.press("3")
+            await pilot.pause()
+            assert f"unfinished {campaign} (10 bootstrap measured): g resumes it" in screen_text(app)
+            await pilot.press("g")
+            await wait_for(pilot, lambda: isinstance(app.screen, ResumeDialog), 10, "the resume question")
+            await pilot.pause()
+            text = screen_text(app)
+            flat = " ".join(line.strip(" █") for line in text.splitlines() if line.strip(" █"))
+            assert "is unfinished (10 bootstrap points measured, poses not chosen yet)" in flat, text
+            assert "0 of ?" not in flat, text
+            await pilot.press("escape")
+            await press_to_close(pilot, "q")
+
+    asyncio.run(scenario())
+    st.store.close()
+
+
+def test_progress_words_count_poses_and_bootstrap_points_apart():
+    assert progress_words(4, 16) == "4 of 16 poses measured"
+    assert progress_words(4, 16, 10) == "4 of 16 poses measured (+ 10 bootstrap points)"
+    assert progress_words(0, 0, 10) == "10 bootstrap points measured, poses not chosen yet"
+    assert progress_words(0, 0, 1) == "1 bootstrap point measured, poses not chosen yet"
+    assert progress_words(0, 0) == "nothing measured yet"
