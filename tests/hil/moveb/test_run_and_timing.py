@@ -163,7 +163,17 @@ def test_run_figure_draws_path_and_deviation() -> None:
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20000
 
 
-def _moveb_run(tmp_path: Path, prog: Path, name: str, *extra: str, exit_code: int = 0) -> dict:
+#: The fast-time factor of the end-to-end runs whose subject is the path, not the pace: the simulated
+#: station keeps its own clock (a GeoCOM reading still takes 0.1 s of it, mocks.station.GEOCOM_MEASURE_S),
+#: so the figures are the same and a run takes a fraction of the wall time. One run stays in real time
+#: (`test_cli_run_the_tracker_saw_only_in_part_is_incomplete`, the command's default).
+FAST = 10.0
+
+
+def _moveb_run(tmp_path: Path, prog: Path, name: str, *extra: str, exit_code: int = 0,
+               speed: float = 1.0) -> dict:
+    """``hil moveb run`` of `prog` on the simulated station at `speed` (its fast-time factor): the
+    result document."""
     import json
     import os
 
@@ -172,7 +182,7 @@ def _moveb_run(tmp_path: Path, prog: Path, name: str, *extra: str, exit_code: in
     env = dict(os.environ, PYTHONPATH=root + os.pathsep + os.environ.get("PYTHONPATH", ""))
     # run from tmp_path: relative paths (the truth) must reach the simulator's own process intact
     res = subprocess.run([sys.executable, "-m", "hil", "moveb", "run", str(prog), "--sim", "--frame",
-                          "current", "--velocity", "150", "--out", str(out), *extra],
+                          "current", "--velocity", "150", "--speed", str(speed), "--out", str(out), *extra],
                          capture_output=True, text=True, timeout=240, cwd=tmp_path, env=env)
     assert res.returncode == exit_code, res.stderr
     return json.loads(out.read_text())
@@ -190,13 +200,13 @@ def test_cli_run_on_the_simulated_station_and_what_the_model_changes(tmp_path: P
     truth = tmp_path / "truth.json"
     # a rigid cold arm: the model's geometry is the subject (a warming, sagging arm is not the cold model)
     write_json(truth, truth_document(random_truth("ur5e", np.random.default_rng(5), rigid=True), Noise()))
-    nominal = _moveb_run(tmp_path, prog, "nominal", "--truth", "truth.json")
+    nominal = _moveb_run(tmp_path, prog, "nominal", "--truth", "truth.json", speed=FAST)
     assert nominal["registered"] is True and nominal["path_accuracy_registered"] is None
     assert nominal["status"] == "done" and nominal["coverage"] > 0.9
     assert 0.05 < nominal["path_accuracy"]["max_deviation_mm"] < 2.0
     assert max(nominal["joint_speeds"]["peak_fraction"]) <= 1.0
     model = _moveb_run(tmp_path, prog, "model", "--truth", "truth.json", "--model", "truth.json",
-                       "--plot", "run.png")
+                       "--plot", "run.png", speed=FAST)
     assert (tmp_path / "run.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert model["registered"] is False
     acc, fitted = model["path_accuracy"], model["path_accuracy_registered"]
@@ -211,7 +221,7 @@ def test_cli_run_on_the_simulated_station_and_what_the_model_changes(tmp_path: P
     assert resolution > 0.0 and corner <= bound
     # the nominal arm measured in the true frame: its absolute error, which the fit above hid
     absolute = _moveb_run(tmp_path, prog, "absolute", "--truth", "truth.json", "--model", "truth.json",
-                          "--ik", "nominal")
+                          "--ik", "nominal", speed=FAST)
     assert absolute["ik"] == "nominal" and absolute["registered"] is False
     assert absolute["path_accuracy"]["max_deviation_mm"] > 0.2
     assert absolute["path_accuracy"]["max_deviation_mm"] > 5 * acc["max_deviation_mm"]
@@ -242,7 +252,7 @@ def test_cli_run_through_an_emscon_tracker_measures_like_geocom(tmp_path: Path) 
     truth = tmp_path / "truth.json"
     write_json(truth, truth_document(random_truth("ur5e", np.random.default_rng(5), rigid=True), Noise()))
     doc = _moveb_run(tmp_path, prog, "emscon", "--truth", "truth.json", "--model", "truth.json",
-                     "--tracker-protocol", "emscon")
+                     "--tracker-protocol", "emscon", speed=FAST)
     assert doc["status"] == "done" and doc["coverage"] > 0.9 and doc["lost_samples"] == 0
     assert doc["path_accuracy"]["max_deviation_mm"] < 0.1
     assert doc["path_accuracy"]["samples"] > 50
