@@ -1,7 +1,8 @@
 """Reading and writing measurement and joint CSV files (docs/design.md, Contracts: measurements CSV).
 
 A measurements file has the header ``q1,q2,q3,q4,q5,q6,x,y,z`` (joint radians, SMR position in the
-tracker frame in metres); extra columns are allowed and ignored. Every problem is reported as an
+tracker frame in metres) and optionally ``d1..d6``, the sign of each joint's last motion before the
+reading (−1, 0 or +1: lost motion, `hil.arm.joint_errors`); other columns are allowed and ignored. Every problem is reported as an
 InputError naming the file, the line and the column, because these files come from other tools and
 people and the first thing a user needs is where to look.
 """
@@ -23,6 +24,8 @@ from hil.files.outputs import atomic_write_text, format_csv
 
 JOINT_COLUMNS: tuple[str, ...] = ("q1", "q2", "q3", "q4", "q5", "q6")
 POINT_COLUMNS: tuple[str, ...] = ("x", "y", "z")
+#: Optional: each joint's direction of approach (sign of its last motion) — all six or none.
+DIRECTION_COLUMNS: tuple[str, ...] = ("d1", "d2", "d3", "d4", "d5", "d6")
 
 #: Farthest a laser tracker measures (m): the Leica AT960's range is 80 m in radius, the longest of
 #: the trackers hil drives. A coordinate beyond it is a unit mistake or a corrupted file.
@@ -71,22 +74,27 @@ class Measurements:
     lines: np.ndarray  # (m,) 1-based line numbers in the source file
     source: str = "<memory>"
     sha256: str = ""
+    #: (m, 6) sign of each joint's last motion before the reading, or None when the data do not say
+    directions: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.q)
 
     def subset(self, mask: np.ndarray) -> Measurements:
-        return Measurements(self.q[mask], self.p[mask], self.lines[mask], self.source, self.sha256)
+        d = None if self.directions is None else self.directions[mask]
+        return Measurements(self.q[mask], self.p[mask], self.lines[mask], self.source, self.sha256, d)
 
     @classmethod
     def from_arrays(cls, q: np.ndarray, p: np.ndarray, source: str = "<memory>",
-                    lines: np.ndarray | None = None) -> Measurements:
+                    lines: np.ndarray | None = None,
+                    directions: np.ndarray | None = None) -> Measurements:
         """Measurements from arrays, hashed by `measurements_sha256`; line numbers as in that CSV
         unless `lines` names the poses otherwise (a campaign names them by pose index)."""
         q = np.asarray(q, dtype=float).reshape(-1, 6)
         p = np.asarray(p, dtype=float).reshape(-1, 3)
         lines = np.arange(2, len(q) + 2) if lines is None else np.asarray(lines, dtype=int)
-        return cls(q, p, lines, source, measurements_sha256(q, p))
+        d = None if directions is None else np.asarray(directions, dtype=float).reshape(-1, 6)
+        return cls(q, p, lines, source, measurements_sha256(q, p), d)
 
 
 def measurements_sha256(q: np.ndarray, p: np.ndarray) -> str:
@@ -101,8 +109,10 @@ def measurements_sha256(q: np.ndarray, p: np.ndarray) -> str:
     return hashlib.sha256(format_csv(JOINT_COLUMNS + POINT_COLUMNS, rows).encode("utf-8")).hexdigest()
 
 
-def read_table(path: str | os.PathLike[str], required: Sequence[str]) -> Table:
-    """Read a CSV file whose header includes `required` numeric columns (others are ignored)."""
+def read_table(path: str | os.PathLike[str], required: Sequence[str],
+               optional: Sequence[str] = ()) -> Table:
+    """Read a CSV file whose header includes `required` numeric columns (others are ignored); the
+    `optional` ones are read too when the header has every one of them (some but not all: an error)."""
     name = str(path)
     raw = read_input_bytes(path, "a CSV file")
     text = decode_input_text(raw, name)
@@ -112,6 +122,12 @@ def read_table(path: str | os.PathLike[str], required: Sequence[str]) -> Table:
         raise InputError(f"{name}: empty file, expected a header with {','.join(required)}")
     header_line, header = rows[0]
     header = [h.strip() for h in header]
+    present = [c for c in optional if c in header]
+    if present and len(present) < len(optional):
+        raise InputError(f"{name}: line {header_line}: column(s) {', '.join(present)} without "
+                         f"{', '.join(c for c in optional if c not in header)} (give all of "
+                         f"{','.join(optional)} or none)")
+    required = [*required, *optional] if present else list(required)
     missing = [c for c in required if c not in header]
     if missing:
         raise InputError(f"{name}: line {header_line}: missing column(s) {', '.join(missing)} "
@@ -135,6 +151,9 @@ def read_table(path: str | os.PathLike[str], required: Sequence[str]) -> Table:
                 raise InputError(f"{name}: line {line}, column {col}: {cell!r} is not a finite number")
             if col in COLUMN_RANGES and not COLUMN_RANGES[col][0] <= value <= COLUMN_RANGES[col][1]:
                 raise InputError(f"{name}: line {line}, column {col}: {_out_of_range(col, value)}")
+            if col in DIRECTION_COLUMNS and value not in (-1.0, 0.0, 1.0):
+                raise InputError(f"{name}: line {line}, column {col}: {cell!r} is not a direction "
+                                 "(-1, 0 or 1: the sign of the joint's last motion)")
             data[k, j] = value
         lines[k] = line
     if len(lines) == 0:
@@ -157,13 +176,20 @@ def read_joints(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def read_measurements(path: str | os.PathLike[str]) -> Measurements:
-    """A measurements CSV (q1..q6, x, y, z) as `Measurements`."""
-    table = read_table(path, JOINT_COLUMNS + POINT_COLUMNS)
+    """A measurements CSV (q1..q6, x, y, z, optionally d1..d6) as `Measurements`."""
+    table = read_table(path, JOINT_COLUMNS + POINT_COLUMNS, DIRECTION_COLUMNS)
     q = np.column_stack([table.columns[c] for c in JOINT_COLUMNS])
     p = np.column_stack([table.columns[c] for c in POINT_COLUMNS])
-    return Measurements(q, p, table.lines, table.source, table.sha256)
+    d = (np.column_stack([table.columns[c] for c in DIRECTION_COLUMNS])
+         if DIRECTION_COLUMNS[0] in table.columns else None)
+    return Measurements(q, p, table.lines, table.source, table.sha256, d)
 
 
-def write_measurements(path: str | os.PathLike[str], q: np.ndarray, p: np.ndarray) -> None:
-    """Write a measurements CSV (q1..q6, x, y, z)."""
-    atomic_write_text(path, format_csv(JOINT_COLUMNS + POINT_COLUMNS, np.hstack([q, p])))
+def write_measurements(path: str | os.PathLike[str], q: np.ndarray, p: np.ndarray,
+                       directions: np.ndarray | None = None) -> None:
+    """Write a measurements CSV (q1..q6, x, y, z, and d1..d6 when `directions` are given)."""
+    if directions is None:
+        atomic_write_text(path, format_csv(JOINT_COLUMNS + POINT_COLUMNS, np.hstack([q, p])))
+    else:
+        atomic_write_text(path, format_csv(JOINT_COLUMNS + POINT_COLUMNS + DIRECTION_COLUMNS,
+                                           np.hstack([q, p, directions])))
