@@ -2,9 +2,9 @@
 
 A measurements file has the header ``q1,q2,q3,q4,q5,q6,x,y,z`` (joint radians, SMR position in the
 tracker frame in metres) and optionally ``d1..d6``, the sign of each joint's last motion before the
-reading (−1, 0 or +1: lost motion, `hil.arm.joint_errors`); other columns are allowed and ignored. Every problem is reported as an
-InputError naming the file, the line and the column, because these files come from other tools and
-people and the first thing a user needs is where to look.
+reading (−1, 0 or +1: lost motion, `hil.arm.joint_errors`); other columns are allowed and ignored.
+Every problem is reported as an InputError naming the file, the line and the column, because these
+files come from other tools and people and the first thing a user needs is where to look.
 """
 
 from __future__ import annotations
