@@ -464,8 +464,8 @@ def identifiable_joint_errors(robot: str | RobotSpec, compliance: bool = False,
     candidate), and a placement error before or after the joint's rotation moves the point by a
     constant or by a once-per-turn rotation of a fixed vector, while a·cos(q) of the angle rotates by
     cos q·Rz(q), which holds a twice-per-turn part. But the overlap is large for order 1: after
-    projecting out the 27 geometric columns a unit order-1 column keeps only 0.63–0.75 of its norm on
-    joints 3, 5 and 6 (0.72–0.93 on joints 1, 2 and 4), orders 2 and 3 keep 0.85–0.95 (UR5e:
+    projecting out the 27 geometric columns a unit order-1 column keeps only 0.63–0.76 of its norm on
+    joints 3, 5 and 6 (0.72–0.93 on joints 1, 2 and 4), orders 2 and 3 keep 0.85–0.96 (every UR:
     `bench/joint_errors.py`), so order 1 costs the most poses to resolve. Lost motion is independent
     only when the directions vary: approached from one side it is a constant, the joint's offset —
     which is why `hil.calibration.joint_error_selection` offers it only for joints whose directions in

@@ -50,10 +50,11 @@ from hil.calibration.measurements import Measurements
 #: standard errors of the paired drop. The one-standard-error rule (Hastie, Tibshirani & Friedman, The
 #: Elements of Statistical Learning, 2nd ed., §7.10) judges one model against another; here each step
 #: keeps the best of up to 24 candidates, and the best of many spurious drops often exceeds one standard
-#: error: measured on rigid UR5e truths with 40 poses (`bench/joint_errors.py`), one standard error kept
-#: a term on 10 of 30 arms, two on 1 of 30, while the first true group of an arm with joint errors
-#: passed two standard errors on 4 of 6. A spurious group costs little (a few µm of held-out error),
-#: but a fit that adds terms to most rigid arms would not mean what it says.
+#: error: measured on rigid UR5e truths with 40 poses (`bench/joint_errors.py`'s stations), one
+#: standard error kept a term on 10 of 30 arms, two on 1 of 30 (1 of 20 in the bench's table), while
+#: with the bench's assumed joint errors two standard errors kept terms on 15 of 20 arms, every one of
+#: them a true order. A spurious group costs little (a few µm of held-out error), but a fit that adds
+#: terms to a third of rigid arms would not mean what it says.
 SE_FACTOR = 2.0
 #: Folds of the selection's cross-validation (fewer when there are fewer poses): ten is the usual
 #: compromise between the bias of few folds and the variance of many (ibid. §7.10.1).
