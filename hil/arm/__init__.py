@@ -4,6 +4,8 @@
 * `geometry` — the URDF-convention joint origins, flange, SMR and tracker pose of one arm;
 * `kinematics` — batched forward kinematics and identification Jacobians (pinocchio), the parameter
   vector and its identifiable subset;
+* `joint_errors` — angle-dependent joint errors and lost motion (the model and its JSON blocks);
+* `joint_error_columns` — their low orders as identification parameters: names, columns, updates;
 * `ik` — inverse kinematics of a (calibrated) model, for tool paths;
 * `safety` — a motion target checked against the joint limits and the keep-in box, never clamped;
 * `self_collision` — whether a posture folds the arm onto itself (the selector's link capsules on

@@ -1,9 +1,11 @@
 """Turning measurements into a model: tables, identification, model files, exports, synthetic truths.
 
-* `measurements` — the measurements CSV (q1..q6, x, y, z) read and written;
+* `measurements` — the measurements CSV (q1..q6, x, y, z, optionally d1..d6) read and written;
 * `measurement_forms` — the other forms instruments write (degrees, URDF joint names, polar Hz/V/D,
   an orientation per pose, several markers), read into radians and metres;
 * `identification` — tracker alignment, Levenberg–Marquardt on SE(3), outlier rejection, validation;
+* `joint_error_request` — what ``--joint-errors`` / ``campaign.joint_errors`` ask for (none, auto, orders);
+* `joint_error_selection` — which low-order joint errors the data support, by cross-validation;
 * `model_file` — the ``hil-model/1`` and ``hil-truth/1`` JSON documents;
 * `exports` — URDF, ROS kinematics YAML and JSON exports of a model;
 * `controller_export` — the controller's own model as the ROS kinematics YAML UR's ur_calibration writes;

@@ -23,13 +23,16 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from hil.arm.geometry import Geometry
 from hil.arm.kinematics import (
-    ALL_PARAMETER_NAMES,
+    EXTENDED_PARAMETER_NAMES,
+    N_ALL_PARAMETERS,
     N_PARAMETERS,
     SMR_SLICE,
     TRACKER_SLICE,
@@ -83,7 +86,8 @@ class FitResult:
 
     geometry: Geometry
     robot: str
-    indices: np.ndarray  # identified parameters (into ALL_PARAMETER_NAMES: 51.. are compliances)
+    indices: np.ndarray  # identified parameters (into EXTENDED_PARAMETER_NAMES: 51.. compliances,
+    # 57.. joint errors and lost motion)
     values: np.ndarray  # their deviation from the nominal geometry (m, rad; SMR absolute)
     std: np.ndarray  # their standard deviations (local error coordinates at the solution)
     covariance: np.ndarray  # (n, n)
@@ -101,15 +105,22 @@ class FitResult:
     seconds: float = 0.0
     source: str = ""
     sha256: str = ""
+    #: how the joint-error terms were chosen (`hil.calibration.joint_error_selection.TermChoice`)
+    joint_error_choice: Any = None
 
     @property
     def names(self) -> list[str]:
-        return [ALL_PARAMETER_NAMES[i] for i in self.indices]
+        return [EXTENDED_PARAMETER_NAMES[i] for i in self.indices]
 
     @property
     def with_compliance(self) -> bool:
         """Whether the joints' compliance was identified with the geometry."""
         return bool(np.any(self.indices >= N_PARAMETERS))
+
+    @property
+    def with_joint_errors(self) -> bool:
+        """Whether joint-error or lost-motion terms were identified with the geometry."""
+        return bool(np.any(self.indices >= N_ALL_PARAMETERS))
 
     def prediction_covariance(self, q: np.ndarray) -> np.ndarray:
         """(N, 3, 3) covariance of the model's predicted SMR positions at configurations `q`."""
@@ -122,21 +133,28 @@ def minimum_poses(n_parameters: int) -> int:
     return -(-(n_parameters + 3) // 3)
 
 
-def _parameters(robot: str, compliance: bool, template: Geometry) -> np.ndarray:
-    """The identified set: the geometry's, plus the identifiable compliances when asked."""
-    if not compliance:
-        return identifiable_parameters(robot)
-    return identifiable_with_compliance(robot, template.payload, template.gravity)
+def _parameters(robot: str, compliance: bool, template: Geometry,
+                joint_errors: Sequence[int] = ()) -> np.ndarray:
+    """The identified set: the geometry's, plus the identifiable compliances when asked, plus the
+    joint-error terms `joint_errors` (indices into `EXTENDED_PARAMETER_NAMES`, 57..)."""
+    idx = (identifiable_parameters(robot) if not compliance
+           else identifiable_with_compliance(robot, template.payload, template.gravity))
+    terms = np.unique(np.asarray(joint_errors, dtype=int))
+    if terms.size and (terms.min() < N_ALL_PARAMETERS or terms.max() >= len(EXTENDED_PARAMETER_NAMES)):
+        raise ValueError(f"joint-error terms must index {N_ALL_PARAMETERS}.."
+                         f"{len(EXTENDED_PARAMETER_NAMES) - 1}, got {terms.tolist()}")
+    return np.r_[idx, terms].astype(int)
 
 
 def check_design(meas: Measurements, robot: str, compliance: bool = False,
-                 template: Geometry | None = None) -> None:
+                 template: Geometry | None = None, joint_errors: Sequence[int] = ()) -> None:
     """Raise InputError if these poses cannot identify the model, naming what is wrong.
 
-    `template` carries the payload and gravity the compliance columns need (its geometry is unused).
+    `template` carries the payload and gravity the compliance columns need (its geometry is unused);
+    `joint_errors` as in `identify`.
     """
     template = Geometry.nominal(robot) if template is None else template
-    idx = _parameters(robot, compliance, template)
+    idx = _parameters(robot, compliance, template, joint_errors)
     n, m, src = len(idx), len(meas), meas.source
     need = minimum_poses(n)
     if m < need:
@@ -152,11 +170,11 @@ def check_design(meas: Measurements, robot: str, compliance: bool = False,
                          "identifiable")
     generic = generic_geometry(robot)
     generic.payload, generic.gravity = template.payload, template.gravity
-    J = Kinematics(generic).jacobian(meas.q, idx).reshape(-1, n)
+    J = Kinematics(generic).jacobian(meas.q, idx, meas.directions).reshape(-1, n)
     if numerical_rank(J) < n:
         norms = np.linalg.norm(J, axis=0)
         _, d, piv = pivoted_qr(J / norms)
-        lost = [ALL_PARAMETER_NAMES[idx[piv[k]]] for k in range(n) if d[k] <= 1e-7 * d[0]]
+        lost = [EXTENDED_PARAMETER_NAMES[idx[piv[k]]] for k in range(n) if d[k] <= 1e-7 * d[0]]
         raise InputError(f"{src}: degenerate pose set: the poses cannot identify {', '.join(lost)} "
                          "(use more distinct poses that move every joint)")
     extent = np.linalg.svd(meas.p - meas.p.mean(axis=0), compute_uv=False) / np.sqrt(m)
@@ -196,13 +214,20 @@ def align_tracker(geometry: Geometry, meas: Measurements) -> Geometry:
 class _State:
     geometry: Geometry
     p: np.ndarray
-    J: np.ndarray  # (m, 3, 51), or (m, 3, 57) with the compliance columns
+    J: np.ndarray  # (m, 3, 51), (m, 3, 57) with the compliance columns, (m, 3, 99) with joint errors
     compliance: bool = False
+    directions: np.ndarray | None = None  # (m, 6) each joint's last motion, for lost motion
+    joint_errors: bool = False
 
     @classmethod
-    def at(cls, geometry: Geometry, q: np.ndarray, compliance: bool = False) -> _State:
-        p, J = Kinematics(geometry).point_and_jacobian(q, compliance)
-        return cls(geometry, p, J, compliance)
+    def at(cls, geometry: Geometry, q: np.ndarray, compliance: bool = False,
+           directions: np.ndarray | None = None, joint_errors: bool = False) -> _State:
+        p, J = Kinematics(geometry).point_and_jacobian(q, compliance, directions, joint_errors)
+        return cls(geometry, p, J, compliance, directions, joint_errors)
+
+    def subset(self, rows: np.ndarray) -> _State:
+        d = None if self.directions is None else self.directions[rows]
+        return _State(self.geometry, self.p[rows], self.J[rows], self.compliance, d, self.joint_errors)
 
 
 def _levenberg_marquardt(state: _State, q: np.ndarray, p_meas: np.ndarray, idx: np.ndarray,
@@ -222,7 +247,8 @@ def _levenberg_marquardt(state: _State, q: np.ndarray, p_meas: np.ndarray, idx: 
             step = np.linalg.solve(A + lam * np.diag(D), g)
             full = np.zeros(state.J.shape[2])
             full[idx] = step
-            cand = _State.at(apply_update(state.geometry, full), q, state.compliance)
+            cand = _State.at(apply_update(state.geometry, full), q, state.compliance, state.directions,
+                             state.joint_errors)
             r_c = (p_meas - cand.p).ravel()
             cost_c = float(r_c @ r_c)
             if cost_c < cost:
@@ -321,25 +347,30 @@ def register(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
 def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None, *,
              reject_outliers: bool = True, alpha: float = 0.01, max_iter: int = 100,
              correlation_threshold: float = 0.95, compliance: bool = False,
-             payload: Payload | None = None, gravity: np.ndarray | None = None) -> FitResult:
+             payload: Payload | None = None, gravity: np.ndarray | None = None,
+             joint_errors: Sequence[int] = ()) -> FitResult:
     """Identify the calibration geometry of `robot` from `meas` (see the module docstring).
 
     With `compliance` the joints' compliance is identified too, for the arm carrying `payload` under
     `gravity` (base frame; default floor mounting): the model then carries both and predicts the sag.
+    `joint_errors` names joint-error and lost-motion terms to identify beside them (indices into
+    `EXTENDED_PARAMETER_NAMES`; which ones the data support is `hil.calibration.joint_error_selection`'s
+    question); the model then carries its ``joint_errors`` and ``lost_motion`` blocks.
     """
     t0 = time.perf_counter()
     nominal = Geometry.nominal(robot, smr=(0.0, 0.0, 0.0) if smr_guess is None else smr_guess)
     nominal.payload = payload
     if gravity is not None:
         nominal.gravity = np.asarray(gravity, dtype=float)
-    check_design(meas, robot, compliance, nominal)
-    idx = _parameters(robot, compliance, nominal)
+    check_design(meas, robot, compliance, nominal, joint_errors)
+    idx = _parameters(robot, compliance, nominal, joint_errors)
+    extended = bool(np.any(idx >= N_ALL_PARAMETERS))
     n, m = len(idx), len(meas)
     if compliance:
         nominal.compliance = np.zeros(6)
     start = align_tracker(nominal, meas)
     used = np.ones(m, dtype=bool)
-    state = _State.at(start, meas.q, compliance)
+    state = _State.at(start, meas.q, compliance, meas.directions, extended)
     initial_rms = float(np.sqrt(np.mean(np.sum((meas.p - state.p) ** 2, axis=1))))
 
     # Tracker pose and SMR offset first: a far-off SMR guess otherwise drags the joints around.
@@ -349,10 +380,9 @@ def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
     max_reject = min(m // 5, m - minimum_poses(n))
     while True:
         q_u, p_u = meas.q[used], meas.p[used]
-        sub = _State(state.geometry, state.p[used], state.J[used], compliance)
-        sub, its, converged = _levenberg_marquardt(sub, q_u, p_u, idx, max_iter)
+        sub, its, converged = _levenberg_marquardt(state.subset(used), q_u, p_u, idx, max_iter)
         iterations += its
-        state = _State.at(sub.geometry, meas.q, compliance)
+        state = _State.at(sub.geometry, meas.q, compliance, meas.directions, extended)
         res = meas.p - state.p
         Jp = state.J[used][:, :, idx]
         inv, sigma2, cond = _statistics(Jp.reshape(-1, n), res[used].ravel())
@@ -376,13 +406,13 @@ def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
     std = np.sqrt(np.maximum(np.diag(cov), 0.0))
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(std, std)
-    names = [ALL_PARAMETER_NAMES[i] for i in idx]
+    names = [EXTENDED_PARAMETER_NAMES[i] for i in idx]
     correlated = [Correlation(names[a], names[b], float(corr[a, b]))
                   for a in range(n) for b in range(a + 1, n)
                   if abs(corr[a, b]) >= correlation_threshold]
     correlated.sort(key=lambda c: -abs(c.rho))
     reference = Geometry.nominal(robot)
-    values = deviation_from(reference, state.geometry, compliance)[idx]
+    values = deviation_from(reference, state.geometry, compliance, extended)[idx]
     norms = np.linalg.norm(res[used], axis=1)
     return FitResult(
         geometry=state.geometry, robot=robot, indices=idx, values=values, std=std, covariance=cov,
@@ -414,4 +444,4 @@ class ErrorStats:
 
 def validate(geometry: Geometry, meas: Measurements) -> ErrorStats:
     """Errors of `geometry`'s predictions against measured points it was not fitted to."""
-    return ErrorStats.of(meas.p - Kinematics(geometry).points(meas.q))
+    return ErrorStats.of(meas.p - Kinematics(geometry).points(meas.q, directions=meas.directions))

@@ -86,6 +86,9 @@ RPY_FIGAROH = Form("orientation", "FIGAROH roll-pitch-yaw", ("phix1", "phiy1", "
 ROTATION_VECTOR = Form("orientation", "rotation vector", ("rx", "ry", "rz"), ("angle",) * 3)
 QUATERNION = Form("orientation", "quaternion", ("qw", "qx", "qy", "qz"), ("number",) * 4)
 ORIENTATION_FORMS: tuple[Form, ...] = (RPY, RPY_FIGAROH, ROTATION_VECTOR, QUATERNION)
+#: Optional: the sign of each joint's last motion before the reading (−1, 0, +1), which lost motion
+#: needs (`hil.arm.joint_errors`); all six or none.
+DIRECTIONS = Form("direction", "directions", ("d1", "d2", "d3", "d4", "d5", "d6"), ("number",) * 6)
 
 _UNITS = {"angle": ANGLE_UNITS, "length": LENGTH_UNITS, "number": {}}
 _SUFFIX = re.compile(r"^(?P<base>.+)_(?P<unit>rad|deg|gon|mm|m)$")
@@ -94,7 +97,7 @@ _MARKER = re.compile(r"^(?P<axis>[xyz])(?P<k>[1-9][0-9]*)$")
 
 def _quantity_of(base: str) -> str | None:
     """What a known column holds, or None for a column no form uses (ignored)."""
-    for form in (*JOINT_FORMS, *POSITION_FORMS, *ORIENTATION_FORMS):
+    for form in (*JOINT_FORMS, *POSITION_FORMS, *ORIENTATION_FORMS, DIRECTIONS):
         if base in form.columns:
             return form.quantities[form.columns.index(base)]
     if _MARKER.match(base):
@@ -414,3 +417,18 @@ def rotations(rows: Rows, lines: np.ndarray) -> tuple[np.ndarray | None, Form | 
     if form is ROTATION_VECTOR:
         return Rotation.from_rotvec(values).as_matrix(), form
     return Rotation.from_euler("xyz", values).as_matrix(), form  # extrinsic x, y, z: Rz·Ry·Rx
+
+
+def directions(rows: Rows, lines: np.ndarray) -> np.ndarray | None:
+    """(m, 6) joint approach directions from ``d1..d6`` (each −1, 0 or +1), or None without them."""
+    form = choose(rows.header, (DIRECTIONS,), required=False, expected="")
+    if form is None:
+        return None
+    values, _ = numbers(rows, form.columns)
+    first = _first_bad(~np.isin(values, (-1.0, 0.0, 1.0)))
+    if first is not None:
+        i, j = first
+        raise InputError(f"{rows.header.source}: line {lines[i]}, column "
+                         f"{rows.header.columns[form.columns[j]].label}: '{values[i, j]:g}' is not a "
+                         f"direction (-1, 0 or +1)")
+    return values

@@ -1,11 +1,12 @@
 """Reading and writing measurement and joint CSV files (docs/design.md, Contracts: measurements CSV).
 
 hil writes the header ``q1,q2,q3,q4,q5,q6,x,y,z`` (joint radians, SMR position in the tracker frame in
-metres); it reads that and the other forms real instruments write (`measurement_forms`: joints in
-degrees or under the URDF's names, polar tracker readings, an orientation per pose, several
-reflectors); extra columns are allowed and ignored. Every problem is reported as an InputError naming
-the file, the line and the column, because these files come from other tools and people and the first
-thing a user needs is where to look.
+metres), optionally ``d1..d6``, the sign of each joint's last motion before the reading (−1, 0 or +1:
+lost motion, `hil.arm.joint_errors`); it reads that and the other forms real instruments write
+(`measurement_forms`: joints in degrees or under the URDF's names, polar tracker readings, an
+orientation per pose, several reflectors); extra columns are allowed and ignored. Every problem is
+reported as an InputError naming the file, the line and the column, because these files come from
+other tools and people and the first thing a user needs is where to look.
 """
 
 from __future__ import annotations
@@ -26,6 +27,8 @@ from hil.files.outputs import atomic_write_text, format_csv
 
 JOINT_COLUMNS: tuple[str, ...] = ("q1", "q2", "q3", "q4", "q5", "q6")
 POINT_COLUMNS: tuple[str, ...] = ("x", "y", "z")
+#: Optional: each joint's direction of approach (sign of its last motion) — all six or none.
+DIRECTION_COLUMNS: tuple[str, ...] = ("d1", "d2", "d3", "d4", "d5", "d6")
 
 def _column_ranges() -> dict[str, tuple[float, float, str]]:
     """The plausible range of every column of hil's own form, and its unit (`measurement_forms`
@@ -69,6 +72,8 @@ class Measurements:
     sha256: str = ""
     rotation: np.ndarray | None = None  # (m, 3, 3) measured frame -> instrument frame
     reflectors: np.ndarray | None = None  # (m, R, 3) metres; reflectors[:, 0] == p
+    #: (m, 6) sign of each joint's last motion before the reading, or None when the data do not say
+    directions: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.q)
@@ -76,17 +81,20 @@ class Measurements:
     def subset(self, mask: np.ndarray) -> Measurements:
         return Measurements(self.q[mask], self.p[mask], self.lines[mask], self.source, self.sha256,
                             None if self.rotation is None else self.rotation[mask],
-                            None if self.reflectors is None else self.reflectors[mask])
+                            None if self.reflectors is None else self.reflectors[mask],
+                            None if self.directions is None else self.directions[mask])
 
     @classmethod
     def from_arrays(cls, q: np.ndarray, p: np.ndarray, source: str = "<memory>",
-                    lines: np.ndarray | None = None) -> Measurements:
+                    lines: np.ndarray | None = None,
+                    directions: np.ndarray | None = None) -> Measurements:
         """Measurements from arrays, hashed by `measurements_sha256`; line numbers as in that CSV
         unless `lines` names the poses otherwise (a campaign names them by pose index)."""
         q = np.asarray(q, dtype=float).reshape(-1, 6)
         p = np.asarray(p, dtype=float).reshape(-1, 3)
         lines = np.arange(2, len(q) + 2) if lines is None else np.asarray(lines, dtype=int)
-        return cls(q, p, lines, source, measurements_sha256(q, p))
+        d = None if directions is None else np.asarray(directions, dtype=float).reshape(-1, 6)
+        return cls(q, p, lines, source, measurements_sha256(q, p), directions=d)
 
 
 def measurements_sha256(q: np.ndarray, p: np.ndarray) -> str:
@@ -101,8 +109,10 @@ def measurements_sha256(q: np.ndarray, p: np.ndarray) -> str:
     return hashlib.sha256(format_csv(JOINT_COLUMNS + POINT_COLUMNS, rows).encode("utf-8")).hexdigest()
 
 
-def read_table(path: str | os.PathLike[str], required: Sequence[str]) -> Table:
-    """Read a CSV file whose header includes `required` numeric columns (others are ignored)."""
+def read_table(path: str | os.PathLike[str], required: Sequence[str],
+               optional: Sequence[str] = ()) -> Table:
+    """Read a CSV file whose header includes `required` numeric columns (others are ignored); the
+    `optional` ones are read too when the header has every one of them (some but not all: an error)."""
     name = str(path)
     raw = read_input_bytes(path, "a CSV file")
     text = decode_input_text(raw, name)
@@ -112,6 +122,12 @@ def read_table(path: str | os.PathLike[str], required: Sequence[str]) -> Table:
         raise InputError(f"{name}: empty file, expected a header with {','.join(required)}")
     header_line, header = rows[0]
     header = [h.strip() for h in header]
+    present = [c for c in optional if c in header]
+    if present and len(present) < len(optional):
+        raise InputError(f"{name}: line {header_line}: column(s) {', '.join(present)} without "
+                         f"{', '.join(c for c in optional if c not in header)} (give all of "
+                         f"{','.join(optional)} or none)")
+    required = [*required, *optional] if present else list(required)
     missing = [c for c in required if c not in header]
     if missing:
         raise InputError(f"{name}: line {header_line}: missing column(s) {', '.join(missing)} "
@@ -135,6 +151,9 @@ def read_table(path: str | os.PathLike[str], required: Sequence[str]) -> Table:
                 raise InputError(f"{name}: line {line}, column {col}: {cell!r} is not a finite number")
             if col in COLUMN_RANGES and not COLUMN_RANGES[col][0] <= value <= COLUMN_RANGES[col][1]:
                 raise InputError(f"{name}: line {line}, column {col}: {_out_of_range(col, value)}")
+            if col in DIRECTION_COLUMNS and value not in (-1.0, 0.0, 1.0):
+                raise InputError(f"{name}: line {line}, column {col}: {cell!r} is not a direction "
+                                 "(-1, 0 or 1: the sign of the joint's last motion)")
             data[k, j] = value
         lines[k] = line
     if len(lines) == 0:
@@ -158,13 +177,15 @@ def read_joints(path: str | os.PathLike[str],
 
 
 def read_measurements(path: str | os.PathLike[str], joint_units: str | None = None) -> Measurements:
-    """A measurements CSV in any form `measurement_forms` knows, as `Measurements` in radians and
-    metres; `joint_units` ("rad" or "deg") declares the unit of joint columns without a suffix."""
+    """A measurements CSV in any form `measurement_forms` knows (with optional d1..d6), as
+    `Measurements` in radians and metres; `joint_units` ("rad" or "deg") declares the unit of joint
+    columns without a suffix."""
     rows = forms.read_rows(path)
     q, lines = forms.joints(rows, joint_units)
     p, reflectors, _ = forms.positions(rows, lines)
     rotation, _ = forms.rotations(rows, lines)
-    return Measurements(q, p, lines, rows.header.source, rows.sha256, rotation, reflectors)
+    directions = forms.directions(rows, lines)
+    return Measurements(q, p, lines, rows.header.source, rows.sha256, rotation, reflectors, directions)
 
 
 def unused_by_position_fit(meas: Measurements, user: str = "the fit") -> list[str]:
@@ -181,6 +202,11 @@ def unused_by_position_fit(meas: Measurements, user: str = "the fit") -> list[st
     return notes
 
 
-def write_measurements(path: str | os.PathLike[str], q: np.ndarray, p: np.ndarray) -> None:
-    """Write a measurements CSV (q1..q6, x, y, z)."""
-    atomic_write_text(path, format_csv(JOINT_COLUMNS + POINT_COLUMNS, np.hstack([q, p])))
+def write_measurements(path: str | os.PathLike[str], q: np.ndarray, p: np.ndarray,
+                       directions: np.ndarray | None = None) -> None:
+    """Write a measurements CSV (q1..q6, x, y, z, and d1..d6 when `directions` are given)."""
+    if directions is None:
+        atomic_write_text(path, format_csv(JOINT_COLUMNS + POINT_COLUMNS, np.hstack([q, p])))
+    else:
+        atomic_write_text(path, format_csv(JOINT_COLUMNS + POINT_COLUMNS + DIRECTION_COLUMNS,
+                                           np.hstack([q, p, directions])))

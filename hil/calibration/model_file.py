@@ -64,12 +64,14 @@ def software_versions() -> dict[str, str]:
 
 #: What the ``parameters`` of a model are (the document says it too, under ``parameter_coordinates``).
 PARAMETER_COORDINATES = (
-    "joint<i>.*, flange.* and tracker.* (tx ty tz m, rx ry rz rad) are se(3) log coordinates of "
+    "joint<i>.tx..rz, flange.* and tracker.* (tx ty tz m, rx ry rz rad) are se(3) log coordinates of "
     "nominal^-1 * identified placement (for the tracker the nominal is the identity: they are the log "
     "coordinates of the tracker pose, not its position or angles, which are 'tracker' and "
     "'tracker_pose'); smr.x/y/z (m) is the SMR centre in the flange frame; compliance.j<i> (rad/Nm) "
-    "is joint i's compliance (the 'compliance' block, for the 'payload' block). std is one standard "
-    "deviation in the local error coordinates at the solution (T * exp(delta))."
+    "is joint i's compliance (the 'compliance' block, for the 'payload' block); joint<i>.cos<k>, "
+    "joint<i>.sin<k> (rad) are a and b of joint i's harmonic a*cos(k*q) + b*sin(k*q) (the "
+    "'joint_errors' block) and lost_motion.j<i> (rad) its lost motion (the 'lost_motion' block). "
+    "std is one standard deviation in the local error coordinates at the solution (T * exp(delta))."
 )
 _TRACKER_AXES = ("tracker.tx", "tracker.ty", "tracker.tz", "tracker.rx", "tracker.ry", "tracker.rz")
 
@@ -141,6 +143,8 @@ def model_document(fit: FitResult, validation: dict[str, Any] | None = None,
                      for r in fit.rejected],
         "correlated": [{"a": c.a, "b": c.b, "rho": c.rho} for c in fit.correlated],
     }
+    if fit.joint_error_choice is not None:
+        doc["joint_error_selection"] = fit.joint_error_choice.as_dict()
     if validation is not None:
         doc["validation"] = validation
     if controller is not None:

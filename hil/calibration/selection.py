@@ -20,6 +20,11 @@ Choices made here:
   arm's gravity torques make identifiable (for the payload and mounting) join the parameters, so the
   poses are chosen to separate the sag from the geometry too; their expected magnitude is the typical
   strain-wave compliance (`hil.arm.physical.typical_compliance`).
+* **Joint errors** (``joint_errors``, orders): the harmonics of those orders of every joint
+  (`hil.arm.kinematics.identifiable_joint_errors`) join the parameters, so the chosen poses spread each
+  joint's angle over its turn — a harmonic is only seen where its joint takes different angles. Their
+  expected magnitude is `JOINT_ERROR_MAGNITUDE`. Lost motion is not designed for: the campaign
+  approaches every pose from one side, which makes it a constant the geometry holds.
 * **Link thickness** scales with the upper-arm length: (|a2| / 0.425)^0.6 times a UR5e's
   (`hil.arm.self_collision.arm_shape`, the capsules the campaign's routes are checked with too).
 """
@@ -38,9 +43,11 @@ import scipy.linalg
 import selector
 from hil.arm.catalog import get_robot
 from hil.arm.geometry import Geometry, look_at_tracker
+from hil.arm.joint_error_columns import harmonic_index
 from hil.arm.kinematics import (
-    ALL_PARAMETER_NAMES,
+    EXTENDED_PARAMETER_NAMES,
     Kinematics,
+    identifiable_joint_errors,
     identifiable_parameters,
     identifiable_with_compliance,
 )
@@ -56,10 +63,17 @@ from selector.tabu import TabuSettings
 
 DEFAULT_TRACKER_FOR_JACOBIAN = (2.5, 0.0, 0.5)
 FORMAT = "hil-poses/1"
+#: Expected size (rad) of one harmonic coefficient of a joint's angle error, for the "expected" column
+#: scaling. An assumption, not a measurement: tens of microradians is what leaves a calibrated UR at the
+#: tenth of a millimetre real arms reach (docs/design.md, Facts: what real arms reach) over its reach.
+#: O1, the default index, does not depend on it.
+JOINT_ERROR_MAGNITUDE = 50e-6
 
 
 def _expected_magnitude(name: str, robot: str) -> float:
     group, axis = name.split(".")
+    if axis.startswith(("cos", "sin")):
+        return JOINT_ERROR_MAGNITUDE
     if group == "compliance":
         from hil.arm.physical import typical_compliance
 
@@ -76,12 +90,14 @@ class SelectionModel:
 
     def __init__(self, robot: str, smr: Sequence[float] = (0.0, 0.0, 0.045),
                  tracker: Sequence[float] | None = None, *, compliance: bool = False,
-                 payload: Any = None, gravity: Sequence[float] | None = None) -> None:
+                 payload: Any = None, gravity: Sequence[float] | None = None,
+                 joint_errors: Sequence[int] = ()) -> None:
         self.spec = get_robot(robot)
         position = DEFAULT_TRACKER_FOR_JACOBIAN if tracker is None else tracker
         self.geometry = Geometry.nominal(self.spec, smr=np.asarray(smr, float),
                                          tracker=look_at_tracker(position))
         self.compliance = compliance
+        self.joint_errors = tuple(sorted(set(int(k) for k in joint_errors)))
         self.geometry.payload = payload
         if gravity is not None:
             self.geometry.gravity = np.asarray(gravity, dtype=float)
@@ -93,7 +109,7 @@ class SelectionModel:
         self._origins = np.array([M.homogeneous for M in self.geometry.joints])
         self._flange = self.geometry.flange.homogeneous
         self.parameters, self.unobservable = self._observable_parameters()
-        self.parameter_names = tuple(ALL_PARAMETER_NAMES[i] for i in self.parameters)
+        self.parameter_names = tuple(EXTENDED_PARAMETER_NAMES[i] for i in self.parameters)
         self.parameter_scale = np.array([_expected_magnitude(n, self.spec.name)
                                          for n in self.parameter_names])
 
@@ -102,13 +118,19 @@ class SelectionModel:
             idx = identifiable_with_compliance(self.spec.name, self.geometry.payload, self.geometry.gravity)
         else:
             idx = identifiable_parameters(self.spec.name)
+        if self.joint_errors:
+            free = set(identifiable_joint_errors(self.spec.name, self.compliance, self.geometry.payload,
+                                                 self.geometry.gravity).tolist())
+            wanted = [harmonic_index(j, k, kind) for j in range(6) for k in self.joint_errors
+                      for kind in ("cos", "sin")]
+            idx = np.r_[idx, [i for i in wanted if i in free]].astype(int)
         q = np.random.default_rng(11).uniform(-math.pi, math.pi, size=(120, 6))
         J = self.kinematics.jacobian(q, idx).reshape(-1, len(idx))
         J = J / np.linalg.norm(J, axis=0)
         _, r, piv = scipy.linalg.qr(J, mode="economic", pivoting=True)
         d = np.abs(np.diag(r))
         keep = np.sort(piv[d > 1e-7 * d[0]])
-        lost = [ALL_PARAMETER_NAMES[idx[i]] for i in np.sort(piv[d <= 1e-7 * d[0]])]
+        lost = [EXTENDED_PARAMETER_NAMES[idx[i]] for i in np.sort(piv[d <= 1e-7 * d[0]])]
         return idx[keep], lost
 
     def frames(self, q: np.ndarray) -> np.ndarray:
@@ -149,11 +171,12 @@ def parse_constraints(*, tracker: Sequence[float] | None, disabled: Sequence[str
 def design_space(robot: str, count: int, *, candidates: int, seed: int, smr: Sequence[float],
                  constraints: Constraints, scaling: str, compliance: bool, payload: Any,
                  gravity: Sequence[float] | None,
-                 say: Callable[[str, str], None]) -> tuple[SelectionModel, Any, np.ndarray]:
+                 say: Callable[[str, str], None],
+                 joint_errors: Sequence[int] = ()) -> tuple[SelectionModel, Any, np.ndarray]:
     """The selection model, its feasible candidates and their scaled Jacobian blocks (every method's
     starting point); `selector.SelectorError` for a count the candidates cannot serve."""
     model = SelectionModel(robot, smr, constraints.tracker, compliance=compliance, payload=payload,
-                           gravity=gravity)
+                           gravity=gravity, joint_errors=joint_errors)
     n = len(model.parameters)
     check_count(count, candidates, n)
     say("candidates", f"drawing up to {candidates} feasible configurations of the {model.spec.name}")
@@ -181,11 +204,12 @@ def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str
                  start: Sequence[float] | None = None, settings: TabuSettings | None = None,
                  bound: bool = True, progress: Callable[[str, str], None] | None = None,
                  compliance: bool = False, payload: Any = None,
-                 gravity: Sequence[float] | None = None) -> dict[str, Any]:
+                 gravity: Sequence[float] | None = None,
+                 joint_errors: Sequence[int] = ()) -> dict[str, Any]:
     """Choose `count` measurement poses for `robot`; the JSON-ready report (see ``hil select``).
 
     With `compliance` the identifiable joint compliances (for `payload` and `gravity`) are parameters
-    of the design too.
+    of the design too, and so are the harmonics of the orders `joint_errors` of every joint.
 
     `progress(phase, text)` hears what is going on ("candidates", "search", "bound", "order"): repeated
     calls with one phase update the same line of a display.
@@ -201,7 +225,8 @@ def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str
             raise selector.SelectorError(f"unknown method {method!r}: choose one of {', '.join(METHODS)}")
         model, cands, G = design_space(robot, count, candidates=candidates, seed=seed, smr=smr,
                                        constraints=constraints, scaling=scaling, compliance=compliance,
-                                       payload=payload, gravity=gravity, say=say)
+                                       payload=payload, gravity=gravity, say=say,
+                                       joint_errors=joint_errors)
         options: dict[str, object] = {"settings": settings} if method == "tabu" and settings else {}
         t0 = time.perf_counter()
         say("search", f"{method} search for {count} poses maximising {index}")

@@ -47,13 +47,14 @@ def select_timed(robot: str, count: int, *, speed: float, acceleration: float, d
                  seed: int = 0, smr: Sequence[float] = (0.0, 0.0, 0.045),
                  constraints: Constraints | None = None, scaling: str = "expected",
                  compliance: bool = False, payload: Any = None, gravity: Sequence[float] | None = None,
-                 time_limit: float = 5.0,
+                 joint_errors: Sequence[int] = (), time_limit: float = 5.0,
                  progress: Callable[[str, str], None] | None = None) -> dict[str, Any]:
     """Choose and order poses for the most accuracy per second of robot time (module docstring).
 
     Returns the JSON-ready ``hil-poses/1`` report: `poses` in visiting order (the fixed poses left out;
     `tour` says where they come), `predicted` for this tour and `seed_method` for method 000's
-    `count` poses in their best tour.
+    `count` poses in their best tour. `joint_errors`: harmonic orders in the design, as
+    `hil.calibration.selection.select_poses`.
     """
     say = progress or (lambda _phase, _text: None)
     constraints = constraints or Constraints()
@@ -61,7 +62,8 @@ def select_timed(robot: str, count: int, *, speed: float, acceleration: float, d
     try:
         model, cands, G = design_space(robot, count, candidates=candidates, seed=seed, smr=smr,
                                        constraints=constraints, scaling=scaling, compliance=compliance,
-                                       payload=payload, gravity=gravity, say=say)
+                                       payload=payload, gravity=gravity, say=say,
+                                       joint_errors=joint_errors)
         profile = MotionProfile(float(speed), float(acceleration), tuple(map(float, model.max_joint_speed)))
         n = len(model.parameters)
         fixed_q = np.zeros((0, 6)) if fixed is None else np.asarray(fixed, dtype=float).reshape(-1, 6)

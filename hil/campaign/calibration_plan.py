@@ -56,10 +56,11 @@ from hil.calibration.identification import (
     ErrorStats,
     FitResult,
     IdentificationError,
-    identify,
     register,
     validate,
 )
+from hil.calibration.joint_error_request import parse_request
+from hil.calibration.joint_error_selection import identify_with_joint_errors
 from hil.calibration.measurements import Measurements
 from hil.calibration.model_file import model_document
 from hil.calibration.validation_precision import campaign_validation_precision
@@ -528,8 +529,10 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     fit_records = [r for (role, _), r in sorted(records.items()) if role in (BOOTSTRAP, CALIBRATION)]
     fitted = measurements_of(fit_records, f"campaign {campaign}")
     try:
-        fit = identify(fitted, robot, smr_guess, compliance=camp["compliance"], payload=config.payload,
-                       gravity=config.gravity)
+        fit = identify_with_joint_errors(
+            fitted, robot, smr_guess, compliance=camp["compliance"], payload=config.payload,
+            gravity=config.gravity,
+            request=parse_request(camp["joint_errors"], "campaign.joint_errors"))
     except InputError as exc:  # too many poses skipped: the run failed, the input was fine
         raise IdentificationError(f"cannot identify from the measured poses: {exc}") from None
     yield Emit(ModelIdentified(campaign=campaign, rms=fit.rms, max=fit.max_error,

@@ -70,7 +70,7 @@ def campaign_chooser(config: Any) -> Any:
             request.model.robot, request.count, candidates=request.candidates, index=request.index,
             method="tabu", seed=request.seed, smr=request.model.smr, constraints=constraints,
             start=request.start, bound=True, compliance=bool(config.campaign["compliance"]),
-            payload=config.payload, gravity=config.gravity)
+            payload=config.payload, gravity=config.gravity, joint_errors=_design_orders(config))
         info = {k: report[k] for k in ("index", "value", "o1", "bound", "percent_of_bound", "method",
                                        "seconds", "travel_time", "candidates", "parameters")}
         return Choice(np.array(report["poses"]), {**info, **_parameter_counts(report)})
@@ -112,11 +112,19 @@ def _time_aware(config: Any, request: SelectionRequest, constraints: Constraints
         fixed=request.fixed, start=request.start, candidates=request.candidates, index=request.index,
         seed=request.seed, smr=request.model.smr, constraints=constraints,
         compliance=bool(camp["compliance"]), payload=config.payload, gravity=config.gravity,
-        time_limit=float(camp["search_time"]))
+        joint_errors=_design_orders(config), time_limit=float(camp["search_time"]))
     info = {k: report[k] for k in ("index", "value", "o1", "method", "form", "seconds", "travel_time",
                                    "candidates", "parameters", "predicted", "seed_method", "motion",
                                    "dwell", "budget", "tour", "details")}
     return Choice(np.array(report["poses"]), {**info, **_parameter_counts(report)})
+
+
+def _design_orders(config: Any) -> tuple[int, ...]:
+    """The joint-error harmonic orders the calibration poses are chosen for (``campaign.joint_errors``:
+    with "auto" every candidate order, so the poses spread each joint's angle whatever the fit keeps)."""
+    from hil.calibration.joint_error_request import parse_request
+
+    return parse_request(config.campaign["joint_errors"], "campaign.joint_errors").design_orders
 
 
 def _parameter_counts(report: Mapping[str, Any]) -> dict[str, Any]:

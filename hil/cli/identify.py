@@ -31,6 +31,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--payload", metavar="MASS[,X,Y,Z]", help=PAYLOAD_HELP + " (default: nothing)")
     p.add_argument("--mounting", metavar="R,P,Y",
                    help="base orientation in the world (roll, pitch, yaw in rad; default 0,0,0: floor)")
+    p.add_argument("--joint-errors", default="auto", metavar="{none,auto,ORDERS}",
+                   help="low-order joint-angle errors to identify: none; auto (the default: the "
+                        "harmonics of orders 1-3 and, where the d1..d6 columns show both directions, "
+                        "the lost motion that cross-validation supports); or orders for every joint, "
+                        "e.g. 1,2 or 1,2,lost")
     p.add_argument("--json", action="store_true", help="print the fit summary as JSON")
     p.add_argument("--out", required=True, metavar="model.json", help="model file to write")
     p.set_defaults(func=run)
@@ -45,12 +50,15 @@ def summary(fit: FitResult) -> dict:
         "condition": fit.condition, "seconds": fit.seconds,
         "rejected": [{"pose": r.index, "line": r.line, "residual": r.residual} for r in fit.rejected],
         "correlated": [{"a": c.a, "b": c.b, "rho": c.rho} for c in fit.correlated],
+        "joint_errors": None if fit.joint_error_choice is None else fit.joint_error_choice.as_dict(),
     }
 
 
 def run(args: argparse.Namespace) -> int:
     from hil.arm.payload import gravity_of_mounting
-    from hil.calibration.identification import identify, validate
+    from hil.calibration.identification import validate
+    from hil.calibration.joint_error_request import parse_request
+    from hil.calibration.joint_error_selection import identify_with_joint_errors
     from hil.calibration.measurements import read_measurements, unused_by_position_fit
     from hil.calibration.model_file import model_document, write_json
     from hil.cli.support.output_paths import campaign_store
@@ -66,9 +74,11 @@ def run(args: argparse.Namespace) -> int:
     held_out = read_measurements(args.validation, args.joint_units) if args.validation else None
     payload = payload_or_none(args.payload)
     mounting = triplet_or_none(args.mounting, "--mounting")
-    fit = identify(meas, robot, smr, reject_outliers=not args.no_reject, compliance=args.compliance,
-                   payload=payload if payload is not None and payload.mass > 0 else None,
-                   gravity=gravity_of_mounting(mounting) if mounting is not None else None)
+    request = parse_request(args.joint_errors)
+    fit = identify_with_joint_errors(
+        meas, robot, smr, request=request, reject_outliers=not args.no_reject, compliance=args.compliance,
+        payload=payload if payload is not None and payload.mass > 0 else None,
+        gravity=gravity_of_mounting(mounting) if mounting is not None else None)
     validation = validate(fit.geometry, held_out).as_dict() if held_out is not None else None
     write_json(args.out, model_document(fit, validation))
     wrote(args.out, f"hil-model/1, {len(fit.indices)} parameters")
@@ -97,6 +107,15 @@ def run(args: argparse.Namespace) -> int:
         for name, v, sd in zip(fit.names, fit.values, fit.std, strict=True):
             if name.startswith("compliance."):
                 print(f"  {name:<16} {v:.3e} ± {sd:.1e} rad/Nm")
+    choice = fit.joint_error_choice
+    if choice is not None:
+        kept = ", ".join(choice.groups) or "none"
+        print(f"  joint errors ({choice.request}): {kept}; {choice.folds}-fold CV RMS "
+              f"{mm(choice.cv_rms_without)} without, {mm(choice.cv_rms)} with")
+        for name, v, sd in zip(fit.names, fit.values, fit.std, strict=True):
+            if name.startswith(("lost_motion.", *(f"joint{j}.cos" for j in range(1, 7)),
+                                *(f"joint{j}.sin" for j in range(1, 7)))):
+                print(f"  {name:<16} {v * 1e6:+.1f} ± {sd * 1e6:.1f} µrad")
     for c in fit.correlated[:10]:
         print(f"  correlated: {c.a} ~ {c.b}  ρ = {c.rho:+.3f}")
     return EXIT_OK

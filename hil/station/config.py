@@ -186,6 +186,19 @@ def _settle(v: Any) -> str | None:
     return None if v in SETTLE_MODES else f"must be one of {', '.join(SETTLE_MODES)}, got {v!r}"
 
 
+def _joint_errors(v: Any) -> str | None:
+    """none, auto or harmonic orders (`hil.calibration.joint_error_request.parse_request`)."""
+    from hil.calibration.joint_error_request import parse_request
+
+    if not isinstance(v, str):
+        return f"must be a string (none, auto or orders such as \"1,2\"), got {v!r}"
+    try:
+        parse_request(v, "value")
+    except InputError as exc:
+        return str(exc).removeprefix("value: ")
+    return None
+
+
 def _lost_limit(v: Any) -> str | None:
     return None if 1 <= v <= 100 else f"must be between 1 and 100, got {v}"
 
@@ -340,6 +353,12 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # a UR's strain-wave joints sag by tenths of a millimetre under their own weight and payload
         # (hil.arm.physical): the fit identifies the joints' compliance beside the geometry
         "compliance": Key("bool", True, help="identify the joints' compliance (rad/Nm) with the geometry"),
+        # low-order joint-angle errors (hil.calibration.joint_error_selection): "none" until the simulated
+        # arm carries them (issue 30 §1) — with "auto" or orders the poses are chosen to spread every
+        # joint's angle for them and cross-validation (auto) keeps the terms the data support
+        "joint_errors": Key("str", "none", _joint_errors,
+                            "joint-angle harmonics to identify: none, auto (cross-validation chooses) or "
+                            "orders such as 1,2"),
         "max_consecutive_lost": Key("int", 3, _lost_limit,
                                     "poses in a row that lose the beam before the run stops, saying the "
                                     "tracker position looks wrong"),

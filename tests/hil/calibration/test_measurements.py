@@ -53,3 +53,25 @@ def test_missing_file_and_binary(tmp_path):
 def test_joint_files_need_only_joints(tmp_path):
     q, lines = read_joints(write(tmp_path, "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n"))
     assert q.shape == (1, 6) and lines.tolist() == [2]
+
+
+def test_directions_are_read_when_all_six_columns_are_there(tmp_path):
+    q = np.zeros((2, 6)) + 0.1
+    p = np.ones((2, 3))
+    d = np.array([[1, -1, 0, 1, 1, -1], [-1, 1, 1, 0, -1, 1]], dtype=float)
+    write_measurements(tmp_path / "d.csv", q, p, d)
+    meas = read_measurements(tmp_path / "d.csv")
+    assert np.array_equal(meas.directions, d)
+    assert np.array_equal(meas.subset(np.array([False, True])).directions, d[1:])
+    write_measurements(tmp_path / "plain.csv", q, p)
+    assert read_measurements(tmp_path / "plain.csv").directions is None
+
+
+def test_a_bad_direction_names_line_and_column(tmp_path):
+    header = "q1,q2,q3,q4,q5,q6,x,y,z,d1,d2,d3,d4,d5,d6\n"
+    (tmp_path / "bad.csv").write_text(header + "0,0,0,0,0,0,1,1,1,1,1,0.5,1,1,1\n")
+    with pytest.raises(InputError, match=r"bad.csv: line 2, column d3: '0.5' is not a direction"):
+        read_measurements(tmp_path / "bad.csv")
+    (tmp_path / "some.csv").write_text("q1,q2,q3,q4,q5,q6,x,y,z,d1,d2\n0,0,0,0,0,0,1,1,1,1,1\n")
+    with pytest.raises(InputError, match=r"some.csv: line 1: missing column\(s\) d3, d4, d5, d6 \(the directions form needs d1,"):
+        read_measurements(tmp_path / "some.csv")
