@@ -166,7 +166,10 @@ class RunScreen(HilScreen):
         """The validation RMS threshold of the run (m), the deviations' colour boundary."""
         if self.hil.session.config is None:
             return None
-        return float(self.hil.session.run_config().campaign["acceptance"])
+        from hil.campaign.acceptance import threshold
+
+        config = self.hil.session.run_config()
+        return threshold(config.campaign["acceptance"], config.robot["type"])
 
     def _errors(self, run: RunState) -> None:
         """The deviations from the nominal model in measuring order, and the outliers (as the table).
