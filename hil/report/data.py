@@ -333,8 +333,10 @@ def report_data_from(
     if accept_rms is None and verdict is not None:
         accept_rms = float(verdict["threshold"])
     if accept_rms is None:
-        try:
-            accept_rms = float(cfg["campaign"]["acceptance"])
+        from hil.campaign.acceptance import threshold
+
+        try:  # the user's threshold, else the robot class's bound (`hil.campaign.acceptance`)
+            accept_rms = threshold(cfg["campaign"]["acceptance"], fit.robot)
         except (KeyError, TypeError, ValueError):
             raise InputError("report: no acceptance threshold (config campaign.acceptance)") from None
     station = str(cfg.get("station", {}).get("name", "")) if isinstance(cfg.get("station"), Mapping) else ""
