@@ -170,10 +170,12 @@ def model_document(fit: FitResult, validation: dict[str, Any] | None = None,
     return doc
 
 
-def refuse_worse_than_nominal(doc: Mapping[str, Any], source: str, force: bool, verb: str) -> str | None:
+def refuse_worse_than_nominal(doc: Mapping[str, Any], source: str, force: bool, verb: str,
+                              remedy: str | None = None) -> str | None:
     """Refuse to hand out a model cross-validation did not show better than the nominal (or the
     controller's) model: InputError naming the file and the figures, unless `force`, when the same
     sentence comes back as a warning to print. A model without the verdict (older hil) passes.
+    `remedy` replaces "give --force to <verb> it anyway" where there is no --force (the TUI).
     """
     if doc.get("better_than_nominal") is not False:
         return None
@@ -189,7 +191,7 @@ def refuse_worse_than_nominal(doc: Mapping[str, Any], source: str, force: bool, 
     said = (f"{source}: better_than_nominal is false: by cross-validation ({figures}) this model does not "
             f"predict the arm better than the nominal or the controller's own model")
     if not force:
-        raise InputError(f"{said}; refused (give --force to {verb} it anyway)")
+        raise InputError(f"{said}; refused ({remedy or f'give --force to {verb} it anyway'})")
     return said
 
 
