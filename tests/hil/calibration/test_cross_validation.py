@@ -73,9 +73,10 @@ def test_linearised_folds_agree_with_refitting_each_fold(robot, poses, sigma, se
 
 def test_the_estimate_agrees_with_the_truth_on_fresh_poses() -> None:
     """CV's RMS against the RMS of 1000 fresh measured poses (the model's error plus the tracker's
-    noise: what a validation measures), over synthetic stations of both arms: within a factor 1.5.
+    noise: what a validation measures), over synthetic stations of both arms: within a factor 1.3.
 
-    Measured here (seeds 0-5, 30 poses, 20 µm): CV/truth 0.84-1.31."""
+    Measured (30 poses, 20 µm, realistic arms fitted without compliance): CV/fresh 0.95-1.17 for
+    seeds 0-5, 0.83-1.17 for seeds 0-11."""
     ratios = []
     for seed in range(6):
         robot = ("ur5e", "ur10e")[seed % 2]
@@ -88,7 +89,7 @@ def test_the_estimate_agrees_with_the_truth_on_fresh_poses() -> None:
         nominal_fresh = ErrorStats.of(p_fresh - Kinematics(fit.baseline).points(q_fresh))
         assert cv.nominal.rms / nominal_fresh.rms == pytest.approx(1.0, abs=0.5)
         assert cv.better_than_nominal
-    assert min(ratios) > 1 / 1.5 and max(ratios) < 1.5, ratios
+    assert min(ratios) > 1 / 1.3 and max(ratios) < 1.3, ratios
 
 
 def test_a_hopeless_data_set_is_not_called_better() -> None:
