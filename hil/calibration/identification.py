@@ -15,7 +15,12 @@ Steps:
 3. fit the tracker pose and SMR offset alone, then all identifiable parameters (27 for a UR);
 4. reject outliers one at a time by a leave-one-out F test on each pose's leverage-corrected
    residual (Bonferroni at α = 1 %), refitting after each rejection; the rejected poses are named;
-5. report the fit RMS/max, iterations, condition number, covariance, standard deviations and
+5. unless told not to, refit with the robot's manufacturing tolerances as a Gaussian prior
+   (`hil.calibration.prior`: a maximum-a-posteriori fit, extra residual rows in the same LM step), the
+   prior's weight σ²/τ² taken from the noise the fit finds (σ̂ and the weights iterated to agreement),
+   so few or noisy poses shrink toward nominal; outliers are judged by the plain least-squares fit
+   before it, so the prior cannot hide one;
+6. report the fit RMS/max, iterations, condition number, covariance, standard deviations and
    strongly correlated parameter pairs.
 """
 
@@ -47,6 +52,7 @@ from hil.arm.kinematics import (
 from hil.arm.payload import Payload
 from hil.arm.pivoted_qr import pivoted_qr
 from hil.calibration.measurements import Measurements, measurements_sha256
+from hil.calibration.prior import Prior, manufacturing_prior
 from hil.errors import HilError, InputError
 
 #: Smallest spread (rad) of a joint's values for it to count as having moved.
@@ -55,6 +61,10 @@ MIN_JOINT_SPREAD = 1e-3
 #: joints all move carry the SMR over tens of centimetres in every direction but at most one, so points
 #: that vary along fewer than two axes by more than this were not measured on a moving arm.
 MIN_POINT_SPREAD = 1e-3
+#: Passes of the MAP refit, each with the prior's weights σ̂²/τ² from the previous pass's σ̂: the
+#: noise estimate and the weights agree to a few per cent after two or three (they change little once
+#: the prior stops moving the fit), and each pass is a warm-started LM of a few iterations.
+PRIOR_PASSES = 3
 
 
 class IdentificationError(HilError):
@@ -107,6 +117,8 @@ class FitResult:
     sha256: str = ""
     #: how the joint-error terms were chosen (`hil.calibration.joint_error_selection.TermChoice`)
     joint_error_choice: Any = None
+    prior: Prior | None = None  # the MAP fit's prior on `indices` (None: plain least squares)
+    prior_weights: np.ndarray | None = None  # (n,) σ²/τ² the fit used (m² per unit² of each parameter)
 
     @property
     def names(self) -> list[str]:
@@ -230,16 +242,42 @@ class _State:
         return _State(self.geometry, self.p[rows], self.J[rows], self.compliance, d, self.joint_errors)
 
 
+@dataclass(frozen=True)
+class _PriorRows:
+    """The prior's residual rows √w·(θ − θ₀), θ the deviation of the fitted geometry from nominal."""
+
+    reference: Geometry  # the nominal arm the deviation is taken from
+    prior: Prior
+    weights: np.ndarray  # (n,) σ²/τ²
+
+    def offset(self, geometry: Geometry, compliance: bool) -> np.ndarray:
+        extended = bool(np.any(self.prior.indices >= N_ALL_PARAMETERS))
+        return (deviation_from(self.reference, geometry, compliance, extended)[self.prior.indices]
+                - self.prior.mean)
+
+    def cost(self, geometry: Geometry, compliance: bool) -> float:
+        d = self.offset(geometry, compliance)
+        return float(np.sum(self.weights * d * d))
+
+
 def _levenberg_marquardt(state: _State, q: np.ndarray, p_meas: np.ndarray, idx: np.ndarray,
-                         max_iter: int) -> tuple[_State, int, bool]:
-    """Minimise Σ‖p_meas − p(q)‖² over the parameters `idx`; returns (state, iterations, converged)."""
+                         max_iter: int, prior: _PriorRows | None = None) -> tuple[_State, int, bool]:
+    """Minimise Σ‖p_meas − p(q)‖² (+ the prior's Σ w·(θ − θ₀)²) over the parameters `idx`; returns
+    (state, iterations, converged).
+
+    The prior's rows have the identity as their Jacobian: the step is local (T·exp(δ)) and the prior
+    is on log(nominal⁻¹·T), equal to first order at the millimetre/milliradian errors of an arm.
+    """
     r = (p_meas - state.p).ravel()
-    cost = float(r @ r)
+    cost = float(r @ r) + (prior.cost(state.geometry, state.compliance) if prior else 0.0)
     lam = 1e-3
     for it in range(1, max_iter + 1):
         J = state.J[:, :, idx].reshape(-1, len(idx))
         A = J.T @ J
         g = J.T @ r
+        if prior is not None:
+            A = A + np.diag(prior.weights)
+            g = g - prior.weights * prior.offset(state.geometry, state.compliance)
         D = np.maximum(np.diag(A), 1e-30)
         improved = False
         while lam < 1e12:
@@ -250,7 +288,7 @@ def _levenberg_marquardt(state: _State, q: np.ndarray, p_meas: np.ndarray, idx: 
             cand = _State.at(apply_update(state.geometry, full), q, state.compliance, state.directions,
                              state.joint_errors)
             r_c = (p_meas - cand.p).ravel()
-            cost_c = float(r_c @ r_c)
+            cost_c = float(r_c @ r_c) + (prior.cost(cand.geometry, cand.compliance) if prior else 0.0)
             if cost_c < cost:
                 improved = True
                 break
@@ -265,13 +303,24 @@ def _levenberg_marquardt(state: _State, q: np.ndarray, p_meas: np.ndarray, idx: 
     return state, max_iter, False
 
 
-def _statistics(J: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, float, float]:
-    """(JᵀJ)⁻¹, σ̂² and the condition number, via column normalisation for numerical stability."""
+def _statistics(J: np.ndarray, r: np.ndarray,
+                weights: np.ndarray | None = None) -> tuple[np.ndarray, float, float]:
+    """(JᵀJ + W)⁻¹, σ̂² and the condition number, via column normalisation for numerical stability.
+
+    With a prior's weights W the residual degrees of freedom are rows − trace(J (JᵀJ + W)⁻¹ Jᵀ) (the
+    effective number of parameters the data, not the prior, determine); without one, rows − n.
+    The condition number is the data's (of the column-normalised J), prior or not.
+    """
     norms = np.linalg.norm(J, axis=0)
     Js = J / norms
     s = np.linalg.svd(Js, compute_uv=False)
-    inv = np.linalg.pinv(Js.T @ Js) / np.outer(norms, norms)
-    dof = J.shape[0] - J.shape[1]
+    A = Js.T @ Js
+    if weights is None:
+        inv = np.linalg.pinv(A) / np.outer(norms, norms)
+        dof = J.shape[0] - J.shape[1]
+    else:
+        inv = np.linalg.pinv(A + np.diag(weights / norms**2)) / np.outer(norms, norms)
+        dof = J.shape[0] - float(np.sum((J.T @ J) * inv))
     sigma2 = float(r @ r) / dof if dof > 0 else float("nan")
     return inv, sigma2, float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
 
@@ -348,7 +397,7 @@ def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
              reject_outliers: bool = True, alpha: float = 0.01, max_iter: int = 100,
              correlation_threshold: float = 0.95, compliance: bool = False,
              payload: Payload | None = None, gravity: np.ndarray | None = None,
-             joint_errors: Sequence[int] = ()) -> FitResult:
+             joint_errors: Sequence[int] = (), prior: bool = True) -> FitResult:
     """Identify the calibration geometry of `robot` from `meas` (see the module docstring).
 
     With `compliance` the joints' compliance is identified too, for the arm carrying `payload` under
@@ -356,6 +405,8 @@ def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
     `joint_errors` names joint-error and lost-motion terms to identify beside them (indices into
     `EXTENDED_PARAMETER_NAMES`; which ones the data support is `hil.calibration.joint_error_selection`'s
     question); the model then carries its ``joint_errors`` and ``lost_motion`` blocks.
+    `prior` (default) makes it the MAP fit toward the nominal geometry (`hil.calibration.prior`);
+    False gives the plain least-squares fit.
     """
     t0 = time.perf_counter()
     nominal = Geometry.nominal(robot, smr=(0.0, 0.0, 0.0) if smr_guess is None else smr_guess)
@@ -400,6 +451,24 @@ def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
         raise InputError(f"{meas.source}: the data cannot identify the {n} parameters: at the fitted "
                          f"model the Jacobian has numerical rank {rank} of {n} (condition number "
                          f"{cond:.3g}); the measured points do not follow the joint motion")
+    tolerance, weights = None, None
+    if prior:
+        tolerance = manufacturing_prior(robot, idx)
+        rows = _PriorRows(Geometry.nominal(robot), tolerance, tolerance.weights(np.sqrt(sigma2)))
+        q_u, p_u = meas.q[used], meas.p[used]
+        for _ in range(PRIOR_PASSES):  # σ̂ and the weights σ̂²/τ² to agreement
+            sub, its, converged = _levenberg_marquardt(state.subset(used), q_u, p_u, idx, max_iter, rows)
+            iterations += its
+            state = _State.at(sub.geometry, meas.q, compliance, meas.directions, extended)
+            res = meas.p - state.p
+            Jp = state.J[used][:, :, idx]
+            inv, new_sigma2, cond = _statistics(Jp.reshape(-1, n), res[used].ravel(), rows.weights)
+            settled = abs(new_sigma2 - sigma2) <= 0.02 * sigma2
+            sigma2 = new_sigma2
+            if settled:
+                break
+            rows = _PriorRows(rows.reference, tolerance, tolerance.weights(np.sqrt(sigma2)))
+        weights = rows.weights
     if not converged:
         raise IdentificationError(f"{meas.source}: the fit did not converge in {max_iter} iterations")
     cov = sigma2 * inv
@@ -420,7 +489,8 @@ def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
         sigma=float(np.sqrt(sigma2)), initial_rms=initial_rms, iterations=iterations,
         condition=cond, residuals=res, used=used, rejected=rejected, correlated=correlated,
         baseline=baseline, seconds=time.perf_counter() - t0, source=meas.source,
-        sha256=meas.sha256 or measurements_sha256(meas.q, meas.p))  # a model always names its data
+        sha256=meas.sha256 or measurements_sha256(meas.q, meas.p),  # a model always names its data
+        prior=tolerance, prior_weights=weights)
 
 
 @dataclass(frozen=True)

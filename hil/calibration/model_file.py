@@ -111,9 +111,28 @@ def tracker_pose(tracker: pin.SE3, names: list[str] | tuple[str, ...] = (),
     return out
 
 
+def prior_block(fit: FitResult) -> dict[str, Any] | None:
+    """The model's ``fit.prior``: the MAP fit's tolerances and the noise its weights used (None: a
+    plain least-squares fit)."""
+    from hil.calibration import prior as tolerances
+
+    if fit.prior is None:
+        return None
+    return {"kind": "manufacturing tolerances (hil.calibration.prior)",
+            "translation_tolerance": tolerances.TRANSLATION_TOLERANCE,
+            "rotation_tolerance": tolerances.ROTATION_TOLERANCE,
+            "compliance_spread": tolerances.COMPLIANCE_SPREAD,
+            "parameters": int(np.sum(fit.prior.constrained)), "sigma": fit.sigma}
+
+
 def model_document(fit: FitResult, validation: dict[str, Any] | None = None,
-                   controller: Mapping[str, Any] | None = None) -> dict[str, Any]:
+                   controller: Mapping[str, Any] | None = None,
+                   cross_validation: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """The ``hil-model/1`` JSON document of an identification result.
+
+    `cross_validation`: the fit's ``CrossValidation.as_dict()``, kept as the ``cross_validation`` block;
+    its ``better_than_nominal`` is repeated at the top level, where `hil export` and `hil compensate`
+    look before they hand the model out.
 
     `controller`: the controller's own model the campaign ran with (its KinematicsInfo record, see
     `hil.campaign.controller`), kept as the ``controller`` block — the deltas
@@ -142,9 +161,13 @@ def model_document(fit: FitResult, validation: dict[str, Any] | None = None,
         "rejected": [{"pose": r.index, "line": r.line, "residual": r.residual, "p_value": r.p_value}
                      for r in fit.rejected],
         "correlated": [{"a": c.a, "b": c.b, "rho": c.rho} for c in fit.correlated],
+        "prior": prior_block(fit),
     }
     if fit.joint_error_choice is not None:
         doc["joint_error_selection"] = fit.joint_error_choice.as_dict()
+    if cross_validation is not None:
+        doc["cross_validation"] = dict(cross_validation)
+        doc["better_than_nominal"] = bool(cross_validation["better_than_nominal"])
     if validation is not None:
         doc["validation"] = validation
     if controller is not None:
@@ -153,6 +176,31 @@ def model_document(fit: FitResult, validation: dict[str, Any] | None = None,
     doc["software"] = software_versions()
     doc["created"] = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
     return doc
+
+
+def refuse_worse_than_nominal(doc: Mapping[str, Any], source: str, force: bool, verb: str,
+                              remedy: str | None = None) -> str | None:
+    """Refuse to hand out a model cross-validation did not show better than the nominal (or the
+    controller's) model: InputError naming the file and the figures, unless `force`, when the same
+    sentence comes back as a warning to print. A model without the verdict (older hil) passes.
+    `remedy` replaces "give --force to <verb> it anyway" where there is no --force (the TUI).
+    """
+    if doc.get("better_than_nominal") is not False:
+        return None
+    block = doc.get("cross_validation") if isinstance(doc.get("cross_validation"), Mapping) else {}
+
+    def rms(key: str) -> str:
+        value = (block.get(key) or {}).get("rms") if isinstance(block.get(key), Mapping) else None
+        return f"{value * 1e3:.4f} mm" if isinstance(value, int | float) else "unknown"
+
+    figures = f"calibrated {rms('calibrated')}, nominal {rms('nominal')}"
+    if isinstance(block.get("controller"), Mapping):
+        figures += f", controller's model {rms('controller')}"
+    said = (f"{source}: better_than_nominal is false: by cross-validation ({figures}) this model does not "
+            f"predict the arm better than the nominal or the controller's own model")
+    if not force:
+        raise InputError(f"{said}; refused ({remedy or f'give --force to {verb} it anyway'})")
+    return said
 
 
 def model_controller(doc: Mapping[str, Any], source: str = "model") -> ControllerCalibration | None:

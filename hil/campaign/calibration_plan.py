@@ -52,6 +52,7 @@ import pinocchio as pin
 
 from hil.arm.geometry import Geometry, look_at_tracker, pose_to_dict
 from hil.arm.kinematics import Kinematics
+from hil.calibration.cross_validation import CrossValidation, cross_validate
 from hil.calibration.identification import (
     ErrorStats,
     FitResult,
@@ -64,6 +65,8 @@ from hil.calibration.joint_error_selection import identify_with_joint_errors
 from hil.calibration.measurements import Measurements
 from hil.calibration.model_file import model_document
 from hil.calibration.validation_precision import campaign_validation_precision
+from hil.campaign.acceptance import Verdict, judge
+from hil.campaign.acceptance import threshold as acceptance_threshold
 from hil.campaign.controller import controller_calibration, controller_validation
 from hil.campaign.events import (
     BootstrapPlanned,
@@ -178,6 +181,10 @@ class CampaignResult:
     validation_precision: dict[str, Any] | None = None
     # poses planned and measured per role (`pose_counts`): the one source of every output's counts
     counts: dict[str, dict[str, int]] = field(default_factory=dict)
+    # the fit's cross-validation beside the nominal and the controller's models (`cross_validate`)
+    cross_validation: CrossValidation | None = None
+    # the verdict and its reason (`hil.campaign.acceptance.judge`); `passed` is its `passed`
+    verdict: Verdict | None = None
 
 
 def pose_counts(bootstrap: list[tuple[int, np.ndarray]] | None, planned: list[tuple[int, str, np.ndarray]],
@@ -469,7 +476,8 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     todo = [(i, r, q) for i, r, q in planned if (r, i) not in records]
     # the stopping rule (campaign.stop_early): a stop the store holds is kept as it was decided
     stop = EarlyStop(StoppingRule(robot, smr_guess, np.array([q for _, r, q in planned if r == VALIDATION]),
-                                  camp["acceptance"], camp["stop_margin"], compliance=camp["compliance"],
+                                  acceptance_threshold(camp["acceptance"], robot), camp["stop_margin"],
+                                  compliance=camp["compliance"],
                                   payload=config.payload, gravity=config.gravity)
                      if camp["stop_early"] else None, resume.stopping)
 
@@ -535,9 +543,18 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
             request=parse_request(camp["joint_errors"], "campaign.joint_errors"))
     except InputError as exc:  # too many poses skipped: the run failed, the input was fine
         raise IdentificationError(f"cannot identify from the measured poses: {exc}") from None
+    their_arm = None
+    if controller is not None:
+        try:
+            their_arm = controller_calibration(controller).geometry(robot)
+        except (HilError, ValueError, KeyError) as exc:
+            yield Emit(Message(campaign=campaign, level="warning",
+                               text=f"the controller's own model could not be compared: {exc}"))
+    cv = cross_validate(fitted, fit, controller=their_arm, smr_guess=smr_guess)
     yield Emit(ModelIdentified(campaign=campaign, rms=fit.rms, max=fit.max_error,
                                iterations=fit.iterations, rejected=[r.line for r in fit.rejected],
-                               model=model_document(fit, controller=controller)))
+                               model=model_document(fit, controller=controller,
+                                                    cross_validation=cv.as_dict())))
     yield Phase("validate")
     val_records = [r for (role, _), r in sorted(records.items()) if role == VALIDATION]
     held_out = measurements_of(val_records, f"campaign {campaign} validation")
@@ -550,7 +567,7 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
         precision = None
         yield Emit(Message(campaign=campaign, level="warning",
                            text=f"the validation RMS's standard error could not be estimated: {exc}"))
-    passed = after.rms <= camp["acceptance"]
+    verdict = judge(after.rms, cv, robot, camp["acceptance"])
     iso = iso9283(val_records, fit.geometry)
     theirs = None
     if controller is not None:  # a comparison that cannot be made is said, never fails the campaign
@@ -561,9 +578,10 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
             yield Emit(Message(campaign=campaign, level="warning",
                                text=f"the controller's own model could not be compared: {exc}"))
     yield Emit(ValidationDone(campaign=campaign, before=before.as_dict(), after=after.as_dict(),
-                              passed=passed, controller=None if theirs is None else theirs.as_dict()))
-    doc = model_document(fit, after.as_dict(), controller=controller)
+                              passed=verdict.passed,
+                              controller=None if theirs is None else theirs.as_dict()))
+    doc = model_document(fit, after.as_dict(), controller=controller, cross_validation=cv.as_dict())
     drift = watch.summary() if config.warmup["enabled"] or config.drift["every"] or watch.points else None
-    return CampaignResult(fit, before, after, passed, list(records.values()), tracker, selection,
+    return CampaignResult(fit, before, after, verdict.passed, list(records.values()), tracker, selection,
                           iso, doc, theirs, drift, stop.summary(), precision,
-                          pose_counts(boot_plan, planned, records))
+                          pose_counts(boot_plan, planned, records), cv, verdict)

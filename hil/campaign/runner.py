@@ -135,10 +135,10 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
         drift = result.drift or {}
         flag = (f"; drift flagged: the reference moved {drift['max'] * 1e6:.1f} µm "
                 f"(limit {drift['limit'] * 1e6:.1f} µm)" if drift.get("flagged") else "")
-        return ("accepted" if result.passed else "rejected",
-                f"validation RMS {result.after.rms * 1e3:.4f} mm "
-                f"{'<=' if result.passed else '>'} {camp['acceptance'] * 1e3:.4f} mm{flag}"
-                f"{stopped_words(result.stopping)}")
+        reason = (result.verdict.reason if result.verdict is not None else
+                  f"validation RMS {result.after.rms * 1e3:.4f} mm")
+        status = "accepted" if result.passed else "rejected"
+        return status, f"{reason}{flag}{stopped_words(result.stopping)}"
 
     return run_plan(
         config, lambda run: calibration_plan(config, choose, run.campaign, resume, validation_cycles,

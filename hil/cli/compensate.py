@@ -62,6 +62,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "poses of; a program's own set_tcp(p[...]) takes over from its line on. "
                         "Default: the flange (tool0)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON on stdout")
+    p.add_argument("--force", action="store_true",
+                   help="compensate with a model whose cross-validation did not show it better than the "
+                        "nominal or the controller's model (better_than_nominal: false); refused without it")
     p.set_defaults(func=run)
 
 
@@ -80,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from hil.arm.controller_model import ControllerCalibration
-    from hil.calibration.model_file import load_geometry
+    from hil.calibration.model_file import load_geometry, refuse_worse_than_nominal
     from hil.cli.support.output_paths import campaign_store
     from hil.compensation.controller_source import PRIMARY_PORT, controller_from_arm, controller_from_file
     from hil.compensation.poses import parse_near, parse_tcp, to_vector
@@ -98,7 +101,10 @@ def run(args: argparse.Namespace) -> int:
     if os.path.splitext(args.input)[1].lower() == ".urp":
         raise InputError(f"{args.input}: a Polyscope .urp file is not a script: give the .script Polyscope "
                          "saves beside it")
-    geometry, _ = load_geometry(args.model)
+    geometry, model_doc = load_geometry(args.model)
+    forced = refuse_worse_than_nominal(model_doc, args.model, args.force, "compensate with")
+    if forced is not None:
+        sys.stderr.write(f"hil: warning: {forced}; compensating anyway (--force)\n")
     robot = geometry.robot
     spec = geometry.spec
     near = parse_near(args.near, spec.lower, spec.upper)

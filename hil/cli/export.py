@@ -30,18 +30,27 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="hil: the calibrated model (default); controller: the controller's own model "
                         "the campaign ran with (its factory calibration), --format ros-kinematics only")
     p.add_argument("--out", required=True, metavar="FILE", help="file to write")
+    p.add_argument("--force", action="store_true",
+                   help="export a model whose cross-validation did not show it better than the nominal "
+                        "or the controller's model (better_than_nominal: false); refused without it")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from hil.calibration.exports import export
-    from hil.calibration.model_file import MODEL_FORMAT, load_geometry
+    from hil.calibration.model_file import MODEL_FORMAT, load_geometry, refuse_worse_than_nominal
     from hil.cli.support.output_paths import campaign_store
     from hil.files.outputs import atomic_write_text, check_output
 
     db, where = campaign_store()
     check_output(args.out, field="--out", inputs={"--model": args.model}, store=db, store_field=where)
     geometry, doc = load_geometry(args.model, (MODEL_FORMAT,))
+    if args.which == "hil":  # the controller's own model is the arm's as it is: no fit to judge
+        forced = refuse_worse_than_nominal(doc, args.model, args.force, "export")
+        if forced is not None:
+            import sys
+
+            print(f"hil: warning: {forced}; exported anyway (--force)", file=sys.stderr)
     if args.which == "controller":
         text = _controller_yaml(args, doc)
     else:

@@ -1,16 +1,24 @@
-"""`hil identify`: calibrated model from a measurements CSV."""
+"""`hil identify`: calibrated model from a measurements CSV.
+
+Every fit is cross-validated (`hil.calibration.cross_validation`) beside the nominal model and, with
+``--controller``, the controller's own model; a fit that cross-validation does not show better than
+both is still written (so it can be inspected) with ``better_than_nominal: false``, said in one line on
+stderr, and the command exits 1: `hil export` and `hil compensate` then refuse the model unless forced.
+"""
 
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import TYPE_CHECKING
 
 from hil.arm.catalog import ROBOT_NAMES, get_robot
 from hil.cli.support.options import PAYLOAD_HELP, add_joint_units, payload_or_none, triplet_or_none
 from hil.cli.support.output import mm, print_json, say, wrote
-from hil.jobs.outcome import EXIT_OK
+from hil.jobs.outcome import EXIT_FAILED, EXIT_OK
 
 if TYPE_CHECKING:
+    from hil.calibration.cross_validation import CrossValidation
     from hil.calibration.identification import FitResult
 
 
@@ -19,13 +27,21 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description="Fit the kinematic parameters of a UR arm to SMR positions measured "
                                    "by a tracker (CSV q1..q6,x,y,z, or another form of docs/design.md: "
                                    "joints in degrees, polar hz,v,d, FIGAROH's x1,y1,z1,phix1,…) and "
-                                   "write a hil-model/1 JSON.")
+                                   "write a hil-model/1 JSON. The fit is cross-validated beside the "
+                                   "nominal model (and the controller's own with --controller); exit 1 "
+                                   "when it does not predict held-out poses better than them.")
     p.add_argument("--robot", required=True, help=f"robot type ({', '.join(ROBOT_NAMES)})")
     p.add_argument("--measurements", required=True, metavar="M.csv", help="measurements CSV")
     p.add_argument("--smr", metavar="X,Y,Z", help="rough SMR offset in the flange frame (m)")
     p.add_argument("--validation", metavar="V.csv", help="held-out measurements to validate on")
     add_joint_units(p)
     p.add_argument("--no-reject", action="store_true", help="keep every pose (no outlier rejection)")
+    p.add_argument("--no-prior", action="store_true",
+                   help="plain least squares: no prior toward the nominal geometry (manufacturing "
+                        "tolerances); few or noisy poses then chase the noise")
+    p.add_argument("--controller", metavar="K.json",
+                   help="the controller's own calibration (a JSON file with a 'controller' block, as "
+                        "hil compensate --controller reads), cross-validated beside the fit")
     p.add_argument("--compliance", action="store_true",
                    help="identify the joints' compliance (rad/Nm) with the geometry, for --payload")
     p.add_argument("--payload", metavar="MASS[,X,Y,Z]", help=PAYLOAD_HELP + " (default: nothing)")
@@ -41,21 +57,26 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def summary(fit: FitResult) -> dict:
+def summary(fit: FitResult, cv: CrossValidation | None = None) -> dict:
     """The fit figures a user looks at first."""
-    return {
+    out = {
         "robot": fit.robot, "poses": len(fit.used), "used": int(fit.used.sum()),
         "parameters": len(fit.indices), "initial_rms": fit.initial_rms, "rms": fit.rms,
         "max": fit.max_error, "sigma": fit.sigma, "iterations": fit.iterations,
-        "condition": fit.condition, "seconds": fit.seconds,
+        "condition": fit.condition, "seconds": fit.seconds, "prior": fit.prior is not None,
         "rejected": [{"pose": r.index, "line": r.line, "residual": r.residual} for r in fit.rejected],
         "correlated": [{"a": c.a, "b": c.b, "rho": c.rho} for c in fit.correlated],
         "joint_errors": None if fit.joint_error_choice is None else fit.joint_error_choice.as_dict(),
     }
+    if cv is not None:
+        out["cross_validation"] = cv.as_dict()
+        out["better_than_nominal"] = cv.better_than_nominal
+    return out
 
 
 def run(args: argparse.Namespace) -> int:
     from hil.arm.payload import gravity_of_mounting
+    from hil.calibration.cross_validation import cross_validate
     from hil.calibration.identification import validate
     from hil.calibration.joint_error_request import parse_request
     from hil.calibration.joint_error_selection import identify_with_joint_errors
@@ -67,37 +88,55 @@ def run(args: argparse.Namespace) -> int:
 
     db, where = campaign_store()
     check_output(args.out, field="--out", store=db, store_field=where,
-                 inputs={"--measurements": args.measurements, "--validation": args.validation})
+                 inputs={"--measurements": args.measurements, "--validation": args.validation,
+                         "--controller": args.controller})
     robot = get_robot(args.robot).name
     smr = triplet_or_none(args.smr, "--smr", max_length=MAX_SMR_OFFSET, where="of the flange")
     meas = read_measurements(args.measurements, args.joint_units)
     held_out = read_measurements(args.validation, args.joint_units) if args.validation else None
+    controller = None
+    if args.controller is not None:
+        from hil.compensation.controller_source import controller_from_file
+
+        controller = controller_from_file(args.controller, robot)
     payload = payload_or_none(args.payload)
     mounting = triplet_or_none(args.mounting, "--mounting")
     request = parse_request(args.joint_errors)
     fit = identify_with_joint_errors(
         meas, robot, smr, request=request, reject_outliers=not args.no_reject, compliance=args.compliance,
         payload=payload if payload is not None and payload.mass > 0 else None,
-        gravity=gravity_of_mounting(mounting) if mounting is not None else None)
+        gravity=gravity_of_mounting(mounting) if mounting is not None else None,
+        prior=not args.no_prior)
+    cv = cross_validate(meas, fit, smr_guess=smr,
+                        controller=None if controller is None else controller.geometry(robot))
     validation = validate(fit.geometry, held_out).as_dict() if held_out is not None else None
-    write_json(args.out, model_document(fit, validation))
+    write_json(args.out, model_document(fit, validation, cross_validation=cv.as_dict()))
     wrote(args.out, f"hil-model/1, {len(fit.indices)} parameters")
     notes = unused_by_position_fit(meas) + (unused_by_position_fit(held_out) if held_out is not None else [])
     for note in notes:
         say(note)
-    info = summary(fit)
+    code = EXIT_OK if cv.better_than_nominal else EXIT_FAILED
+    if not cv.better_than_nominal:
+        print(f"hil: {args.measurements}: {cv.verdict()}; the model is marked better_than_nominal: "
+              "false (hil export and hil compensate refuse it without --force)", file=sys.stderr)
+    info = summary(fit, cv)
     if notes:
         info["notes"] = notes
     if validation is not None:
         info["validation"] = validation
     if args.json:
         print_json(info)
-        return EXIT_OK
+        return code
     print(f"{robot}: {info['used']}/{info['poses']} poses, {info['parameters']} parameters, "
-          f"{fit.iterations} iterations, condition {fit.condition:.1f}, {fit.seconds * 1e3:.0f} ms")
+          f"{fit.iterations} iterations, condition {fit.condition:.1f}, {fit.seconds * 1e3:.0f} ms"
+          + ("" if fit.prior is not None else ", no prior"))
     print(f"  after tracker alignment  RMS {mm(fit.initial_rms)}")
     print(f"  calibrated fit           RMS {mm(fit.rms)}  max {mm(fit.max_error)}  "
           f"noise σ {fit.sigma * 1e6:.1f} µm/axis")
+    print(f"  held out ({cv.folds}-fold CV)   calibrated RMS {mm(cv.calibrated.rms)}  "
+          f"max {mm(cv.calibrated.max)}  nominal RMS {mm(cv.nominal.rms)}"
+          + ("" if cv.controller is None else f"  controller RMS {mm(cv.controller.rms)}")
+          + ("" if cv.better_than_nominal else "  NOT BETTER"))
     if validation is not None:
         print(f"  validation ({validation['count']} poses)  RMS {mm(validation['rms'])}  "
               f"max {mm(validation['max'])}")
@@ -118,4 +157,4 @@ def run(args: argparse.Namespace) -> int:
                 print(f"  {name:<16} {v * 1e6:+.1f} ± {sd * 1e6:.1f} µrad")
     for c in fit.correlated[:10]:
         print(f"  correlated: {c.a} ~ {c.b}  ρ = {c.rho:+.3f}")
-    return EXIT_OK
+    return code

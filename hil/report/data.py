@@ -216,6 +216,15 @@ class ReportData:
     # "measured"}} (`hil.campaign.calibration_plan.pose_counts`); None when not known (an offline
     # identification, an older result)
     poses: Mapping[str, Mapping[str, int]] | None = None
+    # the campaign's verdict (`hil.campaign.acceptance.Verdict.as_dict`: passed, threshold, reason,
+    # rule); None when not known (an older result)
+    verdict: Mapping[str, Any] | None = None
+
+    @property
+    def cross_validation(self) -> Mapping[str, Any] | None:
+        """The model's ``cross_validation`` block (held-out RMS of calibrated, nominal, controller)."""
+        block = self.model.get("cross_validation") if self.model is not None else None
+        return block if isinstance(block, Mapping) else None
 
     @property
     def drift_flagged(self) -> bool:
@@ -286,6 +295,8 @@ def report_data_from(
     stopping: Mapping[str, Any] | None = None,
     validation_precision: Mapping[str, Any] | None = None,
     poses: Mapping[str, Mapping[str, int]] | None = None,
+    passed: bool | None = None,
+    verdict: Mapping[str, Any] | None = None,
 ) -> ReportData:
     """Assemble a `ReportData` from what the campaign engine has at the end of a run.
 
@@ -309,7 +320,9 @@ def report_data_from(
     * ``stopping``: the stopping rule's record (`hil.campaign.calibration_plan.CampaignResult.stopping`);
     * ``validation_precision``: the validation RMS's standard error under the validation design
       (`hil.campaign.calibration_plan.CampaignResult.validation_precision`);
-    * ``poses``: poses planned and measured per role (`hil.campaign.calibration_plan.pose_counts`).
+    * ``poses``: poses planned and measured per role (`hil.campaign.calibration_plan.pose_counts`);
+    * ``passed`` and ``verdict``: the campaign's verdict (`hil.campaign.acceptance.judge`); without
+      them the verdict is validation RMS ≤ ``accept_rms``.
     """
     from hil.calibration.model_file import model_document, software_versions, tracker_pose
 
@@ -317,9 +330,13 @@ def report_data_from(
         cfg: dict[str, Any] = config.as_dict()
     else:
         cfg = {k: dict(v) if isinstance(v, Mapping) else v for k, v in config.items()}
+    if accept_rms is None and verdict is not None:
+        accept_rms = float(verdict["threshold"])
     if accept_rms is None:
-        try:
-            accept_rms = float(cfg["campaign"]["acceptance"])
+        from hil.campaign.acceptance import threshold
+
+        try:  # the user's threshold, else the robot class's bound (`hil.campaign.acceptance`)
+            accept_rms = threshold(cfg["campaign"]["acceptance"], fit.robot)
         except (KeyError, TypeError, ValueError):
             raise InputError("report: no acceptance threshold (config campaign.acceptance)") from None
     station = str(cfg.get("station", {}).get("name", "")) if isinstance(cfg.get("station"), Mapping) else ""
@@ -357,7 +374,7 @@ def report_data_from(
         station=station,
         robot=robot,
         accept_rms=float(accept_rms),
-        passed=bool(after.rms <= accept_rms),
+        passed=bool(after.rms <= accept_rms) if passed is None else bool(passed),
         validation_before=ErrorSet.of_stats(validation_before, v_before),
         validation_after=after,
         fit=FitSummary(rms=fit.rms, max=fit.max_error, sigma=fit.sigma, initial_rms=fit.initial_rms,
@@ -392,6 +409,7 @@ def report_data_from(
         stopping=dict(stopping) if stopping is not None else None,
         validation_precision=dict(validation_precision) if validation_precision is not None else None,
         poses={k: dict(v) for k, v in poses.items()} if poses is not None else None,
+        verdict=dict(verdict) if verdict is not None else None,
     )
 
 
@@ -535,6 +553,7 @@ def _from_result(doc: Mapping[str, Any], source: str) -> ReportData:
         stopping=_stopping(doc.get("stopping"), source),
         validation_precision=_precision(validation.get("precision"), source),
         poses=_pose_counts(doc.get("poses"), source),
+        verdict=doc["verdict"] if isinstance(doc.get("verdict"), Mapping) else None,
     )
 
 

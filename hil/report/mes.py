@@ -55,7 +55,17 @@ def mes_result(data: ReportData) -> dict[str, Any]:
     * ``campaign``: campaign id; ``station``: station name
     * ``robot``: catalog type (``"ur5e"``); ``robot_serial``, ``robot_software``: as the controller
       reports them (``""`` when unknown)
-    * ``passed``: bool, validation RMS ≤ ``accept_rms`` (metres)
+    * ``passed``: bool, the campaign's verdict (``verdict``): validation RMS ≤ ``accept_rms`` (metres)
+      and, for a cross-validated model, ``better_than_nominal``
+    * ``accept_rms``: the threshold applied (m): the user's ``campaign.acceptance``, or without one
+      min(2 × the cross-validated RMS, the robot class's bound) (`hil.campaign.acceptance`)
+    * ``verdict`` (a campaign's): ``{"passed", "threshold": m, "reason": one line, "rule": "threshold" |
+      "auto", "floor_factor", "class_margin"}``
+    * ``cross_validation`` and ``better_than_nominal`` (when the model was cross-validated): the model's
+      block (`hil.calibration.cross_validation`: ``folds``, ``rule``, ``poses``, ``calibrated``,
+      ``nominal``, ``controller`` (S or null, S as under ``validation``), ``better_than_nominal``,
+      ``better_than_controller``, ``p_value_nominal``, ``p_value_controller``, ``significance``,
+      ``seconds``), repeated at the top level for readers of the result alone
     * ``started``, ``finished``: ISO 8601 or null
     * ``validation``: ``{"before": S, "after": S, "iso9283": {"AP": m, "RP": m, ...} | null}``
       where S is ``{"count", "mean", "rms", "max"}``; *before* is the nominal arm (only the tracker
@@ -180,4 +190,9 @@ def mes_result(data: ReportData) -> dict[str, Any]:
         doc["stopping"] = _plain(dict(data.stopping))
     if data.poses is not None:  # likewise only for a campaign
         doc["poses"] = _plain({k: dict(v) for k, v in data.poses.items()})
+    if data.cross_validation is not None:  # likewise only when the model was cross-validated
+        doc["cross_validation"] = _plain(dict(data.cross_validation))
+        doc["better_than_nominal"] = bool(data.cross_validation.get("better_than_nominal"))
+    if data.verdict is not None:
+        doc["verdict"] = _plain(dict(data.verdict))
     return doc

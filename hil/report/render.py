@@ -71,9 +71,36 @@ def _header(d: ReportData, generated: str) -> str:
 <p class="sub">{esc(when)}</p></div>
 <div class="verdict {verdict.lower()}"><div class="big">{verdict}</div>
 <div>validation RMS {esc(fmt_mm(d.validation_after.rms))} {cmp} acceptance {esc(fmt_mm(d.accept_rms))}</div>
-{_precision(d)}{_drift_flag(d)}</div></header>
+{_verdict_reason(d)}{_precision(d)}{_cross_validation(d)}{_drift_flag(d)}</div></header>
 {_stopping(d)}
 <p class="generated">Generated {esc(generated)} by hil {esc(__version__)}.</p>"""
+
+
+def _verdict_reason(d: ReportData) -> str:
+    """The verdict's own line (`hil.campaign.acceptance`) when it says more than the RMS line above:
+    a model not better than nominal, or the automatic threshold's origin."""
+    reason = (d.verdict or {}).get("reason")
+    return f'<div class="reason">{esc(str(reason))}</div>\n' if reason else ""
+
+
+def _cross_validation(d: ReportData) -> str:
+    """The verdict box's line with the cross-validated held-out RMS of each model, and a warning when
+    the calibrated model is not shown better than the nominal or the controller's."""
+    block = d.cross_validation
+    if block is None:
+        return ""
+
+    def rms(key: str) -> str:
+        value = block.get(key)
+        return fmt_mm(value.get("rms")) if isinstance(value, dict) else "—"
+
+    text = (f"{block.get('folds')}-fold cross-validation (held-out RMS): calibrated {rms('calibrated')}, "
+            f"nominal {rms('nominal')}"
+            + (f", controller's model {rms('controller')}" if block.get("controller") else ""))
+    if block.get("better_than_nominal") is False:
+        return (f'<div><b>NOT BETTER THAN NOMINAL</b>: {esc(text)}; this model may make the arm worse '
+                "(exports refuse it without --force)</div>\n")
+    return f'<div class="cv">{esc(text)}</div>\n'
 
 
 def _precision(d: ReportData) -> str:

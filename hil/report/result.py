@@ -51,7 +51,9 @@ def report_data(outcome: Any, config: StationConfig, events: list[Event], starte
         hashes={"measurements": digest}, model=r.model, line_kind="pose",
         validation_controller=r.controller, verification=verification, drift=r.drift,
         stopping=r.stopping, validation_precision=r.validation_precision,
-        poses=r.counts or None)
+        poses=r.counts or None,
+        passed=None if r.verdict is None else r.verdict.passed,
+        verdict=None if r.verdict is None else r.verdict.as_dict())
 
 
 def result_document(outcome: Any, config: StationConfig, events: list[Event], started: float,

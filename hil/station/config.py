@@ -327,8 +327,12 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # longer says the SMR was still, and 10 (m) is a value in micrometres
         "stability": Key("float", 50e-6, _within(0, 1e-3, "m", lo_open=True),
                          "largest per-axis spread of a point (m)"),
-        "acceptance": Key("float", 0.1e-3, _within(0, MAX_ACCEPTANCE, "m", lo_open=True),
-                          "validation RMS threshold (m)"),
+        # unset: the automatic verdict (hil.campaign.acceptance): better than the nominal and the
+        # controller's model by cross-validation, validation within a factor of the cross-validated RMS
+        # and within the robot class's bound; set: validation RMS at most this (and still better)
+        "acceptance": Key("float?", None, _within(0, MAX_ACCEPTANCE, "m", lo_open=True),
+                          "validation RMS threshold (m); unset: judged by cross-validation and the "
+                          "robot class's bound"),
         "index": Key("str", "O1", _index, "observability index for pose selection"),
         # method 000 (tabu, the seed's) chooses calibration_poses poses, then their order; time-aware
         # chooses poses and order together for robot time (hil.calibration.timed_selection): the

@@ -667,6 +667,7 @@ class Session:
         """Write the campaign's model, URDF, ROS kinematics YAML and/or HTML report to the output dir."""
         from hil.arm.geometry import Geometry
         from hil.calibration.exports import export
+        from hil.calibration.model_file import refuse_worse_than_nominal
         from hil.files.outputs import atomic_write_text
         from hil.report import report_data_from_result, write_report
 
@@ -694,6 +695,9 @@ class Session:
                                          f"(status {record.summary.status})")
                     source = f"campaign {record.id}"
                     doc = record.model.doc
+                    # a model cross-validation did not show better than nominal: the CLI's --force only
+                    refuse_worse_than_nominal(doc, source, False, "export",
+                                              "hil export --force exports it anyway")
                     atomic_write_text(path, export(doc, Geometry.from_dict(doc, source=source), fmt,
                                                    source=source))
                 written.append(str(path))

@@ -29,6 +29,11 @@ from hil.tui.widgets.nav import NavBar
 MODE_LABELS = {"uncompensated": "uncomp.", "compensated": "comp."}
 
 
+def model_cv(doc: Any) -> dict[str, Any] | None:
+    """A model's ``cross_validation`` block (`hil.calibration.cross_validation`), or None."""
+    block = doc.get("cross_validation") if isinstance(doc, dict) else None
+    return block if isinstance(block, dict) else None
+
 def _mm(v: Any) -> str:
     return "-" if v is None or not math.isfinite(float(v)) else f"{float(v) * 1e3:.4f}"
 
@@ -143,6 +148,9 @@ class ResultsScreen(HilScreen):
         self.query_one("#stats").border_title = "Validation, held-out poses, mm"
         self.query_one("#fit").border_title = "Fit"
         accept = ((rec.config or {}).get("campaign") or {}).get("acceptance")
+        if isinstance(rec.result, dict) and rec.result.get("accept_rms") is not None:
+            accept = rec.result["accept_rms"]  # the threshold the verdict applied (automatic or the user's)
+        cv = (model_cv(rec.model.doc) if rec.model is not None else None)
         v = rec.validation
         if v is not None:
             word, style = ("PASS", "bold white on green") if v.passed else ("FAIL", "bold white on red")
@@ -155,6 +163,9 @@ class ResultsScreen(HilScreen):
         precision = describe_precision(_precision(rec.result))
         if v is not None and precision is not None:
             line.append(f"\n validation RMS {precision}", "dim")
+        if cv is not None and cv.get("better_than_nominal") is False:
+            line.append("\n NOT BETTER THAN NOMINAL by cross-validation: exports refuse this model",
+                        "bold red")
         if rec.detail and v is None:
             line.append(f"\n{rec.detail}", "dim")
         verdict.update(line)
@@ -163,6 +174,12 @@ class ResultsScreen(HilScreen):
             for key in ("rms", "max", "mean"):
                 grid.add_row(key, _mm(v.before.get(key)), Text(_mm(v.after.get(key)), style="bold"))
             grid.add_row("poses", str(v.before.get("count", "-")), str(v.after.get("count", "-")))
+            if cv is not None:  # the same models held out by cross-validation on the fitted poses
+                nominal, calibrated = cv.get("nominal") or {}, cv.get("calibrated") or {}
+                grid.add_row(f"CV rms ({cv.get('folds')}-fold)", _mm(nominal.get("rms")),
+                             Text(_mm(calibrated.get("rms")), style="bold"))
+                if isinstance(cv.get("controller"), dict):
+                    grid.add_row("CV controller", _mm(cv["controller"].get("rms")), "")
         else:
             grid.add_row("none yet", "", "")
         stats.update(grid)

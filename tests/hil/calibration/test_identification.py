@@ -128,3 +128,37 @@ def test_degenerate_pose_set_names_what_is_lost(rng):
     q = np.where((np.arange(12) % 2 == 0)[:, None], meas.q[0], meas.q[1])  # two poses, repeated
     with pytest.raises(InputError, match="degenerate pose set: the poses cannot identify"):
         identify(Measurements(q, meas.p, meas.lines, "sim.csv"), "ur5e")
+
+
+def test_the_prior_shrinks_few_noisy_poses_toward_nominal_and_leaves_good_data_alone() -> None:
+    """MAP fit (`hil.calibration.prior`): 12 poses with 3 mm noise chase the noise without the prior
+    (true error several times the nominal's) and stay near nominal with it; 40 tracker-grade poses give
+    the same model either way. Posterior standard deviations are below the tolerances."""
+    from hil.calibration.prior import ROTATION_TOLERANCE, TRANSLATION_TOLERANCE
+    from hil.calibration.synthetic import true_points
+
+    for poses, sigma in ((12, 3e-3), (40, 20e-6)):
+        rng = np.random.default_rng(5)
+        truth = random_truth("ur5e", rng, rigid=True)
+        q, p = measure(truth, random_configurations("ur5e", poses, rng), Noise(sigma), rng)
+        meas = Measurements(q, p, np.arange(poses) + 2, "x.csv")
+        q_fresh = random_configurations("ur5e", 500, rng)
+        fresh = true_points(truth, q_fresh)
+
+        def error(geometry, q_fresh=q_fresh, fresh=fresh) -> float:
+            return float(np.sqrt(np.mean(np.sum((Kinematics(geometry).points(q_fresh) - fresh) ** 2, 1))))
+
+        plain = identify(meas, "ur5e", prior=False)
+        shrunk = identify(meas, "ur5e")
+        assert plain.prior is None and shrunk.prior is not None
+        if sigma > 1e-3:
+            assert error(plain.geometry) > 1.5 * error(shrunk.geometry)
+            assert error(shrunk.geometry) < 1.3 * error(shrunk.baseline)
+            joints = [k for k, n in enumerate(shrunk.names) if n.startswith("joint")]
+            tol = np.where([shrunk.names[k].split(".")[1][0] == "t" for k in joints],
+                           TRANSLATION_TOLERANCE, ROTATION_TOLERANCE)
+            assert np.all(shrunk.std[joints] < 1.05 * tol)  # the data add to the prior, never less
+            assert np.all(np.abs(shrunk.values[joints]) < 3 * tol)
+        else:
+            assert error(shrunk.geometry) == pytest.approx(error(plain.geometry), rel=0.05)
+            assert shrunk.rms == pytest.approx(plain.rms, rel=0.01)

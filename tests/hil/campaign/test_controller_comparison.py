@@ -206,7 +206,10 @@ def test_the_runner_keeps_the_controllers_model_and_the_result_reports_it():
 
     devices = _Devices(arm, FakeTracker(arm, truth))
     outcome = run_campaign(config, choose, bus=bus, campaign="c1", devices=devices)
-    assert outcome.status == "accepted", outcome.error
+    # the controller's model is the truth here: no calibration beats it, and the verdict says so
+    assert outcome.status == "rejected", outcome.error
+    assert "worse than the controller's own model" in outcome.result.verdict.reason or \
+        "better than the controller's own model" in outcome.result.verdict.reason
     record = controller_record("ur5e", arm.info.kinematics)
     assert outcome.robot_info["controller"] == record
     names = [type(e) for e in events]
@@ -245,6 +248,8 @@ def test_a_comparison_that_cannot_be_made_is_said_and_the_campaign_goes_on(monke
     choose = lambda request: Choice(visible_poses(request.model, request.count, rng), {})  # noqa: E731
     record = controller_record("ur5e", fake_kinematics(CALIBRATION))
     _, result = dry_run(calibration_plan(_config(truth), choose, "c1", controller=record), respond)
-    assert result.passed and result.controller is None and "controller" in result.model
+    assert result.controller is None and "controller" in result.model
+    # the cross-validation still has the controller's model (the truth): the fit cannot beat it
+    assert not result.passed and "controller's own model" in result.verdict.reason
     (warning,) = [e for e in events if isinstance(e, Message)]
     assert warning.level == "warning" and "did not converge" in warning.text

@@ -63,7 +63,8 @@ def fake_config(truth, **overrides):
         "campaign__calibration_poses": 30, "campaign__validation_poses": 8, "campaign__samples": 2,
         "robot__settle_time": 0.0, "robot__joint_samples": 2, "smr__offset": tuple(truth.smr + 0.003),
         "tracker__position": tuple(truth.tracker.translation + 0.05), "warmup__enabled": False,
-        "drift__every": 0, "campaign__compliance": False, "campaign__stop_early": True, **overrides})
+        "drift__every": 0, "campaign__compliance": False, "campaign__stop_early": True,
+        "campaign__acceptance": 0.1e-3, **overrides})  # a threshold the rule works to (the old default)
 
 
 class StopCell:
