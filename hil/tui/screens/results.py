@@ -140,8 +140,6 @@ class ResultsScreen(HilScreen):
             self._exports()
             return
         s = rec.summary
-        if table.display != (s.kind != VERIFICATION):  # a pose test identifies no parameters: no
-            table.display = s.kind != VERIFICATION  # empty table (set on change only: a relayout)
         if s.kind == VERIFICATION:
             self._verification(rec)
             return
