@@ -148,6 +148,11 @@ class ResultsScreen(HilScreen):
         accept = ((rec.config or {}).get("campaign") or {}).get("acceptance")
         if isinstance(rec.result, dict) and rec.result.get("accept_rms") is not None:
             accept = rec.result["accept_rms"]  # the threshold the verdict applied (automatic or the user's)
+        robot = ((rec.config or {}).get("robot") or {}).get("type")
+        if accept is None and isinstance(robot, str):
+            from hil.campaign.acceptance import threshold
+
+            accept = threshold(None, robot)  # no threshold set: the robot class's bound
         cv = (model_cv(rec.model.doc) if rec.model is not None else None)
         v = rec.validation
         if v is not None:

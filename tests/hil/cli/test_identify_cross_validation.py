@@ -64,7 +64,7 @@ def test_export_refuses_a_model_not_better_than_nominal_unless_forced(models, ca
     model = models["dir"] / "bad.json"
     if not model.exists():
         assert identify(models["bad_csv"], model) == 1
-    target = models["dir"] / f"bad.{fmt}"
+    target = models["dir"] / f"exported-{fmt}.out"
     capsys.readouterr()
     assert main(["export", "--model", str(model), "--format", fmt, "--out", str(target)]) == 2
     err = capsys.readouterr().err.strip()

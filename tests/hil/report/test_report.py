@@ -16,6 +16,7 @@ from hil.calibration.identification import identify, validate
 from hil.calibration.measurements import Measurements
 from hil.calibration.model_file import write_json
 from hil.calibration.synthetic import Noise, measure, random_configurations, random_truth
+from hil.campaign.acceptance import class_bound
 from hil.campaign.events import Message, PoseSkipped, Resumed, Suspended
 from hil.cli import main
 from hil.report import (
@@ -169,7 +170,9 @@ def test_every_parameter_and_section_is_shown(data, page):
 def test_report_data_from_defaults(campaign):
     fit, _, _, before, after = campaign
     d = report_data_from(fit, before, after, default_config(), campaign="x")
-    assert d.accept_rms == default_config().get("campaign.acceptance")
+    # no campaign.acceptance by default: the robot class's bound (hil.campaign.acceptance)
+    assert default_config().get("campaign.acceptance") is None
+    assert d.accept_rms == class_bound("ur5e")
     assert d.calibration_before is None and d.validation_after.vectors is None
     assert d.model["format"] == "hil-model/1"
     page = render_html(d)
