@@ -40,12 +40,11 @@ cross-validated prediction error calls it with each candidate's columns.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import scipy.linalg
-import scipy.special
 
 from hil.arm.geometry import Geometry
 from hil.arm.kinematics import N_PARAMETERS, SMR_SLICE, TRACKER_SLICE, Kinematics
@@ -61,6 +60,33 @@ FOLD_RULE = "pose i (in input order, fitted poses only) in fold i mod k, k = min
 SIGNIFICANCE = 0.05
 #: The registration parameters: what "nominal" and "controller" models fit in each fold.
 REGISTRATION = np.r_[np.arange(N_PARAMETERS)[TRACKER_SLICE], np.arange(N_PARAMETERS)[SMR_SLICE]]
+
+
+def student_t_cdf(t: float, dof: int) -> float:
+    """P(T ≤ t) for Student's t with a whole number `dof` of degrees of freedom.
+
+    The finite series of Abramowitz & Stegun 26.7.3 (odd dof) and 26.7.4 (even dof) in θ = atan(t/√ν):
+    exact for whole dof, which a paired test on poses always has, and it spares `hil identify` the
+    import of scipy (most of its start-up; scipy's `stdtr` agrees to 1e-12, see the tests).
+    """
+    nu = int(dof)
+    if nu < 1:
+        raise ValueError(f"degrees of freedom must be a whole number ≥ 1, not {dof}")
+    theta = math.atan(abs(t) / math.sqrt(nu))
+    c2 = math.cos(theta) ** 2
+    if nu % 2:  # A(t|ν) = 2/π·(θ + sinθ·cosθ·(1 + 2/3·cos²θ + … + 2·4…(ν−3)/(1·3…(ν−2))·cos^(ν−3)θ))
+        total, term = (1.0, 1.0) if nu > 1 else (0.0, 0.0)
+        for k in range(2, nu - 1, 2):
+            term *= k / (k + 1) * c2
+            total += term
+        a = 2.0 / math.pi * (theta + math.sin(theta) * math.cos(theta) * total)
+    else:  # A(t|ν) = sinθ·(1 + 1/2·cos²θ + 1·3/(2·4)·cos⁴θ + … + 1·3…(ν−3)/(2·4…(ν−2))·cos^(ν−2)θ)
+        total, term = 1.0, 1.0
+        for k in range(1, nu - 2, 2):
+            term *= k / (k + 1) * c2
+            total += term
+        a = math.sin(theta) * total
+    return 0.5 + 0.5 * a if t >= 0 else 0.5 - 0.5 * a
 
 
 def default_folds(count: int) -> int:
@@ -104,11 +130,11 @@ def held_out_residuals(residuals: np.ndarray, jacobian: np.ndarray, fold: np.nda
         A = A_all - Jh.T @ Jh + np.diag(w)
         g = g_all - Jh.T @ rf[held] - prior_gradient
         As = A / np.outer(norms, norms)
-        try:
-            step = scipy.linalg.solve(As, g / norms, assume_a="pos", check_finite=False)
+        try:  # numpy's solve, not scipy's: `hil identify` of clean data imports no scipy (its start-up)
+            step = np.linalg.solve(As, g / norms)
             if not np.all(np.isfinite(step)):
                 raise np.linalg.LinAlgError
-        except (np.linalg.LinAlgError, scipy.linalg.LinAlgError):
+        except np.linalg.LinAlgError:
             step = np.linalg.pinv(As, rcond=1e-10) @ (g / norms)
         step = step / norms
         out[np.asarray(fold) == f] = (rf[held] - Jh @ step).reshape(-1, 3)
@@ -136,8 +162,7 @@ class CrossValidation:
         mean = float(np.mean(d))
         if sd == 0.0:
             return 0.0 if mean > 0 else 1.0
-        # scipy.stats.t.sf without importing scipy.stats (a second of a command's start-up)
-        return float(scipy.special.stdtr(len(d) - 1, -mean / (sd / np.sqrt(len(d)))))
+        return student_t_cdf(-mean / (sd / np.sqrt(len(d))), len(d) - 1)
 
     @property
     def better_than_controller(self) -> bool | None:

@@ -16,9 +16,9 @@ joint (`hil.arm.kinematics.identifiable_joint_errors`: all are independent of th
 and the lost motion of every joint whose approach directions in the data take both signs (approached
 from one side it is a constant offset, which the geometry already holds).
 
-**Cheap folds.** The selection's k-fold loop is a private helper here until the campaign-wide
-cross-validation (`hil.calibration.cross_validation`, built alongside) can take its place. Every fold
-fit is warm-started at the full-data fit and takes one Gauss–Newton step there: the fold's solution
+**Cheap folds.** The selection's k-fold loop is `hil.calibration.cross_validation`'s (its folds, its
+one-step fold fits, the fit's prior), so the error "without" joint errors is the cross-validated error
+`hil identify` reports for the geometry. Every fold fit is warm-started at the full-data fit and takes one Gauss–Newton step there: the fold's solution
 lies within the noise of the full one, where the model is linear to far below the noise (the
 joint-error terms enter the link angle linearly, and a geometry step of tens of micrometres changes
 the Jacobian by parts per million), so one step is the fold's fit. The whole selection is then linear
@@ -42,6 +42,7 @@ from hil.arm.kinematics import (
     Kinematics,
     identifiable_joint_errors,
 )
+from hil.calibration.cross_validation import fold_of, held_out_residuals
 from hil.calibration.identification import FitResult, identify
 from hil.calibration.joint_error_request import JointErrorRequest
 from hil.calibration.measurements import Measurements
@@ -59,8 +60,6 @@ SE_FACTOR = 2.0
 #: Folds of the selection's cross-validation (fewer when there are fewer poses): ten is the usual
 #: compromise between the bias of few folds and the variance of many (ibid. §7.10.1).
 FOLDS = 10
-#: The folds' assignment is drawn once from this seed: the same data always give the same choice.
-FOLD_SEED = 0
 #: What `identify_with_joint_errors` does unless told otherwise.
 AUTO = JointErrorRequest("auto")
 
@@ -128,43 +127,22 @@ def candidate_groups(robot: str, meas: Measurements, *, compliance: bool = False
     return out
 
 
-def _folds(m: int, folds: int) -> np.ndarray:
-    """Fold number of each of `m` poses: a fixed shuffle, then round-robin (sizes differ by ≤ 1)."""
-    order = np.random.default_rng(FOLD_SEED).permutation(m)
-    out = np.empty(m, dtype=int)
-    out[order] = np.arange(m) % folds
-    return out
-
-
 class _KFold:
-    """The selection's private k-fold loop (module docstring): every fold's fit is one Gauss–Newton
-    step from the full-data fit, so a model — a set of columns of the Jacobian at that fit — is
-    judged from each fold's Gram matrix and gradient, computed once for all columns: a trial costs a
-    batch of small solves, not a fit."""
+    """The k-fold loop of the selection: `hil.calibration.cross_validation`'s, on the same folds and
+    with the fit's prior, so "without" is the figure `cross_validate` reports for the fit itself.
 
-    def __init__(self, J: np.ndarray, r: np.ndarray, fold: np.ndarray) -> None:
-        n = J.shape[2]
-        scale = np.linalg.norm(J.reshape(-1, n), axis=0)
-        self.A = J / np.where(scale > 0, scale, 1.0)  # unit columns: the normal equations stay tame
-        self.r = r
-        self.fold = fold
-        self.k = int(fold.max()) + 1
-        G_pose = np.einsum("nia,nib->nab", self.A, self.A)  # (m, n, n)
-        b_pose = np.einsum("nia,ni->na", self.A, r)
-        G_fold = np.zeros((self.k, n, n))
-        b_fold = np.zeros((self.k, n))
-        np.add.at(G_fold, fold, G_pose)
-        np.add.at(b_fold, fold, b_pose)
-        self.G_train = G_fold.sum(axis=0) - G_fold  # each fold's training Gram matrix
-        self.b_train = b_fold.sum(axis=0) - b_fold
+    Every fold's fit is one Gauss–Newton step from the full-data fit (`held_out_residuals`), so a
+    model — a set of columns of the Jacobian at that fit — costs a few small solves, not a fit."""
+
+    def __init__(self, J: np.ndarray, r: np.ndarray, fold: np.ndarray, weights: np.ndarray,
+                 offset: np.ndarray) -> None:
+        self.J, self.r, self.fold = J, r, fold
+        self.weights, self.offset = weights, offset  # per column of J: the prior's σ²/τ², θ̂ − θ₀
 
     def squared_errors(self, cols: Sequence[int]) -> np.ndarray:
         """(m,) each pose's squared held-out error of the model with columns `cols`."""
         c = np.asarray(cols, dtype=int)
-        G = self.G_train[:, c[:, None], c[None, :]]
-        b = self.b_train[:, c]
-        step = np.linalg.solve(G, b[:, :, None])[:, :, 0]  # (k, |c|): each fold's fit
-        err = self.r - np.einsum("nia,na->ni", self.A[:, :, c], step[self.fold])
+        err = held_out_residuals(self.r, self.J[:, :, c], self.fold, self.weights[c], self.offset[c])
         return np.sum(err * err, axis=1)
 
 
@@ -179,12 +157,16 @@ def choose_terms(fit: FitResult, meas: Measurements, candidates: dict[str, tuple
     sub = meas.subset(used)
     m = len(sub)
     k = max(2, min(folds, m))
-    fold = _folds(m, k)
+    fold = fold_of(m, k)
     directions = sub.directions
     _, J = Kinematics(fit.geometry).point_and_jacobian(sub.q, fit.with_compliance, directions, True)
     r = fit.residuals[used]
     base = [int(i) for i in fit.indices if i < N_ALL_PARAMETERS]
-    kfold = _KFold(J, r, fold)
+    weights, offset = np.zeros(J.shape[2]), np.zeros(J.shape[2])
+    if fit.prior is not None and fit.prior_weights is not None:  # the fit's MAP prior on its columns
+        weights[fit.indices] = fit.prior_weights
+        offset[fit.indices] = fit.values - fit.prior.mean
+    kfold = _KFold(J, r, fold, weights, offset)
     current = kfold.squared_errors(base)
     without = float(np.sqrt(current.mean()))
     chosen: list[str] = []
