@@ -16,14 +16,14 @@ joint (`hil.arm.kinematics.identifiable_joint_errors`: all are independent of th
 and the lost motion of every joint whose approach directions in the data take both signs (approached
 from one side it is a constant offset, which the geometry already holds).
 
-**Cheap folds.** The selection's k-fold loop is `hil.calibration.cross_validation`'s (its folds, its
-one-step fold fits, the fit's prior), so the error "without" joint errors is the cross-validated error
-`hil identify` reports for the geometry. Every fold fit is warm-started at the full-data fit and
-takes one Gauss–Newton step there: the fold's solution lies within the noise of the full one, where
-the model is linear to far below the noise (the joint-error terms enter the link angle linearly, and a geometry step of tens of micrometres changes
-the Jacobian by parts per million), so one step is the fold's fit. The whole selection is then linear
-algebra on one Jacobian — milliseconds for 40 poses, against the fit's own hundreds — and only the
-chosen model is fitted again, in full.
+**Cheap folds.** The selection's k-fold loop is `hil.calibration.cross_validation`'s (its folds, its one-
+step fold fits, the fit's prior), so the error "without" joint errors is the cross-validated error `hil
+identify` reports for the geometry. Every fold fit is warm-started at the full-data fit and takes one
+Gauss–Newton step there: the fold's solution lies within the noise of the full one, where the model is
+linear to far below the noise (the joint-error terms enter the link angle linearly, and a geometry step
+of tens of micrometres changes the Jacobian by parts per million), so one step is the fold's fit. The
+whole selection is then linear algebra on one Jacobian — milliseconds for 40 poses, against the fit's own
+hundreds — and only the chosen model is fitted again, in full.
 """
 
 from __future__ import annotations
