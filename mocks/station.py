@@ -123,7 +123,8 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
     # the arm warms with the controller's running time: its SimClock counts from the controller's start
     # a GeoCOM reading integrates the SMR's position over its measuring time
     world = World(geometry, controller.true_joints, acceptance_angle, clock=controller.clock.now,
-                  ringing=Ringing(), reading_time=GEOCOM_MEASURE_S)
+                  ringing=Ringing(), reading_time=GEOCOM_MEASURE_S,
+                  directions=controller.joint_directions)
     # the links ring after every joint move (`mocks.ringing`): the tracker sees it, the encoders do not
     controller.arm.listeners.append(world.ringing.listener(world.tip_direction))
     home = world.home_pose(rng)
