@@ -48,6 +48,12 @@ import numpy as np
 from hil.arm.joint_errors import Harmonic, JointErrors
 from hil.arm.physical import UNSEEN_WINDUP, gear_sizes
 
+#: Whether a simulated arm is the ideal one unless asked otherwise (`hil.calibration.synthetic.random_truth`'s
+#: `ideal`, the simulated station's, ``--ideal``/``--no-ideal``): the ideal arm is hil's arm before
+#: issue 30 (geometry, compliance, payload, warm-up), the other the realistic one with these joint
+#: errors and lost motion.
+IDEAL_BY_DEFAULT = True
+
 #: Radians per arc-second.
 ARCSEC = np.pi / (180 * 3600)
 #: HEIDENHAIN's eccentricity relation: error (arc-seconds) = ±412 · e (µm) / D (mm).

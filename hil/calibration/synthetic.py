@@ -30,7 +30,7 @@ import pinocchio as pin
 from hil.arm.catalog import get_robot
 from hil.arm.geometry import Geometry, look_at_tracker
 from hil.arm.joint_errors import motion_directions
-from hil.arm.joint_physics import typical_joint_errors, typical_lost_motion
+from hil.arm.joint_physics import IDEAL_BY_DEFAULT, typical_joint_errors, typical_lost_motion
 from hil.arm.kinematics import N_PARAMETERS, SMR_SLICE, TRACKER_SLICE, Kinematics, apply_update
 from hil.arm.payload import Payload
 from hil.arm.physical import typical_compliance
@@ -85,7 +85,7 @@ class Noise:
 def random_truth(robot: str, rng: np.random.Generator, *, translation_sigma: float = 0.5e-3,
                  rotation_sigma: float = 1e-3, smr: np.ndarray | None = None,
                  tracker_distance: tuple[float, float] = (2.0, 4.0), rigid: bool = False,
-                 ideal: bool = True) -> Geometry:
+                 ideal: bool = IDEAL_BY_DEFAULT) -> Geometry:
     """A realistic true arm: nominal + random placement errors, an SMR and a tracker pose, and (unless
     `rigid`) compliant joints, the SMR's payload and thermal growth, and (unless `rigid` or `ideal`)
     angle-dependent joint errors and lost motion (`hil.arm.joint_physics`).
