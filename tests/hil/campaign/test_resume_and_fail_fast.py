@@ -68,7 +68,8 @@ class BootCell:
         self.config = default_config().with_overrides(
             campaign__calibration_poses=12, campaign__validation_poses=4, campaign__samples=2,
             robot__settle_time=0.0, robot__joint_samples=2, smr__offset=tuple(self.truth.smr + 0.003),
-            warmup__enabled=False)  # a wall-clock run on fakes (test_warmup.py resumes warm-ups)
+            warmup__enabled=False,  # a wall-clock run on fakes (test_warmup.py resumes warm-ups)
+            campaign__approach=0.0)  # one move a pose: the tests count them (test_approach.py: the approach)
         self.rng = rng
         self.store = Store.open(tmp_path / "hil.db")
         self.campaign = self.store.create_campaign(self.config, "ur5e")
