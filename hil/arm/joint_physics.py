@@ -52,7 +52,7 @@ from hil.arm.physical import UNSEEN_WINDUP, gear_sizes
 #: `ideal`, the simulated station's, ``--ideal``/``--no-ideal``): the ideal arm is hil's arm before
 #: issue 30 (geometry, compliance, payload, warm-up), the other the realistic one with these joint
 #: errors and lost motion.
-IDEAL_BY_DEFAULT = True
+IDEAL_BY_DEFAULT = False
 
 #: Radians per arc-second.
 ARCSEC = np.pi / (180 * 3600)

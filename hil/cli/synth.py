@@ -24,10 +24,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "measurements.csv and validation.csv into --out-dir. The random arm "
                                    "has compliant joints carrying an SMR payload and warms up as it "
                                    "runs (the poses are measured cold); --rigid makes it without. "
-                                   "--no-ideal adds the joint errors and lost motion of a UR's joints "
+                                   "It also has the joint errors and lost motion of a UR's joints "
                                    "(every pose approached from below in every joint, as hil's campaign "
                                    "approaches them), which keep a calibrated model at tenths of a "
-                                   "millimetre as on a real arm; --ideal (the default) leaves them out.")
+                                   "millimetre as on a real arm; --ideal leaves them out.")
     p.add_argument("--robot", help=f"robot type ({', '.join(ROBOT_NAMES)}; default ur5e, or the truth's)")
     p.add_argument("--truth", metavar="truth.json", help="use this hil-truth/1 instead of a random one")
     # rows of a CSV: 100 000 are ~10 MB; 1e9 asked numpy for 45 GiB (exit 70)

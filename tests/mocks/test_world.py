@@ -53,7 +53,7 @@ def test_start_pose_sees_the_tracker_for_any_random_truth():
     from hil.calibration.synthetic import random_truth
 
     for seed in range(8):  # seed 5 puts the tracker low and to the side: the best-facing pose is blocked
-        truth = random_truth("ur5e", np.random.default_rng(seed))
+        truth = random_truth("ur5e", np.random.default_rng(seed), ideal=True)
         world = World(truth, lambda: np.zeros(6))
         home = world.home_pose(np.random.default_rng(1))
         world.joints = lambda home=home: home
@@ -104,7 +104,7 @@ def test_the_world_sees_the_arm_synthetic_measurements_see(rng):
     """The simulator's world and `synthetic.measure` describe one arm: compliant, loaded, warming."""
     from hil.calibration.synthetic import random_truth, true_points
 
-    truth = random_truth("ur5e", np.random.default_rng(4))
+    truth = random_truth("ur5e", np.random.default_rng(4), ideal=True)
     assert truth.compliant and truth.payload is not None and truth.thermal is not None
     q = rng.uniform(-np.pi, np.pi, (5, 6))
     world = World(truth, lambda: q[0], clock=lambda: 1200.0)

@@ -51,7 +51,7 @@ class Station:
 
     def __init__(self, seed=3, tracker_known=True, cal=12, val=6, **arm_kw):
         self.rng = np.random.default_rng(seed)
-        self.truth = random_truth("ur5e", self.rng)
+        self.truth = random_truth("ur5e", self.rng, ideal=True)
         start = visible_poses(self.truth, 1, self.rng)[0]
         self.arm = FakeArm(start, **arm_kw)
         self.tracker = FakeTracker(self.arm, self.truth)

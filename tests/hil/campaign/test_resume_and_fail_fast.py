@@ -62,7 +62,7 @@ class BootCell:
 
     def __init__(self, tmp_path: Path) -> None:
         rng = np.random.default_rng(7)
-        self.truth = random_truth("ur5e", rng)
+        self.truth = random_truth("ur5e", rng, ideal=True)
         self.arm = FakeArm(visible_poses(self.truth, 1, rng)[0])
         self.tracker = FakeTracker(self.arm, self.truth)
         self.config = default_config().with_overrides(
@@ -138,7 +138,7 @@ class LostCell:
 
     def __init__(self, lost_at: set[int], cal: int = 14, val: int = 6, **overrides) -> None:
         rng = np.random.default_rng(3)
-        self.truth = random_truth("ur5e", rng)
+        self.truth = random_truth("ur5e", rng, ideal=True)
         self.arm = FakeArm(visible_poses(self.truth, 1, rng)[0])
         self.tracker = FakeTracker(self.arm, self.truth)
         self.rng = rng
@@ -239,7 +239,7 @@ def test_a_store_that_cannot_write_stops_the_arm_and_the_run_fails_naming_the_wr
 def test_a_wrong_tracker_position_on_the_simulated_station_stops_after_three_lost_poses(tmp_path):
     from mocks.station import start_station
 
-    sim = start_station(speed=100.0, seed=5)
+    sim = start_station(speed=100.0, seed=5, ideal=True)
     try:
         svc = sim.info["services"][0]
         config = default_config().with_overrides(

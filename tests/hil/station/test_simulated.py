@@ -64,7 +64,8 @@ def test_each_simulated_arm_is_a_robot_of_its_own_and_keeps_its_serial(tmp_path)
     stations on one machine once both reported 20235500001 and refused each other), the same arm is the
     same robot (a re-run resumes its campaign, found by serial)."""
     truth = tmp_path / "truth.json"
-    truth.write_text(json.dumps(truth_document(random_truth("ur5e", np.random.default_rng(5)), Noise())))
+    arm = random_truth("ur5e", np.random.default_rng(5), ideal=True)
+    truth.write_text(json.dumps(truth_document(arm, Noise())))
     serials = []
     for robot, seed, truth_file in (("ur5e", 1, None), ("ur10e", 1, None), ("ur5e", 2, None),
                                     ("ur5e", 1, str(truth)), ("ur5e", 1, None)):

@@ -112,7 +112,7 @@ class FakeStation:
 
     def __init__(self, tmp_path, monkeypatch, seed: int = 3, cal: int = 12, val: int = 4, **arm_kw: Any):
         self.rng = np.random.default_rng(seed)
-        self.truth = random_truth("ur5e", self.rng)
+        self.truth = random_truth("ur5e", self.rng, ideal=True)
         self.arm = Arm(visible_poses(self.truth, 1, self.rng)[0], **arm_kw)
         self.tracker = Tracker(self.arm, self.truth)
         self.config = default_config().with_overrides(
