@@ -18,6 +18,11 @@ controller reports the warming in RTDE ``joint_temperatures`` (`joint_temperatur
 (`mocks.ringing`, seen by the trackers, not by the encoders), and the GeoCOM instrument takes
 `GEOCOM_MEASURE_S` of the controller's time per measurement.
 
+Unless ``ideal`` (or ``rigid``), the random arm's link angles also carry the joint errors and lost
+motion of a UR joint (`hil.calibration.synthetic.random_truth`): the robot simulator follows which way
+each joint last moved (`mocks.ur.directions`) and the world lags the links by it. A truth file's own
+blocks rule over ``rigid`` and ``ideal``.
+
 Faults it adds to the controller (``inject(name, **args)`` / the control channel): ``block_beam``
 (``on``, ``reason``), ``tracker_unplug``, ``tracker_garble`` (GeoCOM), ``emscon_drop`` (close the
 emScon client now), ``emscon_stall`` (``seconds``: wall seconds without reading or sending),
@@ -33,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from hil.arm.joint_physics import IDEAL_BY_DEFAULT
 from hil.arm.thermal import Thermal
 from hil.calibration.model_file import load_truth, read_json, truth_controller, truth_document
 from hil.calibration.synthetic import Noise, random_truth
@@ -103,10 +109,12 @@ class StationService:
 
 def station_service(controller: Any, truth: str | None = None, seed: int = 0,
                     acceptance_angle: float = 30.0, baudrate: int | None = None,
-                    tracker_port: int = 0, rigid: bool = False) -> StationService:
+                    tracker_port: int = 0, rigid: bool = False,
+                    ideal: bool = IDEAL_BY_DEFAULT) -> StationService:
     """Build the world and the tracker simulator around a running `SimController`.
 
-    `rigid` (without `truth`): the random arm without compliance, payload and warm-up.
+    `rigid` (without `truth`): the random arm without compliance, payload and warm-up; `ideal` (without
+    `truth`): without joint errors and lost motion.
     """
     rng = np.random.default_rng(seed)
     if truth:
@@ -114,7 +122,7 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
         calibration = truth_controller(read_json(truth), str(truth))
         controller.arm.set_encoder_noise(noise.encoder_sigma)
     else:
-        geometry, noise = random_truth(controller.config.robot, rng, rigid=rigid), Noise()
+        geometry, noise = random_truth(controller.config.robot, rng, rigid=rigid, ideal=ideal), Noise()
         calibration = None
     if calibration is None:
         calibration = factory_calibration(geometry, seed)
@@ -123,7 +131,8 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
     # the arm warms with the controller's running time: its SimClock counts from the controller's start
     # a GeoCOM reading integrates the SMR's position over its measuring time
     world = World(geometry, controller.true_joints, acceptance_angle, clock=controller.clock.now,
-                  ringing=Ringing(), reading_time=GEOCOM_MEASURE_S)
+                  ringing=Ringing(), reading_time=GEOCOM_MEASURE_S,
+                  directions=controller.joint_directions)
     # the links ring after every joint move (`mocks.ringing`): the tracker sees it, the encoders do not
     controller.arm.listeners.append(world.ringing.listener(world.tip_direction))
     home = world.home_pose(rng)
@@ -155,37 +164,42 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
 
 
 def station_spec(truth: str | None = None, seed: int = 0, acceptance_angle: float = 30.0,
-                 baudrate: int | None = None, rigid: bool = False) -> str:
+                 baudrate: int | None = None, rigid: bool = False,
+                 ideal: bool = IDEAL_BY_DEFAULT) -> str:
     """The service spec that puts the world and the tracker into the robot simulator's process."""
     import json
 
     options = {"truth": truth, "seed": seed, "acceptance_angle": acceptance_angle, "baudrate": baudrate,
-               "rigid": rigid}
+               "rigid": rigid, "ideal": ideal}
     return "mocks.station:station_service " + json.dumps(options)
 
 
 def start_station(robot: str = "ur5e", truth: str | None = None, speed: float = 1.0, seed: int = 0,
-                  acceptance_angle: float = 30.0, baudrate: int | None = None, rigid: bool = False) -> Any:
+                  acceptance_angle: float = 30.0, baudrate: int | None = None, rigid: bool = False,
+                  ideal: bool = IDEAL_BY_DEFAULT) -> Any:
     """Start the whole simulated station in its own process on a free loopback address.
 
     Returns the running `mocks.ur.process.SimProcess`; ``.info["services"][0]`` holds the tracker's
     URL and pty and the hidden truth. The caller must `stop()` it. `rigid`: a random arm without
-    compliance, payload and warm-up (the arm of the simulator before they existed).
+    compliance, payload and warm-up (the arm of the simulator before they existed); `ideal`: without
+    joint errors and lost motion (the arm before issue 30).
     """
     from mocks.ur.controller import SimConfig
     from mocks.ur.testing import start_sim
 
-    spec = station_spec(truth, seed, acceptance_angle, baudrate, rigid)
-    serial = simulated_serial(robot, seed, truth, rigid)
+    spec = station_spec(truth, seed, acceptance_angle, baudrate, rigid, ideal)
+    serial = simulated_serial(robot, seed, truth, rigid, ideal)
     return start_sim(SimConfig(robot=robot, speed=speed, seed=seed, serial=serial), services=[spec])
 
 
-def simulated_serial(robot: str, seed: int, truth: str | None = None, rigid: bool = False) -> str:
+def simulated_serial(robot: str, seed: int, truth: str | None = None, rigid: bool = False,
+                     ideal: bool = IDEAL_BY_DEFAULT) -> str:
     """The serial number a simulated arm's controller reports (dashboard ``get serial number``).
 
     Each simulated arm is a robot of its own, as each arm of a plant is: the serial is derived from
     what makes the arm — its type, the seed of its random truth, noise and start pose, the truth file's
-    bytes (sha256) and whether it is rigid — so the same simulated arm always has the same serial (a
+    bytes (sha256), whether it is rigid and whether ideal (a truth file's arm is what the file says,
+    so these two count only without one) — so the same simulated arm always has the same serial (a
     re-run resumes its campaign, which is found by serial) and two different ones never share one (on
     one machine they would refuse each other as one robot driven twice; the seed alone once made every
     UR5e and UR10e of seed 1 serial 20235500001). 11 digits like a UR serial (ur_rtde refuses a serial
@@ -194,4 +208,6 @@ def simulated_serial(robot: str, seed: int, truth: str | None = None, rigid: boo
     """
     truth_sha = hashlib.sha256(Path(truth).read_bytes()).hexdigest() if truth else ""
     key = f"{robot.lower()}|seed={int(seed)}|truth={truth_sha}|rigid={bool(rigid)}"
+    if not truth and not rigid and not ideal:  # the ideal arm keeps the serial it always had
+        key += "|realistic"
     return f"9999{int(hashlib.sha256(key.encode()).hexdigest(), 16) % 10**7:07d}"

@@ -13,6 +13,11 @@ truth's ``compliance`` for its ``payload``) and grows as it warms up. At simulat
 `SimClock`, whose seconds count from when the simulated controller started, so the running time of the
 arm is the time since its controller was switched on. Without a clock the arm stays cold.
 
+Its links also differ from its encoders by the truth's angle-dependent joint errors and lag them by
+its lost motion in the direction each joint last moved (docs/design.md, Contracts: non-geometric
+errors): `directions` reports those directions (the robot simulator follows them cycle by cycle,
+`mocks.ur.directions`); without it no lost motion is applied.
+
 The arm also rings after its moves (`mocks.ringing`): with a `ringing` model, the SMR the tracker sees
 (`target`) is displaced by the links' residual vibration at the clock's time, while the joints (and so
 the controller's ``actual_q``) are not. `tip_direction` gives that model the true arm's SMR direction
@@ -62,6 +67,7 @@ class World:
     clock: Callable[[], float] | None = None
     ringing: Ringing | None = None  # the links' residual vibration after moves (needs `clock`)
     reading_time: float = 0.0  # seconds one tracker reading integrates over (`ring_offset`)
+    directions: Callable[[], np.ndarray] | None = None  # each joint's last direction of motion
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     def __post_init__(self) -> None:
@@ -117,8 +123,9 @@ class World:
 
     def state(self, q: np.ndarray) -> tuple[np.ndarray, float]:
         """(SMR in the tracker frame, angle in degrees between its axis and the line to the tracker)."""
+        side = None if self.directions is None else np.asarray(self.directions(), dtype=float)
         with self._lock:  # one pinocchio Data per model: the simulator's threads take turns
-            F = self._warm_kinematics().flange_poses(q)[0]
+            F = self._warm_kinematics().flange_poses(q, side)[0]
         p_base = F[:3, :3] @ self.truth.smr + F[:3, 3]
         return self._in_tracker(p_base), self._angle(F, p_base)
 

@@ -130,10 +130,15 @@ _GEAR_SIZE: dict[float, int] = {
 UNSEEN_WINDUP = 0.1
 
 
+def gear_sizes(robot: str) -> np.ndarray:
+    """(6,) Harmonic Drive size inferred behind each joint from its torque class (`_GEAR_SIZE`)."""
+    spec = get_robot(robot)
+    return np.array([_GEAR_SIZE[float(e)] for e in spec.effort], dtype=int)
+
+
 def gear_compliance(robot: str) -> np.ndarray:
     """(6,) compliance (rad/Nm) of the strain-wave gear in each joint: 1/K3 of its inferred size."""
-    spec = get_robot(robot)
-    return np.array([1.0 / HARMONIC_DRIVE_K3[_GEAR_SIZE[float(e)]] for e in spec.effort])
+    return np.array([1.0 / HARMONIC_DRIVE_K3[int(size)] for size in gear_sizes(robot)])
 
 
 def typical_compliance(robot: str) -> np.ndarray:

@@ -3,8 +3,13 @@
 A moveJ travels a straight line in joint space, and between two poses that are each inside the box
 that line can still sweep the SMR outside it. `Router.route` says which targets to move through
 instead: straight when that is safe, else the quickest safe detour — through the home pose, or through
-one of `TRANSIT_POSTURES` above the start's and the target's base angles. The campaign engine moves
-along it and a dry run (`hil.campaign.steps.plan_motion`) shows it, so both take the same way. Nothing
+one of `TRANSIT_POSTURES` above the start's and the target's base angles. Asked to *approach* a
+target by δ, the route ends with a last short leg from δ below the target in every joint, so every
+joint arrives moving up: each joint's lost motion then lags the same way at every pose so reached
+(ISO 9283 §7.2.1's unidirectional approach, per joint), a constant offset a calibration absorbs; if
+that lead-in pose is not safe, the target is approached from wherever the route arrives. The campaign
+engine moves along it and a dry run (`hil.campaign.steps.plan_motion`) shows it, so both take the
+same way. Nothing
 is ever clamped: a target outside the limits or the box is refused (`InputError`), and one with no safe
 way to it raises `UnsafePathError`.
 """
@@ -67,8 +72,9 @@ class Router:
     def __post_init__(self) -> None:
         self._self_collision: SelfCollision | None = None  # made on first use (few legs need it)
 
-    def route(self, here: np.ndarray | None, q: np.ndarray) -> list[np.ndarray]:
-        """Targets to move through from `here` (None: unknown, only `q` is checked) to reach `q` safely.
+    def route(self, here: np.ndarray | None, q: np.ndarray, approach: float = 0.0) -> list[np.ndarray]:
+        """Targets to move through from `here` (None: unknown, only `q` is checked) to reach `q` safely;
+        with `approach` δ > 0 (rad) the last leg comes up from q − δ in every joint (`approach_pose`).
 
         The target itself must be safe (joint limits, keep-in box), else InputError: the plan is wrong.
         If the straight joint-space path from `here` leaves the box, detours are tried: through the
@@ -79,6 +85,10 @@ class Router:
         """
         q = np.asarray(q, dtype=float)
         check_target(q, self.spec, self.keep_in, self.model)
+        if approach > 0:
+            lead = self.approach_pose(here, q, approach)
+            if lead is not None:
+                return [*self.route(here, lead), q]
         if here is None:
             return [q]
         here = np.asarray(here, dtype=float)
@@ -99,6 +109,20 @@ class Router:
         raise UnsafePathError(f"no safe path from {np.round(here, 3).tolist()} to "
                               f"{np.round(q, 3).tolist()} inside the keep-in box (direct, via home, via "
                               f"{len(TRANSIT_POSTURES)} upright and folded postures)")
+
+    def approach_pose(self, here: np.ndarray | None, q: np.ndarray, approach: float) -> np.ndarray | None:
+        """Where the last leg to `q` starts so every joint arrives moving up by at least `approach`:
+        q − `approach` in every joint; None when no lead-in is needed (every joint already comes up
+        that far from `here`) or when that pose, or the leg from it, is not safe."""
+        if here is not None and np.all(q - np.asarray(here, dtype=float) >= approach):
+            return None
+        lead = q - approach
+        try:
+            check_target(lead, self.spec, self.keep_in, self.model)
+            check_target(q, self.spec, self.keep_in, self.model, lead)
+        except HilError:
+            return None
+        return lead
 
     def candidates(self, here: np.ndarray, q: np.ndarray) -> Iterator[list[np.ndarray]]:
         """The routes `route` tries, in order, made as they are needed (most legs go straight)."""

@@ -10,6 +10,14 @@ Unless asked for a rigid arm, the truth is a real one
 are compliant (UR's typical strain-wave stiffness, `hil.arm.physical.typical_compliance`, each joint
 0.8–1.2 times it), it carries the SMR, its nest and an adaptor plate (`smr_payload`), and it warms up
 as it runs (`Thermal` defaults). Its encoders read with a UR joint's noise (`ENCODER_SIGMA`).
+
+Unless asked for the *ideal* arm (hil's simulated arm before issue 30: geometry, compliance, payload
+and warm-up only), its link angles also differ from its encoders by angle-dependent joint errors and
+lost motion of the sizes a UR joint's output encoder leaves (`hil.arm.joint_physics`, which cites
+them): what keeps a real, calibrated UR at tenths of a millimetre rather than the hundredths an ideal
+arm reaches (docs/design.md, Facts: what real arms reach). Lost motion needs the direction each joint
+last moved in: `measure` and `true_points` take it (`directions`; without, none is applied, as if the
+SMR sat in the middle of its lost-motion band).
 """
 
 from __future__ import annotations
@@ -21,6 +29,8 @@ import pinocchio as pin
 
 from hil.arm.catalog import get_robot
 from hil.arm.geometry import Geometry, look_at_tracker
+from hil.arm.joint_errors import motion_directions
+from hil.arm.joint_physics import IDEAL_BY_DEFAULT, typical_joint_errors, typical_lost_motion
 from hil.arm.kinematics import N_PARAMETERS, SMR_SLICE, TRACKER_SLICE, Kinematics, apply_update
 from hil.arm.payload import Payload
 from hil.arm.physical import typical_compliance
@@ -74,13 +84,16 @@ class Noise:
 
 def random_truth(robot: str, rng: np.random.Generator, *, translation_sigma: float = 0.5e-3,
                  rotation_sigma: float = 1e-3, smr: np.ndarray | None = None,
-                 tracker_distance: tuple[float, float] = (2.0, 4.0), rigid: bool = False) -> Geometry:
+                 tracker_distance: tuple[float, float] = (2.0, 4.0), rigid: bool = False,
+                 ideal: bool = IDEAL_BY_DEFAULT) -> Geometry:
     """A realistic true arm: nominal + random placement errors, an SMR and a tracker pose, and (unless
-    `rigid`) compliant joints, the SMR's payload and thermal growth.
+    `rigid`) compliant joints, the SMR's payload and thermal growth, and (unless `rigid` or `ideal`)
+    angle-dependent joint errors and lost motion (`hil.arm.joint_physics`).
 
     The non-geometric blocks are drawn from a child of `rng` (`Generator.spawn` leaves its stream where
     it is), so a seed gives the same geometry either way, and the caller's later draws (poses, noise)
-    are the same too: a rigid and a realistic arm of one seed differ only by those blocks.
+    are the same too: a rigid, an ideal and a realistic arm of one seed differ only by those blocks
+    (the joint errors are drawn after the compliance, so the ideal and the realistic arm share it).
     """
     spec = get_robot(robot)
     if smr is None:
@@ -107,6 +120,9 @@ def random_truth(robot: str, rng: np.random.Generator, *, translation_sigma: flo
     # doi:10.3390/robotics10030083), and UR has a cold arm warm up with slow motions before full speed
     # ("Robot start-up in cold environments", universal-robots.com).
     truth.thermal = Thermal()
+    if not ideal:
+        truth.joint_errors = typical_joint_errors(spec.name, child)
+        truth.lost_motion = typical_lost_motion(spec.name, child)
     return truth
 
 
@@ -117,28 +133,50 @@ def random_configurations(robot: str, count: int, rng: np.random.Generator) -> n
 
 
 def measure(truth: Geometry, q: np.ndarray, noise: Noise, rng: np.random.Generator,
-            times: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+            times: np.ndarray | None = None, directions: np.ndarray | None = None
+            ) -> tuple[np.ndarray, np.ndarray]:
     """Simulated readings at configurations `q`: (joint readings, tracker points with noise).
 
     `times` (s of running, one per pose) warm an arm with a thermal block: pose i sees
-    ``truth.warmed(times[i])``. Without `times` every pose sees the cold arm.
+    ``truth.warmed(times[i])``. Without `times` every pose sees the cold arm. `directions` (6 or
+    (N, 6), each −1, 0 or +1: the sign of each joint's last motion before the reading) apply the
+    truth's lost motion (`approach_directions` gives them for a sequence of poses).
     """
     q = np.asarray(q, dtype=float)
-    p = true_points(truth, q, times) + rng.normal(0.0, noise.tracker_sigma, size=(len(q), 3))
+    p = (true_points(truth, q, times, directions)
+         + rng.normal(0.0, noise.tracker_sigma, size=(len(q), 3)))
     q_read = q + rng.normal(0.0, noise.encoder_sigma, size=q.shape) if noise.encoder_sigma else q.copy()
     return q_read, p
 
 
-def true_points(truth: Geometry, q: np.ndarray, times: np.ndarray | None = None) -> np.ndarray:
-    """(N, 3) noise-free SMR positions in the tracker frame, each pose on the arm as warm as at its time."""
+def true_points(truth: Geometry, q: np.ndarray, times: np.ndarray | None = None,
+                directions: np.ndarray | None = None) -> np.ndarray:
+    """(N, 3) noise-free SMR positions in the tracker frame, each pose on the arm as warm as at its time
+    and, with `directions` (as in `measure`), lagging by the truth's lost motion."""
     Q = np.atleast_2d(np.asarray(q, dtype=float))
+    D = None if directions is None else np.broadcast_to(np.asarray(directions, dtype=float), Q.shape)
     if times is None or truth.thermal is None:
-        return Kinematics(truth).points(Q)
+        return Kinematics(truth).points(Q, directions=D)
     t = np.asarray(times, dtype=float).reshape(-1)
     if t.shape != (len(Q),):
         raise ValueError(f"times: expected one running time per pose ({len(Q)}), got {t.size}")
     out = np.empty((len(Q), 3))
     for ti in np.unique(t):  # one model per distinct time: poses measured together share it
         rows = t == ti
-        out[rows] = Kinematics(truth.warmed(float(ti))).points(Q[rows])
+        out[rows] = Kinematics(truth.warmed(float(ti))).points(Q[rows],
+                                                              directions=None if D is None else D[rows])
+    return out
+
+
+def approach_directions(q: np.ndarray, start: np.ndarray | None = None) -> np.ndarray:
+    """(N, 6) each joint's last direction of motion on arriving at each of poses `q` visited in order
+    (straight moves from `start`, else from the first pose: its directions are then 0, none known)."""
+    Q = np.atleast_2d(np.asarray(q, dtype=float))
+    previous = Q[0] if start is None else np.asarray(start, dtype=float)
+    out = np.zeros_like(Q)
+    last: np.ndarray | None = None
+    for n, qn in enumerate(Q):
+        last = motion_directions(previous, qn, last)
+        out[n] = last
+        previous = qn
     return out

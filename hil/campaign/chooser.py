@@ -17,6 +17,7 @@ import selector
 from hil.calibration.selection import SelectionModel, hidden_reason, parse_constraints, select_poses
 from hil.calibration.timed_selection import select_timed
 from hil.campaign.calibration_plan import Choice, SelectionRequest
+from hil.campaign.steps import APPROACH, approach_seconds
 from hil.errors import InputError
 from selector.candidates import Constraints, generate_candidates
 from selector.cluster_sample import cluster_sample
@@ -91,13 +92,17 @@ def pose_dwell(config: Any) -> Dwell:
     measuring time) or, over GeoCOM, `GEOCOM_READING_TIME`. Settling: ``robot.settle_time`` in the fixed
     mode; with ``robot.settle = "stable"`` nothing beyond the readings themselves, since a UR's ring after
     a move at the usual accelerations has died out within the first few readings (`mocks.ringing`) and
-    the readings of a ringing arm are still measuring time. Overhead: the joint reading and the
-    controller's steady check.
+    the readings of a ringing arm are still measuring time. Overhead: the joint reading, the
+    controller's steady check and the short last leg every visit approaches its pose by
+    (``campaign.approach``), the same for every pose.
     """
     reading = (float(config.tracker["measure_time"]) if config.tracker["protocol"] == "emscon"
                else GEOCOM_READING_TIME)
     settle = float(config.robot["settle_time"]) if config.robot["settle"] == "fixed" else 0.0
-    return Dwell(settle=settle, measure=float(config.campaign["samples"]) * reading, overhead=DWELL_OVERHEAD)
+    approach = approach_seconds(float(config.campaign.get("approach", APPROACH)),
+                                float(config.robot["speed"]), float(config.robot["acceleration"]))
+    return Dwell(settle=settle, measure=float(config.campaign["samples"]) * reading,
+                 overhead=DWELL_OVERHEAD + approach)
 
 
 def _time_aware(config: Any, request: SelectionRequest, constraints: Constraints) -> Choice:

@@ -7,6 +7,14 @@ declared protocol (`SplitMoves`, `ReadsJointTemperatures`). How the arm gets to 
 a detour through safe postures inside the keep-in box — is the arm package's (`hil.arm.routes.Router`),
 the same routes a dry run lays out (`hil.campaign.steps.plan_motion`).
 
+Every pose a campaign measures — bootstrap, calibration, validation, the warm-up's reference — is
+approached from the same side in every joint: a visit's `Move` asks for an approach
+(``campaign.approach``, `hil.campaign.steps.APPROACH`), and its route ends with a short leg up from
+that far below the pose (`Router.route`; the verification's ISO 9283 cycles keep their own sequence).
+A joint's lost motion (its link lagging the encoder in the direction of its last motion) is then the
+same at every pose, a constant offset the fitted geometry absorbs, instead of a scatter of ± the lag
+that no model can predict; after a suspension the re-run visit approaches again.
+
 States: idle → running ⇄ paused / suspended → stopping → aborted | interrupted | done (| failed).
 Requests to pause, resume and abort come from other threads (the TUI) and take effect at step
 boundaries; an abort stops the arm. A `KeyboardInterrupt` (Ctrl-C, or `RunInterrupted`, which the
@@ -483,7 +491,7 @@ class Engine:
         """`Move`: every leg of the route to its target (`_route`)."""
         t = self.clock.monotonic()
         result = None
-        for target in self._route(np.asarray(step.q, dtype=float)):
+        for target in self._route(np.asarray(step.q, dtype=float), step.approach):
             result = self._move(target, step)
             self._last_q = target
         self.stats.motion += self.clock.monotonic() - t
@@ -564,9 +572,10 @@ class Engine:
             raise
         return robot.wait_move()
 
-    def _route(self, q: np.ndarray) -> list[np.ndarray]:
-        """Targets to move through from where the arm is to reach `q` safely (`Router.route`)."""
-        return self.router.route(self._last_q, q)
+    def _route(self, q: np.ndarray, approach: float = 0.0) -> list[np.ndarray]:
+        """Targets to move through from where the arm is to reach `q` safely, the last leg coming up
+        from `approach` below it when asked (`Router.route`)."""
+        return self.router.route(self._last_q, q, approach)
 
     def _acquire(self, group: Acquire) -> PoseRecord | Skipped:
         """Run one pose visit; after a suspension, run it again from its first step.

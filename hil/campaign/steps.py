@@ -40,13 +40,16 @@ class Move:
 
     `optional`: a target with no safe path from where the arm is (`UnsafePathError`) is answered with
     `Skipped` instead of ending the run — the warm-up's cycling motion, where one target more or less
-    only changes how the arm warms.
+    only changes how the arm warms. `approach` (rad, 0: none): arrive with every joint moving up, from
+    `approach` below the target (`hil.arm.routes.Router.route`), so each joint's lost motion lags the
+    same way at every pose a campaign measures.
     """
 
     q: tuple[float, ...]
     speed: float | None = None
     acceleration: float | None = None
     optional: bool = False
+    approach: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -197,10 +200,12 @@ class Skipped:
 
 def acquire(index: int, role: str, q: Iterable[float], *, settle: float, joint_samples: int,
             samples: int, speed: float | None = None, acceleration: float | None = None,
-            mode: str = "fixed", stability: float = 50e-6, settle_max: float = 5.0) -> Acquire:
-    """The standard pose visit: move, then (``mode="fixed"``) wait `settle` s, read averaged joints,
-    measure; or (``mode="stable"``) settle and measure on the tracker's evidence (`SettleMeasure`)."""
-    move = Move(tuple(float(v) for v in q), speed, acceleration)
+            mode: str = "fixed", stability: float = 50e-6, settle_max: float = 5.0,
+            approach: float = 0.0) -> Acquire:
+    """The standard pose visit: move (arriving from `approach` below in every joint, `Move`), then
+    (``mode="fixed"``) wait `settle` s, read averaged joints, measure; or (``mode="stable"``) settle
+    and measure on the tracker's evidence (`SettleMeasure`)."""
+    move = Move(tuple(float(v) for v in q), speed, acceleration, approach=approach)
     if mode == "stable":
         return Acquire(index, role, (move, SettleMeasure(samples, joint_samples, stability, settle_max)))
     if mode != "fixed":
@@ -208,14 +213,35 @@ def acquire(index: int, role: str, q: Iterable[float], *, settle: float, joint_s
     return Acquire(index, role, (move, Settle(settle), ReadJoints(joint_samples), Measure(samples)))
 
 
+#: How far below each pose (rad, every joint) a campaign's visit starts its last leg (`Move.approach`;
+#: the default of ``campaign.approach``):
+#: every joint then arrives moving up, so its lost motion lags the same way at every pose measured and
+#: becomes a constant offset the geometry absorbs. Several times a strain-wave gear's whole lost-motion
+#: band (twice the Harmonic Drive catalog's 1 arc-min hysteresis loss, 5.8e-4 rad) and a hundred times
+#: the simulator's direction threshold (`mocks.ur.directions`), yet a short leg: 0.14 s at 1 rad/s²
+#: (`approach_seconds`), the SMR moving a few millimetres.
+APPROACH = 0.005
+
+
+def approach_seconds(approach: float, speed: float, acceleration: float) -> float:
+    """Robot time (s) of the approach leg: a moveJ of `approach` rad under the driver's trapezoid."""
+    if approach <= 0:
+        return 0.0
+    if approach <= speed * speed / acceleration:  # never reaches its speed: a triangle
+        return 2.0 * float(np.sqrt(approach / acceleration))
+    return approach / speed + speed / acceleration
+
+
 def visit_settings(config: Any) -> dict[str, Any]:
     """`acquire`'s keyword arguments from a station configuration (`hil.station.config.StationConfig`):
-    every pose visit of a campaign (and its warm-up's reference visits) is made the same way."""
+    every pose visit of a campaign (and its warm-up's reference visits) is made the same way, each
+    pose approached from ``campaign.approach`` below in every joint."""
     robot = config.robot
     return dict(settle=robot["settle_time"], joint_samples=robot["joint_samples"],
                 samples=config.campaign["samples"], speed=robot["speed"],
                 acceleration=robot["acceleration"], mode=robot["settle"],
-                stability=config.campaign["stability"], settle_max=robot["settle_max"])
+                stability=config.campaign["stability"], settle_max=robot["settle_max"],
+                approach=config.campaign.get("approach", APPROACH))
 
 
 def dry_run(plan: Plan, respond: Callable[[Step], Any], limit: int = 100_000) -> tuple[list[Step], Any]:
@@ -284,7 +310,7 @@ def plan_motion(steps: Iterable[Step], router: Router, start: np.ndarray | None 
             continue
         for move in moves:
             try:
-                route = router.route(here, np.asarray(move.q, dtype=float))
+                route = router.route(here, np.asarray(move.q, dtype=float), move.approach)
             except UnsafePathError as exc:
                 if not skippable:
                     raise

@@ -50,7 +50,7 @@ from hil.cli.support.options import (
 )
 from hil.cli.support.output import say, wrote
 from hil.cli.support.progress import JsonLines, Progress
-from hil.cli.support.station_options import add_tracker_protocol, station_source
+from hil.cli.support.station_options import add_arm_choice, add_tracker_protocol, station_source
 from hil.errors import InputError
 from hil.files.outputs import atomic_write_text, check_output
 
@@ -115,6 +115,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     again.add_argument("--new", action="store_true", help="start a new campaign even if one is unfinished")
     p.add_argument("--json", action="store_true", help="one JSON event per line on stdout")
     add_tracker_protocol(p)
+    add_arm_choice(p)
     p.add_argument("--out", metavar="result.json", help="write the result (embeds the model)")
     p.add_argument("--report", metavar="report.html", help="write the HTML report")
     p.add_argument("--verify", action="store_true",

@@ -20,7 +20,7 @@ from typing import Any
 from hil.arm.catalog import ROBOT_NAMES
 from hil.cli.support.options import SEED, SIM_SPEED, finite_float
 from hil.cli.support.output import print_json, say, wants_json, wrote
-from hil.cli.support.station_options import add_tracker_protocol
+from hil.cli.support.station_options import add_arm_choice, add_tracker_protocol
 from hil.errors import InputError
 from hil.files.outputs import check_output
 from hil.jobs.moveb import FRAMES, MovebRequest, run_moveb
@@ -50,6 +50,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     src.add_argument("--config", metavar="station.toml", help="station configuration")
     src.add_argument("--sim", action="store_true", help="use the simulated station")
     add_tracker_protocol(run)
+    add_arm_choice(run)
     run.add_argument("--model", metavar="model.json",
                      help="calibrated model (hil-model/1, a campaign result that embeds one, or a truth): "
                           "IK and the tracker pose")
@@ -236,7 +237,8 @@ def _request(args: argparse.Namespace) -> MovebRequest:
     """``hil moveb run``'s options as the job's request."""
     return MovebRequest(
         args.program, config=args.config, sim=args.sim, truth=args.truth, speed=args.speed, seed=args.seed,
-        robot=args.robot, tracker_protocol=args.tracker_protocol, model=args.model, ik=args.ik,
+        robot=args.robot, tracker_protocol=args.tracker_protocol, ideal=args.ideal, model=args.model,
+        ik=args.ik,
         continuity=args.continuity, frame=args.frame, velocity=args.velocity, acceleration=args.acceleration,
         jerk=args.jerk, normal_acceleration=args.normal_acceleration, joint_speed=args.joint_speed,
         joint_acceleration=args.joint_acceleration, tracker_rate=args.tracker_rate,

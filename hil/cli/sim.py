@@ -43,6 +43,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--acceptance-angle", type=finite_float(0, 90, "degrees", lo_open=True, hi_open=True),
                    default=30.0,
                    help="SMR acceptance half-angle (degrees): beyond it the tracker loses the beam")
+    from hil.cli.support.station_options import add_arm_choice
+
+    add_arm_choice(p)
     p.add_argument("--json", action="store_true",
                    help="print the ready line as JSON even on a terminal (it always is when piped)")
     p.set_defaults(func=run)
@@ -104,10 +107,16 @@ def run(args: argparse.Namespace) -> int:
         claims.append(Claim(geometry.robot, f"the truth {args.truth} is for {geometry.robot}"))
     # the controller simulates (and reports) the arm the truth describes: a disagreement is refused
     args.robot = agreed_robot(claims, default="ur5e")
+    if args.truth and args.ideal is not None:
+        raise InputError(f"--{'' if args.ideal else 'no-'}ideal chooses a random arm: the truth {args.truth} "
+                         "says itself whether its arm has joint errors and lost motion")
+    from hil.arm.joint_physics import IDEAL_BY_DEFAULT
+
+    ideal = IDEAL_BY_DEFAULT if args.ideal is None else args.ideal
     if args.serial is None:  # each simulated arm its own robot, as `hil calibrate --sim`'s (mocks.station)
         from mocks.station import simulated_serial
 
-        args.serial = simulated_serial(args.robot, args.seed, args.truth)
+        args.serial = simulated_serial(args.robot, args.seed, args.truth, ideal=ideal)
     try:
         config = config_from_args(args)
     except ValueError as exc:
@@ -124,7 +133,8 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.flush()
 
     try:
-        serve(config, services=[station_spec(args.truth, args.seed, args.acceptance_angle, args.baud)],
+        serve(config, services=[station_spec(args.truth, args.seed, args.acceptance_angle, args.baud,
+                                             ideal=ideal)],
               ready=ready)
     except OSError as exc:
         raise InputError(f"--address: cannot serve on {args.address}: {exc}") from None

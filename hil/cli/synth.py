@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from hil.arm.catalog import ROBOT_NAMES
+from hil.arm.joint_physics import IDEAL_BY_DEFAULT
 from hil.calibration.measurements import write_measurements
 from hil.calibration.model_file import load_truth, truth_document, write_json
 from hil.calibration.synthetic import Noise, measure, random_configurations, random_truth
@@ -22,7 +23,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "poses with tracker and encoder noise and write truth.json, "
                                    "measurements.csv and validation.csv into --out-dir. The random arm "
                                    "has compliant joints carrying an SMR payload and warms up as it "
-                                   "runs (the poses are measured cold); --rigid makes it without.")
+                                   "runs (the poses are measured cold); --rigid makes it without. "
+                                   "It also has the joint errors and lost motion of a UR's joints "
+                                   "(every pose approached from below in every joint, as hil's campaign "
+                                   "approaches them), which keep a calibrated model at tenths of a "
+                                   "millimetre as on a real arm; --ideal leaves them out.")
     p.add_argument("--robot", help=f"robot type ({', '.join(ROBOT_NAMES)}; default ur5e, or the truth's)")
     p.add_argument("--truth", metavar="truth.json", help="use this hil-truth/1 instead of a random one")
     # rows of a CSV: 100 000 are ~10 MB; 1e9 asked numpy for 45 GiB (exit 70)
@@ -36,6 +41,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="tracker noise per axis (default 20e-6, or the truth's)")
     p.add_argument("--rigid", action="store_true",
                    help="a random arm without compliance, payload and warm-up (geometry errors only)")
+    p.add_argument("--ideal", action=argparse.BooleanOptionalAction, default=None,
+                   help="--ideal: the random arm without joint errors and lost motion (a calibrated model "
+                        "reaches hundredths of a millimetre); --no-ideal: with them (tenths, as real "
+                        "arms). Default: the simulator's (--help's description says which). "
+                        "Not with --truth, whose own blocks rule")
     p.add_argument("--seed", type=SEED, default=1,
                    help="random seed of the truth, the poses and the noise; equal seeds give equal files")
     p.add_argument("--out-dir", required=True, metavar="DIR", help="directory to write the three files to")
@@ -56,6 +66,9 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--noise must be a non-negative number of metres")
     if args.rigid and args.truth:
         raise InputError("--rigid makes a random arm: it cannot be combined with --truth")
+    if args.ideal is not None and args.truth:
+        raise InputError(f"--{'' if args.ideal else 'no-'}ideal makes a random arm: it cannot be combined "
+                         "with --truth, whose own blocks say what the arm has")
     rng = np.random.default_rng(args.seed)
     from hil.station.robot_type import Claim, agreed_robot, option_claim
 
@@ -65,12 +78,16 @@ def run(args: argparse.Namespace) -> int:
         # --robot beside --truth must name the truth's arm: silently using either hides a mistake
         agreed_robot([*claims, Claim(truth.robot, f"the truth {args.truth} is for {truth.robot}")])
     else:
-        truth, noise = random_truth(agreed_robot(claims, default="ur5e"), rng, rigid=args.rigid), Noise()
+        ideal = IDEAL_BY_DEFAULT if args.ideal is None else args.ideal
+        truth, noise = random_truth(agreed_robot(claims, default="ur5e"), rng, rigid=args.rigid,
+                                    ideal=ideal), Noise()
     if args.noise is not None:
         noise = Noise(args.noise, noise.encoder_sigma)
     out = Path(args.out_dir)
-    q, p = measure(truth, random_configurations(truth.robot, args.poses, rng), noise, rng)
-    qv, pv = measure(truth, random_configurations(truth.robot, args.validation, rng), noise, rng)
+    up = np.ones(6)  # every pose approached from below in every joint, as a campaign does
+    q, p = measure(truth, random_configurations(truth.robot, args.poses, rng), noise, rng, directions=up)
+    qv, pv = measure(truth, random_configurations(truth.robot, args.validation, rng), noise, rng,
+                     directions=up)
     write_json(out / "truth.json", truth_document(truth, noise))
     write_measurements(out / "measurements.csv", q, p)
     write_measurements(out / "validation.csv", qv, pv)

@@ -11,7 +11,7 @@ import argparse
 
 from hil.arm.catalog import ROBOT_NAMES
 from hil.cli.support.options import CANDIDATES, POSE_COUNT, RMS_THRESHOLD_HELP, SEED, SIM_SPEED, rms_threshold
-from hil.cli.support.station_options import add_tracker_protocol
+from hil.cli.support.station_options import add_arm_choice, add_tracker_protocol
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -37,6 +37,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "stations' sim.db in the data dir, never $HIL_DB)")
     p.add_argument("--out-dir", default=".", metavar="DIR", help="where exports go (default: here)")
     add_tracker_protocol(p)
+    add_arm_choice(p)
     p.set_defaults(func=run, cycles=1)
 
 
@@ -68,6 +69,7 @@ def options_from(args: argparse.Namespace) -> object:
     db = str(store_location(args.db, source, None, say))
     return TuiOptions(sim=True, speed=args.speed, seed=args.seed, robot=robot,
                       truth=args.truth, tracker_protocol=args.tracker_protocol or "geocom", db=db,
+                      ideal=args.ideal,
                       out_dir=args.out_dir, overrides=source.overrides)
 
 

@@ -31,7 +31,7 @@ from hil.files.outputs import atomic_write_text, check_output
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from hil.cli.support.station_options import add_tracker_protocol
+    from hil.cli.support.station_options import add_arm_choice, add_tracker_protocol
 
     p = sub.add_parser("verify", help="ISO 9283 pose test, uncompensated and compensated",
                        description=__doc__.split("\n\n")[0],
@@ -59,6 +59,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        help="start a new verification even if one is unfinished")
     p.add_argument("--json", action="store_true", help="one JSON event per line on stdout")
     add_tracker_protocol(p)
+    add_arm_choice(p)
     p.add_argument("--out", metavar="result.json", help="write the result (hil-verification/1)")
     p.add_argument("--report", metavar="report.html", help="write the HTML report")
     p.set_defaults(func=run)
@@ -109,7 +110,7 @@ def _run(args: argparse.Namespace, model: Any) -> int:
 
     source = StationSource.of(config=args.config, sim=args.sim, truth=args.truth, speed=args.speed,
                               seed=args.seed, robot=_simulated_robot(args, model),
-                              tracker_protocol=args.tracker_protocol)
+                              tracker_protocol=args.tracker_protocol, ideal=args.ideal)
     request = VerificationRequest(source, model, args.cycles, args.db, new=args.new, resume_only=args.resume)
     subscribers: list[Any] = [Progress(), JsonLines()] if args.json else [Progress()]
     out = run_verification(request, subscribers=subscribers, say=say)

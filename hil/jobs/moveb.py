@@ -40,6 +40,7 @@ class MovebRequest:
     seed: int = 1
     robot: str | None = None  # --robot
     tracker_protocol: str | None = None
+    ideal: bool | None = None  # --sim without a truth: the ideal arm (None: the simulator's default)
     model: str | None = None  # a hil-model/1, a result embedding one, or a truth
     ik: str = "model"  # "model" or "nominal" (the uncalibrated arm, measured in the model's frame)
     continuity: str = "G2"
@@ -128,7 +129,7 @@ def run_moveb(request: MovebRequest, *, say: Say = quiet) -> MovebOutcome:
         robot = agreed_robot(said, default="ur5e")  # the arm the simulator is to simulate
     source = StationSource.of(config=request.config, sim=request.sim, truth=request.truth,
                               speed=request.speed, seed=request.seed, robot=robot,
-                              tracker_protocol=request.tracker_protocol)
+                              tracker_protocol=request.tracker_protocol, ideal=request.ideal)
     with station_setup(source) as setup, contextlib.ExitStack() as stack:
         config, truth = setup.config, setup.truth
         agreed_robot([config_claim(config), *said])  # --config: its robot.type, before connecting

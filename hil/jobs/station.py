@@ -48,6 +48,7 @@ class SimulatedSpec:
     speed: float = 1.0  # fast-time factor
     seed: int = 1
     tracker_protocol: str = "geocom"
+    ideal: bool | None = None  # without `truth`: the ideal arm (None: the simulator's default)
 
 
 @dataclass(frozen=True)
@@ -65,13 +66,18 @@ class StationSource:
     @classmethod
     def of(cls, *, config: str | StationConfig | None, sim: bool, truth: str | None = None,
            speed: float = 1.0, seed: int = 1, robot: str | None = None,
-           tracker_protocol: str | None = None, overrides: dict[str, Any] | None = None) -> StationSource:
+           tracker_protocol: str | None = None, overrides: dict[str, Any] | None = None,
+           ideal: bool | None = None) -> StationSource:
         """The source the options name (``--config`` or ``--sim`` and theirs), checked before anything
         starts: the simulator's options with a configuration, a non-positive speed, an unknown
-        ``--robot`` or one the configuration contradicts are bad input (InputError naming them)."""
+        ``--robot`` or one the configuration contradicts, ``--ideal``/``--no-ideal`` with a truth file
+        (whose own blocks say what the arm has) are bad input (InputError naming them)."""
         said = option_claim(robot)  # an unknown --robot is refused first, named
         overrides = dict(overrides or {})
         if config is not None:
+            if ideal is not None:
+                raise InputError(f"--{'' if ideal else 'no-'}ideal goes with --sim, not --config: it "
+                                 "chooses the simulated arm")
             if truth or speed != 1.0 or tracker_protocol:
                 raise InputError("--truth, --speed and --tracker-protocol go with --sim, not --config "
                                  "(the configuration's tracker.protocol says which tracker it has)")
@@ -83,7 +89,10 @@ class StationSource:
             raise InputError("--config or --sim: which station?")
         if not speed > 0:
             raise InputError(f"--speed must be positive, got {speed}")
-        return cls(sim=SimulatedSpec(robot, truth, speed, seed, tracker_protocol or "geocom"),
+        if truth and ideal is not None:
+            raise InputError(f"--{'' if ideal else 'no-'}ideal chooses a random arm: the truth {truth} "
+                             "says itself whether its arm has joint errors and lost motion")
+        return cls(sim=SimulatedSpec(robot, truth, speed, seed, tracker_protocol or "geocom", ideal),
                    overrides=overrides)
 
     @property
@@ -114,7 +123,7 @@ def station_setup(source: StationSource) -> Iterator[StationSetup]:
 
     sim = source.sim
     with simulated_station(sim.robot, sim.truth, sim.speed, sim.seed, sim.tracker_protocol,
-                           **source.overrides) as (config, identity, truth, simulator):
+                           ideal=sim.ideal, **source.overrides) as (config, identity, truth, simulator):
         yield StationSetup(config, identity, truth, simulator)
 
 

@@ -357,12 +357,19 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # a UR's strain-wave joints sag by tenths of a millimetre under their own weight and payload
         # (hil.arm.physical): the fit identifies the joints' compliance beside the geometry
         "compliance": Key("bool", True, help="identify the joints' compliance (rad/Nm) with the geometry"),
-        # low-order joint-angle errors (hil.calibration.joint_error_selection): "none" until the simulated
-        # arm carries them (issue 30 §1) — with "auto" or orders the poses are chosen to spread every
-        # joint's angle for them and cross-validation (auto) keeps the terms the data support
+        # low-order joint-angle errors (hil.calibration.joint_error_selection): "none" by default, since the
+        # campaign's pose counts are sized for geometry and compliance — with "auto" or orders the poses
+        # are chosen to spread every joint's angle for them and cross-validation (auto) keeps the terms
+        # the data support
         "joint_errors": Key("str", "none", _joint_errors,
                             "joint-angle harmonics to identify: none, auto (cross-validation chooses) or "
                             "orders such as 1,2"),
+        # every pose is approached from below in every joint (hil.campaign.steps.APPROACH: a last leg
+        # from this far below it), so each joint's lost motion lags the same way at every pose and the
+        # geometry absorbs it; 0 approaches each pose from wherever the arm comes. Above 0.1 rad the leg
+        # costs more robot time than any lost motion (a milliradian at most) warrants
+        "approach": Key("float", 0.005, _within(0, 0.1, "rad"),
+                        "approach every pose from this far below it in every joint (0: straight there)"),
         "max_consecutive_lost": Key("int", 3, _lost_limit,
                                     "poses in a row that lose the beam before the run stops, saying the "
                                     "tracker position looks wrong"),

@@ -28,7 +28,7 @@ from hil.station.robot_type import Claim, agreed_robot
 
 @contextlib.contextmanager
 def simulated_station(robot: str | None = None, truth: str | None = None, speed: float = 1.0, seed: int = 1,
-                      tracker_protocol: str = "geocom", *, rigid: bool = False,
+                      tracker_protocol: str = "geocom", *, rigid: bool = False, ideal: bool | None = None,
                       **overrides: Any) -> Iterator[tuple[StationConfig, dict[str, Any], dict, Any]]:
     """(config to run, config identifying the run, hidden truth document, running simulator).
 
@@ -38,7 +38,8 @@ def simulated_station(robot: str | None = None, truth: str | None = None, speed:
     The robot is `robot`, else the truth's, else a UR5e; a `robot` the truth disagrees with is refused
     (InputError naming both) rather than silently replaced, so the simulated controller always reports
     the arm the caller asked for and the truth describes. `rigid` (without `truth`): a random arm
-    without compliance, payload and warm-up.
+    without compliance, payload and warm-up; `ideal` (without `truth`; None: the simulator's default,
+    `hil.calibration.synthetic.IDEAL_BY_DEFAULT`): without joint errors and lost motion.
     """
     truth_sha = ""
     if truth:
@@ -50,9 +51,11 @@ def simulated_station(robot: str | None = None, truth: str | None = None, speed:
         truth = str(Path(truth).resolve())  # the simulator runs in a process of its own, elsewhere
         truth_sha = hashlib.sha256(Path(truth).read_bytes()).hexdigest()
     robot = get_robot("ur5e" if robot is None else robot).name
+    from hil.arm.joint_physics import IDEAL_BY_DEFAULT
     from mocks.station import start_station
 
-    sim = start_station(robot=robot, truth=truth, speed=speed, seed=seed, rigid=rigid)
+    sim = start_station(robot=robot, truth=truth, speed=speed, seed=seed, rigid=rigid,
+                        ideal=IDEAL_BY_DEFAULT if ideal is None else ideal)
     try:
         station = sim.info["services"][0]
         known = {**operator_knowledge(station["truth"]), **overrides}

@@ -85,6 +85,7 @@ class TuiOptions:
     robot: str = "ur5e"
     truth: str | None = None
     tracker_protocol: str = "geocom"  # --sim: which of the simulated tracker's protocols to talk
+    ideal: bool | None = None  # --sim without a truth: the ideal arm (None: the simulator's default)
     db: str | None = None
     out_dir: str = "."
     overrides: dict[str, Any] = field(default_factory=dict)  # "campaign.seed" or "campaign__seed" keys
@@ -98,7 +99,7 @@ def station_source(options: TuiOptions) -> StationSource:
     if not options.sim:  # --config (checked by `hil.cli.tui`; the tests' stations have none)
         return StationSource(config=options.config, overrides=overrides)
     return StationSource(sim=SimulatedSpec(options.robot, options.truth, options.speed, options.seed,
-                                           options.tracker_protocol), overrides=overrides)
+                                           options.tracker_protocol, options.ideal), overrides=overrides)
 
 
 def _error(exc: BaseException) -> str:

@@ -27,6 +27,7 @@ import numpy as np
 
 from hil.calibration.synthetic import ENCODER_SIGMA
 from mocks.ur.clock import SimClock
+from mocks.ur.directions import JointDirections
 from mocks.ur.kin import FkFn, matrix_to_pose, pose_to_matrix
 from mocks.ur.motion import Decelerate, JointMove, LinearMove, MotionError
 from mocks.ur.status import RobotBit, RobotMode, RuntimeState, SafetyBit, SafetyMode
@@ -93,6 +94,8 @@ class SimArm:
         self.qdd = np.zeros(6)
         self.q_target = self.q.copy()
         self.actual_q = self.q.copy()
+        # which way each joint last moved (its lost motion's side), followed cycle by cycle
+        self.directions = JointDirections(self.q)
         self.motion: Any = None
         # the simulator's own account of its motion: simulated seconds with a motion primitive running
         # and the joint moves started (the benches' robot time, free of fast-time software overhead)
@@ -167,6 +170,11 @@ class SimArm:
         """The physical joint angles (no encoder noise): what the world/tracker simulator should use."""
         with self.lock:
             return self.q.copy()
+
+    def joint_directions(self) -> np.ndarray:
+        """(6,) the sign of each joint's last motion (`JointDirections`): its lost motion's side."""
+        with self.lock:
+            return self.directions.signs
 
     def is_steady(self) -> bool:
         with self.lock:
@@ -347,6 +355,7 @@ class SimArm:
         with self.lock:
             self.q = np.asarray(q, dtype=float).copy()
             self.q_target = self.q.copy()
+            self.directions = JointDirections(self.q)  # put there, not moved there: no side known
             self.qd = np.zeros(6)
             self.motion = None
             self._refresh_snapshot()
@@ -409,6 +418,7 @@ class SimArm:
                     if self.motion.target is not None:
                         self.q = np.array(self.motion.target, dtype=float)
                     self.motion = None
+            self.directions.update(self.q)
             if dt > 0:
                 self.qd = (self.q - q_old) / dt
                 self.qdd = (self.qd - qd_old) / dt

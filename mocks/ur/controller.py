@@ -238,6 +238,10 @@ class SimController:
         """The arm's physical joint angles (thread-safe), for a world/tracker simulator."""
         return self.arm.true_joints()
 
+    def joint_directions(self) -> np.ndarray:
+        """The sign of each joint's last motion (thread-safe): which side its lost motion lags on."""
+        return self.arm.joint_directions()
+
     def state(self) -> dict[str, Any]:
         """A JSON-friendly summary of the controller (for tests and the control channel)."""
         a = self.arm

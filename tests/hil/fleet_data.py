@@ -73,7 +73,7 @@ def _calibrate(store: Store, rng: np.random.Generator, truth, serial: str, robot
     """One campaign: the tracker set up anew, 30 calibration and 12 validation poses measured,
     identified, validated (before: the nominal arm registered to the tracker), accepted or rejected."""
     placed = truth.copy()
-    placed.tracker = random_truth(robot, rng).tracker  # the tracker stands elsewhere each time
+    placed.tracker = random_truth(robot, rng, ideal=True).tracker  # the tracker stands elsewhere each time
     q_cal, p_cal = measure(placed, random_configurations(robot, 30, rng), noise, rng)
     q_val, p_val = measure(placed, random_configurations(robot, 12, rng), noise, rng)
     fit = identify(Measurements.from_arrays(q_cal, p_cal, source=f"{serial}@{station}"), robot)

@@ -15,7 +15,7 @@ from mocks.ur.arm import AMBIENT_TEMPERATURE
 
 
 def test_joint_temperatures_rise_with_simulated_running_time() -> None:
-    sim = start_station(speed=10.0, seed=3)
+    sim = start_station(speed=10.0, seed=3, ideal=True)
     try:
         truth = sim.info["services"][0]["truth"]
         thermal = Thermal.from_dict(truth["thermal"])
@@ -55,7 +55,8 @@ def test_a_truth_files_encoder_noise_drives_the_controllers(tmp_path) -> None:
     from hil.calibration.synthetic import Noise, random_truth
 
     path = tmp_path / "truth.json"
-    write_json(path, truth_document(random_truth("ur5e", np.random.default_rng(3)), Noise(20e-6, 1e-4)))
+    arm = random_truth("ur5e", np.random.default_rng(3), ideal=True)
+    write_json(path, truth_document(arm, Noise(20e-6, 1e-4)))
     sim = start_station(truth=str(path), speed=10.0, seed=3)
     try:
         r = rtde_receive.RTDEReceiveInterface(sim.address)

@@ -53,7 +53,7 @@ def test_start_pose_sees_the_tracker_for_any_random_truth():
     from hil.calibration.synthetic import random_truth
 
     for seed in range(8):  # seed 5 puts the tracker low and to the side: the best-facing pose is blocked
-        truth = random_truth("ur5e", np.random.default_rng(seed))
+        truth = random_truth("ur5e", np.random.default_rng(seed), ideal=True)
         world = World(truth, lambda: np.zeros(6))
         home = world.home_pose(np.random.default_rng(1))
         world.joints = lambda home=home: home
@@ -104,7 +104,7 @@ def test_the_world_sees_the_arm_synthetic_measurements_see(rng):
     """The simulator's world and `synthetic.measure` describe one arm: compliant, loaded, warming."""
     from hil.calibration.synthetic import random_truth, true_points
 
-    truth = random_truth("ur5e", np.random.default_rng(4))
+    truth = random_truth("ur5e", np.random.default_rng(4), ideal=True)
     assert truth.compliant and truth.payload is not None and truth.thermal is not None
     q = rng.uniform(-np.pi, np.pi, (5, 6))
     world = World(truth, lambda: q[0], clock=lambda: 1200.0)
@@ -113,3 +113,51 @@ def test_the_world_sees_the_arm_synthetic_measurements_see(rng):
     rigid = World(truth.rigid(), lambda: q[0], clock=lambda: 1200.0)
     sag = np.linalg.norm(seen - np.array([rigid.state(qi)[0] for qi in q]), axis=1)
     assert np.all(sag > 1e-6)  # the compliant, warm arm is not the rigid cold one
+
+
+def test_the_world_applies_lost_motion_by_each_joints_last_direction():
+    """Move a joint up then down to the same angle: the SMR the tracker sees moves by the lag."""
+    from mocks.ur.arm import ArmConfig, SimArm
+    from mocks.ur.kin import dh_fk_factory
+
+    class Clock:
+        t = 0.0
+
+        def now(self) -> float:
+            return self.t
+
+    def run(arm, clock, target):
+        with arm.lock:
+            arm.start_movej(np.asarray(target, float), 0.5, 1.0)
+        for _ in range(100_000):
+            clock.t += 0.002
+            arm.tick()
+            if arm.motion is None:
+                return
+        raise AssertionError("the move never ended")
+
+    clock = Clock()
+    arm = SimArm(ArmConfig(encoder_noise=0.0), dh_fk_factory("ur5e"), clock)  # type: ignore[arg-type]
+    q = np.array([0.3, -1.3, 1.2, -1.5, -1.6, 0.1])
+    arm.set_joints(q - 0.05)
+    lag = np.array([0.0, 3e-4, 0.0, 0.0, 0.0, 0.0])  # joint 2 only
+    truth = Geometry.nominal("ur5e", smr=(0.0, 0.0, 0.045), tracker=look_at_tracker((2.0, 0.0, 0.4)))
+    truth.lost_motion = lag
+    world = World(truth, arm.true_joints, directions=arm.joint_directions)
+    run(arm, clock, q)  # every joint comes up to q
+    assert arm.joint_directions().tolist() == [1.0] * 6
+    from_below = world.target().position
+    above = q.copy()
+    above[1] += 0.05
+    run(arm, clock, above)
+    run(arm, clock, q)  # joint 2 comes down to the same angle
+    assert arm.joint_directions().tolist() == [1.0, -1.0, 1.0, 1.0, 1.0, 1.0]
+    from_above = world.target().position
+    np.testing.assert_allclose(arm.true_joints(), q, atol=1e-12)
+    kin = Kinematics(truth.ideal())
+    up, down = q.copy(), q.copy()
+    up[1] -= lag[1]  # the link lags below the encoder after coming up, above after coming down
+    down[1] += lag[1]
+    expected = kin.points(down)[0] - kin.points(up)[0]
+    np.testing.assert_allclose(from_above - from_below, expected, atol=1e-9)
+    assert np.linalg.norm(expected) > 1e-4  # 2 × 0.3 mrad at the shoulder: a few tenths of a mm

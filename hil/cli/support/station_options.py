@@ -21,6 +21,19 @@ def add_tracker_protocol(parser: argparse.ArgumentParser) -> None:
                              "by Leica's emScon TPI over TCP")
 
 
+def add_arm_choice(parser: argparse.ArgumentParser) -> None:
+    """``--ideal``/``--no-ideal``: which random arm ``--sim`` simulates (a ``--truth`` says it itself)."""
+    from hil.arm.joint_physics import IDEAL_BY_DEFAULT
+
+    default = "the ideal arm" if IDEAL_BY_DEFAULT else "the realistic arm"
+    parser.add_argument("--ideal", action=argparse.BooleanOptionalAction, default=None,
+                        help="--sim: --ideal simulates the ideal arm (placement errors, compliance, payload, "
+                             "warm-up: a calibrated model reaches hundredths of a millimetre); --no-ideal "
+                             "the realistic arm, which adds the joint errors and lost motion of a UR's "
+                             "joints (a calibrated model reaches tenths of a millimetre, as real arms "
+                             f"do). Default: {default}. Not with --truth, whose own blocks rule")
+
+
 def config_overrides(args: argparse.Namespace) -> dict[str, Any]:
     """The campaign keys a command's options override (--poses, --validation, --candidates, --accept,
     and calibrate's --stop-early, --stop-margin)."""
@@ -58,4 +71,4 @@ def station_source(args: argparse.Namespace, *, robot: str | None = None) -> Sta
     return StationSource.of(config=args.config, sim=args.sim, truth=args.truth, speed=args.speed,
                             seed=args.seed, robot=robot,
                             tracker_protocol=getattr(args, "tracker_protocol", None),
-                            overrides=config_overrides(args))
+                            overrides=config_overrides(args), ideal=getattr(args, "ideal", None))

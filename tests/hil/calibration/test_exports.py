@@ -15,7 +15,7 @@ from hil.errors import InputError
 
 @pytest.fixture
 def calibrated(rng, tmp_path):
-    truth = random_truth("ur5e", rng)
+    truth = random_truth("ur5e", rng, ideal=True)
     q, p = measure(truth, random_configurations("ur5e", 30, rng), Noise(), rng)
     fit = identify(Measurements.from_arrays(q, p, "m.csv"), "ur5e")
     doc = model_document(fit)
@@ -130,7 +130,7 @@ def test_a_campaign_model_carries_the_hash_of_its_measurements(rng, tmp_path):
     from hil.campaign.calibration_plan import measurements_of
     from hil.campaign.steps import PoseRecord
 
-    truth = random_truth("ur5e", rng)
+    truth = random_truth("ur5e", rng, ideal=True)
     q, p = measure(truth, random_configurations("ur5e", 30, rng), Noise(), rng)
     records = [PoseRecord(i + 6, "calibration", q[i], q[i], np.zeros(6), p[i], np.zeros(3), 5)
                for i in range(len(q))]

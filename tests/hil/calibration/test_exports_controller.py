@@ -129,7 +129,7 @@ def test_a_flange_delta_the_yaml_cannot_hold_is_said_in_the_header(rng):
 @pytest.fixture(scope="module")
 def fit():
     rng = np.random.default_rng(5)
-    truth = random_truth("ur5e", rng)
+    truth = random_truth("ur5e", rng, ideal=True)
     q, p = measure(truth, random_configurations("ur5e", 30, rng), Noise(), rng)
     return identify(Measurements.from_arrays(q, p, "m.csv"), "ur5e")
 

@@ -25,7 +25,7 @@ RECORD = {"checksum": [11, 22, 33, 44, 55, 66], "dh_theta": [0.0] * 6, "dh_a": [
 @pytest.fixture(scope="module")
 def fit():
     rng = np.random.default_rng(14)
-    truth = random_truth("ur5e", rng)
+    truth = random_truth("ur5e", rng, ideal=True)
     q, p = measure(truth, random_configurations("ur5e", 30, rng), Noise(), rng)
     return identify(Measurements.from_arrays(q, p, "m.csv"), "ur5e")
 

@@ -13,10 +13,12 @@ from hil.calibration.model_file import load_truth, truth_document, write_json
 from hil.calibration.synthetic import (
     ENCODER_SIGMA,
     Noise,
+    approach_directions,
     measure,
     random_configurations,
     random_truth,
     smr_payload,
+    true_points,
 )
 
 
@@ -85,3 +87,51 @@ def test_the_default_noise_reads_the_joints_as_a_ur_does() -> None:
     q = random_configurations("ur5e", 2000, np.random.default_rng(2))
     q_read, _ = measure(truth, q, Noise(), np.random.default_rng(3))
     assert np.std(q_read - q) == pytest.approx(ENCODER_SIGMA, rel=0.05)
+
+
+def test_the_ideal_and_the_realistic_truth_of_one_seed_differ_only_by_joint_errors_and_lost_motion() -> None:
+    rng_real, rng_ideal = np.random.default_rng(11), np.random.default_rng(11)
+    real = random_truth("ur5e", rng_real, ideal=False)
+    ideal = random_truth("ur5e", rng_ideal, ideal=True)
+    assert rng_real.random() == rng_ideal.random()  # the caller's later draws are the same
+    assert ideal.joint_errors is None and ideal.lost_motion is None
+    assert real.has_joint_errors and real.has_lost_motion
+    same = real.ideal()
+    for a, b in zip([*same.joints, same.flange, same.tracker], [*ideal.joints, ideal.flange, ideal.tracker],
+                    strict=True):
+        assert np.array_equal(a.homogeneous, b.homogeneous)
+    np.testing.assert_array_equal(same.compliance, ideal.compliance)
+    assert same.payload == ideal.payload and same.thermal == ideal.thermal
+
+
+def test_a_realistic_truth_with_its_joint_errors_and_lost_motion_survives_its_file(tmp_path) -> None:
+    truth = random_truth("ur10e", np.random.default_rng(4), ideal=False)
+    path = tmp_path / "truth.json"
+    write_json(path, truth_document(truth, Noise()))
+    back, _ = load_truth(path)
+    assert back.joint_errors == truth.joint_errors
+    np.testing.assert_array_equal(back.lost_motion, truth.lost_motion)
+    q = random_configurations("ur10e", 20, np.random.default_rng(5))
+    side = np.random.default_rng(6).choice([-1.0, 1.0], (20, 6))
+    np.testing.assert_allclose(Kinematics(back).points(q, directions=side),
+                               Kinematics(truth).points(q, directions=side), atol=1e-12)
+
+
+def test_measure_applies_lost_motion_by_the_approach() -> None:
+    truth = random_truth("ur5e", np.random.default_rng(8), ideal=False)
+    q = random_configurations("ur5e", 10, np.random.default_rng(9))
+    up = true_points(truth, q, directions=np.ones(6))
+    down = true_points(truth, q, directions=-np.ones(6))
+    middle = true_points(truth, q)
+    np.testing.assert_allclose(0.5 * (up + down), middle, atol=1e-9)  # the lag is symmetric
+    assert 1e-6 < np.max(np.linalg.norm(up - down, axis=1)) < 1e-3
+    _, p = measure(truth, q, Noise(0.0, 0.0), np.random.default_rng(1), directions=np.ones(6))
+    np.testing.assert_allclose(p, up, atol=1e-12)
+
+
+def test_approach_directions_follow_a_sequence_of_poses() -> None:
+    q = np.array([[0.0] * 6, [0.1, -0.1, 0.0, 0.1, 0.1, 0.1], [0.2, -0.2, 0.0, 0.0, 0.1, 0.1]])
+    d = approach_directions(q)
+    assert d[0].tolist() == [0.0] * 6
+    assert d[1].tolist() == [1.0, -1.0, 0.0, 1.0, 1.0, 1.0]
+    assert d[2].tolist() == [1.0, -1.0, 0.0, -1.0, 1.0, 1.0]  # a joint standing keeps its last side

@@ -58,7 +58,8 @@ def held_out_error(model_doc: dict, truth: Geometry, seed: int = 0) -> tuple[flo
 
 
 def cli(tmp: Path, *extra: str) -> list[str]:
-    return [sys.executable, "-m", "hil", "calibrate", "--sim", "--speed", str(SPEED), "--seed", "11",
+    return [sys.executable, "-m", "hil", "calibrate", "--sim",
+            "--speed", str(SPEED), "--seed", "11",
             "--truth", str(tmp / "truth.json"), "--poses", "30", "--validation", "10",
             "--candidates", "4000", "--db", str(tmp / "hil.db"), "--no-warmup", *extra]
 
@@ -140,7 +141,7 @@ class Station:
     """The simulated station in its own process, and a run of the campaign in this one."""
 
     def __init__(self, tmp_path: Path, seed: int = 5, protocol: str = "geocom") -> None:
-        self.sim = start_station(speed=SPEED, seed=seed)
+        self.sim = start_station(speed=SPEED, seed=seed, ideal=True)
         svc = self.sim.info["services"][0]
         self.truth = Geometry.from_dict(svc["truth"])
         url = svc["tracker_emscon_url"] if protocol == "emscon" else svc["tracker_url"]

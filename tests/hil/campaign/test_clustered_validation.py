@@ -124,7 +124,7 @@ def test_a_resumed_campaign_keeps_its_clustered_validation_poses_and_labels(tmp_
     """The plan stores the poses and the selection info (`PlanReady`): a resumed run asks the chooser
     nothing and visits the same clustered validation poses, whose draw labels it still has."""
     rng = np.random.default_rng(7)
-    truth = random_truth("ur5e", rng)
+    truth = random_truth("ur5e", rng, ideal=True)
     arm = FakeArm(visible_poses(truth, 1, rng)[0])
     tracker = FakeTracker(arm, truth)
     config = default_config().with_overrides(

@@ -126,7 +126,7 @@ def test_what_the_tracker_cannot_see_is_not_charged_to_the_controller(data):
 # --- in the plan and the runner --------------------------------------------------------------------
 def _controller_is_the_truth(rng: np.random.Generator) -> Geometry:
     """A world whose arm is exactly the controller's model (plus a tracker and an SMR)."""
-    placed = random_truth("ur5e", rng)
+    placed = random_truth("ur5e", rng, ideal=True)
     return CALIBRATION.geometry("ur5e", placed.smr, placed.tracker)
 
 
@@ -168,7 +168,7 @@ def test_the_plan_validates_the_controllers_model_beside_hils():
 
 def test_without_a_controller_model_nothing_changes():
     rng = np.random.default_rng(8)
-    truth = random_truth("ur5e", rng)
+    truth = random_truth("ur5e", rng, ideal=True)
 
     def respond(step: Any) -> Any:
         if isinstance(step, Acquire):

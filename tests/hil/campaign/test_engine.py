@@ -51,14 +51,16 @@ class Station:
 
     def __init__(self, seed=3, tracker_known=True, cal=12, val=6, **arm_kw):
         self.rng = np.random.default_rng(seed)
-        self.truth = random_truth("ur5e", self.rng)
+        self.truth = random_truth("ur5e", self.rng, ideal=True)
         start = visible_poses(self.truth, 1, self.rng)[0]
         self.arm = FakeArm(start, **arm_kw)
         self.tracker = FakeTracker(self.arm, self.truth)
         # warm-up and drift watch off: these tests count moves and measurements of the plan's poses
         # (tests/hil/campaign/test_warmup.py tests those); a fixed settle: one tracker measurement a pose
-        # (tests/hil/campaign/test_settle_on_evidence.py tests the "stable" one)
+        # (tests/hil/campaign/test_settle_on_evidence.py tests the "stable" one); one move a pose, no
+        # approach leg (tests/hil/campaign/test_approach.py tests that)
         overrides = dict(campaign__calibration_poses=cal, campaign__validation_poses=val,
+                         campaign__approach=0.0,
                          robot__settle_time=0.0, robot__settle="fixed",
                          smr__offset=tuple(self.truth.smr + 0.003),
                          warmup__enabled=False, drift__every=0)

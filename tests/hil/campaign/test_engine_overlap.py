@@ -135,8 +135,9 @@ def test_each_point_is_committed_while_the_arm_travels_to_the_next_pose():
         # committed before anything else was measured: the tracker has measured this point and the
         # ones before it, not the next
         assert count == k + 1 and event.index == starts[k].index
-        if k + 1 < len(measured):  # on its way to the next pose, not standing at this one
-            assert moving and np.allclose(heading, starts[k + 1].target)
+        if k + 1 < len(measured):  # on its way to the next pose (or its approach), not standing at this one
+            lead = np.asarray(starts[k + 1].target) - cell.config.campaign["approach"]
+            assert moving and (np.allclose(heading, starts[k + 1].target) or np.allclose(heading, lead))
     # the last point has no next move: it is committed before the identification, arm standing
     assert not measured[-1][1]
 

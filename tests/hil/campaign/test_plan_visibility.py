@@ -31,7 +31,7 @@ class PlanReadyReached(Exception):
 @pytest.mark.parametrize("seed", [5])
 def test_no_planned_pose_is_hidden_from_the_tracker(seed: int) -> None:
     rng = np.random.default_rng(seed)
-    truth = random_truth("ur5e", rng)
+    truth = random_truth("ur5e", rng, ideal=True)
     world = World(truth, lambda: np.zeros(6))
     home = world.home_pose(rng)
     config = default_config().with_overrides(campaign__calibration_poses=30, campaign__validation_poses=20,
@@ -78,7 +78,7 @@ def test_a_planned_pose_the_tracker_would_not_see_is_skipped_without_moving_ther
     from tests.hil.campaign.fakes import visible_poses
 
     rng = np.random.default_rng(8)
-    truth = random_truth("ur5e", rng)
+    truth = random_truth("ur5e", rng, ideal=True)
     world = World(truth, lambda: np.zeros(6))
     config = default_config().with_overrides(campaign__calibration_poses=14, campaign__validation_poses=4,
                                              tracker__position=tuple(truth.tracker.translation + 0.04),

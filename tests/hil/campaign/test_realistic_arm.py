@@ -26,7 +26,7 @@ WARM = 1e6  # s: the steady state, the arm the model will drive
 
 
 def test_the_realistic_arm_is_calibrated_and_its_error_is_what_the_covariance_says(tmp_path):
-    truth = random_truth("ur5e", np.random.default_rng(23))
+    truth = random_truth("ur5e", np.random.default_rng(23), ideal=True)
     assert truth.compliant and truth.payload is not None
     truth.thermal = Thermal(rise=6.0, time_constant=120.0)
     write_json(tmp_path / "truth.json", truth_document(truth, Noise()))

@@ -62,13 +62,14 @@ class BootCell:
 
     def __init__(self, tmp_path: Path) -> None:
         rng = np.random.default_rng(7)
-        self.truth = random_truth("ur5e", rng)
+        self.truth = random_truth("ur5e", rng, ideal=True)
         self.arm = FakeArm(visible_poses(self.truth, 1, rng)[0])
         self.tracker = FakeTracker(self.arm, self.truth)
         self.config = default_config().with_overrides(
             campaign__calibration_poses=12, campaign__validation_poses=4, campaign__samples=2,
             robot__settle_time=0.0, robot__joint_samples=2, smr__offset=tuple(self.truth.smr + 0.003),
-            warmup__enabled=False)  # a wall-clock run on fakes (test_warmup.py resumes warm-ups)
+            warmup__enabled=False,  # a wall-clock run on fakes (test_warmup.py resumes warm-ups)
+            campaign__approach=0.0)  # one move a pose: the tests count them (test_approach.py: the approach)
         self.rng = rng
         self.store = Store.open(tmp_path / "hil.db")
         self.campaign = self.store.create_campaign(self.config, "ur5e")
@@ -137,7 +138,7 @@ class LostCell:
 
     def __init__(self, lost_at: set[int], cal: int = 14, val: int = 6, **overrides) -> None:
         rng = np.random.default_rng(3)
-        self.truth = random_truth("ur5e", rng)
+        self.truth = random_truth("ur5e", rng, ideal=True)
         self.arm = FakeArm(visible_poses(self.truth, 1, rng)[0])
         self.tracker = FakeTracker(self.arm, self.truth)
         self.rng = rng
@@ -238,7 +239,7 @@ def test_a_store_that_cannot_write_stops_the_arm_and_the_run_fails_naming_the_wr
 def test_a_wrong_tracker_position_on_the_simulated_station_stops_after_three_lost_poses(tmp_path):
     from mocks.station import start_station
 
-    sim = start_station(speed=100.0, seed=5)
+    sim = start_station(speed=100.0, seed=5, ideal=True)
     try:
         svc = sim.info["services"][0]
         config = default_config().with_overrides(

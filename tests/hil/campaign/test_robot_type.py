@@ -34,7 +34,7 @@ class _Devices:
 
 def test_the_runner_refuses_before_any_motion_with_fake_devices() -> None:
     rng = np.random.default_rng(2)
-    truth = random_truth("ur5e", rng)
+    truth = random_truth("ur5e", rng, ideal=True)
     arm = FakeArm(visible_poses(truth, 1, rng)[0])
     arm.info = SimpleNamespace(model="UR5e", serial="20235500042", software_version="5.15")
     devices = _Devices(arm, FakeTracker(arm, truth))
@@ -59,7 +59,7 @@ def ur5e_station():
     """A simulated UR5e controller and tracker (their own process), shared by the cases below."""
     from mocks.station import start_station
 
-    sim = start_station(robot="ur5e", speed=20.0, seed=3)
+    sim = start_station(robot="ur5e", speed=20.0, seed=3, ideal=True)
     yield sim
     sim.stop()
 

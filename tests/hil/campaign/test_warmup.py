@@ -329,10 +329,10 @@ def _no_path_to(engine, *targets):
     straight path, home and the upright posture all leave)."""
     route = engine._route
 
-    def blocked(q):
+    def blocked(q, approach=0.0):
         if any(np.allclose(q, t) for t in targets):
             raise UnsafePathError(f"no safe path to {np.round(q, 3).tolist()}")
-        return route(q)
+        return route(q, approach)
 
     engine._route = blocked
 

@@ -38,7 +38,7 @@ SPEED = 200.0
 def test_a_simulated_campaign_warms_the_arm_up_and_watches_the_reference(tmp_path):
     from mocks.station import start_station
 
-    sim = start_station(speed=SPEED, seed=4)
+    sim = start_station(speed=SPEED, seed=4, ideal=True)
     try:
         svc = sim.info["services"][0]
         truth = Geometry.from_dict(svc["truth"])
@@ -88,7 +88,8 @@ def test_kill_9_during_the_warm_up_keeps_its_reference_measurements_and_the_reru
     the first run's measurements kept in the result."""
     root = Path(__file__).resolve().parents[3]
     db = tmp_path / "hil.db"
-    command = [sys.executable, "-m", "hil", "calibrate", "--sim", "--speed", str(SPEED), "--seed", "6",
+    command = [sys.executable, "-m", "hil", "calibrate", "--sim", "--ideal",
+               "--speed", str(SPEED), "--seed", "6",
                "--poses", "12", "--validation", "4", "--candidates", "1000", "--db", str(db), "--json",
                "--out", str(tmp_path / "r.json")]
     env = {**os.environ, "PYTHONPATH": str(root)}

@@ -161,8 +161,8 @@ def build_fixtures(out: Path) -> Path:
 
     out.mkdir(parents=True, exist_ok=True)
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-        assert main(["synth", "--robot", "ur5e", "--poses", "30", "--validation", "12", "--seed", "3",
-                     "--out-dir", str(out)]) == 0
+        assert main(["synth", "--ideal", "--robot", "ur5e", "--poses", "30", "--validation", "12",
+                     "--seed", "3", "--out-dir", str(out)]) == 0
         assert main(["identify", "--robot", "ur5e", "--measurements", str(out / "measurements.csv"),
                      "--out", str(out / "model.json")]) == 0
     cal = read_measurements(out / "measurements.csv")

@@ -48,7 +48,7 @@ class Cell:
 
     def __init__(self, tmp_path: Path, monkeypatch) -> None:
         rng = np.random.default_rng(4)
-        self.truth = random_truth("ur5e", rng)
+        self.truth = random_truth("ur5e", rng, ideal=True)
         self.arm = FakeArm(visible_poses(self.truth, 1, rng)[0])
         self.arm.info = SimpleNamespace(serial="20235500042", model="UR5e", software_version="5.15")
         self.tracker = FakeTracker(self.arm, self.truth)
@@ -168,7 +168,8 @@ def test_ctrl_c_through_the_real_command_is_clean(tmp_path):
     KeyboardInterrupt traceback of its own) and the simulator (which died with the CLI). About 15 s."""
     out = tmp_path / "result.json"
     out.write_text("an earlier result\n")
-    cmd = [sys.executable, "-m", "hil", "calibrate", "--sim", "--speed", "40", "--seed", "5", "--poses", "14",
+    cmd = [sys.executable, "-m", "hil", "calibrate", "--sim", "--ideal",
+           "--speed", "40", "--seed", "5", "--poses", "14",
            "--validation", "4", "--candidates", "2000", "--db", str(tmp_path / "hil.db"), "--json",
            "--out", str(out), "--no-warmup"]
     proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,

@@ -19,7 +19,7 @@ ROOT = Path(__file__).resolve().parents[3]
 
 
 def test_kill_9_mid_run_leaves_no_child_process(tmp_path):
-    proc = subprocess.Popen([sys.executable, "-m", "hil", "calibrate", "--sim", "--speed", "20",
+    proc = subprocess.Popen([sys.executable, "-m", "hil", "calibrate", "--sim", "--ideal", "--speed", "20",
                              "--db", str(tmp_path / "k.db"), "--out", str(tmp_path / "r.json"),
                              "--no-warmup"],
                             cwd=ROOT, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,

@@ -101,7 +101,8 @@ def test_a_database_that_stays_away_is_a_station_fault_and_the_campaign_resumes(
 
 
 def test_kill_9_then_the_same_command_continues_the_campaign_on_postgresql(tmp_path, pg_url):
-    command = [sys.executable, "-m", "hil", "calibrate", "--sim", "--speed", "200", "--poses", "12",
+    command = [sys.executable, "-m", "hil", "calibrate", "--sim", "--ideal",
+               "--speed", "200", "--poses", "12",
                "--validation", "4", "--candidates", "1000", "--db", pg_url, "--out", str(tmp_path / "r.json"),
                "--no-warmup"]
     env = {**os.environ, "PYTHONPATH": str(ROOT)}

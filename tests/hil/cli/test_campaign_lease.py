@@ -146,7 +146,8 @@ def test_two_real_processes_on_the_simulator(tmp_path):
     db = tmp_path / "k.db"
 
     def command(out: str) -> list[str]:
-        return [sys.executable, "-m", "hil", "calibrate", "--sim", "--speed", "100", "--seed", "5", "--poses",
+        return [sys.executable, "-m", "hil", "calibrate", "--sim", "--ideal",
+                "--speed", "100", "--seed", "5", "--poses",
                 "12", "--validation", "3", "--candidates", "500", "--db", str(db), "--json",
                 "--out", str(tmp_path / out), "--no-warmup"]
 

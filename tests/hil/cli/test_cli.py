@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parents[3]
 @pytest.fixture(scope="module")
 def station(tmp_path_factory):
     out = tmp_path_factory.mktemp("station")
-    assert main(["synth", "--robot", "ur5e", "--poses", "30", "--validation", "40", "--seed", "3",
+    assert main(["synth", "--ideal", "--robot", "ur5e", "--poses", "30", "--validation", "40", "--seed", "3",
                  "--out-dir", str(out)]) == 0
     return out
 
@@ -126,8 +126,9 @@ def test_bad_options(tmp_path, capsys, station):
 
 def test_console_entry_point_runs_as_a_process(tmp_path):
     out = tmp_path / "r.json"
-    proc = subprocess.run([sys.executable, "-m", "hil", "synth", "--poses", "12", "--validation", "3",
-                           "--out-dir", str(tmp_path)], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    proc = subprocess.run([sys.executable, "-m", "hil", "synth", "--ideal", "--poses", "12", "--validation",
+                           "3", "--out-dir", str(tmp_path)],
+                          cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert json.loads((tmp_path / "truth.json").read_text())["format"] == "hil-truth/1"
     proc = subprocess.run([sys.executable, "-m", "hil", "identify", "--robot", "ur5e",

@@ -122,7 +122,7 @@ def test_sim_the_lock_refuses_a_run_is_held_while_it_runs_and_freed_after(tmp_pa
                 thread.join(5)
 
     monkeypatch.setattr(hil.station.simulated, "simulated_station", station)
-    command = ["moveb", "run", str(_program(tmp_path)), "--sim", "--speed", "10", "--json"]
+    command = ["moveb", "run", str(_program(tmp_path)), "--sim", "--ideal", "--speed", "10", "--json"]
 
     assert main(command) == 2
     captured = capsys.readouterr()

@@ -64,7 +64,7 @@ def test_show_into_a_pipe_closed_early_is_quiet_as_a_process(tmp_path: Path) -> 
 
 
 def test_every_written_file_is_named_on_stderr(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["synth", "--poses", "12", "--validation", "3", "--seed", "2",
+    assert main(["synth", "--ideal", "--poses", "12", "--validation", "3", "--seed", "2",
                  "--out-dir", str(tmp_path)]) == 0
     out, err = capsys.readouterr()
     assert out == "" and err.count("wrote ") == 3 and "measurements.csv (12 poses)" in err

@@ -84,7 +84,7 @@ def _snapshot(root: Path) -> dict[str, bytes | None]:
 # --- the table: (subcommand, option, kind) -> command line and what the one line must say -------------
 
 Case = Callable[[Path], list[str]]
-SIM = ["--sim", "--speed", "20", "--seed", "2"]
+SIM = ["--sim", "--ideal", "--speed", "20", "--seed", "2"]
 
 
 def _cases() -> list[tuple[str, str, str, Case, str]]:

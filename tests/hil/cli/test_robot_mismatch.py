@@ -25,7 +25,7 @@ EXAMPLES = Path(__file__).parents[3] / "hil" / "moveb" / "examples"
 
 
 def _truth(path: Path, robot: str) -> str:
-    write_json(path, truth_document(random_truth(robot, np.random.default_rng(1)), Noise()))
+    write_json(path, truth_document(random_truth(robot, np.random.default_rng(1), ideal=True), Noise()))
     return str(path)
 
 

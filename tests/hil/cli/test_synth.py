@@ -38,3 +38,25 @@ def test_rigid_cannot_reshape_a_given_truth(tmp_path: Path, capsys: pytest.Captu
     err = capsys.readouterr().err.strip()
     assert code == 2 and "--rigid" in err and len(err.splitlines()) == 1
     assert not (tmp_path / "b" / "truth.json").exists()
+
+
+def test_ideal_leaves_out_joint_errors_and_lost_motion_and_no_ideal_adds_them(tmp_path: Path) -> None:
+    ideal = synth(tmp_path / "ideal", "--ideal")
+    real = synth(tmp_path / "real", "--no-ideal")
+    assert "joint_errors" not in ideal and "lost_motion" not in ideal
+    assert len(real["joint_errors"]) == 6 and len(real["lost_motion"]) == 6
+    for key in ("joints", "flange", "smr", "tracker", "compliance", "payload", "thermal"):
+        assert real[key] == ideal[key]  # one seed, one arm: only the two blocks differ
+    ideal_rows = (tmp_path / "ideal" / "measurements.csv").read_text().splitlines()[1:]
+    real_rows = (tmp_path / "real" / "measurements.csv").read_text().splitlines()[1:]
+    assert [r.split(",")[:6] for r in ideal_rows] == [r.split(",")[:6] for r in real_rows]
+    assert [r.split(",")[6:] for r in ideal_rows] != [r.split(",")[6:] for r in real_rows]
+
+
+def test_ideal_cannot_reshape_a_given_truth(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    synth(tmp_path / "a")
+    capsys.readouterr()
+    code = main(["synth", "--truth", str(tmp_path / "a" / "truth.json"), "--no-ideal", "--poses", "5",
+                 "--out-dir", str(tmp_path / "b")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "--no-ideal" in err and "truth" in err and len(err.splitlines()) == 1

@@ -211,7 +211,8 @@ def test_bad_input_is_one_line_before_anything_connects(tmp_path, monkeypatch, c
     assert main(["verify", "--config", str(bare), "--db", str(st.db)]) == 2
     assert "verify.centre" in one_line_error(capsys)
     other = tmp_path / "ur10e.json"
-    other.write_text(json.dumps({"format": "hil-model/1", **random_truth("ur10e", np.random.default_rng(1))
+    other.write_text(json.dumps({"format": "hil-model/1", **random_truth("ur10e", np.random.default_rng(1),
+                                                                              ideal=True)
                                  .to_dict()}))
     assert main([*base, "--model", str(other)]) == 2
     err = one_line_error(capsys)

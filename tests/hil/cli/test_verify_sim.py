@@ -46,7 +46,8 @@ def test_a_simulated_station_keeps_its_campaigns_apart_from_the_plants(tmp_path:
     fleet report), and says so; its robot is the simulated arm's own serial."""
     plant, data = tmp_path / "plant.db", tmp_path / "data"
     env = {**os.environ, "HIL_DB": str(plant), "XDG_DATA_HOME": str(data)}
-    cmd = [sys.executable, "-m", "hil", "verify", "--sim", "--speed", "100", "--cycles", "2", "--seed", "4"]
+    cmd = [sys.executable, "-m", "hil", "verify", "--sim", "--ideal",
+           "--speed", "100", "--cycles", "2", "--seed", "4"]
     done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=240, env=env)
     assert done.returncode == 0, done.stderr[-3000:]
     sim = data / "hil" / "sim.db"
@@ -55,4 +56,4 @@ def test_a_simulated_station_keeps_its_campaigns_apart_from_the_plants(tmp_path:
     assert len(said) == 1 and str(sim) in said[0] and "$HIL_DB" in said[0], done.stderr[-3000:]
     with Store.open(sim, readonly=True) as store:
         (campaign,) = store.campaigns()
-        assert store.campaign(campaign.id).robot.serial == simulated_serial("ur5e", 4)
+        assert store.campaign(campaign.id).robot.serial == simulated_serial("ur5e", 4, ideal=True)

@@ -71,7 +71,7 @@ def test_unreachable_target_names_where(compensator: Compensator) -> None:
 
 def test_models_of_different_robots_are_refused() -> None:
     with pytest.raises(ValueError, match="ur10e"):
-        Compensator(random_truth("ur5e", np.random.default_rng(1)),
+        Compensator(random_truth("ur5e", np.random.default_rng(1), ideal=True),
                     ControllerCalibration().geometry("ur10e"))
 
 

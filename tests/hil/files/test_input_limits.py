@@ -15,7 +15,7 @@ from hil.errors import InputError
 @pytest.fixture(scope="module")
 def station(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("station")
-    assert main(["synth", "--robot", "ur5e", "--poses", "30", "--validation", "10", "--seed", "5",
+    assert main(["synth", "--ideal", "--robot", "ur5e", "--poses", "30", "--validation", "10", "--seed", "5",
                  "--out-dir", str(out)]) == 0
     return out
 

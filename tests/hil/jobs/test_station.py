@@ -299,3 +299,16 @@ def test_a_simulated_stations_campaigns_go_to_their_own_store_and_it_is_said(tmp
     assert job_station.store_location(str(tmp_path / "mine.db"), sim, None, say) == tmp_path / "mine.db"
     assert job_station.store_location(None, real, config, say) == tmp_path / "plant.db"
     assert len(said) == 1
+
+
+def test_ideal_is_a_choice_of_the_random_simulated_arm_only(tmp_path) -> None:
+    """--ideal/--no-ideal choose the random arm: with a truth file (whose blocks rule) or a
+    configuration they are bad input, named."""
+    from hil.jobs.station import StationSource
+
+    assert StationSource.of(config=None, sim=True, ideal=False).sim.ideal is False
+    assert StationSource.of(config=None, sim=True).sim.ideal is None  # the simulator's default
+    with pytest.raises(InputError, match="--no-ideal chooses a random arm.*truth"):
+        StationSource.of(config=None, sim=True, truth=str(tmp_path / "t.json"), ideal=False)
+    with pytest.raises(InputError, match="--ideal goes with --sim, not --config"):
+        StationSource.of(config=str(tmp_path / "station.toml"), sim=False, ideal=True)

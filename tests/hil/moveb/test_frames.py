@@ -35,7 +35,7 @@ EXAMPLES = Path(__file__).parents[3] / "hil" / "moveb" / "examples"
 def _sim_world(seed: int) -> tuple[World, np.ndarray]:
     """The simulated station's world and start pose for `seed`, drawn as `mocks.station` draws them."""
     rng = np.random.default_rng(seed)
-    world = World(random_truth("ur5e", rng), lambda: np.zeros(6))
+    world = World(random_truth("ur5e", rng, ideal=True), lambda: np.zeros(6))
     return world, world.home_pose(rng)
 
 
@@ -112,7 +112,7 @@ def test_a_tracker_that_saw_nothing_makes_the_run_incomplete_not_a_hardware_faul
     monkeypatch.setattr(hil.jobs.moveb, "station_setup", station)
     monkeypatch.setattr(hil.station.devices, "open_devices", lambda _config: devices)
     out = tmp_path / "run.json"
-    code = main(["moveb", "run", str(EXAMPLES / "square.moveb"), "--sim", "--out", str(out)])
+    code = main(["moveb", "run", str(EXAMPLES / "square.moveb"), "--sim", "--ideal", "--out", str(out)])
     captured = capsys.readouterr()
     assert code == 1, captured.err
     doc = json.loads(captured.out)

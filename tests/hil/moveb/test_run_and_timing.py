@@ -272,7 +272,8 @@ def _example_run(tmp_path: Path, example: str, protocol: str, *extra: str) -> tu
     root = str(Path(__file__).parents[3])
     env = dict(os.environ, PYTHONPATH=root + os.pathsep + os.environ.get("PYTHONPATH", ""))
     program = str(EXAMPLES / f"{example}.moveb")
-    res = subprocess.run([sys.executable, "-m", "hil", "moveb", "run", program, "--sim", "--speed", "20",
+    res = subprocess.run([sys.executable, "-m", "hil", "moveb", "run", program, "--sim", "--ideal",
+                          "--speed", "20",
                           "--tracker-protocol", protocol, "--out", str(out), *extra],
                          capture_output=True, text=True, timeout=240, cwd=tmp_path, env=env)
     assert res.returncode == 0, res.stderr

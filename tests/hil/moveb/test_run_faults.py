@@ -59,7 +59,7 @@ def test_a_hardware_fault_is_one_line_on_stderr_and_exit_3(tmp_path, capsys, mon
     out = tmp_path / "run.json"
     program = tmp_path / "short.moveb"
     program.write_text(PROGRAM)
-    code = main(["moveb", "run", str(program), "--sim", "--speed", "5",
+    code = main(["moveb", "run", str(program), "--sim", "--ideal", "--speed", "5",
                  "--out", str(out), "--json"])
     captured = capsys.readouterr()
     assert code == 3, captured.err

@@ -42,7 +42,7 @@ MES_KEYS = {"format", "campaign", "station", "robot", "robot_serial", "robot_sof
 def campaign():
     """A real identification of a simulated UR5e with one planted outlier, and its validation."""
     rng = np.random.default_rng(7)
-    truth = random_truth("ur5e", rng)
+    truth = random_truth("ur5e", rng, ideal=True)
     q, p = measure(truth, random_configurations("ur5e", 30, rng), Noise(), rng)
     p[4] += [4e-4, -3e-4, 2e-4]
     qv, pv = measure(truth, random_configurations("ur5e", 25, rng), Noise(), rng)

@@ -80,7 +80,7 @@ def test_the_simulated_station_refuses_a_robot_its_truth_contradicts(
 
     monkeypatch.setattr("mocks.station.start_station", started)
     truth = tmp_path / "t.json"
-    write_json(truth, truth_document(random_truth("ur5e", np.random.default_rng(1)), Noise()))
+    write_json(truth, truth_document(random_truth("ur5e", np.random.default_rng(1), ideal=True), Noise()))
     with pytest.raises(InputError) as exc, simulated_station("ur10e", str(truth)):
         pass
     assert str(exc.value) == f"--robot is ur10e but the truth {truth} is for ur5e"

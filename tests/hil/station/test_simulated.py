@@ -64,7 +64,8 @@ def test_each_simulated_arm_is_a_robot_of_its_own_and_keeps_its_serial(tmp_path)
     stations on one machine once both reported 20235500001 and refused each other), the same arm is the
     same robot (a re-run resumes its campaign, found by serial)."""
     truth = tmp_path / "truth.json"
-    truth.write_text(json.dumps(truth_document(random_truth("ur5e", np.random.default_rng(5)), Noise())))
+    arm = random_truth("ur5e", np.random.default_rng(5), ideal=True)
+    truth.write_text(json.dumps(truth_document(arm, Noise())))
     serials = []
     for robot, seed, truth_file in (("ur5e", 1, None), ("ur10e", 1, None), ("ur5e", 2, None),
                                     ("ur5e", 1, str(truth))):
@@ -77,3 +78,29 @@ def test_each_simulated_arm_is_a_robot_of_its_own_and_keeps_its_serial(tmp_path)
     # value now, in this process; a fifth station of the first arm (about 20 s of the suite) would ask
     # the same function again with the same arguments
     assert serials[0] == simulated_serial("ur5e", 1) and serials[3] == simulated_serial("ur5e", 1, str(truth))
+
+
+def test_the_ideal_and_the_realistic_arm_of_one_seed_are_two_robots() -> None:
+    """--ideal gives the arm without joint errors and lost motion, --no-ideal the realistic one: same
+    geometry, another robot (its own serial), and the truth each reports says which it is."""
+    seen = {}
+    for ideal in (True, False):
+        with simulated_station("ur5e", None, speed=10.0, seed=3, ideal=ideal) as (_c, _i, truth, sim):
+            seen[ideal] = (_serial(sim), truth)
+    (serial_ideal, ideal_truth), (serial_real, real_truth) = seen[True], seen[False]
+    assert serial_ideal != serial_real
+    assert serial_ideal == simulated_serial("ur5e", 3, ideal=True)
+    assert serial_real == simulated_serial("ur5e", 3, ideal=False)
+    assert "joint_errors" not in ideal_truth and "lost_motion" not in ideal_truth
+    assert len(real_truth["joint_errors"]) == 6 and len(real_truth["lost_motion"]) == 6
+    assert real_truth["joints"] == ideal_truth["joints"] and real_truth["tracker"] == ideal_truth["tracker"]
+    assert real_truth["compliance"] == ideal_truth["compliance"]
+
+
+def test_the_ideal_arm_keeps_the_serial_it_always_had() -> None:
+    """A store's simulated campaigns are found by serial: the ideal arm's must not change."""
+    import hashlib
+
+    key = "ur5e|seed=1|truth=|rigid=False"
+    old = f"9999{int(hashlib.sha256(key.encode()).hexdigest(), 16) % 10**7:07d}"
+    assert simulated_serial("ur5e", 1, ideal=True) == old

@@ -112,14 +112,15 @@ class FakeStation:
 
     def __init__(self, tmp_path, monkeypatch, seed: int = 3, cal: int = 12, val: int = 4, **arm_kw: Any):
         self.rng = np.random.default_rng(seed)
-        self.truth = random_truth("ur5e", self.rng)
+        self.truth = random_truth("ur5e", self.rng, ideal=True)
         self.arm = Arm(visible_poses(self.truth, 1, self.rng)[0], **arm_kw)
         self.tracker = Tracker(self.arm, self.truth)
         self.config = default_config().with_overrides(
             campaign__calibration_poses=cal, campaign__validation_poses=val, robot__settle_time=0.0,
             smr__offset=tuple(self.truth.smr + 0.003),
             tracker__position=tuple(self.truth.tracker.translation + 0.05),
-            warmup__enabled=False, drift__every=0)  # a wall-clock run whose moves the tests count
+            warmup__enabled=False, drift__every=0,  # a wall-clock run whose moves the tests count:
+            campaign__approach=0.0)  # one move a pose (tests/hil/campaign/test_approach.py: the approach)
         self.store = Store.open(tmp_path / "hil.db")
         self.reconnects: list[Any] = []  # what the session's connect() after a run gets
         rng = self.rng

@@ -19,7 +19,7 @@ from hil.verify.session import ModelInput, identity, load_model, requested_cube
 
 def test_a_verification_is_found_by_its_model_cube_cycles_and_controller_not_as_a_calibration(tmp_path):
     base = default_config().as_dict()
-    truth = random_truth("ur5e", np.random.default_rng(1))
+    truth = random_truth("ur5e", np.random.default_rng(1), ideal=True)
     model = ModelInput.of({"format": "hil-model/1", **truth.to_dict()}, truth, "m.json")
     cube = Cube(np.array([0.5, 0.0, 0.3]), 0.2)
     nominal = ControllerCalibration()
@@ -50,7 +50,7 @@ def test_the_verify_section_leaves_a_calibrations_identity_alone() -> None:
 
 
 def test_the_model_hash_is_the_same_from_a_model_file_and_from_a_calibrate_result(tmp_path) -> None:
-    truth = random_truth("ur5e", np.random.default_rng(2))
+    truth = random_truth("ur5e", np.random.default_rng(2), ideal=True)
     doc = {"format": "hil-model/1", **truth.to_dict(), "fit": {"rms": 1e-5}}
     (tmp_path / "model.json").write_text(json.dumps(doc))
     (tmp_path / "result.json").write_text(json.dumps({"format": "hil-result/1", "status": "accepted",

@@ -27,7 +27,7 @@ SPEED = 10.0
 
 @pytest.fixture(scope="module")
 def station() -> Iterator[SimProcess]:
-    sim = start_station(speed=SPEED, seed=3)
+    sim = start_station(speed=SPEED, seed=3, ideal=True)
     try:
         yield sim
     finally:

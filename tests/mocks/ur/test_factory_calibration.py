@@ -26,7 +26,7 @@ def same(a: ControllerCalibration, b: ControllerCalibration) -> bool:
 
 @pytest.mark.parametrize("seed", [1, 2, 6])
 def test_the_controllers_model_misses_the_truth_by_the_target_and_beats_nominal(seed: int) -> None:
-    truth = random_truth("ur5e", np.random.default_rng(seed))
+    truth = random_truth("ur5e", np.random.default_rng(seed), ideal=True)
     cal = factory_calibration(truth, seed)
     Q = random_configurations("ur5e", 400, np.random.default_rng(1000 + seed))  # not the fit's poses
     error = rms(position_errors(cal, truth, Q))
@@ -40,7 +40,8 @@ def test_the_controllers_model_misses_the_truth_by_the_target_and_beats_nominal(
 
 
 def test_where_the_dh_chain_alone_misses_more_no_rig_error_is_added() -> None:
-    truth = random_truth("ur5e", np.random.default_rng(3))  # a large joint-1 tilt: DH cannot follow it
+    # a large joint-1 tilt: DH cannot follow it
+    truth = random_truth("ur5e", np.random.default_rng(3), ideal=True)
     Q = random_configurations("ur5e", 400, np.random.default_rng(7))
     cal = factory_calibration(truth, 3)
     error = rms(position_errors(cal, truth, Q))
@@ -51,7 +52,7 @@ def test_where_the_dh_chain_alone_misses_more_no_rig_error_is_added() -> None:
 
 
 def test_it_is_deterministic_per_seed_and_bounded() -> None:
-    truth = random_truth("ur10e", np.random.default_rng(4))
+    truth = random_truth("ur10e", np.random.default_rng(4), ideal=True)
     a, b = factory_calibration(truth, 4), factory_calibration(truth, 4)
     assert same(a, b)
     assert not same(a, factory_calibration(truth, 5))

@@ -240,7 +240,7 @@ def test_read_kinematics_info_against_the_running_simulator(rtde_sim: SimProcess
 
 # ------------------------------------------------------------------ the station's truth block
 def test_a_truths_controller_block_is_the_controllers_model_and_is_reported(tmp_path: Path) -> None:
-    truth = random_truth("ur5e", np.random.default_rng(5))
+    truth = random_truth("ur5e", np.random.default_rng(5), ideal=True)
     path = tmp_path / "truth.json"
     write_json(path, truth_document(truth, Noise(), CAL))
     assert truth_controller(json.loads(path.read_text()), str(path)).to_dict() == CAL.to_dict()  # type: ignore[union-attr]
@@ -269,7 +269,7 @@ def test_without_a_block_the_station_fits_one_to_its_truth_and_reports_it() -> N
 
 
 def test_a_malformed_truth_block_names_the_file_and_field(tmp_path: Path) -> None:
-    doc = truth_document(random_truth("ur5e", np.random.default_rng(1)), Noise())
+    doc = truth_document(random_truth("ur5e", np.random.default_rng(1), ideal=True), Noise())
     doc["controller"] = {**CAL.to_dict(), "delta_d": [0, 0, "x", 0, 0, 0]}
     path = tmp_path / "truth.json"
     write_json(path, doc)
