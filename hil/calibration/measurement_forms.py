@@ -272,6 +272,23 @@ def _first_bad(mask: np.ndarray) -> tuple[int, int] | None:
     return None if len(bad) == 0 else (int(bad[0][0]), int(bad[0][1]))
 
 
+#: What a header without a joint or a position form is told to have.
+JOINTS_EXPECTED = ("q1..q6 or shoulder_pan_joint..wrist_3_joint (radians; degrees as q1_deg..q6_deg or "
+                   "with --joint-units deg)")
+POSITIONS_EXPECTED = ("x,y,z (m), x1,y1,z1[,x2,y2,z2…] (FIGAROH's markers) or hz,v,d (Leica polar: "
+                      "horizontal angle, zenith angle, slope distance)")
+
+
+def check_measurements_header(rows: Rows) -> None:
+    """Refuse a measurements header that lacks a joint or a position form, or names one in part,
+    before any row is read: a file whose header is wrong is told so, whatever its rows hold."""
+    header = rows.header
+    choose(header, JOINT_FORMS, required=True, expected=JOINTS_EXPECTED)
+    choose(header, POSITION_FORMS, required=True, expected=POSITIONS_EXPECTED)
+    choose(header, ORIENTATION_FORMS, required=False, expected="")
+    choose(header, (DIRECTIONS,), required=False, expected="")
+
+
 def joints(rows: Rows, declared: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Joint angles (m, 6) in radians and the line numbers, from the header's one joint form.
 
@@ -281,8 +298,7 @@ def joints(rows: Rows, declared: str | None = None) -> tuple[np.ndarray, np.ndar
     """
     header = rows.header
     form = choose(header, JOINT_FORMS, required=True,
-                  expected="q1..q6 or shoulder_pan_joint..wrist_3_joint (radians; degrees as q1_deg..q6_deg "
-                           "or with --joint-units deg)")
+                  expected=JOINTS_EXPECTED)
     assert form is not None
     unit = joint_unit(header, form, declared)
     values, lines = numbers(rows, form.columns)
@@ -341,8 +357,7 @@ def positions(rows: Rows, lines: np.ndarray) -> tuple[np.ndarray, np.ndarray | N
     """
     header = rows.header
     form = choose(header, POSITION_FORMS, required=True,
-                  expected="x,y,z (m), x1,y1,z1[,x2,y2,z2…] (FIGAROH's markers) or hz,v,d (Leica polar: "
-                           "horizontal angle, zenith angle, slope distance)")
+                  expected=POSITIONS_EXPECTED)
     assert form is not None
     if form is POLAR:
         from drivers.tracker.geometry import polar_to_cartesian

@@ -181,6 +181,7 @@ def read_measurements(path: str | os.PathLike[str], joint_units: str | None = No
     `Measurements` in radians and metres; `joint_units` ("rad" or "deg") declares the unit of joint
     columns without a suffix."""
     rows = forms.read_rows(path)
+    forms.check_measurements_header(rows)
     q, lines = forms.joints(rows, joint_units)
     p, reflectors, _ = forms.positions(rows, lines)
     rotation, _ = forms.rotations(rows, lines)

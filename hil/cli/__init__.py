@@ -174,7 +174,10 @@ def _simulator_did_not_start(exc: BaseException) -> bool:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the CLI; returns the process exit code."""
+    """Run the CLI; returns the process exit code. Called with no `argv` it is the ``hil`` program
+    (``args.as_program``), which a command may end at once when it is done (`hil tui`); called with an
+    argument list (a test, a script) it always returns."""
+    as_program = argv is None
     argv = sys.argv[1:] if argv is None else list(argv)
     limit_blas_threads()
     try:
@@ -189,6 +192,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return EXIT_BAD_INPUT
+    args.as_program = as_program
     try:
         return int(args.func(args) or EXIT_OK)
     except InputError as exc:

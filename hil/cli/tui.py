@@ -88,13 +88,15 @@ def check_store(db: str | None, config: object | None) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the app; once it has closed (arm stopped, campaign recorded, devices, store and simulator
-    closed, terminal restored) the process ends at once (`end_process`), not after the interpreter's
-    seconds of teardown."""
+    closed, terminal restored) the ``hil`` program ends at once (`end_process`), not after the
+    interpreter's seconds of teardown; called in-process (`hil.cli.main` with arguments) it returns."""
     from hil.cli.support.process_end import end_process
     from hil.tui.app import create_app
 
     options = options_from(args)
     check_store(getattr(options, "db", None), getattr(options, "config", None))
     app = create_app(options)  # type: ignore[arg-type]
-    code = app.run()
-    end_process(int(code or 0))
+    code = int(app.run() or 0)
+    if getattr(args, "as_program", False):
+        end_process(code)
+    return code

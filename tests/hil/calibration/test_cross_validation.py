@@ -20,9 +20,9 @@ from hil.calibration.measurements import Measurements
 from hil.calibration.synthetic import Noise, measure, random_configurations, random_truth
 
 
-def station(robot: str, poses: int, sigma: float, seed: int, rigid: bool = True):
+def station(robot: str, poses: int, sigma: float, seed: int, rigid: bool = True, ideal: bool = True):
     rng = np.random.default_rng(seed)
-    truth = random_truth(robot, rng, rigid=rigid)
+    truth = random_truth(robot, rng, rigid=rigid, ideal=ideal)
     q, p = measure(truth, random_configurations(robot, poses, rng), Noise(sigma), rng)
     return truth, Measurements(q, p, np.arange(poses) + 2, f"{robot}-{seed}.csv"), rng
 
@@ -75,12 +75,12 @@ def test_the_estimate_agrees_with_the_truth_on_fresh_poses() -> None:
     """CV's RMS against the RMS of 1000 fresh measured poses (the model's error plus the tracker's
     noise: what a validation measures), over synthetic stations of both arms: within a factor 1.3.
 
-    Measured (30 poses, 20 µm, realistic arms fitted without compliance): CV/fresh 0.95-1.17 for
-    seeds 0-5, 0.83-1.17 for seeds 0-11."""
+    Measured (30 poses, 20 µm, ideal arms — compliance, payload, warm-up — fitted without compliance):
+    CV/fresh 0.95-1.17 for seeds 0-5, 0.83-1.17 for seeds 0-11."""
     ratios = []
     for seed in range(6):
         robot = ("ur5e", "ur10e")[seed % 2]
-        truth, meas, rng = station(robot, 30, 20e-6, seed, rigid=False)
+        truth, meas, rng = station(robot, 30, 20e-6, seed, rigid=False, ideal=True)
         fit = identify(meas, robot)
         cv = cross_validate(meas, fit)
         q_fresh, p_fresh = measure(truth, random_configurations(robot, 1000, rng), Noise(20e-6), rng)
@@ -90,6 +90,23 @@ def test_the_estimate_agrees_with_the_truth_on_fresh_poses() -> None:
         assert cv.nominal.rms / nominal_fresh.rms == pytest.approx(1.0, abs=0.5)
         assert cv.better_than_nominal
     assert min(ratios) > 1 / 1.3 and max(ratios) < 1.3, ratios
+
+
+def test_on_the_realistic_arm_the_estimate_stays_within_its_measured_spread() -> None:
+    """On the realistic arm (joint errors and their high-frequency part, `hil.arm.joint_physics`) what
+    is left after the fit is structured, not noise, and 30-40 poses estimate it less surely: CV/fresh
+    measured 0.65-1.16 over seeds 0-11 (30 poses, geometry only; 0.70-1.16 with compliance; 40 poses
+    0.65-1.17). CV tends to be optimistic there, never by more than a factor 1.6."""
+    ratios = []
+    for seed in range(6):
+        robot = ("ur5e", "ur10e")[seed % 2]
+        truth, meas, rng = station(robot, 30, 20e-6, seed, rigid=False, ideal=False)
+        fit = identify(meas, robot)
+        cv = cross_validate(meas, fit)
+        q_fresh, p_fresh = measure(truth, random_configurations(robot, 1000, rng), Noise(20e-6), rng)
+        fresh = ErrorStats.of(p_fresh - Kinematics(fit.geometry).points(q_fresh))
+        ratios.append(cv.calibrated.rms / fresh.rms)
+    assert min(ratios) > 1 / 1.6 and max(ratios) < 1.3, ratios
 
 
 def test_a_hopeless_data_set_is_not_called_better() -> None:

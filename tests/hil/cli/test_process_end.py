@@ -50,5 +50,8 @@ def test_the_tui_command_ends_the_process_once_the_app_has_closed(monkeypatch: p
     monkeypatch.setattr("hil.tui.app.create_app", lambda options: App())
     monkeypatch.setattr("hil.cli.support.process_end.end_process", end)
     with pytest.raises(SystemExit):
-        tui.run(argparse.Namespace())
+        tui.run(argparse.Namespace(as_program=True))  # the hil program (hil.cli.main without argv)
     assert ran == [True] and ended == [130]
+    # called in-process (hil.cli.main with an argument list: a test, a script) it returns the code
+    assert tui.run(argparse.Namespace(as_program=False)) == 130
+    assert ran == [True, True] and ended == [130]
