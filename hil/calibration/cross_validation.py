@@ -40,7 +40,6 @@ cross-validated prediction error calls it with each candidate's columns.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -48,6 +47,7 @@ import numpy as np
 
 from hil.arm.geometry import Geometry
 from hil.arm.kinematics import N_PARAMETERS, SMR_SLICE, TRACKER_SLICE, Kinematics
+from hil.calibration.distributions import student_t_cdf
 from hil.calibration.identification import ErrorStats, FitResult, register
 from hil.calibration.measurements import Measurements
 
@@ -60,33 +60,6 @@ FOLD_RULE = "pose i (in input order, fitted poses only) in fold i mod k, k = min
 SIGNIFICANCE = 0.05
 #: The registration parameters: what "nominal" and "controller" models fit in each fold.
 REGISTRATION = np.r_[np.arange(N_PARAMETERS)[TRACKER_SLICE], np.arange(N_PARAMETERS)[SMR_SLICE]]
-
-
-def student_t_cdf(t: float, dof: int) -> float:
-    """P(T ≤ t) for Student's t with a whole number `dof` of degrees of freedom.
-
-    The finite series of Abramowitz & Stegun 26.7.3 (odd dof) and 26.7.4 (even dof) in θ = atan(t/√ν):
-    exact for whole dof, which a paired test on poses always has, and it spares `hil identify` the
-    import of scipy (most of its start-up; scipy's `stdtr` agrees to 1e-12, see the tests).
-    """
-    nu = int(dof)
-    if nu < 1:
-        raise ValueError(f"degrees of freedom must be a whole number ≥ 1, not {dof}")
-    theta = math.atan(abs(t) / math.sqrt(nu))
-    c2 = math.cos(theta) ** 2
-    if nu % 2:  # A(t|ν) = 2/π·(θ + sinθ·cosθ·(1 + 2/3·cos²θ + … + 2·4…(ν−3)/(1·3…(ν−2))·cos^(ν−3)θ))
-        total, term = (1.0, 1.0) if nu > 1 else (0.0, 0.0)
-        for k in range(2, nu - 1, 2):
-            term *= k / (k + 1) * c2
-            total += term
-        a = 2.0 / math.pi * (theta + math.sin(theta) * math.cos(theta) * total)
-    else:  # A(t|ν) = sinθ·(1 + 1/2·cos²θ + 1·3/(2·4)·cos⁴θ + … + 1·3…(ν−3)/(2·4…(ν−2))·cos^(ν−2)θ)
-        total, term = 1.0, 1.0
-        for k in range(1, nu - 2, 2):
-            term *= k / (k + 1) * c2
-            total += term
-        a = math.sin(theta) * total
-    return 0.5 + 0.5 * a if t >= 0 else 0.5 - 0.5 * a
 
 
 def default_folds(count: int) -> int:
@@ -162,7 +135,7 @@ class CrossValidation:
         mean = float(np.mean(d))
         if sd == 0.0:
             return 0.0 if mean > 0 else 1.0
-        return student_t_cdf(-mean / (sd / np.sqrt(len(d))), len(d) - 1)
+        return float(student_t_cdf(float(-mean / (sd / np.sqrt(len(d)))), len(d) - 1))
 
     @property
     def better_than_controller(self) -> bool | None:

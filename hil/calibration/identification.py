@@ -5,8 +5,8 @@ because the step must be applied *multiplicatively* on SE(3) (`kinematics.apply_
 adds steps to a vector, and an additive update of the twist with the Jacobian taken at zero error
 converges to a biased answer. Everything else comes from libraries: pinocchio for the kinematics,
 numpy for the linear algebra (the Kabsch alignment is one 3 × 3 SVD; the pivoted QR is
-`hil.arm.pivoted_qr`), scipy for the F distribution, imported only when a pose may be an outlier —
-scipy's import was most of ``hil identify``'s start-up.
+`hil.arm.pivoted_qr`), and the F distribution's tail from `hil.calibration.distributions` — scipy's
+import was most of ``hil identify``'s start-up.
 
 Steps:
 1. check the data can identify the parameters at all (pose count, joints that never move, rank);
@@ -51,6 +51,7 @@ from hil.arm.kinematics import (
 )
 from hil.arm.payload import Payload
 from hil.arm.pivoted_qr import pivoted_qr
+from hil.calibration.distributions import f_sf
 from hil.calibration.measurements import Measurements, measurements_sha256
 from hil.calibration.prior import Prior, manufacturing_prior
 from hil.errors import HilError, InputError
@@ -350,9 +351,9 @@ def _outlier(Jp: np.ndarray, res: np.ndarray, inv: np.ndarray, level: float) -> 
     """(index among the used poses, F-test p-value) of the most significant outlier if its p-value is
     below `level`, else None.
 
-    The p-values are scipy's F distribution (``scipy.special.fdtrc``), imported only when the largest
-    F statistic could be significant (`f_3_sf_lower_bound`): on data without outliers ``hil identify``
-    then never loads scipy, whose import was most of its start-up (bench/cli_startup.py).
+    The p-values are the F distribution's tail (`hil.calibration.distributions.f_sf`, scipy's to 1e-10
+    without its import), computed only when the largest F statistic could be significant
+    (`f_3_sf_lower_bound`).
     """
     m, n = Jp.shape[0], Jp.shape[2]
     dof = 3 * m - n
@@ -366,9 +367,7 @@ def _outlier(Jp: np.ndarray, res: np.ndarray, inv: np.ndarray, level: float) -> 
     F = qi / (3.0 * s2_loo)
     if f_3_sf_lower_bound(float(np.max(F))) >= level:
         return None
-    import scipy.special  # the F distribution's survival function, without scipy.stats (a second)
-
-    pvals = scipy.special.fdtrc(3, dof - 3, F)
+    pvals = np.array([f_sf(float(f), 3.0, float(dof - 3)) for f in F])
     k = int(np.argmin(pvals))
     return (k, float(pvals[k])) if pvals[k] < level else None
 
