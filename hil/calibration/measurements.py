@@ -12,48 +12,18 @@ other tools and people and the first thing a user needs is where to look.
 from __future__ import annotations
 
 import hashlib
-import math
 import os
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from hil.calibration import measurement_forms as forms
-from hil.calibration.measurement_forms import JOINT_RANGES, TRACKER_RANGE
-from hil.errors import InputError
-from hil.files.inputs import csv_rows, decode_input_text, read_input_bytes
 from hil.files.outputs import atomic_write_text, format_csv
 
 JOINT_COLUMNS: tuple[str, ...] = ("q1", "q2", "q3", "q4", "q5", "q6")
 POINT_COLUMNS: tuple[str, ...] = ("x", "y", "z")
 #: Optional: each joint's direction of approach (sign of its last motion) — all six or none.
 DIRECTION_COLUMNS: tuple[str, ...] = ("d1", "d2", "d3", "d4", "d5", "d6")
-
-def _column_ranges() -> dict[str, tuple[float, float, str]]:
-    """The plausible range of every column of hil's own form, and its unit (`measurement_forms`
-    holds the reasons: a joint within any catalog arm's limits plus `JOINT_LIMIT_MARGIN`, a point
-    within `TRACKER_RANGE`)."""
-    out = {c: (low, high, "rad") for c, (low, high) in zip(JOINT_COLUMNS, JOINT_RANGES, strict=True)}
-    out.update({c: (-TRACKER_RANGE, TRACKER_RANGE, "m") for c in POINT_COLUMNS})
-    return out
-
-
-COLUMN_RANGES = _column_ranges()
-
-
-@dataclass(frozen=True)
-class Table:
-    """Numeric columns read from a CSV file, with the file line number of every row."""
-
-    source: str
-    columns: dict[str, np.ndarray]
-    lines: np.ndarray  # 1-based line numbers in the file
-    sha256: str
-
-    def __len__(self) -> int:
-        return len(self.lines)
-
 
 @dataclass(frozen=True)
 class Measurements:
@@ -107,66 +77,6 @@ def measurements_sha256(q: np.ndarray, p: np.ndarray) -> str:
     """
     rows = np.hstack([np.asarray(q, dtype=float).reshape(-1, 6), np.asarray(p, dtype=float).reshape(-1, 3)])
     return hashlib.sha256(format_csv(JOINT_COLUMNS + POINT_COLUMNS, rows).encode("utf-8")).hexdigest()
-
-
-def read_table(path: str | os.PathLike[str], required: Sequence[str],
-               optional: Sequence[str] = ()) -> Table:
-    """Read a CSV file whose header includes `required` numeric columns (others are ignored); the
-    `optional` ones are read too when the header has every one of them (some but not all: an error)."""
-    name = str(path)
-    raw = read_input_bytes(path, "a CSV file")
-    text = decode_input_text(raw, name)
-    rows = [(n, row) for n, row in csv_rows(text, name)
-            if row and any(c.strip() for c in row) and not row[0].lstrip().startswith("#")]
-    if not rows:
-        raise InputError(f"{name}: empty file, expected a header with {','.join(required)}")
-    header_line, header = rows[0]
-    header = [h.strip() for h in header]
-    present = [c for c in optional if c in header]
-    if present and len(present) < len(optional):
-        raise InputError(f"{name}: line {header_line}: column(s) {', '.join(present)} without "
-                         f"{', '.join(c for c in optional if c not in header)} (give all of "
-                         f"{','.join(optional)} or none)")
-    required = [*required, *optional] if present else list(required)
-    missing = [c for c in required if c not in header]
-    if missing:
-        raise InputError(f"{name}: line {header_line}: missing column(s) {', '.join(missing)} "
-                         f"(the header must include {','.join(required)})")
-    dupes = sorted({c for c in required if header.count(c) > 1})
-    if dupes:
-        raise InputError(f"{name}: line {header_line}: column(s) {', '.join(dupes)} appear twice")
-    where = {c: header.index(c) for c in required}
-    data = np.empty((len(rows) - 1, len(required)))
-    lines = np.empty(len(rows) - 1, dtype=int)
-    for k, (line, row) in enumerate(rows[1:]):
-        if len(row) != len(header):
-            raise InputError(f"{name}: line {line}: expected {len(header)} fields, got {len(row)}")
-        for j, col in enumerate(required):
-            cell = row[where[col]].strip()
-            try:
-                value = float(cell)
-            except ValueError:
-                raise InputError(f"{name}: line {line}, column {col}: {cell!r} is not a number") from None
-            if not math.isfinite(value):
-                raise InputError(f"{name}: line {line}, column {col}: {cell!r} is not a finite number")
-            if col in COLUMN_RANGES and not COLUMN_RANGES[col][0] <= value <= COLUMN_RANGES[col][1]:
-                raise InputError(f"{name}: line {line}, column {col}: {_out_of_range(col, value)}")
-            if col in DIRECTION_COLUMNS and value not in (-1.0, 0.0, 1.0):
-                raise InputError(f"{name}: line {line}, column {col}: {cell!r} is not a direction "
-                                 "(-1, 0 or 1: the sign of the joint's last motion)")
-            data[k, j] = value
-        lines[k] = line
-    if len(lines) == 0:
-        raise InputError(f"{name}: no data rows after the header")
-    columns = {c: data[:, j] for j, c in enumerate(required)}
-    return Table(name, columns, lines, hashlib.sha256(raw).hexdigest())
-
-
-def _out_of_range(col: str, value: float) -> str:
-    low, high, unit = COLUMN_RANGES[col]
-    what = ("beyond the joint limits of every UR arm" if unit == "rad"
-            else "beyond a laser tracker's range")
-    return f"{value:g} {unit} is {what} ({low:.4g} to {high:.4g} {unit})"
 
 
 def read_joints(path: str | os.PathLike[str],

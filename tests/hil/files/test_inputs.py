@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from hil.calibration.measurements import read_table
+from hil.calibration.measurement_forms import read_rows
 from hil.calibration.model_file import read_json
 from hil.errors import InputError
 from hil.files.inputs import read_input_text
@@ -17,7 +17,7 @@ READERS = [
     (load_config, "a TOML file"),
     (read_json, "a JSON file"),
     (load_program, "a MOVEB program"),
-    (lambda p: read_table(p, ["x"]), "a CSV file"),
+    (read_rows, "a CSV file"),
 ]
 
 
