@@ -57,6 +57,11 @@ class Geometry:
     arm), the `payload` it carries (None: nothing), `gravity` in the base frame (the mounting) and, in
     a simulator's truth only, `thermal` growth; the angle-dependent `joint_errors` and the joints'
     `lost_motion` (rad; `hil.arm.joint_errors`). `Kinematics` applies them all to the encoder angles.
+
+    The measured tool, when a fit of 6-D or several-reflector measurements identified it
+    (`hil.arm.tool_frame`): `tool_rotation`, the measured frame's orientation in the flange frame (its
+    origin is `smr`), and `reflectors`, every reflector's centre in the flange frame (row 0 is `smr`).
+    None: a single SMR, whose orientation nothing measures.
     """
 
     robot: str
@@ -70,6 +75,8 @@ class Geometry:
     thermal: Thermal | None = None
     joint_errors: JointErrors | None = None
     lost_motion: np.ndarray | None = None
+    tool_rotation: np.ndarray | None = None  # (3, 3) measured frame -> flange frame
+    reflectors: np.ndarray | None = None  # (R, 3) m, flange frame; reflectors[0] == smr
 
     def __post_init__(self) -> None:
         if len(self.joints) != 6:
@@ -83,6 +90,11 @@ class Geometry:
         self.gravity = np.array(self.gravity, dtype=float).reshape(3)
         if self.lost_motion is not None:
             self.lost_motion = np.array(self.lost_motion, dtype=float).reshape(6)
+        if self.tool_rotation is not None:
+            self.tool_rotation = np.array(self.tool_rotation, dtype=float).reshape(3, 3)
+        if self.reflectors is not None:
+            self.reflectors = np.array(self.reflectors, dtype=float).reshape(-1, 3)
+            self.reflectors[0] = self.smr
 
     @property
     def compliant(self) -> bool:
@@ -129,7 +141,9 @@ class Geometry:
         return Geometry(self.robot, list(self.joints), self.flange, self.smr.copy(), self.tracker,
                         None if self.compliance is None else self.compliance.copy(), self.payload,
                         self.gravity.copy(), self.thermal, self.joint_errors,
-                        None if self.lost_motion is None else self.lost_motion.copy())
+                        None if self.lost_motion is None else self.lost_motion.copy(),
+                        None if self.tool_rotation is None else self.tool_rotation.copy(),
+                        None if self.reflectors is None else self.reflectors.copy())
 
     def ideal(self) -> Geometry:
         """The same arm without angle-dependent joint errors and lost motion (hil's arm before they were
@@ -172,8 +186,20 @@ class Geometry:
             "flange": pose_to_dict(self.flange),
             "smr": [float(v) for v in self.smr],
             "tracker": pose_to_dict(self.tracker),
+            **self.tool_dict(),
             **self.non_geometric_dict(),
         }
+
+    def tool_dict(self) -> dict[str, Any]:
+        """The measured tool's optional keys: ``tool_rpy`` (the measured frame's orientation in the
+        flange frame, URDF rpy; its origin is ``smr``) and ``reflectors`` (every reflector's centre in
+        the flange frame, the first equal to ``smr``)."""
+        out: dict[str, Any] = {}
+        if self.tool_rotation is not None:
+            out["tool_rpy"] = [float(v) for v in pin.rpy.matrixToRpy(self.tool_rotation)]
+        if self.reflectors is not None:
+            out["reflectors"] = [[float(v) for v in row] for row in self.reflectors]
+        return out
 
     def non_geometric_dict(self) -> dict[str, Any]:
         """The optional blocks this arm has (compliance, payload, gravity when not floor, thermal, joint
@@ -223,8 +249,20 @@ class Geometry:
         thermal = (Thermal.from_dict(data["thermal"], f"{source}: thermal")
                    if data.get("thermal") is not None else None)
         joint_errors, lost_motion = block_of(data, source)
+        tool_rotation = None
+        if data.get("tool_rpy") is not None:
+            tool_rotation = pin.rpy.rpyToMatrix(*_vector(data["tool_rpy"], "tool_rpy", source))
+        reflectors = None
+        if data.get("reflectors") is not None:
+            rows = data["reflectors"]
+            if not isinstance(rows, list) or not rows:
+                raise InputError(f"{source}: field 'reflectors' must be a non-empty list of [x, y, z]")
+            reflectors = np.array([_vector(r, f"reflectors[{k}]", source) for k, r in enumerate(rows)])
+            if not np.allclose(reflectors[0], smr, rtol=0.0, atol=1e-9):
+                raise InputError(f"{source}: field 'reflectors[0]' must equal 'smr' (the first reflector "
+                                 "is the SMR)")
         return cls(spec.name, parsed, flange, smr, tracker, compliance, payload, gravity, thermal,
-                   joint_errors, lost_motion)
+                   joint_errors, lost_motion, tool_rotation, reflectors)
 
 
 def _require(data: Mapping[str, Any], key: str, source: str) -> Any:

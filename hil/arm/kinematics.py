@@ -288,6 +288,8 @@ def apply_update(geometry: Geometry, delta: np.ndarray) -> Geometry:
     g.joints = [M * pin.exp6(delta[6 * i: 6 * i + 6]) for i, M in enumerate(g.joints)]
     g.flange = g.flange * pin.exp6(delta[FLANGE_SLICE])
     g.smr = g.smr + delta[SMR_SLICE]
+    if g.reflectors is not None:  # the first reflector is the SMR
+        g.reflectors[0] = g.smr
     g.tracker = g.tracker * pin.exp6(delta[TRACKER_SLICE])
     if delta.size > N_PARAMETERS and np.any(delta[COMPLIANCE_SLICE] != 0.0):
         base = np.zeros(6) if g.compliance is None else g.compliance
@@ -350,7 +352,8 @@ def generic_configurations(robot: str | RobotSpec, count: int = 60, seed: int = 
     return rng.uniform(-np.pi, np.pi, size=(count, 6))
 
 
-def select_identifiable(J: np.ndarray, tol: float = RANK_TOLERANCE) -> np.ndarray:
+def select_identifiable(J: np.ndarray, tol: float = RANK_TOLERANCE,
+                        groups: Sequence[slice] | None = None) -> np.ndarray:
     """Indices of a maximal set of independent columns of the stacked Jacobian `J` (rows × 51, or
     × 57 with the compliance columns, or × 99 with the joint errors' and lost motion's, which come
     last in that order: geometry wins where they are equivalent, then compliance).
@@ -359,16 +362,18 @@ def select_identifiable(J: np.ndarray, tol: float = RANK_TOLERANCE) -> np.ndarra
     group in `_GROUP_ORDER`: each group's columns are first projected on the complement of the columns
     already chosen, and pivoted QR then keeps those whose residual exceeds `tol`. Within a group the
     pivoting picks the best-conditioned columns; across groups the order settles exact equivalences so
-    the set is stable.
+    the set is stable. `groups` replaces that order for other column layouts (a 6-D fit's,
+    `hil.arm.tool_frame`).
     """
     J = np.asarray(J, dtype=float)
     norms = np.linalg.norm(J, axis=0)
     Js = J / np.where(norms > 0, norms, 1.0)
     basis = np.zeros((J.shape[0], 0))
     chosen: list[int] = []
-    groups = _GROUP_ORDER + ((COMPLIANCE_SLICE,) if J.shape[1] > N_PARAMETERS else ())
-    if J.shape[1] > N_ALL_PARAMETERS:  # joint errors last, harmonic by harmonic, then lost motion
-        groups += tuple(slice(g[0], g[-1] + 1) for g in jec.term_groups().values())
+    if groups is None:
+        groups = _GROUP_ORDER + ((COMPLIANCE_SLICE,) if J.shape[1] > N_PARAMETERS else ())
+        if J.shape[1] > N_ALL_PARAMETERS:  # joint errors last, harmonic by harmonic, then lost motion
+            groups += tuple(slice(g[0], g[-1] + 1) for g in jec.term_groups().values())
     for group in groups:
         idx = np.arange(J.shape[1])[group]
         cols = Js[:, idx] - basis @ (basis.T @ Js[:, idx])

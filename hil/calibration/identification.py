@@ -51,6 +51,7 @@ from hil.arm.kinematics import (
 )
 from hil.arm.payload import Payload
 from hil.arm.pivoted_qr import pivoted_qr
+from hil.arm.tool_frame import POSE_PARAMETER_NAMES
 from hil.calibration.distributions import f_sf
 from hil.calibration.measurements import Measurements, measurements_sha256
 from hil.calibration.prior import Prior, manufacturing_prior
@@ -120,20 +121,24 @@ class FitResult:
     joint_error_choice: Any = None
     prior: Prior | None = None  # the MAP fit's prior on `indices` (None: plain least squares)
     prior_weights: np.ndarray | None = None  # (n,) σ²/τ² the fit used (m² per unit² of each parameter)
+    #: a 6-D or several-reflector fit's additions (`hil.calibration.pose_identification.PoseFit`); its
+    #: indices then name `hil.arm.tool_frame.POSE_PARAMETER_NAMES`, tool.* and reflector<k>.* from 99
+    pose_fit: Any = None
 
     @property
     def names(self) -> list[str]:
-        return [EXTENDED_PARAMETER_NAMES[i] for i in self.indices]
+        return [POSE_PARAMETER_NAMES[i] for i in self.indices]
 
     @property
     def with_compliance(self) -> bool:
         """Whether the joints' compliance was identified with the geometry."""
-        return bool(np.any(self.indices >= N_PARAMETERS))
+        return bool(np.any((self.indices >= N_PARAMETERS) & (self.indices < N_ALL_PARAMETERS)))
 
     @property
     def with_joint_errors(self) -> bool:
         """Whether joint-error or lost-motion terms were identified with the geometry."""
-        return bool(np.any(self.indices >= N_ALL_PARAMETERS))
+        return bool(np.any((self.indices >= N_ALL_PARAMETERS)
+                           & (self.indices < len(EXTENDED_PARAMETER_NAMES))))
 
     def prediction_covariance(self, q: np.ndarray) -> np.ndarray:
         """(N, 3, 3) covariance of the model's predicted SMR positions at configurations `q`."""

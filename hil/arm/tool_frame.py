@@ -1,0 +1,239 @@
+"""The measured tool — a frame (a camera, a 6-DoF probe) and several reflectors on the flange — and the
+Jacobian of what an instrument measures of it, for a 6-D and a several-reflector fit.
+
+A tracker measuring one SMR sees a point; a camera on a chessboard, or a tracker's 6-DoF probe, sees a
+frame, and a tool with several reflectors several points. With T_bt the instrument frame in the base
+frame, T_bf(q) the flange, R_tool the measured frame's orientation in the flange frame and s_k the
+reflectors' centres in the flange frame (s_1 = the SMR offset, the measured frame's origin):
+
+    p_k = T_bt⁻¹ · T_bf(q) · s_k                 (instrument frame, each reflector k = 1..R)
+    R   = R_btᵀ · R_bf(q) · R_tool               (measured frame -> instrument frame)
+
+and the orientation residual is the small rotation vector log(R_measured · R_modelᵀ), in the instrument
+frame: a step δ of the parameters turns the model by J_o·δ, so the residual falls by J_o·δ, as a
+position residual falls by J_p·δ.
+
+**Parameters.** A fit's local layout: the 51 geometric parameters of `hil.arm.kinematics` (applied as
+there), then ``tool.rx, tool.ry, tool.rz`` (R_tool ← R_tool·exp(ω)), then ``reflector<k>.x/y/z`` for
+k = 2..R (s_k ← s_k + δ). Their names in a model file (`POSE_PARAMETER_NAMES`) follow
+`EXTENDED_PARAMETER_NAMES`, so compliance and joint-error indices keep their meaning.
+
+**What is identifiable** (`identifiable_tool_parameters`): the same pivoted QR as for positions, with the
+groups ordered tracker, SMR, tool rotation, reflectors, joints, flange, so the tool absorbs the flange's
+error (one rigid transform after joint 6 is all the data see). With orientations the tool rotation is
+identified beside the position fit's 27 (30 for a UR: FIGAROH reports 30 for its 6-D UR10 fit, the
+shared camera file's source); each further reflector adds its 3 offsets.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+import pinocchio as pin
+
+from hil.arm.geometry import Geometry
+from hil.arm.kinematics import (
+    EXTENDED_PARAMETER_NAMES,
+    FLANGE_SLICE,
+    JOINT_SLICE,
+    N_PARAMETERS,
+    SMR_SLICE,
+    TRACKER_SLICE,
+    Kinematics,
+    _skew,
+    apply_update,
+    deviation_from,
+    generic_configurations,
+    generic_geometry,
+    select_identifiable,
+)
+
+#: Most reflectors one tool may carry. No file hil has met carries more than a few (FIGAROH's marker
+#: files number them x1..); sixteen bounds the model file's names, not a physical limit.
+MAX_REFLECTORS = 16
+TOOL_ROTATION_NAMES: tuple[str, ...] = ("tool.rx", "tool.ry", "tool.rz")
+REFLECTOR_NAMES: tuple[str, ...] = tuple(f"reflector{k}.{a}" for k in range(2, MAX_REFLECTORS + 1)
+                                         for a in "xyz")
+#: Every parameter name a model may carry: the position fit's, then the tool's.
+POSE_PARAMETER_NAMES: tuple[str, ...] = EXTENDED_PARAMETER_NAMES + TOOL_ROTATION_NAMES + REFLECTOR_NAMES
+#: Where the tool's parameters start among `POSE_PARAMETER_NAMES`.
+FIRST_TOOL_PARAMETER = len(EXTENDED_PARAMETER_NAMES)
+#: The local layout's tool rotation columns.
+TOOL_SLICE = slice(N_PARAMETERS, N_PARAMETERS + 3)
+
+
+def width(reflectors: int) -> int:
+    """Columns of the local layout for a tool with `reflectors` reflectors."""
+    return N_PARAMETERS + 3 + 3 * (reflectors - 1)
+
+
+def reflector_slice(k: int) -> slice:
+    """Local columns of reflector k (0-based, k ≥ 1; reflector 0 is the SMR's `SMR_SLICE`)."""
+    start = N_PARAMETERS + 3 + 3 * (k - 1)
+    return slice(start, start + 3)
+
+
+def to_names(local: np.ndarray) -> np.ndarray:
+    """Indices into `POSE_PARAMETER_NAMES` of local columns `local`."""
+    idx = np.asarray(local, dtype=int)
+    return np.where(idx < N_PARAMETERS, idx, idx - N_PARAMETERS + FIRST_TOOL_PARAMETER)
+
+
+def tool_rotation(geometry: Geometry) -> np.ndarray:
+    """The measured frame's orientation in the flange frame (the identity when none was identified)."""
+    return np.eye(3) if geometry.tool_rotation is None else geometry.tool_rotation
+
+
+def reflector_offsets(geometry: Geometry) -> np.ndarray:
+    """(R, 3) every reflector's centre in the flange frame (the SMR alone when there is one)."""
+    return geometry.smr[None, :].copy() if geometry.reflectors is None else geometry.reflectors.copy()
+
+
+def with_tool(geometry: Geometry, reflectors: int, orientation: bool) -> Geometry:
+    """`geometry` carrying a tool of `reflectors` reflectors (new ones at the SMR) and, with
+    `orientation`, a tool rotation (the identity when it had none)."""
+    g = geometry.copy()
+    if orientation and g.tool_rotation is None:
+        g.tool_rotation = np.eye(3)
+    if reflectors > 1:
+        old = reflector_offsets(g)
+        rows = np.vstack([old, np.repeat(g.smr[None, :], max(0, reflectors - len(old)), axis=0)])
+        g.reflectors = rows[:reflectors]
+        g.reflectors[0] = g.smr
+    return g
+
+
+def predict(geometry: Geometry, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(m, R, 3) reflector positions and (m, 3, 3) measured-frame orientations, instrument frame."""
+    F = Kinematics(geometry).flange_poses(q)
+    Ti = geometry.tracker.inverse()
+    s = reflector_offsets(geometry)
+    base = np.einsum("nij,kj->nki", F[:, :3, :3], s) + F[:, None, :3, 3]
+    p = base @ Ti.rotation.T + Ti.translation
+    R = np.einsum("ij,njk,kl->nil", Ti.rotation, F[:, :3, :3], tool_rotation(geometry))
+    return p, R
+
+
+def rotation_residuals(measured: np.ndarray, model: np.ndarray) -> np.ndarray:
+    """(m, 3) log(R_measured · R_modelᵀ): the small rotation (instrument frame) from model to measured."""
+    return np.array([pin.log3(a @ b.T) for a, b in zip(measured, model, strict=True)]).reshape(-1, 3)
+
+
+def frame_and_jacobian(geometry: Geometry, q: np.ndarray,
+                       orientation: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Model positions (m, R, 3), orientations (m, 3, 3) and the Jacobian (m, 3R [+ 3], local width).
+
+    Rows per pose: each reflector's x, y, z, then (with `orientation`) the measured frame's small
+    rotation. Columns: the local layout (module docstring), each the derivative for its multiplicative
+    update at zero error. The joint columns are pinocchio's ``computeJointKinematicRegressor`` at each
+    reflector (its angular rows are the frame's); the others are closed forms.
+    """
+    kin = Kinematics(geometry)
+    if not geometry.encoder_exact:
+        raise ValueError("the tool-frame Jacobian models the geometry only (no compliance or joint errors)")
+    Q = np.atleast_2d(np.asarray(q, dtype=float))
+    m = len(Q)
+    s = reflector_offsets(geometry)
+    R_count = len(s)
+    placements = [geometry.flange * pin.SE3(np.eye(3), sk) for sk in s]
+    reg_lin = np.empty((m, R_count, 3, 36))
+    reg_ang = np.empty((m, 3, 36))
+    R6 = np.empty((m, 3, 3))
+    model, data = kin.model, kin.data
+    for n, qn in enumerate(Q):
+        pin.forwardKinematics(model, data, qn)
+        for k, placement in enumerate(placements):
+            reg = pin.computeJointKinematicRegressor(model, data, 6, pin.LOCAL_WORLD_ALIGNED, placement)
+            reg_lin[n, k] = reg[:3]
+            if k == 0:
+                reg_ang[n] = reg[3:]
+        R6[n] = data.oMi[6].rotation
+    p, R = predict(geometry, Q)
+    Rt = geometry.tracker.inverse().rotation  # base -> instrument
+    R_bs = np.einsum("ij,njk->nik", Rt, R6 @ geometry.flange.rotation)  # flange axes, instrument frame
+    rows = 3 * R_count + (3 if orientation else 0)
+    J = np.zeros((m, rows, width(R_count)))
+    for k in range(R_count):
+        r = slice(3 * k, 3 * k + 3)
+        J[:, r, JOINT_SLICE] = np.einsum("ij,njk->nik", Rt, reg_lin[:, k])
+        J[:, r, FLANGE_SLICE] = np.concatenate([R_bs, -R_bs @ _skew(s[k])], axis=2)
+        J[:, r, SMR_SLICE if k == 0 else reflector_slice(k)] = R_bs
+        J[:, r, TRACKER_SLICE] = np.concatenate([np.broadcast_to(-np.eye(3), (m, 3, 3)), _skew(p[:, k])],
+                                                axis=2)
+    if orientation:
+        o = slice(3 * R_count, rows)
+        J[:, o, JOINT_SLICE] = np.einsum("ij,njk->nik", Rt, reg_ang)
+        J[:, o, FLANGE_SLICE.start + 3: FLANGE_SLICE.stop] = R_bs
+        J[:, o, TRACKER_SLICE.start + 3: TRACKER_SLICE.stop] = -np.eye(3)
+        J[:, o, TOOL_SLICE] = R_bs @ tool_rotation(geometry)
+    return p, R, J
+
+
+def apply_tool_update(geometry: Geometry, delta: np.ndarray) -> Geometry:
+    """The geometry after a local-layout step: the 51 geometric parameters as `apply_update`, the tool
+    rotation multiplicatively, the further reflectors additively."""
+    delta = np.asarray(delta, dtype=float)
+    g = apply_update(geometry, delta[:N_PARAMETERS])
+    if g.tool_rotation is not None:
+        g.tool_rotation = g.tool_rotation @ pin.exp3(delta[TOOL_SLICE])
+    if g.reflectors is not None:
+        for k in range(1, len(g.reflectors)):
+            g.reflectors[k] = g.reflectors[k] + delta[reflector_slice(k)]
+        g.reflectors[0] = g.smr
+    return g
+
+
+def tool_deviation(reference: Geometry, geometry: Geometry) -> np.ndarray:
+    """Local-layout vector δ with `geometry` ≈ `reference` updated by δ (logs on SE(3) and SO(3))."""
+    s, s0 = reflector_offsets(geometry), reflector_offsets(reference)
+    out = np.zeros(width(len(s)))
+    out[:N_PARAMETERS] = deviation_from(reference, geometry)
+    out[TOOL_SLICE] = pin.log3(tool_rotation(reference).T @ tool_rotation(geometry))
+    for k in range(1, len(s)):
+        out[reflector_slice(k)] = s[k] - (s0[k] if k < len(s0) else s0[0])
+    return out
+
+
+def group_order(reflectors: int) -> tuple[slice, ...]:
+    """The identifiable-set groups of the local layout: tracker, SMR, tool rotation, further reflectors,
+    joints 1..6, flange (module docstring)."""
+    return (TRACKER_SLICE, SMR_SLICE, TOOL_SLICE, *(reflector_slice(k) for k in range(1, reflectors)),
+            *(slice(6 * i, 6 * i + 6) for i in range(6)), FLANGE_SLICE)
+
+
+def generic_tool(robot: str, reflectors: int, orientation: bool) -> Geometry:
+    """`generic_geometry` with a tool at a generic point: a tilted frame, reflectors spread off-axis."""
+    g = generic_geometry(robot)
+    if orientation:
+        g.tool_rotation = pin.rpy.rpyToMatrix(0.3, -0.2, 0.7)
+    if reflectors > 1:
+        spread = np.array([[0.0, 0.0, 0.0], [0.052, 0.011, -0.02], [-0.017, 0.061, 0.013],
+                           [0.023, -0.044, 0.037]])
+        extra = [g.smr + spread[k % 4] + 0.013 * (k // 4) for k in range(reflectors)]
+        g.reflectors = np.array(extra)
+        g.reflectors[0] = g.smr
+    return g
+
+
+@lru_cache(maxsize=64)
+def _identifiable_cached(robot: str, reflectors: int, orientation: bool) -> tuple[int, ...]:
+    g = generic_tool(robot, reflectors, orientation)
+    _, _, J = frame_and_jacobian(g, generic_configurations(robot), orientation)
+    return tuple(select_identifiable(J.reshape(-1, J.shape[2]), groups=group_order(reflectors)))
+
+
+def identifiable_tool_parameters(robot: str, reflectors: int, orientation: bool) -> np.ndarray:
+    """Local columns a fit of `reflectors` positions per pose (and, with `orientation`, the measured
+    frame's orientation) identifies: 27 + 3·(R − 1), and 3 more with orientations, on a UR."""
+    return np.array(_identifiable_cached(robot, int(reflectors), bool(orientation)), dtype=int)
+
+
+def registration_columns(reflectors: int, orientation: bool) -> np.ndarray:
+    """Local columns of what places the tool and the instrument (tracker pose, SMR offset, the tool
+    rotation with orientations, the further reflectors): what a nominal model fits."""
+    cols = [np.arange(N_PARAMETERS)[TRACKER_SLICE], np.arange(N_PARAMETERS)[SMR_SLICE]]
+    if orientation:
+        cols.append(np.arange(TOOL_SLICE.start, TOOL_SLICE.stop))
+    cols += [np.arange(reflector_slice(k).start, reflector_slice(k).stop) for k in range(1, reflectors)]
+    return np.concatenate(cols).astype(int)
