@@ -78,21 +78,22 @@ def fold_of(count: int, folds: int | None = None) -> np.ndarray:
 def held_out_residuals(residuals: np.ndarray, jacobian: np.ndarray, fold: np.ndarray,
                        weights: np.ndarray | None = None,
                        offset: np.ndarray | None = None) -> np.ndarray:
-    """(m, 3) each pose's error when its fold is left out of the fit (module docstring).
+    """(m, b) each pose's error when its fold is left out of the fit (module docstring).
 
-    `residuals` (m, 3) measured − modelled at the full fit; `jacobian` (m, 3, n) of the modelled points
+    `residuals` (m, b) measured − modelled at the full fit (b = 3 for a point; a 6-D or several-reflector
+    fit's whitened rows, `hil.calibration.pose_cross_validation`); `jacobian` (m, b, n) of the modelled points
     in the fitted parameters; `fold` (m,) fold numbers; `weights` (n,) a MAP fit's prior weights σ²/τ²
     and `offset` (n,) its θ̂ − θ₀ (None: plain least squares). A training set that cannot determine
     every parameter on its own (no prior, few poses) takes the least-norm step (a pseudo-inverse).
     """
-    r = np.asarray(residuals, dtype=float).reshape(-1, 3)
     J = np.asarray(jacobian, dtype=float)
-    m, n = len(r), J.shape[2]
-    Jf = J.reshape(3 * m, n)
+    m, b, n = J.shape
+    r = np.asarray(residuals, dtype=float).reshape(m, b)
+    Jf = J.reshape(b * m, n)
     rf = r.ravel()
     w = np.zeros(n) if weights is None else np.asarray(weights, dtype=float)
     prior_gradient = np.zeros(n) if offset is None else w * np.asarray(offset, dtype=float)
-    rows = np.repeat(np.asarray(fold), 3)
+    rows = np.repeat(np.asarray(fold), b)
     A_all = Jf.T @ Jf
     g_all = Jf.T @ rf
     norms = np.sqrt(np.maximum(np.diag(A_all) + w, 1e-300))  # column scaling for the solves
@@ -110,8 +111,21 @@ def held_out_residuals(residuals: np.ndarray, jacobian: np.ndarray, fold: np.nda
         except np.linalg.LinAlgError:
             step = np.linalg.pinv(As, rcond=1e-10) @ (g / norms)
         step = step / norms
-        out[np.asarray(fold) == f] = (rf[held] - Jh @ step).reshape(-1, 3)
+        out[np.asarray(fold) == f] = (rf[held] - Jh @ step).reshape(-1, b)
     return out
+
+
+def paired_p_value(d: np.ndarray) -> float:
+    """One-sided p-value of "the per-pose differences `d` (other − calibrated) are positive on
+    average": the paired t test of the module docstring."""
+    d = np.asarray(d, dtype=float)
+    if len(d) < 2:
+        return 1.0
+    sd = float(np.std(d, ddof=1))
+    mean = float(np.mean(d))
+    if sd == 0.0:
+        return 0.0 if mean > 0 else 1.0
+    return float(student_t_cdf(float(-mean / (sd / np.sqrt(len(d)))), len(d) - 1))
 
 
 @dataclass(frozen=True)
@@ -128,14 +142,7 @@ class CrossValidation:
     def p_value(self, other: ErrorStats) -> float:
         """One-sided p-value of "the calibrated model predicts better than `other`" (paired t test on
         the per-pose differences of squared held-out errors; module docstring)."""
-        d = other.errors**2 - self.calibrated.errors**2
-        if len(d) < 2:
-            return 1.0
-        sd = float(np.std(d, ddof=1))
-        mean = float(np.mean(d))
-        if sd == 0.0:
-            return 0.0 if mean > 0 else 1.0
-        return float(student_t_cdf(float(-mean / (sd / np.sqrt(len(d)))), len(d) - 1))
+        return paired_p_value(other.errors**2 - self.calibrated.errors**2)
 
     @property
     def better_than_controller(self) -> bool | None:

@@ -70,7 +70,10 @@ PARAMETER_COORDINATES = (
     "'tracker_pose'); smr.x/y/z (m) is the SMR centre in the flange frame; compliance.j<i> (rad/Nm) "
     "is joint i's compliance (the 'compliance' block, for the 'payload' block); joint<i>.cos<k>, "
     "joint<i>.sin<k> (rad) are a and b of joint i's harmonic a*cos(k*q) + b*sin(k*q) (the "
-    "'joint_errors' block) and lost_motion.j<i> (rad) its lost motion (the 'lost_motion' block). "
+    "'joint_errors' block) and lost_motion.j<i> (rad) its lost motion (the 'lost_motion' block); "
+    "tool.rx..rz (rad) is the log (rotation vector) of the measured frame's orientation in the flange "
+    "frame (the 'tool_rpy' key) and reflector<k>.x/y/z (m) reflector k's centre in the flange frame "
+    "(the 'reflectors' key). "
     "std is one standard deviation in the local error coordinates at the solution (T * exp(delta))."
 )
 _TRACKER_AXES = ("tracker.tx", "tracker.ty", "tracker.tz", "tracker.rx", "tracker.ry", "tracker.rz")
@@ -163,6 +166,8 @@ def model_document(fit: FitResult, validation: dict[str, Any] | None = None,
         "correlated": [{"a": c.a, "b": c.b, "rho": c.rho} for c in fit.correlated],
         "prior": prior_block(fit),
     }
+    if fit.pose_fit is not None:  # a 6-D or several-reflector fit (hil.calibration.pose_identification)
+        doc["fit"]["pose_fit"] = fit.pose_fit.as_dict(fit.used)
     if fit.joint_error_choice is not None:
         doc["joint_error_selection"] = fit.joint_error_choice.as_dict()
     if cross_validation is not None:
@@ -303,6 +308,11 @@ def check_geometry_block(doc: dict[str, Any], source: str, prefix: str = "") -> 
             placement(joint, f"joints[{i}]", MAX_LINK_OFFSET)
     placement(doc.get("flange"), "flange", MAX_LINK_OFFSET)
     numbers(doc.get("smr"), "smr", MAX_SMR_OFFSET, "m")
+    numbers(doc.get("tool_rpy"), "tool_rpy", MAX_ANGLE, "rad")
+    reflectors = doc.get("reflectors")
+    if isinstance(reflectors, list):
+        for k, row in enumerate(reflectors):
+            numbers(row, f"reflectors[{k}]", MAX_SMR_OFFSET, "m")
     placement(doc.get("tracker"), "tracker", MAX_TRACKER_DISTANCE)
 
 

@@ -247,8 +247,9 @@ def identify_pose(meas: Measurements, robot: str, smr_guess: np.ndarray | None =
     model, registered as the nominal is); `registration_only` stops after the registration (a
     nominal or controller model placed on the data)."""
     t0 = time.perf_counter()
-    if not (position_noise > 0 and orientation_noise > 0):
-        raise InputError(f"{meas.source}: the position and orientation noise must be positive")
+    for name, value in (("--position-noise", position_noise), ("--orientation-noise", orientation_noise)):
+        if not (np.isfinite(value) and value > 0):
+            raise InputError(f"{name}: {value:g} is not a noise level (a positive, finite σ per axis)")
     check_design(meas, robot)
     orientation = meas.rotation is not None
     points = _measured(meas)
@@ -339,3 +340,11 @@ def identify_pose(meas: Measurements, robot: str, smr_guess: np.ndarray | None =
         correlated=correlated, baseline=baseline, seconds=time.perf_counter() - t0, source=meas.source,
         sha256=meas.sha256 or measurements_sha256(meas.q, meas.p), prior=tolerance,
         prior_weights=weights, pose_fit=info)
+
+
+def whitened(meas: Measurements, geometry: Geometry, info: PoseFit) -> tuple[np.ndarray, np.ndarray]:
+    """Whitened residuals (m, rows) and Jacobian (m, rows, local width) of `geometry` against `meas`
+    as the fit `info` weighs them (the cross-validation's input)."""
+    problem = _Problem(meas.q, _measured(meas), meas.rotation if info.orientation else None, info.whiten())
+    r, J, _, _ = problem.evaluate(geometry)
+    return r, J

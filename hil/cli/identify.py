@@ -18,8 +18,13 @@ from hil.cli.support.output import mm, print_json, say, wrote
 from hil.jobs.outcome import EXIT_FAILED, EXIT_OK
 
 if TYPE_CHECKING:
+    import numpy as np
+
+    from hil.arm.geometry import Geometry
     from hil.calibration.cross_validation import CrossValidation
     from hil.calibration.identification import FitResult
+    from hil.calibration.joint_error_request import JointErrorRequest
+    from hil.calibration.measurements import Measurements
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -52,6 +57,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "harmonics of orders 1-3 and, where the d1..d6 columns show both directions, "
                         "the lost motion that cross-validation supports); or orders for every joint, "
                         "e.g. 1,2 or 1,2,lost")
+    p.add_argument("--position-noise", type=float, metavar="M",
+                   help="σ per axis (m) of a measured position, which weighs positions against "
+                        "orientations in a 6-D fit (default 0.002, a camera on a chessboard; "
+                        "hil.calibration.pose_identification says why)")
+    p.add_argument("--orientation-noise", type=float, metavar="RAD",
+                   help="σ per axis (rad) of a measured orientation in a 6-D fit (default 0.002)")
     p.add_argument("--json", action="store_true", help="print the fit summary as JSON")
     p.add_argument("--out", required=True, metavar="model.json", help="model file to write")
     p.set_defaults(func=run)
@@ -74,6 +85,33 @@ def summary(fit: FitResult, cv: CrossValidation | None = None) -> dict:
     return out
 
 
+def _pose_fit(args: argparse.Namespace, meas: Measurements, robot: str, smr: np.ndarray | None,
+              request: JointErrorRequest, arm: Geometry | None
+              ) -> tuple[FitResult, CrossValidation, list[str]]:
+    """The 6-D / several-reflector fit and its cross-validation (`hil.calibration.pose_identification`),
+    with the notes on what it leaves out."""
+    from hil.calibration import pose_identification as pose
+    from hil.calibration.pose_cross_validation import cross_validate_pose
+    from hil.errors import InputError
+
+    what = "orientations" if meas.rotation is not None else "several reflectors"
+    if args.compliance or request.mode == "orders":
+        option = "--compliance" if args.compliance else "--joint-errors"
+        raise InputError(f"{option}: {args.measurements} has {what} per pose, and the 6-D fit identifies "
+                         "the geometry only; leave out the option or the file's extra columns")
+    fit = pose.identify_pose(
+        meas, robot, smr, reject_outliers=not args.no_reject, prior=not args.no_prior, arm=None,
+        position_noise=pose.POSITION_NOISE if args.position_noise is None else args.position_noise,
+        orientation_noise=(pose.ORIENTATION_NOISE if args.orientation_noise is None
+                           else args.orientation_noise))
+    cv = cross_validate_pose(meas, fit, controller=arm, smr_guess=smr)
+    notes = []
+    if request.mode != "none":
+        notes.append(f"{meas.source}: {what} per pose: the 6-D fit identifies the geometry and the tool; "
+                     "joint-error terms are not tried with it")
+    return fit, cv, notes
+
+
 def run(args: argparse.Namespace) -> int:
     from hil.arm.payload import gravity_of_mounting
     from hil.calibration.cross_validation import cross_validate
@@ -82,7 +120,9 @@ def run(args: argparse.Namespace) -> int:
     from hil.calibration.joint_error_selection import identify_with_joint_errors
     from hil.calibration.measurements import read_measurements, unused_by_position_fit
     from hil.calibration.model_file import model_document, write_json
+    from hil.calibration.pose_identification import uses_tool
     from hil.cli.support.output_paths import campaign_store
+    from hil.errors import InputError
     from hil.files.outputs import check_output
     from hil.station.config import MAX_SMR_OFFSET
 
@@ -102,17 +142,25 @@ def run(args: argparse.Namespace) -> int:
     payload = payload_or_none(args.payload)
     mounting = triplet_or_none(args.mounting, "--mounting")
     request = parse_request(args.joint_errors)
-    fit = identify_with_joint_errors(
-        meas, robot, smr, request=request, reject_outliers=not args.no_reject, compliance=args.compliance,
-        payload=payload if payload is not None and payload.mass > 0 else None,
-        gravity=gravity_of_mounting(mounting) if mounting is not None else None,
-        prior=not args.no_prior)
-    cv = cross_validate(meas, fit, smr_guess=smr,
-                        controller=None if controller is None else controller.geometry(robot))
+    arm = None if controller is None else controller.geometry(robot)
+    if uses_tool(meas):
+        fit, cv, notes = _pose_fit(args, meas, robot, smr, request, arm)
+    else:
+        for name in ("position_noise", "orientation_noise"):
+            if getattr(args, name) is not None:
+                raise InputError(f"--{name.replace('_', '-')}: {args.measurements} has one position per "
+                                 "pose and no orientation: there is nothing to weigh it against")
+        fit = identify_with_joint_errors(
+            meas, robot, smr, request=request, reject_outliers=not args.no_reject,
+            compliance=args.compliance, payload=payload if payload is not None and payload.mass > 0 else None,
+            gravity=gravity_of_mounting(mounting) if mounting is not None else None,
+            prior=not args.no_prior)
+        cv = cross_validate(meas, fit, smr_guess=smr, controller=arm)
+        notes = unused_by_position_fit(meas)
     validation = validate(fit.geometry, held_out).as_dict() if held_out is not None else None
     write_json(args.out, model_document(fit, validation, cross_validation=cv.as_dict()))
     wrote(args.out, f"hil-model/1, {len(fit.indices)} parameters")
-    notes = unused_by_position_fit(meas) + (unused_by_position_fit(held_out) if held_out is not None else [])
+    notes += unused_by_position_fit(held_out) if held_out is not None else []
     for note in notes:
         say(note)
     code = EXIT_OK if cv.better_than_nominal else EXIT_FAILED
@@ -137,6 +185,12 @@ def run(args: argparse.Namespace) -> int:
           f"max {mm(cv.calibrated.max)}  nominal RMS {mm(cv.nominal.rms)}"
           + ("" if cv.controller is None else f"  controller RMS {mm(cv.controller.rms)}")
           + ("" if cv.better_than_nominal else "  NOT BETTER"))
+    orientation = getattr(cv, "orientation", None)
+    if orientation:
+        print(f"  held out orientation     calibrated RMS {orientation['calibrated'].rms * 1e3:.3f} mrad  "
+              f"nominal RMS {orientation['nominal'].rms * 1e3:.3f} mrad"
+              + ("" if orientation.get("controller") is None
+                 else f"  controller RMS {orientation['controller'].rms * 1e3:.3f} mrad"))
     if validation is not None:
         print(f"  validation ({validation['count']} poses)  RMS {mm(validation['rms'])}  "
               f"max {mm(validation['max'])}")
