@@ -5,7 +5,6 @@ multi-reflector file is fitted on the first reflector's positions, and the comma
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import numpy as np
@@ -46,8 +45,7 @@ def same_fit(a: dict, b: dict) -> None:
     assert a["max"] == pytest.approx(b["max"], rel=1e-6, abs=1e-12)
 
 
-def test_identify_reads_degrees_polar_and_figaroh_files_as_their_cartesian_twin(station, tmp_path, capsys,
-                                                                               rng):
+def test_identify_reads_degrees_polar_and_figaroh_files_as_their_cartesian_twin(station, tmp_path, capsys):
     meas = read_measurements(station / "measurements.csv")
     q, p = meas.q, meas.p
     base, err = identify(capsys, station / "measurements.csv", tmp_path / "base.json")
@@ -67,17 +65,12 @@ def test_identify_reads_degrees_polar_and_figaroh_files_as_their_cartesian_twin(
                   np.hstack([q, np.column_stack([hz, v, d * 1e3])]))
     same_fit(identify(capsys, polar, tmp_path / "polar.json")[0], base)
 
-    # FIGAROH's 6-D header with a second marker: fitted on marker 1, the rest said to be unused
-    rpy = rng.uniform(-math.pi, math.pi, size=(len(q), 3))
-    second = p + rng.normal(0, 0.05, size=p.shape)
-    six = table(tmp_path / "six.csv", f"x1,y1,z1,phix1,phiy1,phiz1,x2,y2,z2,{URDF}",
-                np.hstack([p, rpy, second, q]))
-    info, err = identify(capsys, six, tmp_path / "six.json")
+    # FIGAROH's marker header with one marker and no orientation: the same fit, nothing left unused
+    # (files with orientations or further markers get the 6-D fit: tests/hil/cli/test_identify_sixd.py)
+    figaroh = table(tmp_path / "figaroh.csv", f"x1,y1,z1,{URDF}", np.hstack([p, q]))
+    info, err = identify(capsys, figaroh, tmp_path / "figaroh.json")
     same_fit(info, base)
-    said = [line for line in err.splitlines() if line.startswith("hil: ")]
-    assert said == [f"hil: {six}: 30 orientations read but not used: the fit uses the positions only",
-                    f"hil: {six}: 2 reflectors per pose read; the fit uses the first (x1,y1,z1) only"]
-    assert info["notes"] == [line.removeprefix("hil: ") for line in said]
+    assert "notes" not in info and "not used" not in err
 
 
 def test_validate_and_fk_read_degrees(station, tmp_path, capsys):
