@@ -90,7 +90,7 @@ def test_validate_and_fk_read_degrees(station, tmp_path, capsys):
                     np.hstack([val.q, val.p, np.tile([1.0, 0, 0, 0], (len(val), 1))]))
     six = stats(rotated)
     assert six["rms"] == pytest.approx(rad["rms"], rel=1e-12)
-    assert "validation uses the positions" in six["notes"][0]
+    assert "orientations read but not checked: the model has no tool frame" in six["notes"][0]
 
     def fk(path: Path, out: Path, *extra: str) -> np.ndarray:
         assert main(["fk", "--model", str(model), "--joints", str(path), "--out", str(out), *extra]) == 0
