@@ -77,7 +77,7 @@ def station(robot: str, seed: int, poses: int, *, blocks: bool, rigid: bool = Tr
         truth.joint_errors, truth.lost_motion = realistic_blocks(np.random.default_rng(10_000 + seed))
     q = random_configurations(robot, poses, rng)
     directions = rng.choice([-1.0, 1.0], q.shape) if two_sided else np.ones_like(q)
-    p = Kinematics(truth).points(q, directions=directions) + rng.normal(0, Noise().tracker_sigma, (poses, 3))
+    p = Kinematics(truth).points(q, directions=directions) + rng.normal(0, 20e-6, (poses, 3))
     q_read = q + rng.normal(0, Noise().encoder_sigma, q.shape)
     meas = Measurements.from_arrays(q_read, p, directions=directions if two_sided else None)
     return truth, meas, random_configurations(robot, 200, rng)
@@ -137,7 +137,7 @@ def table_recovery(poses: int = 120) -> None:
     terms = [[[k, *rng.normal(0.0, s, 2)] for k, s in ORDER_SIGMA.items()] for _ in range(6)]
     truth.joint_errors = JointErrors.of(terms)
     q = random_configurations("UR5e", poses, rng)
-    p = Kinematics(truth).points(q) + rng.normal(0, Noise().tracker_sigma, (poses, 3))
+    p = Kinematics(truth).points(q) + rng.normal(0, 20e-6, (poses, 3))
     meas = Measurements.from_arrays(q + rng.normal(0, Noise().encoder_sigma, q.shape), p)
     fit = identify_with_joint_errors(meas, "UR5e", request=JointErrorRequest("orders", (1, 2)))
     z = []

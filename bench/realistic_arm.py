@@ -47,7 +47,7 @@ def held_out(robot: str, seed: int, count: int, ideal: bool, compliance: bool,
     truth = random_truth(robot, rng, ideal=ideal)
     q = poses(robot, count, rng)
     up = np.ones(6)
-    q_read, p = measure(truth, q, Noise(), rng, directions=up)
+    q_read, p = measure(truth, q, Noise(20e-6), rng, directions=up)
     meas = Measurements.from_arrays(q_read, p)
     fit = identify_with_joint_errors(meas, robot, request=JointErrorRequest(joint_errors),
                                      reject_outliers=False, compliance=compliance,
@@ -66,7 +66,7 @@ def main() -> None:
     args = ap.parse_args()
     print(f"held-out truth RMS (mm), {args.poses} poses, {args.seeds} seeds; real UR5: geometry 0.215, "
           "+ compliance 0.187")
-    sigma3 = 3 * Noise().tracker_sigma ** 2
+    sigma3 = 3 * 20e-6**2
     print(f"{'robot':7} {'arm':10} {'fit':15} {'mean':>6} {'min':>6} {'max':>6} {'CV':>6} {'CV/meas':>8}")
     for robot in args.robots.split(","):
         for ideal in (True, False):

@@ -48,6 +48,7 @@ MAX_ANGLE = 2 * np.pi  # rad
 #: hundreds of times what real instruments show; beyond that nothing a calibration does means anything.
 MAX_TRACKER_SIGMA = 0.01  # m
 MAX_ENCODER_SIGMA = 0.01  # rad
+MAX_ANGLE_SIGMA = 0.01  # rad: a tracker angle's σ (the AT960's is 3 µrad)
 
 
 def software_versions() -> dict[str, str]:
@@ -322,10 +323,17 @@ def load_truth(path: str | os.PathLike[str]) -> tuple[Geometry, Noise]:
     block = doc.get("noise")
     if not isinstance(block, dict):
         raise InputError(f"{path}: missing field 'noise'")
-    values = {}
+    values: dict[str, float | None] = {}
     for key, high, unit in (("tracker_sigma", MAX_TRACKER_SIGMA, "m"),
                             ("encoder_sigma", MAX_ENCODER_SIGMA, "rad")):
         if key not in block:
             raise InputError(f"{path}: missing field 'noise.{key}'")
+        if key == "tracker_sigma" and block[key] is None:  # null: the tracker's distance-dependent model
+            values[key] = None
+            continue
         values[key] = json_number(block[key], f"{path}: noise.{key}", 0.0, high, unit)
-    return geometry, Noise(**values)
+    for key, high, unit in (("distance_sigma", MAX_TRACKER_SIGMA, "m"),
+                            ("angle_sigma", MAX_ANGLE_SIGMA, "rad")):
+        if key in block:  # optional: the tracker model's figures (hil.calibration.tracker_noise) otherwise
+            values[key] = json_number(block[key], f"{path}: noise.{key}", 0.0, high, unit)
+    return geometry, Noise(**values)  # type: ignore[arg-type]

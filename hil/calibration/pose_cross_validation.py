@@ -53,7 +53,7 @@ class PoseCrossValidation(CrossValidation):
         name = "nominal" if other is self.nominal else "controller" if other is self.controller else None
         if name is None or name not in self.scores:
             return super().p_value(other)
-        return paired_p_value(self.scores[name] - self.scores["calibrated"])
+        return paired_p_value(self.scores[name] - self.scores["calibrated"], self.folds)
 
     def verdict(self) -> str:
         """`CrossValidation.verdict`, with the orientation figures when there are any."""

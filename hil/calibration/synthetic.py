@@ -35,6 +35,7 @@ from hil.arm.kinematics import N_PARAMETERS, SMR_SLICE, TRACKER_SLICE, Kinematic
 from hil.arm.payload import Payload
 from hil.arm.physical import typical_compliance
 from hil.arm.thermal import Thermal
+from hil.calibration.tracker_noise import ANGLE_SIGMA, DISTANCE_SIGMA, perturb_points
 
 DEFAULT_SMR = (0.0, 0.0, 0.045)  # flange-mounted SMR nest, 45 mm out along the flange axis
 
@@ -73,13 +74,31 @@ def smr_payload(smr: np.ndarray) -> Payload:
 
 @dataclass(frozen=True)
 class Noise:
-    """Measurement noise of a simulated station."""
+    """Measurement noise of a simulated station.
 
-    tracker_sigma: float = 20e-6  # m, per axis (isotropic Gaussian)
+    By default the points err as a laser tracker's do, more the farther they are
+    (`hil.calibration.tracker_noise`: the AT960's MPE, the same model the GeoCOM and emScon simulators
+    use): along the beam by `distance_sigma`, across it by `angle_sigma` per metre. A `tracker_sigma`
+    replaces that by a flat isotropic σ per axis — another instrument (a camera's millimetres, hil
+    synth --noise) or a benchmark that fixes its noise.
+    """
+
+    tracker_sigma: float | None = None  # m, per axis (isotropic Gaussian); None: the tracker's model
     encoder_sigma: float = ENCODER_SIGMA  # rad, per joint reading (a UR joint's, see ENCODER_SIGMA)
+    distance_sigma: float = DISTANCE_SIGMA  # m, along the beam (tracker model only)
+    angle_sigma: float = ANGLE_SIGMA  # rad, of each angle (tracker model only)
 
-    def as_dict(self) -> dict[str, float]:
-        return {"tracker_sigma": self.tracker_sigma, "encoder_sigma": self.encoder_sigma}
+    def perturb(self, points: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """(N, 3) tracker-frame `points` as measured: with the flat σ, or as the tracker reads them."""
+        P = np.atleast_2d(np.asarray(points, dtype=float))
+        if self.tracker_sigma is not None:
+            return P + rng.normal(0.0, self.tracker_sigma, size=P.shape)
+        return perturb_points(P, rng, self.distance_sigma, self.angle_sigma)
+
+    def as_dict(self) -> dict[str, float | None]:
+        """The truth file's ``noise`` block (docs/design.md): ``tracker_sigma`` null for the tracker model."""
+        return {"tracker_sigma": self.tracker_sigma, "encoder_sigma": self.encoder_sigma,
+                "distance_sigma": self.distance_sigma, "angle_sigma": self.angle_sigma}
 
 
 def random_truth(robot: str, rng: np.random.Generator, *, translation_sigma: float = 0.5e-3,
@@ -143,8 +162,7 @@ def measure(truth: Geometry, q: np.ndarray, noise: Noise, rng: np.random.Generat
     truth's lost motion (`approach_directions` gives them for a sequence of poses).
     """
     q = np.asarray(q, dtype=float)
-    p = (true_points(truth, q, times, directions)
-         + rng.normal(0.0, noise.tracker_sigma, size=(len(q), 3)))
+    p = noise.perturb(true_points(truth, q, times, directions), rng)
     q_read = q + rng.normal(0.0, noise.encoder_sigma, size=q.shape) if noise.encoder_sigma else q.copy()
     return q_read, p
 

@@ -29,7 +29,7 @@ def _station(seed: int, poses: int, terms=None, lost=None, two_sided: bool = Fal
     truth.lost_motion = None if lost is None else np.asarray(lost, float)
     q = random_configurations("ur5e", poses, rng)
     d = rng.choice([-1.0, 1.0], q.shape) if two_sided else np.ones_like(q)
-    p = Kinematics(truth).points(q, directions=d) + rng.normal(0, Noise().tracker_sigma, (poses, 3))
+    p = Kinematics(truth).points(q, directions=d) + rng.normal(0, Noise(20e-6).tracker_sigma, (poses, 3))
     meas = Measurements.from_arrays(q + rng.normal(0, Noise().encoder_sigma, q.shape), p,
                                     directions=d if two_sided else None)
     return truth, meas

@@ -107,4 +107,4 @@ def test_the_files_hil_writes_still_load(files) -> None:
     geometry, doc = load_geometry(files / "model.json")
     assert doc["format"] == "hil-model/1" and geometry.robot == "ur5e"
     truth, noise = load_truth(files / "truth.json")
-    assert truth.robot == "ur5e" and noise.tracker_sigma > 0
+    assert truth.robot == "ur5e" and noise.tracker_sigma is None and noise.distance_sigma > 0

@@ -135,3 +135,33 @@ def test_approach_directions_follow_a_sequence_of_poses() -> None:
     assert d[0].tolist() == [0.0] * 6
     assert d[1].tolist() == [1.0, -1.0, 0.0, 1.0, 1.0, 1.0]
     assert d[2].tolist() == [1.0, -1.0, 0.0, -1.0, 1.0, 1.0]  # a joint standing keeps its last side
+
+
+def test_offline_noise_grows_with_distance_as_the_tracker_simulators() -> None:
+    """`Noise()` errs as the GeoCOM/emScon simulators do (`hil.calibration.tracker_noise`): 7.5 µm along
+    the beam at any distance, 3 µrad × distance across it; a flat σ is isotropic as before."""
+    from hil.calibration.tracker_noise import ANGLE_SIGMA, DISTANCE_SIGMA
+    from mocks.geocom.noise import NoiseSpec
+
+    rng = np.random.default_rng(7)
+    for distance in (2.0, 10.0):
+        beam = np.array([0.6, 0.8, 0.0])  # a horizontal line of sight
+        across_h = np.array([0.8, -0.6, 0.0])
+        point = distance * beam
+        errors = Noise().perturb(np.tile(point, (20000, 1)), rng) - point
+        assert np.std(errors @ beam) == pytest.approx(DISTANCE_SIGMA, rel=0.05)
+        assert np.std(errors @ across_h) == pytest.approx(ANGLE_SIGMA * distance, rel=0.05)
+        assert np.std(errors[:, 2]) == pytest.approx(ANGLE_SIGMA * distance, rel=0.05)
+    assert NoiseSpec() == NoiseSpec(DISTANCE_SIGMA, ANGLE_SIGMA)  # the simulators' figures are these
+    point = np.array([3.0, 0.0, 0.0])
+    flat = Noise(1e-3).perturb(np.tile(point, (20000, 1)), rng) - point
+    assert np.std(flat, axis=0) == pytest.approx([1e-3] * 3, rel=0.05)
+
+
+def test_a_truth_keeps_its_tracker_noise_model(tmp_path) -> None:
+
+    rng = np.random.default_rng(3)
+    truth = random_truth("ur5e", rng)
+    for noise in (Noise(), Noise(0.5e-3), Noise(None, 1e-5, 20e-6, 5e-6)):
+        write_json(tmp_path / "t.json", truth_document(truth, noise))
+        assert load_truth(tmp_path / "t.json")[1] == noise

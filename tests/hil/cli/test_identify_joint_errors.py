@@ -21,7 +21,7 @@ def data(tmp_path_factory):
     truth = random_truth("ur5e", rng, rigid=True)
     truth.joint_errors = JointErrors.of([[], [[1, 2e-4, -1e-4]], [], [[2, 1.5e-4, 1e-4]], [], []])
     q = random_configurations("ur5e", 60, rng)
-    p = Kinematics(truth).points(q) + rng.normal(0, Noise().tracker_sigma, (60, 3))
+    p = Kinematics(truth).points(q) + rng.normal(0, Noise(20e-6).tracker_sigma, (60, 3))
     write_measurements(d / "m.csv", q, p)
     held = random_configurations("ur5e", 5, rng)
     rows = "\n".join(",".join(repr(float(v)) for v in r) for r in held)
