@@ -13,7 +13,7 @@ from __future__ import annotations
 import logging
 import signal
 import sqlite3
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -88,15 +88,18 @@ class RunOutcome:
         return EXIT_FAULT
 
 
-def _nominal_deviation(config: StationConfig) -> Callable[[PoseRecord], float | None]:
+def _nominal_deviation(config: StationConfig, earlier: Iterable[PoseRecord] = ()
+                       ) -> Callable[[PoseRecord], float | None]:
     """Distance of each new point from the nominal arm's prediction, shown live to the operator.
 
     The nominal arm is registered (tracker pose and SMR offset fitted) on the points measured so far,
     so the figure is the arm's kinematic error, not the error of a rough SMR guess. Needs 4 points.
+    `earlier`: a resumed campaign's points, so its next point is registered on all the campaign has,
+    as it would have been without the interruption (not on none: no figure, then a rough one).
     """
     robot = config.robot["type"]
     smr = np.array(config.smr["offset"])
-    seen: list[PoseRecord] = []
+    seen: list[PoseRecord] = list(earlier)
 
     def deviation(record: PoseRecord) -> float | None:
         seen.append(record)
@@ -145,7 +148,8 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
                                              run.controller),
         judge=judge, poses=planned, measured=measured, resumed=resume is not None, bus=bus,
         campaign=campaign, clock=clock, devices=devices, engine_ready=engine_ready, lease=lease,
-        deviation=_nominal_deviation(config), close_devices=close_devices)
+        deviation=_nominal_deviation(config, resume.records.values() if resume else ()),
+        close_devices=close_devices)
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,7 @@ from hil.campaign.events import PlanReady, RunStarted
 from hil.errors import EXIT_ABORTED, EXIT_FAILED, EXIT_FAULT, EXIT_INTERRUPTED, EXIT_OK
 from hil.tui.messages import (
     CampaignLoaded,
+    EarlierPoints,
     EngineEvent,
     Exported,
     HistoryLoaded,
@@ -416,6 +417,13 @@ class HilApp(App[int]):
             nav = self.screen.query("NavBar")
             for widget in nav:
                 widget.refresh()
+
+    def on_earlier_points(self, message: EarlierPoints) -> None:
+        """A resumed run's points from before: in the Run table and plot, and its counts."""
+        self.run_state.restore(message.campaign, message.points)
+        run = self.views["run"]
+        if self.screen is run:
+            run.redraw()
 
     def on_run_ended(self, message: RunEnded) -> None:
         self.exit_code = EXIT_CODES.get(message.status, EXIT_FAULT)

@@ -28,6 +28,15 @@ class EngineEvent(Message):
 
 
 @dataclass
+class EarlierPoints(Message):
+    """The points a resumed campaign measured before it was interrupted (the store's PointMeasured
+    events, latest per pose): the Run screen shows them, and counts them as ``hil calibrate`` does."""
+
+    campaign: str
+    points: list[Any] = field(default_factory=list)  # hil.campaign.events.PointMeasured
+
+
+@dataclass
 class RunEnded(Message):
     """The run worker finished; the store already holds the campaign's final status and result."""
 

@@ -37,7 +37,7 @@ from textual.message import Message
 
 from drivers.robot.model import RobotIdentity
 from hil.campaign.engine import Engine
-from hil.campaign.events import Event, RunFinished
+from hil.campaign.events import Event, PointMeasured, RunFinished, RunStarted
 from hil.errors import InputError
 from hil.jobs.calibration import StoreGate
 from hil.jobs.station import SimulatedSpec, StationSource, TakenStation, station_setup, take_station
@@ -45,6 +45,7 @@ from hil.jobs.words import outage_words
 from hil.station.config import StationConfig
 from hil.tui.messages import (
     CampaignLoaded,
+    EarlierPoints,
     EngineEvent,
     Exported,
     HistoryLoaded,
@@ -483,7 +484,7 @@ class Session:
                 robot = RobotIdentity.of(config.robot["type"], devices.robot.info)
                 taken = TakenStation(config, devices, robot)
             taken.store = store
-            to_screens = (to_station, lambda event: self.post(EngineEvent(event)))
+            to_screens = (to_station, self._to_screens)
             out = run_calibration(request, setup, taken, subscribers=to_screens, say=self._say,
                                   engine_ready=self._engine_ready, gate=gate, status_of=self._final,
                                   on_claimed=claimed)
@@ -515,6 +516,29 @@ class Session:
             if self.devices is None:
                 self.check_unfinished()
                 self.changed()
+
+    def _to_screens(self, event: Event) -> None:
+        """A run's event to the screens; a resumed run's start brings the points measured before it
+        (`EarlierPoints`), so the Run screen shows what the campaign already has."""
+        self.post(EngineEvent(event))
+        if isinstance(event, RunStarted) and event.resumed:
+            self.post(EarlierPoints(event.campaign, self._earlier_points(event.campaign)))
+
+    def _earlier_points(self, campaign: str) -> list[PointMeasured]:
+        """The campaign's stored points, the latest of each pose — what the resume keeps
+        (`hil.campaign.runner.resume_state` reads the same) — in measuring order, as the events the
+        run would have shown; none if the store cannot say (the run goes on, its table without them)."""
+        try:
+            measured = self.store.measured_poses(campaign).values()
+            targets = {p.index: p.target for p in self.store.campaign(campaign).poses}
+        except Exception as exc:
+            log.info("the points of %s: %s", campaign, technical(exc))
+            return []
+        return [PointMeasured(campaign=campaign, index=m.index, role=m.role, q=list(m.q), p=list(m.p),
+                              p_spread=list(m.p_spread or ()), samples=m.samples, deviation=m.deviation,
+                              q_spread=list(m.q_spread or ()), target=list(targets.get(m.index) or m.q),
+                              t=m.t)
+                for m in sorted(measured, key=lambda m: m.id)]
 
     def _final(self, outcome: Any, events: list[Event]) -> tuple[str, str]:
         """The campaign's status in the store and its plain-words detail.

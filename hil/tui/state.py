@@ -7,6 +7,7 @@ state from canned events.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 from hil.campaign.events import (
@@ -194,6 +195,28 @@ class RunState:
         elif isinstance(event, RunFinished):
             self.finished, self.active, self.suspended = event, False, None
             self.suspend_deadline = None
+
+    def restore(self, campaign: str, points: Sequence[PointMeasured]) -> None:
+        """The points a resumed campaign measured before it was interrupted, into the table and the
+        plot as measured: the operator sees what the campaign already has, and the bootstrap's
+        count beside the poses, as after an uninterrupted run. Not counted again (`RunStarted`'s
+        ``measured``, `resumed_with`, holds the poses among them, the count ``hil calibrate``
+        resumes from) nor in this run's pace (the ETA)."""
+        if campaign != self.campaign:  # a late message of another run
+            return
+        earlier: dict[tuple[str, int], PoseRow] = {}
+        deviations: list[float] = []
+        for e in points:
+            key = (e.role, e.index)
+            if key in self.rows:  # measured again by this run already
+                continue
+            earlier[key] = PoseRow(e.index, e.role, list(e.target or e.q), status="measured", q=list(e.q),
+                                   p=list(e.p), deviation=e.deviation)
+            if e.deviation is not None:
+                deviations.append(e.deviation)
+        # in measuring order: the earlier run's points before this run's
+        self.rows = {**earlier, **self.rows}
+        self.deviations = deviations + self.deviations
 
     def end(self, status: str, detail: str) -> None:
         """The session's final status and plain-words detail of the run (RunEnded): it may differ

@@ -82,6 +82,7 @@ class HistoryScreen(HilScreen):
                           Text(f"{c.measured}/{c.planned}"), Text(rms, justify="right"))
         if self.rows:
             table.move_cursor(row=min(max(cursor, 0), len(self.rows) - 1))
-        text = (f"{len(self.rows)} campaigns in {self.database}" if self.rows
+        n = len(self.rows)
+        text = (f"{n} campaign{'' if n == 1 else 's'} in {self.database}" if self.rows
                 else f"no campaigns yet in {self.database or 'the store'}")
         self.query_one("#database", Static).update(Text(text, style="dim"))

@@ -46,6 +46,28 @@ def _precision(result: Any) -> dict[str, Any] | None:
     return block if isinstance(block, dict) else None
 
 
+#: The table's columns for a calibration: its model's parameters.
+PARAMETER_COLUMNS = ("parameter", "value", "std", "unit")
+
+
+def pose_columns(modes: list[str]) -> tuple[str, ...]:
+    """The table's columns for a verification: each pose's AP and RP in each of its modes (mm)."""
+    return ("pose", *(f"{what} {MODE_LABELS.get(m, m)}" for m in modes for what in ("AP", "RP")))
+
+
+def pose_rows(results: dict[str, Any]) -> list[tuple[str, ...]]:
+    """A verification's AP_P and RP_l of every pose (``hil-verification/1``'s ``results.<mode>.poses``)
+    in mm, one row a pose, in the order the test names them (P1-P5); "-" where a mode measured it
+    fewer than twice (no AP/RP). Empty if the document has no per-pose figures."""
+    by_pose: dict[str, dict[str, dict[str, Any]]] = {}
+    for mode, r in results.items():
+        for row in (r.get("poses") or []) if isinstance(r, dict) else []:
+            if isinstance(row, dict) and "pose" in row:
+                by_pose.setdefault(str(row["pose"]), {})[str(mode)] = row
+    return [(pose, *(_mm(by_pose[pose].get(m, {}).get(key)) for m in results for key in ("AP_P", "RP_l")))
+            for pose in by_pose]
+
+
 def parameter_cells(p: dict[str, Any]) -> tuple[str, str, str, str]:
     """name, value, std, unit: translations in mm, rotations in mrad (`.tx` / `.rx` style names)."""
     name = str(p.get("name", "?"))
@@ -82,9 +104,7 @@ class ResultsScreen(HilScreen):
         with Horizontal(id="result-top"):
             yield Static(id="stats", classes="panel")
             yield Static(id="fit", classes="panel")
-        table: DataTable[str] = DataTable(id="params", cursor_type="row", zebra_stripes=True)
-        table.add_columns("parameter", "value", "std", "unit")
-        yield table
+        yield DataTable(id="params", cursor_type="row", zebra_stripes=True)
         yield Static(id="exports")
         yield Footer()
 
@@ -92,6 +112,19 @@ class ResultsScreen(HilScreen):
         self.query_one("#stats").border_title = "Validation, held-out poses, mm"
         self.query_one("#fit").border_title = "Fit"
         self.refresh_view()
+
+    def _table(self, columns: tuple[str, ...], rows: list[tuple[str, ...]]) -> None:
+        """The table below the panels, with these columns (a calibration's parameters or a
+        verification's poses); hidden when it has no rows (a header over nothing says nothing)."""
+        table: DataTable[str] = self.query_one("#params", DataTable)
+        if tuple(str(c.label) for c in table.columns.values()) != columns:
+            table.clear(columns=True)
+            table.add_columns(*columns)
+        else:
+            table.clear()
+        for row in rows:
+            table.add_row(*row)
+        table.display = bool(rows)
 
     def show(self, record: Any) -> None:
         if self.record is None or record.id != self.record.id:
@@ -130,13 +163,12 @@ class ResultsScreen(HilScreen):
         self.query_one(NavBar).refresh()
         verdict = self.query_one("#verdict", Static)
         stats, fit = self.query_one("#stats", Static), self.query_one("#fit", Static)
-        table: DataTable[str] = self.query_one("#params", DataTable)
         rec = self.record
         if rec is None:
             verdict.update(Text("no campaign yet: run one (3, g) or open one from History (5)", style="dim"))
             stats.update("")
             fit.update("")
-            table.clear()
+            self._table(PARAMETER_COLUMNS, [])
             self._exports()
             return
         s = rec.summary
@@ -187,10 +219,9 @@ class ResultsScreen(HilScreen):
             grid.add_row("none yet", "", "")
         stats.update(grid)
         fit.update(self._fit(rec))
-        table.clear()
         model = rec.model
-        for p in (model.doc.get("parameters") or []) if model is not None else []:
-            table.add_row(*parameter_cells(p))
+        self._table(PARAMETER_COLUMNS, [parameter_cells(p) for p in (model.doc.get("parameters") or [])]
+                    if model is not None else [])
         self._exports()
 
     def _verification(self, rec: Any) -> None:
@@ -225,7 +256,7 @@ class ResultsScreen(HilScreen):
         info.add_row("model", str(model.get("source", "-")) if isinstance(model, dict) else str(model or "-"))
         info.add_row("status", status_words(s))  # "verified", as History and `hil history` say
         fit.update(info)
-        self.query_one("#params", DataTable).clear()
+        self._table(pose_columns([str(m) for m in results]), pose_rows(results))
         self._exports()
 
     @staticmethod

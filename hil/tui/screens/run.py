@@ -57,6 +57,15 @@ def outlier_level(deviations: list[float]) -> float | None:
     return OUTLIER_FACTOR * float(np.median(deviations))
 
 
+def run_outlier_level(run: RunState) -> float | None:
+    """`outlier_level` of the run's poses, the bootstrap's points left out: they are registered on
+    themselves around one start pose (hundredths of a millimetre from nominal) and set against the
+    poses' millimetres their median marked every calibration pose red — the arm's plain error
+    shown as an outlier."""
+    return outlier_level([r.deviation for (role, _), r in run.rows.items()
+                          if role != "bootstrap" and r.deviation is not None])
+
+
 def clock(seconds: float | None) -> str:
     """m:ss (or h:mm:ss) for a duration."""
     if seconds is None or not math.isfinite(seconds):
@@ -174,7 +183,7 @@ class RunScreen(HilScreen):
         d = 1e3 * np.asarray(run.deviations, float)
         x = np.arange(1, len(d) + 1, dtype=float)
         series = [Series(x, d, style="yellow", line=True, label="deviation")]
-        level = outlier_level(list(run.deviations))
+        level = run_outlier_level(run)
         if level is not None and np.any(d > 1e3 * level):
             out = d > 1e3 * level
             series.append(Series(x[out], d[out], style="bold red", marker="•",
@@ -272,7 +281,7 @@ class RunScreen(HilScreen):
             self._shown = {}
         # the cursor follows the current pose unless the operator moved it elsewhere
         follow = table.cursor_row >= table.row_count - 1 or table.cursor_row == self._followed
-        outlier = outlier_level(list(run.deviations))
+        outlier = run_outlier_level(run)
         for (role, index), row in run.rows.items():
             key = f"{role}:{index}"
             cells = row_cells(row, outlier)
