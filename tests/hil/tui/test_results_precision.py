@@ -7,7 +7,7 @@ import asyncio
 import dataclasses
 
 from hil.tui.messages import CampaignLoaded
-from tests.hil.tui.conftest import screen_text
+from tests.hil.tui.conftest import screen_text, wait_for
 from tests.hil.tui.test_snapshots import SIZE, offline_app, record
 
 PRECISION = {"design": "clustered", "poses": 4, "clusters": 2, "rms_standard_error": 1.84e-6,
@@ -22,7 +22,8 @@ def test_the_results_screen_shows_the_standard_error_under_the_verdict() -> None
         shown = dataclasses.replace(finished, result=result)
         async with app.run_test(size=SIZE) as pilot:
             app.post_message(CampaignLoaded(shown))
-            await pilot.pause()
+            # the footer redraws its keys once the table is shown: wait for that frame, not one pause
+            await wait_for(pilot, lambda: "HTML report" in screen_text(app), 10.0, "the footer's keys")
             return screen_text(app)
 
     text = asyncio.run(scenario())
