@@ -6,12 +6,12 @@ a pose are every reflector's position and the measured frame's orientation, each
 noise (`hil.calibration.pose_identification`). The nominal model fits what places the tool and the
 instrument: tracker pose, SMR offset, tool rotation, further reflectors.
 
-**Better or not.** The same one-sided paired t test at `SIGNIFICANCE`, on each pose's held-out error
-in units of σ: the sum of its squared position errors over σ_p² and orientation errors over σ_o² — the
-quantity the fit minimises, so a model counts as better only when it predicts the whole measurement
-better, not one kind at the other's cost. The figures are reported in their own units: the position
-errors of every reflector in metres (``calibrated``, ``nominal``, ``controller`` as for a position fit)
-and the orientation errors in radians (the ``orientation`` block).
+**Better or not.** The same one-sided test at `SIGNIFICANCE` (the folds' log ratios), on each pose's
+held-out error in units of σ: the sum of its squared position errors over σ_p² and orientation errors
+over σ_o² — the quantity the fit minimises, so a model counts as better only when it predicts the
+whole measurement better, not one kind at the other's cost. The figures are reported in their own
+units: the position errors of every reflector in metres (``calibrated``, ``nominal``, ``controller``
+as for a position fit) and the orientation errors in radians (the ``orientation`` block).
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from hil.calibration.cross_validation import (
     CrossValidation,
     fold_of,
     held_out_residuals,
-    paired_p_value,
+    ratio_p_value,
 )
 from hil.calibration.identification import ErrorStats, FitResult
 from hil.calibration.measurements import Measurements
@@ -53,7 +53,7 @@ class PoseCrossValidation(CrossValidation):
         name = "nominal" if other is self.nominal else "controller" if other is self.controller else None
         if name is None or name not in self.scores:
             return super().p_value(other)
-        return paired_p_value(self.scores[name] - self.scores["calibrated"], self.folds)
+        return ratio_p_value(self.scores[name], self.scores["calibrated"], self.folds)
 
     def verdict(self) -> str:
         """`CrossValidation.verdict`, with the orientation figures when there are any."""

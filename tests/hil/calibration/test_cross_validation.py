@@ -14,6 +14,7 @@ from hil.calibration.cross_validation import (
     default_folds,
     fold_of,
     held_out_residuals,
+    paired_p_value,
 )
 from hil.calibration.identification import ErrorStats, identify, register
 from hil.calibration.joint_error_selection import identify_with_joint_errors
@@ -135,6 +136,15 @@ def test_a_bad_data_model_worse_than_nominal_is_not_called_better(robot, seed, p
     """The realistic arm, few poses approached from below, a camera's noise, maybe outliers, fitted as
     `hil identify` does: the truth over 500 fresh poses says the model is worse than the nominal, and
     the folds' corrected test no longer calls it better (the naive one did, at p 0.009-0.04)."""
+    cv = _worse_bad_station(robot, seed, poses, sigma, outliers)
+    naive = cv.nominal.errors**2 - cv.calibrated.errors**2
+    assert naive.mean() > 1.8 * naive.std(ddof=1) / np.sqrt(len(naive))  # the naive test said better
+    assert not cv.better_than_nominal, cv.verdict()
+
+
+def _worse_bad_station(robot: str, seed: int, poses: int, sigma: float, outliers: int) -> CrossValidation:
+    """A `bench/bad_data.py` station fitted and cross-validated as `hil identify` does, after checking
+    that the truth over 500 fresh poses says its model is worse than the nominal."""
     rng = np.random.default_rng(seed)
     truth = random_truth(robot, rng, ideal=False)
     up = np.ones(6)
@@ -157,8 +167,25 @@ def test_a_bad_data_model_worse_than_nominal_is_not_called_better(robot, seed, p
     worse = (np.linalg.norm(Kinematics(fit.geometry).points(qv, directions=np.broadcast_to(up, qv.shape))
                             - actual, axis=1) ** 2).mean()
     assert worse > (np.linalg.norm(Kinematics(nominal).points(qv) - actual, axis=1) ** 2).mean()
-    naive = cv.nominal.errors**2 - cv.calibrated.errors**2
-    assert naive.mean() > 1.8 * naive.std(ddof=1) / np.sqrt(len(naive))  # the naive test said better
+    return cv
+
+
+#: Bad-data stations of `bench/bad_data.py` (seed 1) that the corrected paired test on the differences of
+#: squared errors still exported at 5 % (p 0.015-0.022) although the truth says the model is worse than
+#: nominal: robot, seed, poses, σ (m), outliers.
+WORSE_BUT_EXPORTED_BY_THE_DIFFERENCE_TEST = [("ur5e", 1897149461, 15, 1.4482e-3, 0),
+                                             ("ur10e", 74845286, 10, 1.9230e-3, 0)]
+
+
+@pytest.mark.parametrize(("robot", "seed", "poses", "sigma", "outliers"),
+                         WORSE_BUT_EXPORTED_BY_THE_DIFFERENCE_TEST)
+def test_the_log_ratio_test_refuses_what_the_difference_test_exported(robot, seed, poses, sigma,
+                                                                      outliers) -> None:
+    """The stations above, fitted as `hil identify` does: the truth says worse; the difference test on
+    the folds' mean differences (the previous verdict at 5 %) said better; the verdict's log-ratio test
+    at 0.5 % does not."""
+    cv = _worse_bad_station(robot, seed, poses, sigma, outliers)
+    assert paired_p_value(cv.nominal.errors**2 - cv.calibrated.errors**2, cv.folds) < 0.05  # said better
     assert not cv.better_than_nominal, cv.verdict()
 
 
