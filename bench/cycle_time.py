@@ -34,7 +34,7 @@ The time-aware rows search for ``campaign.search_time`` seconds (the example's 1
 before the first move: wall time of the cell, not robot time, shown as "selection compute" per station.
 
 Run: python bench/cycle_time.py [--seeds 3] [--draws 4] [--speed 10] [--robots ur5e,ur10e] [--clusters 4]
-[--search-time S]
+[--search-time S] [--joint-errors none|auto|ORDERS]
 """
 
 from __future__ import annotations
@@ -120,12 +120,13 @@ def truth_error(truth: Geometry, Q: np.ndarray, qv: np.ndarray, config: Any, rng
 
 
 def plan_station(robot: str, seed: int, draws: int, home: np.ndarray, clusters: int,
-                 search_time: float | None = None) -> dict[str, Any]:
-    """Part A for one station: every method's poses and tour, and their truth errors."""
+                 search_time: float | None = None, over: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Part A for one station: every method's poses and tour, and their truth errors (`over`: further
+    configuration overrides, e.g. ``campaign__joint_errors``)."""
     rng = np.random.default_rng(7000 + seed)
     truth = random_truth(robot, rng)
     truth.thermal = None  # warm: the warm-up is the same for every method
-    config = station_config(robot, truth)
+    config = station_config(robot, truth, **(over or {}))
     base = requests(config, truth)
     camp = config.campaign
     today_choose = campaign_chooser(config)
@@ -220,7 +221,10 @@ def main() -> None:
     ap.add_argument("--clusters", type=int, default=4, help="validation clusters of the clustered row")
     ap.add_argument("--search-time", type=float, help="campaign.search_time of the time-aware rows "
                                                        "(default: the example configuration's)")
+    ap.add_argument("--joint-errors", help="campaign.joint_errors of every row (default: the example "
+                                           "configuration's; the README's table was measured with none)")
     args = ap.parse_args()
+    over = {} if args.joint_errors is None else {"campaign__joint_errors": args.joint_errors}
     limit_blas_threads()  # as the CLI does: one BLAS thread (hil.arm.blas_threads)
     report: dict[str, Any] = {}
     for robot in args.robots.split(","):
@@ -240,13 +244,13 @@ def main() -> None:
                 sim = start_station(robot=robot, truth=str(path), speed=args.speed, seed=seed)
                 try:
                     home = np.asarray(sim.info["services"][0]["home"], dtype=float)
-                    st = plan_station(robot, seed, args.draws, home, args.clusters, args.search_time)
+                    st = plan_station(robot, seed, args.draws, home, args.clusters, args.search_time, over)
                     stations.append(st)
                     for k, v in st["errors"].items():
                         acc[k].append(v)
                     for n, v in st["random"].items():
                         rand[n].append(v)
-                    config = station_config(robot, truth, sim)
+                    config = station_config(robot, truth, sim, **over)
                     profile = MotionProfile(config.robot["speed"], config.robot["acceleration"],
                                             tuple(st["timed"].info["motion"]["max_joint_speed"]))
                     cal, val = st["cal"].poses, st["val"].poses
@@ -269,7 +273,7 @@ def main() -> None:
                             config.with_overrides(campaign__selection="time-aware", robot__settle="stable"),
                             given_poses(st["timed"].poses, val, st["timed"].info["tour"])),
                         "time-aware, clustered validation": (
-                            station_config(robot, truth, sim).with_overrides(
+                            station_config(robot, truth, sim, **over).with_overrides(
                                 campaign__selection="time-aware", robot__settle="stable",
                                 campaign__validation_clusters=args.clusters),
                             given_poses(st["timed_c"].poses, st["val_c"].poses, st["timed_c"].info["tour"])),

@@ -71,10 +71,11 @@ def campaign_chooser(config: Any) -> Any:
             request.model.robot, request.count, candidates=request.candidates, index=request.index,
             method="tabu", seed=request.seed, smr=request.model.smr, constraints=constraints,
             start=request.start, bound=True, compliance=bool(config.campaign["compliance"]),
-            payload=config.payload, gravity=config.gravity, joint_errors=_design_orders(config))
+            payload=config.payload, gravity=config.gravity,
+            joint_errors=_design_orders(config, request.count))
         info = {k: report[k] for k in ("index", "value", "o1", "bound", "percent_of_bound", "method",
                                        "seconds", "travel_time", "candidates", "parameters")}
-        return Choice(np.array(report["poses"]), {**info, **_parameter_counts(report)})
+        return Choice(np.array(report["poses"]), {**info, **_parameter_counts(report, config)})
 
     # the same line-of-sight and acceptance tests, asked again during the run (`plan._SightCheck`)
     choose.hidden = hidden_reason  # type: ignore[attr-defined]
@@ -117,29 +118,63 @@ def _time_aware(config: Any, request: SelectionRequest, constraints: Constraints
         fixed=request.fixed, start=request.start, candidates=request.candidates, index=request.index,
         seed=request.seed, smr=request.model.smr, constraints=constraints,
         compliance=bool(camp["compliance"]), payload=config.payload, gravity=config.gravity,
-        joint_errors=_design_orders(config), time_limit=float(camp["search_time"]))
+        joint_errors=_design_orders(config, request.count), time_limit=float(camp["search_time"]))
     info = {k: report[k] for k in ("index", "value", "o1", "method", "form", "seconds", "travel_time",
                                    "candidates", "parameters", "predicted", "seed_method", "motion",
                                    "dwell", "budget", "tour", "details")}
-    return Choice(np.array(report["poses"]), {**info, **_parameter_counts(report)})
+    return Choice(np.array(report["poses"]), {**info, **_parameter_counts(report, config)})
 
 
-def _design_orders(config: Any) -> tuple[int, ...]:
-    """The joint-error harmonic orders the calibration poses are chosen for (``campaign.joint_errors``:
-    with "auto" every candidate order, so the poses spread each joint's angle whatever the fit keeps)."""
+#: Harmonic parameters one order adds to a design: a cosine and a sine of each of the 6 joints, every
+#: one independent of the geometry and compliance on every UR
+#: (`hil.arm.kinematics.identifiable_joint_errors`).
+HARMONICS_PER_ORDER = 12
+
+
+def _design_orders(config: Any, count: int | None = None) -> tuple[int, ...]:
+    """The joint-error harmonic orders the calibration poses are chosen for (``campaign.joint_errors``).
+
+    Fixed orders: those. "auto" (the default): every candidate order the `count` calibration poses
+    (default ``campaign.calibration_poses``) can carry beside the geometry and compliance — an order
+    joins only while the poses still identify everything designed so far — so the poses spread each
+    joint's angle whatever the fit keeps, and a short campaign (a dozen poses) is chosen for its
+    geometry as before, its fit still asking cross-validation which terms the data support.
+    """
     from hil.calibration.joint_error_request import parse_request
+    from hil.station.config import minimum_calibration_poses
+    from selector.design import minimum_poses
 
-    return parse_request(config.campaign["joint_errors"], "campaign.joint_errors").design_orders
+    request = parse_request(config.campaign["joint_errors"], "campaign.joint_errors")
+    if request.mode != "auto":
+        return request.design_orders
+    camp = config.campaign
+    count = int(camp["calibration_poses"] if count is None else count)
+    base = minimum_calibration_poses(config.robot["type"], bool(camp["compliance"]), config.payload,
+                                     config.gravity)[1]
+    kept: tuple[int, ...] = ()
+    for k in request.design_orders:
+        if minimum_poses(base + HARMONICS_PER_ORDER * (len(kept) + 1)) > count:
+            break
+        kept += (k,)
+    return kept
 
 
-def _parameter_counts(report: Mapping[str, Any]) -> dict[str, Any]:
+def _parameter_counts(report: Mapping[str, Any], config: Any) -> dict[str, Any]:
     """The selection's ``parameters`` are those its SMR guess makes observable; the fit identifies
     them and the ``unobservable`` ones (the same identifiable set, compliance included when
     configured: `hil.station.config.minimum_calibration_poses`): ``identified_parameters`` is the
-    fit's count, what a plan is compared with (the model's ``parameters`` once it is fitted)."""
+    fit's count, what a plan is compared with (the model's ``parameters`` once it is fitted). With
+    ``campaign.joint_errors = "auto"`` the harmonics the poses were chosen for (``joint_error_design``)
+    are not in it: the fit adds those cross-validation keeps, which only the fit knows."""
+    from hil.calibration.joint_error_request import parse_request
+
     unobservable = list(report.get("unobservable") or [])
-    return {"unobservable": unobservable,
-            "identified_parameters": int(report["parameters"]) + len(unobservable)}
+    designed = sum(1 for name in report.get("parameter_names") or []
+                   if name.startswith("joint") and (".cos" in name or ".sin" in name))
+    auto = parse_request(config.campaign["joint_errors"], "campaign.joint_errors").mode == "auto"
+    identified = int(report["parameters"]) + len(unobservable) - (designed if auto else 0)
+    return {"unobservable": unobservable, "joint_error_design": designed,
+            "identified_parameters": identified}
 
 
 def _validation_poses(config: Any, request: Any, constraints: Constraints) -> Any:

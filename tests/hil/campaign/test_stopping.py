@@ -27,14 +27,24 @@ from hil.campaign.stopping import (
 
 SMR = np.array([0.0, 0.0, 0.045])
 
+#: A campaign approaches every pose from below in every joint (`campaign.approach`): each joint's last
+#: motion is upwards at every reading, so the realistic arm's lost motion lags the same way everywhere.
+FROM_BELOW = np.ones(6)
 
-def station(seed: int, robot: str, calibration: int = 30, validation: int = 20, noise: float = 20e-6):
-    """A rigid synthetic arm, its calibration and validation readings, and held-out true points."""
+
+def station(seed: int, robot: str, calibration: int = 30, validation: int = 20, noise: float = 20e-6,
+            realistic: bool = False):
+    """A synthetic arm, its calibration and validation readings, and held-out joints. Rigid by default
+    (only placement errors: the residual is the tracker's noise, what the rule's σ models); `realistic`:
+    the default simulated arm (compliance, payload, joint errors and lost motion, `hil.arm.joint_physics`;
+    warm), approached from below, whose residual is dominated by what a 27-parameter fit cannot model."""
     rng = np.random.default_rng(seed)
-    truth = random_truth(robot, rng, rigid=True)
+    truth = random_truth(robot, rng, rigid=not realistic, ideal=not realistic)
+    truth.thermal = None
+    directions = FROM_BELOW if realistic else None
     qc, qv = random_configurations(robot, calibration, rng), random_configurations(robot, validation, rng)
-    cal = Measurements.from_arrays(*measure(truth, qc, Noise(noise), rng), "cal")
-    val = Measurements.from_arrays(*measure(truth, qv, Noise(noise), rng), "val")
+    cal = Measurements.from_arrays(*measure(truth, qc, Noise(noise), rng, directions=directions), "cal")
+    val = Measurements.from_arrays(*measure(truth, qv, Noise(noise), rng, directions=directions), "val")
     return truth, qv, cal, val, random_configurations(robot, 200, rng)
 
 
@@ -108,22 +118,27 @@ def test_prediction_matches_the_validation_it_predicts():
     assert 0.5 < float(np.median(ratios)) < 1.1
 
 
-#: Synthetic stations of the "never stops above" test: UR5e and UR10e alternately, each with its own
-#: acceptance threshold of 50-150 µm.
+#: Synthetic stations of the "never stops above" tests: UR5e and UR10e alternately, each with its own
+#: acceptance threshold: 50-150 µm on the rigid arm (tracker noise only), 0.2-0.6 mm on the realistic
+#: arm, whose calibrated floor is tenths of a millimetre as a real UR's (README, "What a real UR reaches").
 SEEDS = range(200, 232)
+THRESHOLDS = {False: (50e-6, 150e-6), True: (0.2e-3, 0.6e-3)}
 
 
 @functools.cache
-def stops_over_stations() -> dict[str, np.ndarray]:
+def stops_over_stations(realistic: bool = False) -> dict[str, np.ndarray]:
     """The first stop on each station of two rules fed the same fits, pose by pose: the default rule
     (σ at its upper bound, margin 0.7) and the naive one (σ̂ as it is, margin 1). Per stop: (acceptance,
-    poses used, measured validation RMS, true RMS on 200 held-out poses of the noise-free truth)."""
+    poses used, measured validation RMS, true RMS on 200 held-out poses of the noise-free truth,
+    predicted validation RMS). The realistic arm is fitted as a campaign fits it, with the compliance
+    for its payload."""
     out: dict[str, list] = {"bound": [], "naive": []}
     for seed in SEEDS:
         robot = ("ur5e", "ur10e")[seed % 2]
-        truth, qv, cal, val, held = station(seed, robot)
-        acceptance = float(np.random.default_rng(seed).uniform(50e-6, 150e-6))
-        rule = StoppingRule(robot, SMR, qv, acceptance)
+        truth, qv, cal, val, held = station(seed, robot, realistic=realistic)
+        acceptance = float(np.random.default_rng(seed).uniform(*THRESHOLDS[realistic]))
+        rule = StoppingRule(robot, SMR, qv, acceptance, compliance=realistic, payload=truth.payload)
+        directions = FROM_BELOW if realistic else None
         pending = {"bound", "naive"}
         for k in range(1, len(cal) + 1):
             verdict = rule.check(Measurements.from_arrays(cal.q[:k], cal.p[:k], "so far"))
@@ -134,8 +149,10 @@ def stops_over_stations() -> dict[str, np.ndarray]:
                 if name in pending and stop:
                     pending.discard(name)
                     geometry = verdict.fit.geometry
-                    out[name].append((acceptance, k, validate(geometry, val).rms,
-                                      rms(true_points(geometry, held) - true_points(truth, held))))
+                    true = (true_points(geometry, held, directions=directions)
+                            - true_points(truth, held, directions=directions))
+                    out[name].append((acceptance, k, validate(geometry, val).rms, rms(true),
+                                      verdict.predicted_rms))
             if verdict.stop:
                 assert verdict.predicted_rms <= 0.7 * acceptance  # what it claims when it stops
             if not pending:
@@ -159,6 +176,28 @@ def test_the_point_estimate_without_margin_does_stop_above_the_target():
     its validation. This is what makes the test above a test: the bound and the margin pass it."""
     bound, naive = stops_over_stations()["bound"], stops_over_stations()["naive"]
     assert np.sum(naive[:, 2] > naive[:, 0]) >= 4
+    assert np.mean(naive[:, 1]) < np.mean(bound[:, 1])
+
+
+def test_on_the_realistic_arm_it_never_stops_above_the_target_it_claims():
+    """The same on the realistic arm with thresholds a real UR can meet (0.2-0.6 mm): there the fit's
+    σ̂ (60-120 µm) is mostly the joint errors no 31-parameter model holds, not the tracker's 20 µm, and
+    the rule reads it as noise. That is still what a validation pose sees (its residual is the same
+    unmodelled error), so the prediction holds: measured, 30 of 32 stations stopped after 17.6 poses on
+    average (the 20-degrees-of-freedom floor: 17 poses with compliance), none above its threshold, the
+    validation RMS 0.80 × the prediction (median), at most 1.4 ×."""
+    stops = stops_over_stations(realistic=True)["bound"]
+    assert len(stops) >= 28
+    assert np.mean(stops[:, 1]) < 20
+    above = (stops[:, 2] > stops[:, 0]) | (stops[:, 3] > stops[:, 0])
+    assert not above.any(), stops[above]
+    assert 0.6 < float(np.median(stops[:, 2] / stops[:, 4])) < 1.0
+
+
+def test_on_the_realistic_arm_the_point_estimate_without_margin_stops_above_the_target():
+    """The naive rule on the realistic stations: 5 of 32 stops then failed their validation."""
+    bound, naive = stops_over_stations(realistic=True)["bound"], stops_over_stations(realistic=True)["naive"]
+    assert np.sum(naive[:, 2] > naive[:, 0]) >= 3
     assert np.mean(naive[:, 1]) < np.mean(bound[:, 1])
 
 
