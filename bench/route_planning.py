@@ -13,6 +13,7 @@ for a before/after comparison; the poses are the same (seeded) either way.
 from __future__ import annotations
 
 import argparse
+import itertools
 import sys
 import time
 from pathlib import Path
@@ -30,6 +31,7 @@ def main() -> None:
     from hil.arm.catalog import get_robot
     from hil.arm.geometry import Geometry
     from hil.arm.routes import Router, UnsafePathError
+    from hil.errors import HilError
     from hil.station.config import EXAMPLE, load_config
 
     spec = get_robot("ur10e")
@@ -43,7 +45,7 @@ def main() -> None:
         q = rng.uniform(spec.lower / 2, spec.upper / 2)
         try:
             router.route(None, q)
-        except Exception:  # noqa: BLE001 - outside the box: not a pose of a plan
+        except HilError:  # outside the box: not a pose of a plan
             continue
         poses.append(q)
     best = float("inf")
@@ -51,7 +53,7 @@ def main() -> None:
     for _ in range(args.repeat):
         straight = detour = unsafe = 0
         t0 = time.process_time()
-        for a, b in zip(poses[:-1], poses[1:], strict=True):
+        for a, b in itertools.pairwise(poses):
             try:
                 route = router.route(a, b)
             except UnsafePathError:
