@@ -10,7 +10,7 @@ import numpy as np
 
 from hil.arm.catalog import RobotSpec
 from hil.arm.geometry import Geometry
-from hil.arm.kinematics import Kinematics
+from hil.arm.kinematics_cache import kinematics_of
 from hil.errors import InputError
 
 
@@ -20,7 +20,9 @@ def check_target(q: np.ndarray, spec: RobotSpec, keep_in: tuple[np.ndarray, np.n
     """Raise InputError if `q` is outside the joint limits, or the SMR leaves the keep-in box.
 
     With `start`, the straight joint-space path from `start` to `q` (how moveJ travels) is checked at
-    `path_checks` points too. Nothing is clamped: an unsafe target is refused.
+    `path_checks` points too. Nothing is clamped: an unsafe target is refused. The model's kinematics
+    is built once per geometry content and thread (`hil.arm.kinematics_cache`): a route's twenty-odd
+    checks would otherwise spend most of their time rebuilding it.
     """
     q = np.asarray(q, dtype=float)
     if q.shape != (6,) or not np.all(np.isfinite(q)):
@@ -33,8 +35,8 @@ def check_target(q: np.ndarray, spec: RobotSpec, keep_in: tuple[np.ndarray, np.n
     if keep_in is None or model is None:
         return
     lo, hi = keep_in
-    path = [q] if start is None else [start + (q - start) * s for s in np.linspace(0, 1, path_checks)]
-    pts = Kinematics(model).points(np.array(path), frame="base")
+    path = q[None] if start is None else start + np.linspace(0, 1, path_checks)[:, None] * (q - start)
+    pts = kinematics_of(model).points(path, frame="base")
     outside = np.flatnonzero(np.any((pts < lo) | (pts > hi), axis=1))
     if outside.size:
         p = pts[outside[0]]

@@ -22,8 +22,8 @@ from typing import Any
 
 from sqlalchemy import Connection, func, select
 
+import hil
 import hil.store.tables as tb
-from hil import __version__
 from hil.campaign.ids import new_campaign_id
 from hil.store.hashing import canonical_json, config_hash, measurement_hash
 from hil.store.records import CALIBRATION, ROLES, RobotIdentity
@@ -150,7 +150,8 @@ def insert_campaign(conn: Connection, config: Any,
     conn.execute(c.insert().values(
         id=cid, station=station_id, robot=robot_id, robot_type=info.type, config=dumps(values),
         config_hash=config_hash(values), measure_hash=measurement_hash(values),
-        plan=dumps_or_null(plan), status="created", software=__version__, created=now, updated=now,
+        # hil.__version__ looked up here, not on import: a listing never pays for importlib.metadata
+        plan=dumps_or_null(plan), status="created", software=hil.__version__, created=now, updated=now,
         kind=str((plan or {}).get("kind") or CALIBRATION)))
     return cid
 
