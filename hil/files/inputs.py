@@ -112,16 +112,31 @@ def parse_json(text: str, name: str) -> Any:
         raise InputError(f"{name}: not a usable JSON file ({exc})") from None
 
 
-def csv_rows(text: str, name: str) -> list[tuple[int, list[str]]]:
+#: The most data rows hil reads from one CSV table (measurements, joints, targets). A campaign has at
+#: most 1000 calibration and 1000 validation poses (`hil.cli.support.options.POSE_COUNT`), so 10 000 is
+#: five times the largest file hil itself writes; `hil identify` fits 10 000 rows in about a minute
+#: (docs/design.md, Measurements CSV: the figure and the command that measures it), while a 100 000-row
+#: file ran over 20 minutes (issue 31). A table beyond it is refused before its values are parsed.
+MAX_TABLE_ROWS = 10_000
+
+
+def csv_rows(text: str, name: str, limit: int = MAX_TABLE_ROWS) -> list[tuple[int, list[str]]]:
     """The rows of CSV `text` with their 1-based line numbers; InputError naming file and line when
     the csv module refuses a row (a field over its size limit, a NUL byte), which it raises as its own
-    `csv.Error` and would otherwise escape as an internal error."""
+    `csv.Error` and would otherwise escape as an internal error, and when the table has more than
+    `limit` rows besides its header (comments and blank rows are not counted)."""
     reader = csv.reader(io.StringIO(text))
     rows: list[tuple[int, list[str]]] = []
     number = 0
+    counted = 0
     try:
         for number, row in enumerate(reader, start=1):
             rows.append((number, row))
+            if row and any(c.strip() for c in row) and not row[0].lstrip().startswith("#"):
+                counted += 1
+                if counted > limit + 1:  # the header and `limit` rows
+                    raise InputError(f"{name}: line {reader.line_num}: more than {limit} rows; hil reads "
+                                     f"tables of at most {limit} rows (split the file)")
     except csv.Error as exc:
         line = max(reader.line_num, number + 1)  # the physical line the reader stopped on
         raise InputError(f"{name}: line {line}: not a usable CSV row ({exc})") from None

@@ -13,8 +13,9 @@ import time
 
 import pytest
 
+from hil.calibration.measurements import read_measurements
 from hil.errors import InputError
-from hil.files.inputs import MAX_INPUT_BYTES, read_input_bytes
+from hil.files.inputs import MAX_INPUT_BYTES, MAX_TABLE_ROWS, csv_rows, read_input_bytes
 from tests.hil.files.test_inputs import READERS
 
 
@@ -73,3 +74,23 @@ def test_a_fifo_with_a_writer_is_still_refused(tmp_path) -> None:
     threading.Thread(target=write, daemon=True).start()
     with pytest.raises(InputError, match="not a regular file"):
         read_input_bytes(fifo, "a CSV file")
+
+
+def test_a_table_longer_than_the_row_limit_is_refused_at_the_first_row_past_it() -> None:
+    text = "q1\n# a comment\n\n" + "0\n" * 5
+    assert len(csv_rows(text, "t.csv", limit=5)) == 8  # header + 5 rows: read, comments not counted
+    with pytest.raises(InputError, match=r"^t\.csv: line 8: more than 4 rows; hil reads tables of at most "
+                                         r"4 rows \(split the file\)$"):
+        csv_rows(text, "t.csv", limit=4)
+    assert MAX_TABLE_ROWS == 10_000  # the limit docs/design.md and the README state
+
+
+def test_a_100000_row_measurements_file_is_refused_in_well_under_two_seconds(tmp_path) -> None:
+    """The file of the issue: refused before its values are parsed (parsing alone took 20 s)."""
+    row = "0.1,-1.2,1.3,-1.4,1.5,0.6,1.1,0.2,0.3\n"
+    big = tmp_path / "big.csv"
+    big.write_text("q1,q2,q3,q4,q5,q6,x,y,z\n" + row * 100_000)
+    start = time.process_time()
+    with pytest.raises(InputError, match=r"big\.csv: line 10002: more than 10000 rows"):
+        read_measurements(big)
+    assert time.process_time() - start < 2.0
