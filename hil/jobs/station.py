@@ -80,8 +80,8 @@ class StationSource:
                                  "chooses the simulated arm")
             if truth or speed != 1.0 or tracker_protocol or seed is not None:
                 given = [o for o, v in (("--truth", truth), ("--speed", speed != 1.0),
-                                        ("--tracker-protocol", tracker_protocol), ("--seed", seed is not None))
-                         if v]
+                                        ("--tracker-protocol", tracker_protocol),
+                                        ("--seed", seed is not None)) if v]
                 raise InputError(f"{', '.join(given)}: {'go' if len(given) > 1 else 'goes'} with --sim, not "
                                  "--config (the configuration's tracker.protocol says which tracker it has, "
                                  "campaign.seed its seed)")
@@ -157,15 +157,14 @@ def store_location(db: str | None, source: StationSource, config: StationConfig 
     configuration's ``store.url``, the user's default."""
     import os
 
-    from hil.store.paths import ENV_VAR, resolve_location
-
-    from hil.store.paths import check_creatable
+    from hil.store.paths import ENV_VAR, check_creatable, resolve_location
 
     if source.sim is None or db:
         location = resolve_location(db, config)
+        stored = config.store if config is not None else {}
         field = ("--db" if db else f"${ENV_VAR}" if os.environ.get(ENV_VAR)
-                 else "store.url" if config is not None and config.store.get("url")
-                 else "store.path" if config is not None and config.store.get("path") else "the default store")
+                 else "store.url" if stored.get("url") else "store.path" if stored.get("path")
+                 else "the default store")
     else:
         location = resolve_location(None, simulated=True)
         say(simulated_store_words(location, bool(os.environ.get(ENV_VAR))), "information")

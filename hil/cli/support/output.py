@@ -3,14 +3,58 @@ figures in millimetres, and a quiet end (exit 141) when stdout's reader goes awa
 
 from __future__ import annotations
 
+import codecs
 import contextlib
 import errno
+import io
 import json
 import os
 import sys
 from typing import Any
 
 from hil.errors import InputError
+
+#: ASCII for the non-ASCII characters hil's words use (units, statistics, typography), so a terminal or
+#: a log in ASCII (``PYTHONIOENCODING=ascii``, the C locale) reads them; anything else becomes "?".
+ASCII_SPELLINGS: dict[str, str] = {
+    "\u2014": "--", "\u2013": "-", "\u2212": "-", "\u2026": "...", "\u00b5": "u", "\u03bc": "u",
+    "\u00b0": " deg", "\u00b1": "+/-", "\u00d7": "x", "\u00b7": ".", "\u2248": "~", "\u2264": "<=",
+    "\u2265": ">=", "\u2192": "->", "\u2190": "<-", "\u00b2": "^2", "\u00b3": "^3", "\u03c3": "sigma",
+    "\u03c1": "rho", "\u0394": "delta", "\u03b8": "theta", "\u03c0": "pi", "\u2018": "'", "\u2019": "'",
+    "\u201c": '"', "\u201d": '"', "\u2022": "*", "\u2713": "ok", "\u2717": "x", "\u00a0": " ",
+}
+ASCII_ERRORS = "hil-ascii"
+
+
+def _to_ascii(exc: UnicodeError) -> tuple[str, int]:
+    """The codec error handler behind `ASCII_ERRORS`: each character the stream cannot encode spelled
+    in ASCII (`ASCII_SPELLINGS`, else its decomposition's ASCII letters, else "?")."""
+    if not isinstance(exc, UnicodeEncodeError):
+        raise exc
+    import unicodedata
+
+    out = []
+    for ch in exc.object[exc.start:exc.end]:
+        spelled = ASCII_SPELLINGS.get(ch)
+        if spelled is None:
+            spelled = unicodedata.normalize("NFKD", ch).encode("ascii", "ignore").decode() or "?"
+        out.append(spelled)
+    return "".join(out), exc.end
+
+
+codecs.register_error(ASCII_ERRORS, _to_ascii)
+
+
+def degrade_to_ascii(*streams: Any) -> None:
+    """Let `streams` (default stdout and stderr) write what they cannot encode as ASCII instead of
+    failing: an em dash in ``hil show`` under ``PYTHONIOENCODING=ascii`` or a C locale was exit 70
+    (issue 31). A stream that encodes UTF-8, or is not a text file, is left as it is."""
+    for stream in streams or (sys.stdout, sys.stderr):
+        encoding = (getattr(stream, "encoding", None) or "").lower().replace("_", "-")
+        if encoding in ("utf-8", "utf8", "utf-16", "utf-32") or not hasattr(stream, "reconfigure"):
+            continue
+        with contextlib.suppress(ValueError, OSError, io.UnsupportedOperation):
+            stream.reconfigure(errors=ASCII_ERRORS)
 
 
 def mm(value: float) -> str:
