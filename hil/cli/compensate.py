@@ -131,6 +131,10 @@ def run(args: argparse.Namespace) -> int:
     except UnicodeDecodeError:
         text = decode_input_text(raw, args.input)  # raises, naming the file and the byte
     program = _is_program(args.input, text)
+    if not program:  # a table over the row limit is refused before the controller is asked
+        from hil.files.inputs import csv_rows
+
+        csv_rows(text, args.input)
 
     if args.controller is not None:
         controller: ControllerCalibration = controller_from_file(args.controller, robot)

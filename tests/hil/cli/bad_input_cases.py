@@ -1137,19 +1137,21 @@ def _cases() -> list[Case]:
     add("select", "c2-stdout=full", sel, ["stdout", "no space"], stdout="full", timeout=60)
     add("select", "c2-stdout=closed", sel, ["stdout", "closed"], stdout="closed", timeout=60)
     add("show", "c2-stdout=full", ["show", "last", "--db", f"{d}/store.db"], ["stdout"], stdout="full")
-    add("robots", "c2-stdout=closed", ["robots", "--db", f"{d}/store.db"], ["stdout"], stdout="closed")
+    add("show", "c2-stdout=closed", ["show", "last", "--db", f"{d}/store.db"], ["stdout"], stdout="closed")
 
+    with_cube = {**BASE_CONFIG, "verify": {"centre": [0.4, 0.0, 0.4], "edge": 0.2}}
     for cmd in ("calibrate", "verify"):
         cfg = [cmd, "--config", f"{d}/bad.toml", "--db", f"{d}/c.db"]
+        base = with_cube if cmd == "verify" else BASE_CONFIG
         for label, url in (("http", "http://tracker:80"), ("spy-empty", "spy://"),
                            ("port-99999", "socket://tracker:99999"), ("socket-no-port", "socket://tracker"),
                            ("rfc2217-no-host", "rfc2217://"), ("port-not-number", "socket://tracker:x")):
             add(cmd, f"c4-tracker.url={label}", cfg, ["tracker.url"],
-                files={"bad.toml": config_with("tracker.url", url)})
+                files={"bad.toml": config_with("tracker.url", url, base)}, timeout=60)
         add(cmd, "c4-store.path=/proc", [cmd, "--config", f"{d}/bad.toml"], ["store.path", "/proc"],
-            files={"bad.toml": config_with("store.path", "/proc/hil.db")})
+            files={"bad.toml": config_with("store.path", "/proc/hil.db", base)}, timeout=60)
         add(cmd, "c4-config-with-seed", [cmd, "--config", f"{d}/station.toml", "--seed", "3", "--db",
-                                         f"{d}/c.db"], ["--seed"])
+                                         f"{d}/c.db"], ["--seed"], timeout=60)
     emscon = {**BASE_CONFIG, "tracker": {**BASE_CONFIG["tracker"], "protocol": "emscon"}}
     add("calibrate", "c4-tracker.url=emscon-serial-device",
         ["calibrate", "--config", f"{d}/bad.toml", "--db", f"{d}/c.db"], ["tracker.url"],
