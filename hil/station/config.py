@@ -42,6 +42,10 @@ def _store_url(v: Any) -> str | None:
     """A store is an SQLite file (a path, or ``sqlite:///path``) or a PostgreSQL database
     (``postgresql://user@host:port/db``); another database's URL would fail only when the run starts."""
     if "://" not in v:
+        head = v.split("/", 1)[0]
+        if ":" in head and not re.fullmatch(r"[A-Za-z]:", head):  # "postgresql:/db", "dbhost:5432/hil"
+            return (f"{v!r} is not a URL (scheme://host/database) and not a file path either: a URL is "
+                    "postgresql://user@host[:port]/database, a file a path without ':'")
         return None
     scheme = v.split("://", 1)[0].lower()
     if scheme in ("postgresql", "postgres", "postgresql+psycopg"):

@@ -1161,6 +1161,9 @@ def _cases() -> list[Case]:
     add("tui", "c4-tracker.url=http", ["tui", "--config", f"{d}/bad.toml", "--db", f"{d}/c.db"],
         ["tracker.url"], files={"bad.toml": config_with("tracker.url", "http://tracker")})
     add("select", "c4-tracker-at-the-base", [*sel, "--tracker", "0,0,0"], ["--tracker"], timeout=60)
+    for cmd in ("history", "robots"):
+        add(cmd, "c4-store.url-not-a-url", [cmd, "--config", f"{d}/bad.toml"], ["store.url", "not a url"],
+            files={"bad.toml": config_with("store.url", "dbhost:5432/hil")})
 
     damaged = {"config": ("UPDATE campaigns SET config = '{broken'", "campaigns"),
                "joints": ("UPDATE measurements SET q = '[1, 2' WHERE id = 3", "measurements"),

@@ -37,3 +37,12 @@ def test_urls_no_driver_takes_are_refused(url, protocol, says) -> None:
     assert tracker_url_problem(url, protocol) is not None
     with pytest.raises(InputError, match=f"^station.toml: tracker.url: .*{says}"):
         parse_config({"tracker": {"protocol": protocol, "url": url}}, "station.toml")
+
+
+@pytest.mark.parametrize("url", ["postgresql:/db", "dbhost:5432/hil", "postgres:hil"])
+def test_a_store_url_that_is_not_a_url_is_said_so(url) -> None:
+    """Taken for a file path it was "no such database"; it is a URL with a typo (issue 31)."""
+    with pytest.raises(InputError, match=f"^s.toml: store.url: '{url}' is not a URL"):
+        parse_config({"store": {"url": url}}, "s.toml")
+    for path in ("hil.db", "C:/stores/hil.db", "data/a:b.db"):  # paths still pass
+        assert parse_config({"store": {"url": path}}, "s.toml").store["url"] == path
