@@ -22,7 +22,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     src.add_argument("--config", metavar="station.toml", help="station configuration")
     src.add_argument("--sim", action="store_true", help="use the simulated station")
     p.add_argument("--speed", type=SIM_SPEED, default=1.0, metavar="F", help="--sim: fast-time factor")
-    p.add_argument("--seed", type=SEED, default=1, help="--sim: seed of the random truth and noise")
+    p.add_argument("--seed", type=SEED, help="--sim: seed of the random truth and noise (default: 1)")
     p.add_argument("--robot", default=None,
                    help=f"--sim: robot type ({', '.join(ROBOT_NAMES)}; default: --truth's, else ur5e); "
                         "with --config it must match robot.type")
@@ -67,7 +67,7 @@ def options_from(args: argparse.Namespace) -> object:
     # a simulated station's campaigns go to the simulated stations' store unless --db names one (said
     # on stderr before the app takes the screen), never to $HIL_DB's or the default: the plant's
     db = str(store_location(args.db, source, None, say))
-    return TuiOptions(sim=True, speed=args.speed, seed=args.seed, robot=robot,
+    return TuiOptions(sim=True, speed=args.speed, seed=1 if args.seed is None else args.seed, robot=robot,
                       truth=args.truth, tracker_protocol=args.tracker_protocol or "geocom", db=db,
                       ideal=args.ideal,
                       out_dir=args.out_dir, overrides=source.overrides)
