@@ -32,6 +32,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--candidates", type=CANDIDATES, help="selector candidates (overrides the config)")
     p.add_argument("--accept", type=rms_threshold, metavar="METRES",
                    help=f"validation RMS threshold, {RMS_THRESHOLD_HELP}; overrides the config")
+    p.add_argument("--no-warmup", action="store_true",
+                   help="measure without warming the arm up first (a quick look, or an arm that has been "
+                        "running), as hil calibrate --no-warmup; the Plan screen's w toggles it")
     p.add_argument("--db", metavar="PATH",
                    help="campaign database (default: config, $HIL_DB, data dir; with --sim: the simulated "
                         "stations' sim.db in the data dir, never $HIL_DB)")
@@ -56,7 +59,8 @@ def options_from(args: argparse.Namespace) -> object:
     check_pose_count(args.poses, args.config, args.robot)
     source = station_source(args)  # before the app opens (or creates) a store
     if source.config is not None:
-        return TuiOptions(config=source.config, db=args.db, out_dir=args.out_dir, overrides=source.overrides)
+        return TuiOptions(config=source.config, db=args.db, out_dir=args.out_dir, overrides=source.overrides,
+                          no_warmup=args.no_warmup)
     claims = option_claim(args.robot)
     if args.truth:
         from hil.calibration.model_file import load_truth
@@ -70,7 +74,7 @@ def options_from(args: argparse.Namespace) -> object:
     return TuiOptions(sim=True, speed=args.speed, seed=1 if args.seed is None else args.seed, robot=robot,
                       truth=args.truth, tracker_protocol=args.tracker_protocol or "geocom", db=db,
                       ideal=args.ideal,
-                      out_dir=args.out_dir, overrides=source.overrides)
+                      out_dir=args.out_dir, overrides=source.overrides, no_warmup=args.no_warmup)
 
 
 def check_store(db: str | None, config: object | None) -> None:
