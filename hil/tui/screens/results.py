@@ -85,6 +85,15 @@ def pose_rows(results: dict[str, Any]) -> list[tuple[str, ...]]:
             for pose in by_pose]
 
 
+def _rule_words(result: Any) -> str:
+    """Whose threshold the verdict applied, as the result's ``verdict.rule`` says: " auto" (the
+    automatic rule: 2 × the cross-validated RMS or the class bound, `hil.campaign.acceptance`) or
+    " set" (the user's ``campaign.acceptance``); nothing for an older result without it."""
+    verdict = result.get("verdict") if isinstance(result, dict) else None
+    rule = verdict.get("rule") if isinstance(verdict, dict) else None
+    return {"auto": " auto", "threshold": " set"}.get(str(rule), "")
+
+
 def parameter_cells(p: dict[str, Any]) -> tuple[str, str, str, str]:
     """name, value, std, unit: translations in mm, rotations in mrad (`.tx` / `.rx` style names)."""
     name = str(p.get("name", "?"))
@@ -211,7 +220,7 @@ class ResultsScreen(HilScreen):
         line = Text.assemble((f" {word} ", style), "  ", (rec.id, "bold"), f"  {s.status}")
         if v is not None and accept is not None:
             line.append(f"  RMS {_mm(v.after.get('rms'))} mm {'≤' if v.passed else '>'} "
-                        f"{_mm(accept)} mm")
+                        f"{_mm(accept)} mm{_rule_words(rec.result)}")
         precision = describe_precision(_precision(rec.result))
         if v is not None and precision is not None:
             line.append(f"\n validation RMS {precision}", "dim")
