@@ -15,7 +15,7 @@ from hil.arm.joint_errors import JointErrors
 from hil.arm.kinematics import Kinematics
 from hil.arm.kinematics_cache import CAPACITY, geometry_key, kinematics_of
 from hil.arm.payload import Payload
-from hil.arm.safety import check_target
+from hil.arm.safety import check_target, path_fractions
 from hil.errors import InputError
 
 Q = np.random.default_rng(7).uniform(-2.0, 2.0, (5, 6))
@@ -134,15 +134,17 @@ def test_check_target_sees_a_model_changed_after_a_check() -> None:
 
 
 def test_check_target_path_points_are_the_straight_joint_path() -> None:
-    """The path check evaluates start + s·(q − start) at `path_checks` evenly spaced s, ends included:
-    a box around those points only passes, a box missing the middle one refuses."""
+    """The path check evaluates start + s·(q − start) at `path_checks` evenly spaced s, ends included,
+    and at the driver's (`path_fractions`): a box around those points only passes, a box missing the
+    middle ones refuses."""
     g = _geometry()
     start = np.array([-1.5, -1.2, 1.0, -1.4, -1.57, 0.0])
     q = start + np.array([3.0, 0.0, 0.0, 0.0, 0.0, 0.0])  # the base swings the SMR round an arc
-    s = np.linspace(0.0, 1.0, 3)
+    s = path_fractions(3)
     pts = Kinematics(g).points([start + (q - start) * k for k in s], frame="base")
     check_target(q, g.spec, (pts.min(0) - 1e-9, pts.max(0) + 1e-9), g, start, path_checks=3)
-    ends = pts[[0, 2]]
-    assert not np.all((pts[1] >= ends.min(0)) & (pts[1] <= ends.max(0)))  # the arc bulges out
+    ends = pts[[0, -1]]
+    middle = pts[len(pts) // 2]
+    assert not np.all((middle >= ends.min(0)) & (middle <= ends.max(0)))  # the arc bulges out
     with pytest.raises(InputError, match="path to the target"):
         check_target(q, g.spec, (ends.min(0) - 1e-9, ends.max(0) + 1e-9), g, start, path_checks=3)
