@@ -75,6 +75,7 @@ class EmsconSimulator:
         self._t0_wall = time.monotonic()
         self._t0 = self._clock()
         self.instrument = EmsconInstrument(source, self.config.instrument, now=0.0)
+        self.instrument.source_epoch = self._t0
         self.stopping = threading.Event()
         self._lock = threading.Lock()  # the instrument and the client socket
         self._listener: socket.socket | None = None
@@ -117,6 +118,7 @@ class EmsconSimulator:
         self.stopping.clear()
         self._t0_wall = time.monotonic()
         self._t0 = self._clock()
+        self.instrument.source_epoch = self._t0  # the source's record is on the same clock
         sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         sock.bind((self.config.address, self.config.port))
