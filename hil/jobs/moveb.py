@@ -185,10 +185,10 @@ def run_moveb(request: MovebRequest, *, say: Say = quiet) -> MovebOutcome:
         say(timing.warning(), "warning")
     if timing is not None and timing.disturbed and doc["status"] == "done":
         doc.update(status="stream late", exit_code=EXIT_FAILED,
-                   error=f"hil's servo stream left the arm without a new target for "
+                   error=f"hil's servo stream left the arm without a new target for up to "
                          f"{timing.max_gap_s * 1e3:.0f} ms (more than the {timing.lookahead_s * 1e3:.0f} ms "
-                         "lookahead): the path figures include that stop, not only the arm's accuracy; "
-                         "run on an idle machine")
+                         f"lookahead): its straight leg can have cut the path by {timing.chord_mm:.3f} mm, "
+                         "which the figures include; run on an idle machine")
     doc.update({"program": request.program, "frame": place, "continuity": request.continuity,
                 "model": request.model, "ik": "nominal" if model is None else request.ik,
                 "registered": result.registered, "smr": {"offset_mm": smr_mm, "source": smr_source},

@@ -279,7 +279,7 @@ def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, reg
         stop.set()
         thread.join(timeout=5.0)
     step_times = res.times  # send time of each sample (time.monotonic, as the tracker's records)
-    timing = stream_timing(step_times, rate, LOOKAHEAD)
+    timing = stream_timing(step_times, rate, LOOKAHEAD, samples.position)
     if failure:
         raise failure[0]
     t0, t1 = step_times[0], step_times[-1] + settle
