@@ -229,9 +229,13 @@ class SimController:
             delay = deadline - time.monotonic()
             if delay > 0:
                 time.sleep(delay)
-            elif delay < -10 * period:  # fell far behind (loaded CI machine): do not burst to catch up
+            elif delay < -period:
+                # fell behind (a loaded machine): the next tick steps the motion through every missed
+                # cycle (`SimArm.tick`), so bursting ticks to catch up gains nothing and would hold the
+                # GIL from the protocol servers and the trackers in this process; yield to them instead
                 self.late_ticks += 1
                 deadline = time.monotonic()
+                time.sleep(0)
 
     # ----------------------------------------------------------------- readers for other services
     def true_joints(self) -> np.ndarray:
