@@ -148,6 +148,9 @@ from mocks.geocom.target import TargetSource, TargetState
 
 log = logging.getLogger(__name__)
 
+#: Seconds of the tracker's clock over which the simulation's rate (simulated seconds per tracker
+#: second) is measured: long next to a tick's jitter of a millisecond or so (0.1 % of it at most).
+RATE_BASELINE_S = 1.0
 _AT901_B = 13  # ES_LTS_AT901_B: the header's closest sensor type to an AT960
 _ADM_READY = 2  # ES_AS_ADMReady
 _LASER_WARM = 3  # laserStatus reported when warm
@@ -281,6 +284,8 @@ class EmsconInstrument:
         state = self.source.target()
         self._now = self._clock_now = now  # the last simulated time and tracker clock seen
         self._rate = 1.0  # simulated seconds per second of the tracker's clock, as last seen
+        self._clock_start = now
+        self._rate_ref = (now, now)  # (simulated time, tracker clock) the rate is measured from
         # the last two looks at the target: (simulated time, tracker clock, position)
         self._anchors = ((now, now, state.position), (now, now, state.position))
         self.locked = state.visible
@@ -400,8 +405,14 @@ class EmsconInstrument:
     def _clocks(self, now: float, clock: float | None) -> None:
         """Note the simulated time and the tracker's clock at it (and the rate between the two)."""
         clock = now if clock is None else clock
-        if now > self._now and clock > self._clock_now:
-            self._rate = (now - self._now) / (clock - self._clock_now)
+        ref_now, ref_clock = self._rate_ref
+        if now > ref_now and clock - ref_clock >= RATE_BASELINE_S:
+            # over a long baseline: two reads a tick apart, each a little off, would make it jitter
+            self._rate = (now - ref_now) / (clock - ref_clock)
+            if clock - ref_clock >= 4 * RATE_BASELINE_S:  # follow a change of the simulation's speed
+                self._rate_ref = (self._now, self._clock_now)
+        elif now > self._now and clock > self._clock_now and ref_clock == self._clock_start:
+            self._rate = (now - self._now) / (clock - self._clock_now)  # until the baseline is long
         self._now, self._clock_now = now, clock
 
     def _clock_at(self, t: float) -> float:
