@@ -162,6 +162,7 @@ class SimController:
         self._thread: threading.Thread | None = None
         self.tick_count = 0
         self.late_ticks = 0
+        self.max_tick_gap = 0.0  # wall seconds (`_run`)
 
     @property
     def servers(self) -> tuple[Any, ...]:
@@ -221,7 +222,13 @@ class SimController:
     def _run(self) -> None:
         period = 1.0 / self.arm.config.rate_hz
         deadline = time.monotonic()
+        last = deadline
         while not self._stop.is_set():
+            started = time.monotonic()
+            # the longest wall time between two ticks (and so between two RTDE packets): how starved
+            # this process has been; ur_rtde drops its link after 2.5 s without data
+            self.max_tick_gap = max(self.max_tick_gap, started - last)
+            last = started
             self.arm.tick()
             self.rtde.broadcast(self.tick_count)
             self.tick_count += 1
@@ -269,6 +276,7 @@ class SimController:
                 "primary_connections": self.primary.connection_count(),
                 "secondary_connections": self.secondary.connection_count(),
                 "late_ticks": self.late_ticks,
+                "max_tick_gap_s": self.max_tick_gap,
                 "motion_seconds": a.motion_seconds,
                 "joint_moves": a.joint_moves,
                 "services": {name: read() for name, read in self.extra_state.items()},
