@@ -132,7 +132,8 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
     # a GeoCOM reading integrates the SMR's position over its measuring time
     world = World(geometry, controller.true_joints, acceptance_angle, clock=controller.clock.now,
                   ringing=Ringing(), reading_time=GEOCOM_MEASURE_S,
-                  directions=controller.joint_directions)
+                  directions=controller.joint_directions, joints_at=controller.arm.true_joints_at,
+                  known_until=controller.arm.history_end)
     # the links ring after every joint move (`mocks.ringing`): the tracker sees it, the encoders do not
     controller.arm.listeners.append(world.ringing.listener(world.tip_direction))
     home = world.home_pose(rng)

@@ -68,6 +68,10 @@ class World:
     ringing: Ringing | None = None  # the links' residual vibration after moves (needs `clock`)
     reading_time: float = 0.0  # seconds one tracker reading integrates over (`ring_offset`)
     directions: Callable[[], np.ndarray] | None = None  # each joint's last direction of motion
+    # the arm's recorded true states: (joints, directions) at simulated times (`mocks.ur.history`),
+    # and the newest time it has; None: only the current joints are known
+    joints_at: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
+    known_until: Callable[[], float | None] | None = None
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     def __post_init__(self) -> None:
@@ -90,14 +94,15 @@ class World:
         p = np.einsum("nij,j->ni", F[:, :3, :3], self.truth.smr) + F[:, :3, 3]
         return (p[1] - p[0]) / step
 
-    def ring_offset(self) -> np.ndarray:
+    def ring_offset(self, at: float | None = None) -> np.ndarray:
         """The SMR's vibration displacement (m, tracker frame) as a reading sees it: averaged over the
         `reading_time` that has just passed (a distance measurement integrates over its measuring time;
         an instantaneous sample of a 9 Hz ring every 0.1 s would alias it to a slow, steady-looking
-        offset that no real instrument reports). Zero without a ringing model."""
+        offset that no real instrument reports). `at`: a reading ending at that simulated time, else
+        now. Zero without a ringing model."""
         if self.ringing is None or self.clock is None:
             return np.zeros(3)
-        now = float(self.clock())
+        now = float(self.clock()) if at is None else float(at)
         if self.reading_time > 0:
             times = now - self.reading_time * (np.arange(READING_SAMPLES) + 0.5) / READING_SAMPLES
             offset = np.mean([self.ringing.offset(float(t)) for t in times], axis=0)
@@ -128,6 +133,24 @@ class World:
             F = self._warm_kinematics().flange_poses(q, side)[0]
         p_base = F[:3, :3] @ self.truth.smr + F[:3, 3]
         return self._in_tracker(p_base), self._angle(F, p_base)
+
+    def positions_at(self, times: np.ndarray) -> np.ndarray:
+        """(n, 3) true SMR positions (m, tracker frame, ringing included) at simulated `times`, from
+        the arm's recorded states (`joints_at`): what a tracker sampling at those instants measures,
+        however late its own thread got round to asking. Without a record: the current position."""
+        times = np.atleast_1d(np.asarray(times, dtype=float))
+        if self.joints_at is None:
+            return np.tile(self.target().position, (len(times), 1))
+        Q, D = self.joints_at(times)
+        side = D if self.directions is not None else None
+        with self._lock:
+            F = self._warm_kinematics().flange_poses(Q, side)
+        p_base = np.einsum("nij,j->ni", F[:, :3, :3], self.truth.smr) + F[:, :3, 3]
+        T = self.truth.tracker
+        p = (p_base - T.translation) @ T.rotation
+        if self.ringing is not None and self.clock is not None:
+            p = p + np.array([self.ring_offset(float(t)) for t in times])
+        return p
 
     def _in_tracker(self, p_base: np.ndarray) -> np.ndarray:
         T = self.truth.tracker

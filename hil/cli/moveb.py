@@ -197,6 +197,10 @@ def _run_text(doc: dict[str, Any]) -> str:
             note = " (rigidly fitted: no model)" if key == "path_accuracy" and doc.get("registered") else ""
             lines.append(f"  {title:<15} max {acc['max_deviation_mm']:.3f} mm, "
                          f"RMS {acc['rms_deviation_mm']:.3f} mm{note}")
+    servo = doc.get("servo")
+    if servo:
+        lines.append(f"  servo stream    {servo['deadline_misses']} of {servo['samples']} targets late, "
+                     f"longest gap {servo['max_gap_s'] * 1e3:.0f} ms")
     peak = (doc.get("joint_speeds") or {}).get("peak_fraction")
     if peak:
         lines.append("  joint speeds    peak " + ", ".join(f"{v:.0%}" for v in peak) + " of the allowed")

@@ -180,6 +180,15 @@ def run_moveb(request: MovebRequest, *, say: Say = quiet) -> MovebOutcome:
                    error=f"the tracker measured {cov.fraction:.0%} of the path ({result.lost} records lost; "
                          f"longest unmeasured stretch s = {a:.1f}-{b:.1f} mm): the figures describe only "
                          "the measured part; keep the SMR facing the tracker with a clear line of sight")
+    timing = result.stream
+    if timing is not None and timing.warning():
+        say(timing.warning(), "warning")
+    if timing is not None and timing.disturbed and doc["status"] == "done":
+        doc.update(status="stream late", exit_code=EXIT_FAILED,
+                   error=f"hil's servo stream left the arm without a new target for up to "
+                         f"{timing.max_gap_s * 1e3:.0f} ms (more than the {timing.lookahead_s * 1e3:.0f} ms "
+                         f"lookahead): its straight leg can have cut the path by {timing.chord_mm:.3f} mm, "
+                         "which the figures include; run on an idle machine")
     doc.update({"program": request.program, "frame": place, "continuity": request.continuity,
                 "model": request.model, "ik": "nominal" if model is None else request.ik,
                 "registered": result.registered, "smr": {"offset_mm": smr_mm, "source": smr_source},
@@ -187,5 +196,6 @@ def run_moveb(request: MovebRequest, *, say: Say = quiet) -> MovebOutcome:
                 "lost_samples": result.lost,
                 "coverage": None if cov is None else cov.fraction,
                 "path_accuracy": result.accuracy, "path_accuracy_registered": result.accuracy_registered,
-                "joint_speeds": result.joint_speeds})
+                "joint_speeds": result.joint_speeds,
+                "servo": None if timing is None else timing.as_dict()})
     return MovebOutcome(int(doc["exit_code"]), str(doc["status"]), document=doc, run=result)

@@ -17,6 +17,8 @@
   pose is unknown, so it is registered: a rigid fit of the measured points to the commanded positions
   at the same times, refined by nearest-point iterations (ICP). The result says ``registered: true``;
   a rigid misplacement of the arm is then not seen.
+* hil's own lateness (servo deadlines missed on a loaded machine) is measured from the send times
+  and reported with the figures (`hil.moveb.stream_timing`), never folded silently into them.
 * Path accuracy in the style of ISO 9283 and the share of the path it covers: `hil.moveb.accuracy`.
   A run whose measured points cover less than ``min_coverage`` of the path is reported as
   ``incomplete`` (exit code 1) with the largest unmeasured stretch named: its figures describe only
@@ -45,9 +47,13 @@ from hil.moveb.joints import JointSpeedError, JointSpeeds, joint_speed_ceiling, 
 from hil.moveb.orientation import rotation_matrices
 from hil.moveb.path_plan import Plan, Samples
 from hil.moveb.program import Program
+from hil.moveb.stream_timing import StreamTiming, stream_timing
 from hil.moveb.timing import Limits
 
 Box = tuple[np.ndarray, np.ndarray]  # keep-in box corners (base frame, m)
+#: servoJ lookahead (s) and gain of a MOVEB stream (docs/design.md, Facts: streaming on UR)
+LOOKAHEAD = 0.05
+GAIN = 1000.0
 
 
 def program_in_frame(program: Program, anchor: np.ndarray) -> Program:
@@ -159,6 +165,7 @@ class RunResult:
     path_s: np.ndarray | None = None  # (M,) mm, its arc lengths
     corners: np.ndarray | None = None  # (K, 3) mm, programmed interior points
     coverage: Coverage | None = None  # the stretches of the path the tracker measured
+    stream: StreamTiming | None = None  # how hil's servo stream kept its deadlines
 
 
 @dataclass(frozen=True)
@@ -267,11 +274,12 @@ def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, reg
     thread.start()
     try:
         time.sleep(0.05)
-        res = devices.robot.follow(Q, lookahead=0.05, gain=1000, settle=settle)
+        res = devices.robot.follow(Q, lookahead=LOOKAHEAD, gain=GAIN, settle=settle)
     finally:  # the sampling thread ends with the motion, failed or not
         stop.set()
         thread.join(timeout=5.0)
     step_times = res.times  # send time of each sample (time.monotonic, as the tracker's records)
+    timing = stream_timing(step_times, rate, LOOKAHEAD, samples.position)
     if failure:
         raise failure[0]
     t0, t1 = step_times[0], step_times[-1] + settle
@@ -300,8 +308,9 @@ def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, reg
                      start=None if registered else (T.rotation, T.translation * 1e3))
     fitted = path_accuracy(path, moved, corners, **seen)
     if registered:
-        return RunResult(fitted, traj.cycle_time, True, lost, traj.speeds.as_dict(), None, moved, **shown)
+        return RunResult(fitted, traj.cycle_time, True, lost, traj.speeds.as_dict(), None, moved, **shown,
+                         stream=timing)
     base = m @ T.rotation.T + T.translation * 1e3
     # with a model: in its base frame, and (comparable with a run without one) rigidly fitted
     return RunResult(path_accuracy(path, base, corners, **seen), traj.cycle_time, False, lost,
-                     traj.speeds.as_dict(), fitted, base, **shown)
+                     traj.speeds.as_dict(), fitted, base, **shown, stream=timing)

@@ -80,7 +80,16 @@ maps its stamps onto the host's clock by an offset alone; a fast-time station (s
 times faster than the wall's) stamping samples in simulated seconds would make every sample's time
 wrong by up to 95 % of its age. So the server passes that clock (``clock``: seconds of the wall clock
 since it started) beside ``now``, and a continuous sample stamped τ carries the SMR's position at the
-simulated time that τ was (linear between the last two looks at the target, on both axes).
+simulated time that τ was.
+
+Truth: a real tracker measures the SMR where it is at each sample's instant. This simulator's thread
+runs when the machine lets it, so a source that keeps a record of its past (`positions_at(times)`, the
+simulated station's `mocks.world.World`, from the arm's `mocks.ur.history`) is asked where the SMR was
+at each sample's simulated time (the source's clock reads ``source_epoch`` when ``now`` is 0), and
+samples later than the newest time it knows (`known_until()`) wait for the next tick; a stall of
+this thread then delays samples but never moves them. A source
+without a record (`StaticTarget`) is read linearly between the last two looks at it, which is exact
+for a target that moves only between ticks.
 
 StopMeasurement answers AllOK (also when idle) and ends the stream; a stationary measurement it
 interrupts sends no result. Changing units, measurement mode, mode parameters, coordinate system
@@ -139,6 +148,9 @@ from mocks.geocom.target import TargetSource, TargetState
 
 log = logging.getLogger(__name__)
 
+#: Seconds of the tracker's clock over which the simulation's rate (simulated seconds per tracker
+#: second) is measured: long next to a tick's jitter of a millisecond or so (0.1 % of it at most).
+RATE_BASELINE_S = 1.0
 _AT901_B = 13  # ES_LTS_AT901_B: the header's closest sensor type to an AT960
 _ADM_READY = 2  # ES_AS_ADMReady
 _LASER_WARM = 3  # laserStatus reported when warm
@@ -272,11 +284,16 @@ class EmsconInstrument:
         state = self.source.target()
         self._now = self._clock_now = now  # the last simulated time and tracker clock seen
         self._rate = 1.0  # simulated seconds per second of the tracker's clock, as last seen
+        self._clock_start = now
+        self._rate_ref = (now, now)  # (simulated time, tracker clock) the rate is measured from
         # the last two looks at the target: (simulated time, tracker clock, position)
         self._anchors = ((now, now, state.position), (now, now, state.position))
         self.locked = state.visible
         self._seen = state
         self.commands = 0
+        # the source's time (`positions_at`, `known_until`) when this instrument's simulated time is 0:
+        # the server's start on the clock both share
+        self.source_epoch = 0.0
         self._handlers = {
             Command.GET_SYSTEM_STATUS: self._get_system_status,
             Command.GET_TRACKER_STATUS: self._get_tracker_status,
@@ -388,8 +405,14 @@ class EmsconInstrument:
     def _clocks(self, now: float, clock: float | None) -> None:
         """Note the simulated time and the tracker's clock at it (and the rate between the two)."""
         clock = now if clock is None else clock
-        if now > self._now and clock > self._clock_now:
-            self._rate = (now - self._now) / (clock - self._clock_now)
+        ref_now, ref_clock = self._rate_ref
+        if now > ref_now and clock - ref_clock >= RATE_BASELINE_S:
+            # over a long baseline: two reads a tick apart, each a little off, would make it jitter
+            self._rate = (now - ref_now) / (clock - ref_clock)
+            if clock - ref_clock >= 4 * RATE_BASELINE_S:  # follow a change of the simulation's speed
+                self._rate_ref = (self._now, self._clock_now)
+        elif now > self._now and clock > self._clock_now and ref_clock == self._clock_start:
+            self._rate = (now - self._now) / (clock - self._clock_now)  # until the baseline is long
         self._now, self._clock_now = now, clock
 
     def _clock_at(self, t: float) -> float:
@@ -434,8 +457,16 @@ class EmsconInstrument:
         self._emit(t, encode_status_change(SystemStatusChange.MEAS_STATUS_NOT_READY))
 
     def _truths(self, times: list[float], on_clock: bool = False) -> NDArray[np.float64]:
-        """True positions (n, 3) at ``times`` (simulated, or on the tracker's clock with ``on_clock``):
-        linear between the last two looks at the target."""
+        """True positions (n, 3) at ``times`` (simulated, or on the tracker's clock with ``on_clock``).
+
+        From the source's record of where the SMR was at each time (`positions_at`, module docstring:
+        Truth) when it keeps one; else linear between the last two looks at the target."""
+        recorded = getattr(self.source, "positions_at", None)
+        if recorded is not None:
+            t = np.asarray(times, dtype=float)
+            if on_clock:
+                t = self._now + (t - self._clock_now) * self._rate
+            return np.asarray(recorded(t + self.source_epoch), dtype=float).reshape(-1, 3)
         axis = 1 if on_clock else 0
         (t0, p0), (t1, p1) = ((a[axis], a[2]) for a in self._anchors)
         p0, p1 = np.asarray(p0, dtype=float), np.asarray(p1, dtype=float)
@@ -512,6 +543,10 @@ class EmsconInstrument:
         due: list[int] = []
         k = m.next_k
         upto = self._clock_at(now)
+        known = getattr(self.source, "known_until", None)
+        end = known() if known is not None else None
+        if end is not None:  # a sample the source cannot tell the truth for yet waits for it
+            upto = min(upto, self._clock_at(end - self.source_epoch))
         while m.time_of(k) <= upto + 1e-12 and not (m.limit and m.produced + len(due) >= m.limit):
             due.append(k)
             k += 1

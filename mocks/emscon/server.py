@@ -43,6 +43,9 @@ from mocks.geocom.target import TargetSource
 log = logging.getLogger(__name__)
 
 ES_C_UNKNOWN = 64  # ES_C_Unknown: the command an unsolicited refusal names
+#: Seconds within which the simulated time and the tracker's clock count as read at one instant
+#: (`EmsconSimulator._times`): a tenth of the 1 ms finest sample separation TPI allows.
+PAIR_S = 1e-4
 
 
 @dataclass(frozen=True)
@@ -75,6 +78,7 @@ class EmsconSimulator:
         self._t0_wall = time.monotonic()
         self._t0 = self._clock()
         self.instrument = EmsconInstrument(source, self.config.instrument, now=0.0)
+        self.instrument.source_epoch = self._t0
         self.stopping = threading.Event()
         self._lock = threading.Lock()  # the instrument and the client socket
         self._listener: socket.socket | None = None
@@ -100,6 +104,19 @@ class EmsconSimulator:
         Clocks)."""
         return time.monotonic() - self._t0_wall
 
+    def _times(self) -> tuple[float, float]:
+        """(`now`, `tracker_clock`) read at one instant: a thread pre-empted between two separate reads
+        (a loaded machine) would pair a simulated time with a tracker clock tenths of a second later,
+        and the instrument maps its samples' stamps onto simulated time by such pairs. The wall clock
+        is read around the simulated one until the two reads are less than `PAIR_S` apart."""
+        for _ in range(5):
+            w0 = time.monotonic()
+            now = self.now()
+            w1 = time.monotonic()
+            if w1 - w0 < PAIR_S:
+                break
+        return now, 0.5 * (w0 + w1) - self._t0_wall
+
     @property
     def url(self) -> str:
         """``tcp://<address>:<port>`` (after `start()`)."""
@@ -117,6 +134,7 @@ class EmsconSimulator:
         self.stopping.clear()
         self._t0_wall = time.monotonic()
         self._t0 = self._clock()
+        self.instrument.source_epoch = self._t0  # the source's record is on the same clock
         sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         sock.bind((self.config.address, self.config.port))
@@ -245,7 +263,7 @@ class EmsconSimulator:
                     for packet in packets:
                         with self._lock:
                             try:
-                                out = self.instrument.handle(packet, self.now(), self.tracker_clock())
+                                out = self.instrument.handle(packet, *self._times())
                             except PacketError as exc:
                                 log.info("emScon: closing after an undecodable packet: %s", exc)
                                 return
@@ -254,8 +272,8 @@ class EmsconSimulator:
                 if flush:
                     last_flush = time.monotonic()
                 with self._lock:
-                    out = self.instrument.tick(self.now(), flush=flush, watch=flush,
-                                               clock=self.tracker_clock())
+                    now, clock = self._times()
+                    out = self.instrument.tick(now, flush=flush, watch=flush, clock=clock)
                     bursts, self._garbage = self._garbage, 0
                 out += [self._garbage_bytes() for _ in range(bursts)]
                 self._send(conn, out)

@@ -18,6 +18,7 @@ every joint stays at the lab's `AMBIENT_TEMPERATURE`.
 from __future__ import annotations
 
 import logging
+import math
 import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -28,6 +29,7 @@ import numpy as np
 from hil.calibration.synthetic import ENCODER_SIGMA
 from mocks.ur.clock import SimClock
 from mocks.ur.directions import JointDirections
+from mocks.ur.history import JointHistory
 from mocks.ur.kin import FkFn, matrix_to_pose, pose_to_matrix
 from mocks.ur.motion import Decelerate, JointMove, LinearMove, MotionError
 from mocks.ur.status import RobotBit, RobotMode, RuntimeState, SafetyBit, SafetyMode
@@ -40,6 +42,9 @@ SAFETY_STOP_DECEL = 8.0  # rad/s^2 of the fastest joint in a category-1/2 stop
 # replaced by another): a real controller brings the arm to a controlled stop on its trajectory with the
 # drives powered (UR user manual, "Stop Categories": category 2), it never lets the last motion run on.
 PROGRAM_STOP_DECEL = 4.0
+#: The most controller cycles one tick steps through (`SimArm._advance`): 20 s at 500 Hz. A stall
+#: longer than that is no load any machine recovers from; its rest is stepped in larger steps.
+MAX_SUBSTEPS = 10_000
 #: °C, a joint's temperature when it has not warmed up: a lab's air. 20–25 °C is an air-conditioned
 #: workshop (ISO 1 puts the reference temperature of dimensional metrology at 20 °C); UR's own guideline
 #: takes 21 °C of internal joint temperature as warmed enough for full speed ("Robot start-up in cold
@@ -96,6 +101,8 @@ class SimArm:
         self.actual_q = self.q.copy()
         # which way each joint last moved (its lost motion's side), followed cycle by cycle
         self.directions = JointDirections(self.q)
+        # every controller cycle's true state in simulated time, for the instruments (`_advance`)
+        self.history = JointHistory()
         self.motion: Any = None
         # the simulator's own account of its motion: simulated seconds with a motion primitive running
         # and the joint moves started (the benches' robot time, free of fast-time software overhead)
@@ -121,6 +128,7 @@ class SimArm:
         self._t_start = self._t_last
         self.timestamp = 0.0
         self.steady_since: float | None = self._t_last
+        self.history.append(self._t_last, self.q, self.directions.signs)
         self.snapshot: dict[str, Any] = {}
         # callables(event: str, **info) told about safety events and joint moves ("movej" with its
         # profile, "movej_cut" when one ends before its profile did): `mocks.ringing` listens
@@ -356,6 +364,8 @@ class SimArm:
             self.q = np.asarray(q, dtype=float).copy()
             self.q_target = self.q.copy()
             self.directions = JointDirections(self.q)  # put there, not moved there: no side known
+            self.history.clear()
+            self.history.append(self._t_last, self.q, self.directions.signs)
             self.qd = np.zeros(6)
             self.motion = None
             self._refresh_snapshot()
@@ -409,16 +419,7 @@ class SimArm:
                 if isinstance(self.motion, JointMove):  # the part of this tick the move still ran
                     left = max(self.motion.duration - self.motion.tau, 0.0) / max(scale, 1e-9)
                     self.motion_seconds += min(dt, left)
-                try:
-                    self.q = self.motion.step(dt * scale, self.q)
-                except MotionError as exc:
-                    self.motion = None
-                    self.program_error(str(exc))
-                if self.motion is not None and self.motion.done:
-                    if self.motion.target is not None:
-                        self.q = np.array(self.motion.target, dtype=float)
-                    self.motion = None
-            self.directions.update(self.q)
+            self._advance(now - dt, dt)
             if dt > 0:
                 self.qd = (self.q - q_old) / dt
                 self.qdd = (self.qd - qd_old) / dt
@@ -431,6 +432,47 @@ class SimArm:
                     self._notify("movej_cut", at=now)
                 self._announced = None
             self._refresh_snapshot()
+
+    def _advance(self, t_from: float, dt: float) -> None:
+        """Move the arm through the `dt` simulated seconds since `t_from`, one controller cycle at a
+        time, recording each cycle's true state in `history`.
+
+        A real controller is hard real-time: it steps its motion every 2 ms (500 Hz) whatever else
+        runs. This tick thread can be starved for tenths of a second on a loaded machine; stepping the
+        motion over such a gap in one go would move the arm on a different path (a servo loop's
+        smoothing, a move's profile integrated coarsely) and leave the instruments no state between
+        the two ticks. The cycle is the controller's period in simulated time, or longer in fast time
+        (`clock.speed` simulated seconds pass per wall second), where the tick thread's own period is
+        the finest step this simulator takes anyway. At most `MAX_SUBSTEPS` cycles per tick bound the
+        cost of a very long stall.
+        """
+        speed = float(getattr(self.clock, "speed", 1.0))  # a test's hand-moved clock has none
+        cycle = max(1.0, speed) / self.config.rate_hz
+        n = min(max(1, math.ceil(dt / cycle - 1e-6)), MAX_SUBSTEPS) if dt > 0 else 1
+        h = dt / n
+        for k in range(n):
+            if self.motion is not None and h > 0:
+                scale = self.speed_slider if not isinstance(self.motion, Decelerate) else 1.0
+                try:
+                    self.q = self.motion.step(h * scale, self.q)
+                except MotionError as exc:
+                    self.motion = None
+                    self.program_error(str(exc))
+                if self.motion is not None and self.motion.done:
+                    if self.motion.target is not None:
+                        self.q = np.array(self.motion.target, dtype=float)
+                    self.motion = None
+            signs = self.directions.update(self.q)
+            self.history.append(t_from + (k + 1) * h, self.q, signs)
+
+    def true_joints_at(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(true joints, joint directions), each (n, 6), at simulated `times` from `history`."""
+        return self.history.at(times)
+
+    def history_end(self) -> float | None:
+        """The newest simulated time the arm has a true state for (None before its first cycle)."""
+        span = self.history.span()
+        return None if span is None else span[1]
 
     def set_encoder_noise(self, sigma: float) -> None:
         """Standard deviation (rad) of ``actual_q`` around the true joints from the next cycle on."""

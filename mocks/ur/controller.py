@@ -162,6 +162,7 @@ class SimController:
         self._thread: threading.Thread | None = None
         self.tick_count = 0
         self.late_ticks = 0
+        self.max_tick_gap = 0.0  # wall seconds (`_run`)
 
     @property
     def servers(self) -> tuple[Any, ...]:
@@ -221,7 +222,13 @@ class SimController:
     def _run(self) -> None:
         period = 1.0 / self.arm.config.rate_hz
         deadline = time.monotonic()
+        last = deadline
         while not self._stop.is_set():
+            started = time.monotonic()
+            # the longest wall time between two ticks (and so between two RTDE packets): how starved
+            # this process has been; ur_rtde drops its link after 2.5 s without data
+            self.max_tick_gap = max(self.max_tick_gap, started - last)
+            last = started
             self.arm.tick()
             self.rtde.broadcast(self.tick_count)
             self.tick_count += 1
@@ -229,9 +236,13 @@ class SimController:
             delay = deadline - time.monotonic()
             if delay > 0:
                 time.sleep(delay)
-            elif delay < -10 * period:  # fell far behind (loaded CI machine): do not burst to catch up
+            elif delay < -period:
+                # fell behind (a loaded machine): the next tick steps the motion through every missed
+                # cycle (`SimArm.tick`), so bursting ticks to catch up gains nothing and would hold the
+                # GIL from the protocol servers and the trackers in this process; yield to them instead
                 self.late_ticks += 1
                 deadline = time.monotonic()
+                time.sleep(0)
 
     # ----------------------------------------------------------------- readers for other services
     def true_joints(self) -> np.ndarray:
@@ -265,6 +276,7 @@ class SimController:
                 "primary_connections": self.primary.connection_count(),
                 "secondary_connections": self.secondary.connection_count(),
                 "late_ticks": self.late_ticks,
+                "max_tick_gap_s": self.max_tick_gap,
                 "motion_seconds": a.motion_seconds,
                 "joint_moves": a.joint_moves,
                 "services": {name: read() for name, read in self.extra_state.items()},

@@ -108,6 +108,36 @@ READY_PREFIX = "UR-SIM-READY "
 PARENT_ENV = "UR_SIM_PARENT"  # the pid of the process that started the child (see _watch_parent)
 _PARENT_POLL = 0.2  # seconds between the child's checks that its parent is still there
 _STOP_GRACE = 2.0  # seconds an orderly shutdown may take before the child exits regardless
+#: Starting a simulator is CPU work (imports, a start pose searched among 20 000 configurations): on a
+#: loaded machine it takes many times its idle wall time while the child is runnable but not running.
+#: `start_timeout` therefore bounds the child's *CPU* time; a child that has had no CPU at all for
+#: `_HUNG_S` wall seconds is hung (a starved one still gets its slices), and `_START_WALL_FACTOR` ×
+#: `start_timeout` of wall time bounds the whole (where /proc cannot say, that alone applies).
+_HUNG_S = 30.0
+_START_WALL_FACTOR = 5.0
+
+
+def _cpu_seconds(pid: int) -> float | None:
+    """User + system CPU seconds process `pid` has used (Linux /proc), None where it cannot be read."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def start_verdict(waited: float, cpu: float | None, idle_for: float, start_timeout: float) -> str | None:
+    """Why a simulator still starting after `waited` wall seconds, with `cpu` CPU seconds used (None:
+    unknown) and none used for the last `idle_for` wall seconds, has failed; None while it may go on."""
+    if cpu is None:
+        return f"did not start within {start_timeout:g} s" if waited >= start_timeout else None
+    if cpu >= start_timeout:
+        return f"used {cpu:g} s of CPU time and did not start within {start_timeout:g} s"
+    if idle_for >= _HUNG_S:
+        return f"hung while starting (no CPU time for {idle_for:.0f} s)"
+    if waited >= _START_WALL_FACTOR * start_timeout:
+        return f"did not start within {waited:.0f} s (a machine this loaded cannot run it)"
+    return None
 
 
 def _watch_parent(parent: int, stop: threading.Event) -> None:
@@ -207,13 +237,19 @@ class SimProcess:
         line = ""
         with selectors.DefaultSelector() as sel:
             sel.register(self._proc.stdout, selectors.EVENT_READ)
-            deadline = time.monotonic() + self.start_timeout
+            began = time.monotonic()
+            last_cpu, last_busy = 0.0, began
             while not line.startswith(READY_PREFIX):
-                left = deadline - time.monotonic()
-                if left <= 0 or not sel.select(left):
-                    self.stop()
-                    raise SimStartError(f"simulator on {self.address} did not start within "
-                                        f"{self.start_timeout:g} s")
+                if not sel.select(1.0):
+                    now = time.monotonic()
+                    cpu = _cpu_seconds(self._proc.pid)
+                    if cpu is not None and cpu > last_cpu:
+                        last_cpu, last_busy = cpu, now
+                    why = start_verdict(now - began, cpu, now - last_busy, self.start_timeout)
+                    if why is not None:
+                        self.stop()
+                        raise SimStartError(f"simulator on {self.address} {why}")
+                    continue
                 line = self._proc.stdout.readline()
                 if not line:
                     self.stop()
