@@ -1,7 +1,8 @@
 """Cross-validation of a 6-D or several-reflector fit, judged as the position fit is.
 
 The folds, the one-step fold fits warm-started from the full fit, the MAP prior and the nominal (and
-controller's) model registered in each fold are `hil.calibration.cross_validation`'s; here the rows of
+controller's) model registered in each fold, and the scoring of the poses the fit rejected as outliers
+(every pose is scored held out: `score_folds`), are `hil.calibration.cross_validation`'s; here the rows of
 a pose are every reflector's position and the measured frame's orientation, each divided by its stated
 noise (`hil.calibration.pose_identification`). The nominal model fits what places the tool and the
 instrument: tracker pose, SMR offset, tool rotation, further reflectors.
@@ -27,9 +28,9 @@ from hil.arm.geometry import Geometry
 from hil.calibration.cross_validation import (
     SIGNIFICANCE,
     CrossValidation,
-    fold_of,
     held_out_residuals,
     ratio_p_value,
+    score_folds,
 )
 from hil.calibration.identification import ErrorStats, FitResult
 from hil.calibration.measurements import Measurements
@@ -73,12 +74,13 @@ class PoseCrossValidation(CrossValidation):
 
 
 def _held_out(meas: Measurements, geometry: Geometry, info: PoseFit, cols: np.ndarray, fold: np.ndarray,
-              weights: np.ndarray | None = None,
+              train: np.ndarray, weights: np.ndarray | None = None,
               offset: np.ndarray | None = None) -> tuple[ErrorStats, ErrorStats | None, np.ndarray]:
     """Held-out position errors (every reflector), orientation errors and per-pose scores of the model
-    `geometry` whose columns `cols` are refitted in each fold."""
+    `geometry` whose columns `cols` are refitted in each fold on the `train` poses (the others
+    predicted by the fit on all of them)."""
     r, J = whitened(meas, geometry, info)
-    err = held_out_residuals(r, J[:, :, cols], fold, weights, offset)
+    err = held_out_residuals(r, J[:, :, cols], fold, weights, offset, train)
     score = np.sum(err * err, axis=1)
     physical = err * info.whiten()
     positions = ErrorStats.of(physical[:, : 3 * info.reflectors])
@@ -89,19 +91,20 @@ def _held_out(meas: Measurements, geometry: Geometry, info: PoseFit, cols: np.nd
 def cross_validate_pose(meas: Measurements, fit: FitResult, *, controller: Geometry | None = None,
                         folds: int | None = None, smr_guess: np.ndarray | None = None) -> PoseCrossValidation:
     """Cross-validate the 6-D / several-reflector `fit` (made from `meas` by `identify_pose`) beside the
-    nominal model and, when given, the controller's own arm, on the same folds."""
+    nominal model and, when given, the controller's own arm, on the same folds; every pose of `meas` is
+    scored, those the fit rejected included (`score_folds`)."""
     t0 = time.perf_counter()
     info: PoseFit = fit.pose_fit
-    used = np.asarray(fit.used, dtype=bool)
+    used, fold = score_folds(fit.used, folds)
     sub = meas.subset(used)
-    fold = fold_of(len(sub), folds)
     offset = None
     if fit.prior is not None and fit.prior_weights is not None:
         offset = fit.values - fit.prior.mean
-    cal, cal_o, cal_s = _held_out(sub, fit.geometry, info, info.local, fold, fit.prior_weights, offset)
+    cal, cal_o, cal_s = _held_out(meas, fit.geometry, info, info.local, fold, used, fit.prior_weights,
+                                  offset)
     reg = tf.registration_columns(info.reflectors, info.orientation)
     assert fit.baseline is not None  # identify_pose always registers the nominal first
-    nom, nom_o, nom_s = _held_out(sub, fit.baseline, info, reg, fold)
+    nom, nom_o, nom_s = _held_out(meas, fit.baseline, info, reg, fold, used)
     orientation: dict[str, ErrorStats | None] = {}
     if info.orientation:
         orientation = {"calibrated": cal_o, "nominal": nom_o}
@@ -113,11 +116,11 @@ def cross_validate_pose(meas: Measurements, fit: FitResult, *, controller: Geome
                                 orientation_noise=info.orientation_noise, arm=controller,
                                 registration_only=True, reject_outliers=False, prior=False).baseline
         assert located is not None
-        theirs, their_o, scores["controller"] = _held_out(sub, located, info, reg, fold)
+        theirs, their_o, scores["controller"] = _held_out(meas, located, info, reg, fold, used)
         if info.orientation:
             orientation["controller"] = their_o
-    return PoseCrossValidation(int(fold.max()) + 1, len(sub), cal, nom, theirs, time.perf_counter() - t0,
-                               orientation, scores)
+    return PoseCrossValidation(int(fold.max()) + 1, len(meas), cal, nom, theirs, time.perf_counter() - t0,
+                               int((~used).sum()), orientation, scores)
 
 
 __all__ = ["JUDGED_ON", "SIGNIFICANCE", "PoseCrossValidation", "cross_validate_pose"]
