@@ -129,7 +129,9 @@ def candidate_groups(robot: str, meas: Measurements, *, compliance: bool = False
 
 class _KFold:
     """The k-fold loop of the selection: `hil.calibration.cross_validation`'s, on the same folds and
-    with the fit's prior, so "without" is the figure `cross_validate` reports for the fit itself.
+    with the fit's prior, so "without" is the figure `cross_validate` reports for the fit itself when
+    the fit rejected no pose (`cross_validate` also scores the rejected ones; the selection compares
+    candidate terms on the poses they are fitted to).
 
     Every fold's fit is one Gauss–Newton step from the full-data fit (`held_out_residuals`), so a
     model — a set of columns of the Jacobian at that fit — costs a few small solves, not a fit."""
