@@ -38,7 +38,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     # a laser tracker's noise is micrometres (AT960: 15 µm + 6 µm/m MPE): 1 mm is already a poor
     # instrument, and 1 (m) is a value in millimetres
     p.add_argument("--noise", type=finite_float(0, 1e-3, "m"), default=None, metavar="METRES",
-                   help="tracker noise per axis (default 20e-6, or the truth's)")
+                   help="a flat tracker noise per axis instead of the default, the tracker's "
+                        "distance-dependent error (hil.calibration.tracker_noise; AT960), or the truth's")
     p.add_argument("--rigid", action="store_true",
                    help="a random arm without compliance, payload and warm-up (geometry errors only)")
     p.add_argument("--ideal", action=argparse.BooleanOptionalAction, default=None,

@@ -65,12 +65,19 @@ TRACKER_SCHEMES: dict[str, tuple[str, ...]] = {
 }
 
 
+#: How a simulated station's tracker is named in its campaign identity (``sim:seed=…;truth=…``): the
+#: identity is hashed, never connected to, whatever the protocol.
+SIMULATED_IDENTITY = "sim:"
+
+
 def tracker_url_problem(url: str, protocol: str) -> str | None:
     """Why `url` cannot reach a `protocol` tracker, or None: checked with the rest of the config, so a
     URL hil does not speak (``http://``), a port out of range or a missing host is bad input naming
     tracker.url, not a hardware fault after a connection was tried (issue 31)."""
     if not url:
         return None  # required only where a campaign runs (`check_runnable`)
+    if url.startswith(SIMULATED_IDENTITY):
+        return None  # a simulated station's identity (`hil.station.simulated`), never connected to
     if "://" not in url:
         if protocol == "emscon":
             return f"an emScon tracker is reached by tcp://host[:port], got {url!r}"

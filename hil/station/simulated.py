@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from hil.arm.catalog import get_robot
-from hil.station.config import StationConfig, default_config
+from hil.station.config import SIMULATED_IDENTITY, StationConfig, default_config
 from hil.station.robot_type import Claim, agreed_robot
 
 
@@ -65,7 +65,7 @@ def simulated_station(robot: str | None = None, truth: str | None = None, speed:
         url = station["tracker_emscon_url"] if tracker_protocol == "emscon" else station["tracker_url"]
         config = base.with_overrides(robot__address=sim.address, tracker__url=url)
         identity = base.with_overrides(robot__address="sim",
-                                       tracker__url=f"sim:seed={seed};truth={truth_sha}").as_dict()
+                                       tracker__url=f"{SIMULATED_IDENTITY}seed={seed};truth={truth_sha}").as_dict()
         yield config, identity, station["truth"], sim
     finally:
         sim.stop()

@@ -18,8 +18,10 @@ ROOT = Path(__file__).resolve().parents[3]
 @pytest.fixture(scope="module")
 def station(tmp_path_factory):
     out = tmp_path_factory.mktemp("station")
+    # a flat 20 µm, as this station was drawn before the tracker's distance-dependent default: at its
+    # ~8 µm the ideal arm's unmodelled compliance makes one of these 30 poses an outlier (pose 8, 3.7 σ)
     assert main(["synth", "--ideal", "--robot", "ur5e", "--poses", "30", "--validation", "40", "--seed", "3",
-                 "--out-dir", str(out)]) == 0
+                 "--noise", "20e-6", "--out-dir", str(out)]) == 0
     return out
 
 

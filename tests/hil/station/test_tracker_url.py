@@ -14,6 +14,7 @@ from hil.station.config import parse_config, tracker_url_problem
     ("spy:///dev/ttyUSB0?file=log.txt", "geocom"), ("spy://socket://tracker:5000", "geocom"),
     ("socket://[::1]:4000", "geocom"), ("tcp://at960:700", "emscon"), ("tcp://at960", "emscon"),
     ("socket://10.0.0.5", "emscon"), ("", "geocom"),
+    ("sim:seed=1;truth=ab12", "emscon"), ("sim:seed=1;truth=ab12", "geocom"),  # a simulated identity
 ])
 def test_urls_the_drivers_take_pass(url, protocol) -> None:
     assert tracker_url_problem(url, protocol) is None
