@@ -158,8 +158,9 @@ class ReferenceWatch:
 
     def settled(self, series: Sequence[ReferenceMeasured]) -> tuple[bool, DriftFit | None]:
         """Whether a warm-up `series` (this run's, in order) shows the arm warm: the fitted drift still
-        to come below ``warmup.limit`` over a series spanning three fitted time constants; and the fit
-        (None before `hil.calibration.warmup_fit.MIN_POINTS` measurements)."""
+        to come below ``warmup.limit`` over a series spanning three fitted time constants, both at their
+        upper confidence limits (`hil.calibration.warmup_fit.DriftFit`); and the fit (None before
+        `hil.calibration.warmup_fit.MIN_POINTS` measurements)."""
         times = np.array([p.elapsed for p in series], dtype=float)
         # the joint temperatures the controller reports, when every measurement has them, fix τ
         # without the tracker's noise (hil.calibration.warmup_fit)
@@ -171,7 +172,10 @@ class ReferenceWatch:
         if fit is None:
             return False, None
         limit = float(self.config.warmup["limit"])
-        return bool(fit.remaining < limit and times[-1] - times[0] >= 3.0 * fit.time_constant), fit
+        # on the upper confidence limits, not the point estimates: a noisy series can fit a short τ
+        # that "passes" three time constants at once and says nothing is left (issue 30)
+        span = times[-1] - times[0]
+        return bool(fit.remaining_upper < limit and span >= 3.0 * fit.time_constant_upper), fit
 
     def _visit(self) -> Generator[Step, Any, tuple[PoseRecord, Conditions] | None]:
         """Approach and measure the reference; None (said in a warning) when the visit was given up."""
@@ -256,12 +260,16 @@ class ReferenceWatch:
         seconds = (yield ReadConditions(temperatures=False)).t - start
         # what `settled` compared with three time constants: the span of the series it judged
         span = series[-1].elapsed - series[0].elapsed if series else None
-        if not converged and not reason and fit is not None and fit.remaining < limit:
+        if not converged and not reason and fit is not None:
             assert span is not None  # a fit needs a series
-            three = 3 * fit.time_constant / 60
-            reason = (f"about {um(fit.remaining)} of drift is still to come, but the measurements span "
-                      f"{span / 60:.0f} min, under three fitted time constants ({three:.0f} min): too "
-                      "short to trust the fit")
+            three = 3 * fit.time_constant_upper / 60
+            if fit.remaining_upper >= limit:
+                reason = (f"about {um(fit.remaining)} of drift is still to come, and the series cannot "
+                          f"rule out {um(fit.remaining_upper)} (the fit's upper confidence limit)")
+            else:
+                reason = (f"at most {um(fit.remaining_upper)} of drift is still to come, but the "
+                          f"measurements span {span / 60:.0f} min, under three of the longest time "
+                          f"constants the fit allows ({three:.0f} min): too short to trust the fit")
         remaining = None if fit is None else fit.remaining
         tau = None if fit is None else fit.time_constant
         self.warmup = {"seconds": seconds, "converged": converged, "references": len(series),
