@@ -6,7 +6,10 @@
 1. **Bad inputs.** Runs the table of tests/hil/cli/bad_input_cases.py (the one
    tests/hil/cli/test_bad_input_sweep.py runs) in this process, each case with a time limit, and prints
    per subcommand: cases, how many meet the error contract (exit 2, one line naming the option/file/key,
-   no traceback, nothing written, created or started), and the ids of those that fail.
+   no traceback, nothing written, created or started), and the ids of those that fail; then per class
+   of issue 31 (case ids ``c1-`` … ``c6-``: inputs that never end, outputs that go nowhere, a config
+   checked before any connection, a damaged store row, odd environments) the cases, how many meet the
+   contract and the longest time one took to be refused (target: under 2 s).
 2. **Faults.** Runs ``hil calibrate --sim --speed 50`` (a small campaign) in a subprocess and interrupts
    it at seeded random moments — SIGKILL of the process (``kill -9``), SIGINT to its process group
    (Ctrl-C) or SIGTERM (``kill``), a random number of measured points into the run plus a random
@@ -48,11 +51,13 @@ sys.path.insert(0, str(ROOT))
 
 # ------------------------------------------------------------------------------------------ bad inputs
 
-def sweep(only: set[str] | None, verbose: bool) -> tuple[int, int]:
-    """Run the bad-input table; print the per-subcommand table; return (cases, meeting the contract)."""
+def sweep(only: set[str] | None, verbose: bool, classes_only: bool = False) -> tuple[int, int]:
+    """Run the bad-input table; print the per-subcommand table; return (cases, meeting the contract).
+    `classes_only`: only the cases of issue 31's classes (`CLASSES`)."""
     from tests.hil.cli.bad_input_cases import CASES, Outcome, build_fixtures, run_case, start_sim_station
 
-    cases = [c for c in CASES if only is None or c.cmd in only]
+    cases = [c for c in CASES if (only is None or c.cmd in only)
+             and (not classes_only or c.id.split("-", 1)[0] in CLASSES)]
     work = Path(tempfile.mkdtemp(prefix="hil-adversarial-"))
     station = None
     no_station = ""
@@ -74,6 +79,11 @@ def sweep(only: set[str] | None, verbose: bool) -> tuple[int, int]:
             outcome = run_case(case, fixtures, work / f"case-{i}", station=station, timeout=case.timeout)
             results.append(outcome)
             shutil.rmtree(work / f"case-{i}", ignore_errors=True)
+            if case.id.split("-", 1)[0] in CLASSES:  # again, its libraries loaded: the refusal alone
+                again = run_case(case, fixtures, work / f"case-{i}-warm", station=station,
+                                 timeout=case.timeout)
+                WARM[case.name] = again.seconds if again.ok else float("inf")
+                shutil.rmtree(work / f"case-{i}-warm", ignore_errors=True)
             if sys.stderr.isatty():
                 print(f"\r{i + 1}/{len(cases)} cases", end="", file=sys.stderr, flush=True)
         print(f"\r{len(cases)} cases in {time.monotonic() - t0:.0f} s", file=sys.stderr)
@@ -94,6 +104,7 @@ def sweep(only: set[str] | None, verbose: bool) -> tuple[int, int]:
               + ", ".join(r.case.id for r in failing))
     total_fail = sum(1 for r in results if not r.ok)
     print(f"{'total':<12} {len(results):>5} {len(results) - total_fail:>5} {total_fail:>5}")
+    by_class(results)
     if verbose and total_fail:
         print("\nFailing cases:")
         for r in results:
@@ -102,6 +113,39 @@ def sweep(only: set[str] | None, verbose: bool) -> tuple[int, int]:
                 if r.err:
                     print(f"      stderr: {r.err.splitlines()[-1][:240]}")
     return len(results), len(results) - total_fail
+
+
+#: Issue 31's classes of bad input and bad surroundings (the table's case ids begin "c<n>-").
+CLASSES = {"c1": "inputs that never end", "c2": "outputs that go nowhere", "c4": "config before connection",
+           "c5": "a damaged store row", "c6": "odd environments, ambiguous kinds"}
+
+
+#: case name -> seconds of its second run (the command's libraries already imported): a class case
+#: runs twice, so the time to refuse is told apart from the first import of numpy, scipy, pinocchio.
+WARM: dict[str, float] = {}
+
+
+def by_class(results: list[Any]) -> None:
+    """Per class of issue 31: cases, meeting the contract, and the longest time a case took to be
+    refused (or, for the cases that must succeed, to finish) — on its first run (cold: the command's
+    imports included) and its second (warm: a failing second run counts as infinite); then the longest
+    over the whole table."""
+    print("\nBy class (issue 31): cases, meeting the contract, longest time to refuse (cold / warm)")
+    print(f"{'class':<40} {'cases':>5} {'meet':>5} {'cold':>8} {'warm':>8}  slowest warm case")
+    for key, words in CLASSES.items():
+        rs = [r for r in results if r.case.id.startswith(f"{key}-")]
+        if not rs:
+            continue
+        cold = max(r.seconds for r in rs)
+        warm = max(rs, key=lambda r: WARM.get(r.case.name, r.seconds))
+        print(f"{key + ' ' + words:<40} {len(rs):>5} {sum(r.ok for r in rs):>5} {cold:>7.2f}s "
+              f"{WARM.get(warm.case.name, warm.seconds):>7.2f}s  {warm.case.name}")
+    refused = [r for r in results if r.case.expect == 2]
+    if refused:
+        slowest = max(refused, key=lambda r: r.seconds)
+        met = sum(r.ok for r in refused)
+        print(f"{'every bad input of the table (cold)':<40} {len(refused):>5} {met:>5} "
+              f"{slowest.seconds:>7.2f}s {'':>8}  {slowest.case.name}")
 
 
 # ------------------------------------------------------------------------------------------ faults
@@ -381,6 +425,8 @@ def main() -> int:
                     help="faults injected into one campaign before it is let finish (default: 2)")
     ap.add_argument("--only", help="comma list of subcommands of the bad-input table (default: all)")
     ap.add_argument("--no-sweep", action="store_true", help="skip the bad-input table")
+    ap.add_argument("--classes", action="store_true",
+                    help="only the cases of issue 31's classes (ids c1-... to c6-...)")
     ap.add_argument("--no-faults", action="store_true", help="skip the fault injection")
     ap.add_argument("--verbose", action="store_true", help="print why each failing case fails")
     ap.add_argument("--keep", action="store_true", help="keep the fault trials' stores and logs")
@@ -389,7 +435,7 @@ def main() -> int:
         ap.error("--faults and --kills-per-trial must be at least 1")
     ok = True
     if not args.no_sweep:
-        cases, meeting = sweep(set(args.only.split(",")) if args.only else None, args.verbose)
+        cases, meeting = sweep(set(args.only.split(",")) if args.only else None, args.verbose, args.classes)
         ok &= cases == meeting
     if not args.no_faults:
         injected, exact, baseline = faults(args.faults, args.seed, args.kills_per_trial, args.keep)

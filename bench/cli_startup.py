@@ -16,6 +16,18 @@ each, every campaign with its model document and validation, 5 poses measured); 
 40 synthetic measurements of a random UR5e. ``--source DIR`` times another checkout of hil (e.g. ``git
 archive HEAD | tar -x -C /tmp/old``) through PYTHONPATH on the same files, for a before/after
 comparison.
+
+Two rows are floors rather than commands: ``import sqlalchemy`` (what every listing pays before it reads
+anything) and ``import numpy, pinocchio`` (what ``hil identify`` pays before it fits).
+
+Python's bytecode cache: a command run the second time reads its modules' compiled bytecode instead of
+compiling their source, as an installed hil always does (pip compiles on install). With
+PYTHONDONTWRITEBYTECODE set and a source checkout, every run compiles all of hil's modules it imports
+again: compiling the 33 modules of hil ``hil history`` imports took 40 ms of CPU, the 42 of ``hil
+identify`` 73 ms (a loaded 2-core machine, where ``hil --help`` took twice its idle CPU time). So by
+default each command runs once untimed with the bytecode written to a folder of the run
+(PYTHONPYCACHEPREFIX, nothing written into the checkout) and is then timed reading it;
+``--no-bytecode`` times compiling every run instead.
 """
 
 from __future__ import annotations
@@ -85,6 +97,8 @@ def commands(store: Path, csv: Path, out: Path) -> tuple[tuple[str, list[str]], 
     db = ["--db", str(store)]
     return (
         ("python -c pass", ["-c", "pass"]),
+        ("import sqlalchemy", ["-c", "import sqlalchemy"]),
+        ("import numpy, pinocchio", ["-c", "import numpy, pinocchio"]),
         ("hil --help", ["-m", "hil", "--help"]),
         ("hil history --help", ["-m", "hil", "history", "--help"]),
         ("hil select --help", ["-m", "hil", "select", "--help"]),
@@ -116,22 +130,33 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--runs", type=int, default=7, help="runs per command (default: 7)")
     ap.add_argument("--source", type=Path, help="time the hil found in this directory instead")
+    ap.add_argument("--no-bytecode", action="store_true",
+                    help="compile every module's source on every run (PYTHONDONTWRITEBYTECODE)")
     args = ap.parse_args()
     env = dict(os.environ)
     env.pop("HIL_DB", None)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    env.pop("PYTHONPYCACHEPREFIX", None)
     if args.source:
         env["PYTHONPATH"] = str(args.source.resolve()) + os.pathsep + env.get("PYTHONPATH", "")
     where = args.source or ROOT
     with tempfile.TemporaryDirectory(prefix="hil-cli-startup-") as tmp:
         folder = Path(tmp)
         env["XDG_DATA_HOME"] = str(folder / "data")  # nothing of the user's
+        if args.no_bytecode:
+            env["PYTHONDONTWRITEBYTECODE"] = "1"
+        else:
+            env["PYTHONPYCACHEPREFIX"] = str(folder / "pycache")  # the run's, not the checkout's
         store, csv = make_inputs(folder)
-        print(f"hil from {where}; {args.runs} runs each; {os.cpu_count()} cores, "
+        cache = "compiled every run" if args.no_bytecode else "bytecode cached (one untimed run first)"
+        print(f"hil from {where}; {args.runs} runs each; {cache}; {os.cpu_count()} cores, "
               f"load average {os.getloadavg()[0]:.2f}")
         print(f"{'command':<24} {'median [s]':>10} {'fastest [s]':>11} {'× hil --help':>12} "
               f"{'CPU [s]':>8}")
         baseline = None
         for name, argv in commands(store, csv, folder / "model.json"):
+            if not args.no_bytecode:
+                timed(argv, env, where, 1)  # writes the bytecode the timed runs read
             times, cpu = timed(argv, env, where, args.runs)
             t = statistics.median(times)
             baseline = t if name == "hil --help" else baseline

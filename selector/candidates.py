@@ -302,7 +302,7 @@ def generate_candidates(model: PoseModel, count: int, constraints: Constraints |
         worst = max(alone, key=lambda k: alone[k]) if alone else "joint range"
         raise NoCandidatesError(
             f"no candidate configuration satisfies the constraints ({sampled} drawn): '{worst}' removed "
-            f"the most ({alone.get(worst, 0)} of {len(q)} on its own); relax or disable it")
+            f"the most ({alone.get(worst, 0)} of {len(q)} on its own); relax or disable it", worst)
     S = np.concatenate(kept_smr)[:count]
     G = np.asarray(model.jacobian(Q), dtype=float)
     return CandidateSet(Q, S, G, sampled, rejected, time.perf_counter() - t0)

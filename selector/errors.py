@@ -20,4 +20,9 @@ class CountError(SelectorError):
 
 
 class NoCandidatesError(SelectorError):
-    """The constraints left no (or too few) candidate configurations."""
+    """The constraints left no (or too few) candidate configurations; `constraint` names the one that
+    removed the most on its own, so a caller can name the setting behind it."""
+
+    def __init__(self, message: str, constraint: str | None = None) -> None:
+        super().__init__(message)
+        self.constraint = constraint

@@ -93,7 +93,7 @@ class Router:
             return [q]
         here = np.asarray(here, dtype=float)
         safe: list[list[np.ndarray]] = []
-        for route in self.candidates(here, q):
+        for route, folded in self._candidates(here, q):
             try:
                 start = here
                 for target in route:
@@ -103,6 +103,10 @@ class Router:
                 continue
             if len(route) == 1:  # straight there: nothing is quicker
                 return route
+            # a folded transit is checked for self-collision only once its legs stay in the box: most
+            # fail that first, and the box check (a cached model's FK) costs half the capsules'
+            if folded and self.collides(np.linspace(route[0], route[1], 5)):
+                continue
             safe.append(route)
         if safe:
             return min(safe, key=lambda r: travel(here, r))
@@ -125,15 +129,21 @@ class Router:
         return lead
 
     def candidates(self, here: np.ndarray, q: np.ndarray) -> Iterator[list[np.ndarray]]:
-        """The routes `route` tries, in order, made as they are needed (most legs go straight)."""
-        yield [q]
+        """The routes `route` tries, in order, made as they are needed (most legs go straight); a
+        transit through a folded posture only if it does not fold the arm onto itself."""
+        for route, folded in self._candidates(here, q):
+            if not (folded and self.collides(np.linspace(route[0], route[1], 5))):
+                yield route
+
+    def _candidates(self, here: np.ndarray, q: np.ndarray) -> Iterator[tuple[list[np.ndarray], bool]]:
+        """(route, whether its transit is a folded posture to check for self-collision), in `candidates`'
+        order, unchecked."""
+        yield [q], False
         if self.home is not None:
-            yield [np.asarray(self.home, dtype=float), q]
+            yield [np.asarray(self.home, dtype=float), q], False
         for k, (shoulder, elbow) in enumerate(TRANSIT_POSTURES):
-            a, b = transit(here, shoulder, elbow), transit(q, shoulder, elbow)
-            if k and self.collides(np.linspace(a, b, 5)):  # the upright posture cannot fold onto itself
-                continue
-            yield [a, b, q]
+            # the upright posture (k = 0) cannot fold the arm onto itself
+            yield [transit(here, shoulder, elbow), transit(q, shoulder, elbow), q], k > 0
 
     def collides(self, q: np.ndarray) -> bool:
         """Whether any of configurations `q` (n, 6) brings two non-adjacent links of the arm together

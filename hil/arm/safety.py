@@ -10,8 +10,19 @@ import numpy as np
 
 from hil.arm.catalog import RobotSpec
 from hil.arm.geometry import Geometry
-from hil.arm.kinematics import Kinematics
+from hil.arm.kinematics_cache import kinematics_of
 from hil.errors import InputError
+
+#: Points along a move's joint-space path at which the UR driver checks the keep-in zone with the
+#: controller's kinematics (`drivers.robot.model.RobotConfig.keep_in_checks`' default: s = k/7). The
+#: planner checks these fractions too, so a move it passes is never refused there for falling
+#: between its own points (a campaign once failed mid-run "at 57 % of the way", s = 4/7).
+DRIVER_PATH_CHECKS = 8
+
+
+def path_fractions(path_checks: int) -> np.ndarray:
+    """Fractions of a move's path the planner checks: `path_checks` evenly spaced, and the driver's."""
+    return np.union1d(np.linspace(0.0, 1.0, path_checks), np.linspace(0.0, 1.0, DRIVER_PATH_CHECKS))
 
 
 def check_target(q: np.ndarray, spec: RobotSpec, keep_in: tuple[np.ndarray, np.ndarray] | None = None,
@@ -20,7 +31,10 @@ def check_target(q: np.ndarray, spec: RobotSpec, keep_in: tuple[np.ndarray, np.n
     """Raise InputError if `q` is outside the joint limits, or the SMR leaves the keep-in box.
 
     With `start`, the straight joint-space path from `start` to `q` (how moveJ travels) is checked at
-    `path_checks` points too. Nothing is clamped: an unsafe target is refused.
+    `path_checks` points and at the UR driver's own (`path_fractions`) too. Nothing is clamped: an unsafe
+    target is refused. The model's kinematics is built once per geometry content and thread
+    (`hil.arm.kinematics_cache`): a route's twenty-odd checks would otherwise spend most of their time
+    rebuilding it.
     """
     q = np.asarray(q, dtype=float)
     if q.shape != (6,) or not np.all(np.isfinite(q)):
@@ -33,8 +47,8 @@ def check_target(q: np.ndarray, spec: RobotSpec, keep_in: tuple[np.ndarray, np.n
     if keep_in is None or model is None:
         return
     lo, hi = keep_in
-    path = [q] if start is None else [start + (q - start) * s for s in np.linspace(0, 1, path_checks)]
-    pts = Kinematics(model).points(np.array(path), frame="base")
+    path = q[None] if start is None else start + path_fractions(path_checks)[:, None] * (q - start)
+    pts = kinematics_of(model).points(path, frame="base")
     outside = np.flatnonzero(np.any((pts < lo) | (pts > hi), axis=1))
     if outside.size:
         p = pts[outside[0]]

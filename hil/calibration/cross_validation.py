@@ -118,7 +118,7 @@ def held_out_residuals(residuals: np.ndarray, jacobian: np.ndarray, fold: np.nda
     g_all = Jf.T @ rf
     norms = np.sqrt(np.maximum(np.diag(A_all) + w, 1e-300))  # column scaling for the solves
     out = np.empty_like(r)
-    for f in np.unique(fold):
+    for f in sorted(set(np.asarray(fold).tolist())):  # not np.unique: numpy 2.4's imports numpy.ma
         held = rows == f
         Jh = Jf[held]
         A = A_all - Jh.T @ Jh + np.diag(w)

@@ -168,6 +168,26 @@ def parse_constraints(*, tracker: Sequence[float] | None, disabled: Sequence[str
         raise InputError(str(exc)) from None
 
 
+#: The constraints that depend on where the tracker stands (its distance, the SMR's acceptance cone
+#: toward it, the line of sight to it): with ``--tracker`` given, that position is the first suspect.
+TRACKER_CONSTRAINTS = frozenset({"range", "acceptance", "line-of-sight"})
+#: The ``hil select`` option that sets each constraint (for one not about the tracker's position).
+CONSTRAINT_OPTIONS = {"range": "--range", "acceptance": "--half-angle", "wrist": "--wrist-margin",
+                      "elbow": "--elbow-margin", "floor": "--floor"}
+
+
+def _naming_the_option(exc: Exception, constraints: Constraints) -> str:
+    """`exc`'s message, led by the option behind the constraint that left no candidates: ``--tracker
+    0,0,0`` was refused as "no candidate configuration satisfies the constraints" without naming the
+    option that caused it (issue 31)."""
+    worst = getattr(exc, "constraint", None)
+    if worst in TRACKER_CONSTRAINTS and constraints.tracker is not None:
+        where = ",".join(f"{v:g}" for v in constraints.tracker)
+        return f"--tracker {where}: {exc} (the tracker's position decides '{worst}'; move it)"
+    option = CONSTRAINT_OPTIONS.get(worst or "")
+    return f"{option}: {exc}" if option else str(exc)
+
+
 def design_space(robot: str, count: int, *, candidates: int, seed: int, smr: Sequence[float],
                  constraints: Constraints, scaling: str, compliance: bool, payload: Any,
                  gravity: Sequence[float] | None,
@@ -253,7 +273,7 @@ def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str
         perm, ordered = order_poses(Q, model.max_joint_speed, start)
         order_seconds = time.perf_counter() - t0
     except selector.SelectorError as exc:
-        raise InputError(str(exc)) from None
+        raise InputError(_naming_the_option(exc, constraints)) from None
     unordered = travel_time(Q, model.max_joint_speed, start)
     report: dict[str, Any] = {
         "format": FORMAT,

@@ -21,7 +21,7 @@ import numpy as np
 
 from drivers.robot.model import RobotIdentity
 from hil import __version__
-from hil.arm.catalog import get_robot
+from hil.arm.catalog import RobotSpec, get_robot
 from hil.arm.geometry import Geometry
 from hil.arm.kinematics import Kinematics
 from hil.calibration.identification import register
@@ -33,7 +33,7 @@ from hil.campaign.calibration_plan import (
     ResumeState,
     calibration_plan,
 )
-from hil.campaign.controller import controller_record
+from hil.campaign.controller import controller_calibration, controller_record
 from hil.campaign.engine import Clock, Engine, RealClock, RunAborted, RunInterrupted
 from hil.campaign.events import (
     AcquisitionStopped,
@@ -86,6 +86,16 @@ class RunOutcome:
         if self.status == "interrupted":
             return 128 + int(getattr(self.error, "signum", signal.SIGINT))
         return EXIT_FAULT
+
+
+def keep_in_model(spec: RobotSpec, smr: Any, controller: dict[str, Any] | None) -> Geometry:
+    """The arm the engine checks every planned move against the keep-in box with: the controller's
+    own model when it reported one, since the controller's driver checks each commanded move with the
+    controller's forward kinematics (`drivers.robot.ur`), and a path that the nominal arm keeps inside
+    the box by less than the factory deltas' millimetres is refused there mid-campaign; else nominal."""
+    if controller is None:
+        return Geometry.nominal(spec, smr)
+    return controller_calibration(controller).geometry(spec, smr)
 
 
 def _nominal_deviation(config: StationConfig, earlier: Iterable[PoseRecord] = ()
@@ -205,7 +215,7 @@ def run_plan(config: StationConfig, plan: Callable[[RunContext], Any], *,
             suspenders=suspenders(devices, relock_timeout=config.timeouts["relock"]),
             clock=clock or RealClock(), suspend_timeout=config.timeouts["suspend"],
             keep_in=(np.array(config.keep_in["min"]), np.array(config.keep_in["max"])),
-            check_model=Geometry.nominal(spec, config.smr["offset"]), deviation=deviation)
+            check_model=keep_in_model(spec, config.smr["offset"], controller), deviation=deviation)
         if lease is not None:
             lease.on_lost = engine.request_interrupt
         if engine_ready is not None:

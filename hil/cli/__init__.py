@@ -27,7 +27,7 @@ from typing import Any
 
 import hil
 from hil.arm.blas_threads import limit_blas_threads
-from hil.cli.support.output import quiet_on_closed_stdout
+from hil.cli.support.output import degrade_to_ascii, quiet_on_closed_stdout
 from hil.errors import FaultError, HilError, InputError
 from hil.jobs.outcome import (
     EXIT_BAD_INPUT,
@@ -179,6 +179,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     argument list (a test, a script) it always returns."""
     as_program = argv is None
     argv = sys.argv[1:] if argv is None else list(argv)
+    degrade_to_ascii()  # an ASCII terminal or the C locale: "--" for an em dash, not exit 70
     limit_blas_threads()
     try:
         parser = build_parser(argv)

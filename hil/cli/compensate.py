@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import sys
 
 from hil.cli.support.output import print_json, wrote
@@ -16,7 +17,9 @@ from hil.jobs.outcome import EXIT_OK
 
 #: File name endings read as a URScript program, and as a CSV of poses; anything else is decided by its
 #: first line (a CSV header names x,y,z,rx,ry,rz).
-PROGRAM_SUFFIXES = (".script", ".urscript", ".txt")
+#: Suffixes that say the kind; any other (``.txt`` included: Polyscope exports and CSVs both use it)
+#: is decided by the content, and a content that is neither kind is refused (`_is_program`).
+PROGRAM_SUFFIXES = (".script", ".urscript")
 CSV_SUFFIXES = (".csv",)
 
 
@@ -76,7 +79,20 @@ def _is_program(path: str, text: str) -> bool:
         return True
     if suffix in CSV_SUFFIXES:
         return False
-    return not looks_like_csv(text)
+    if looks_like_csv(text):
+        return False
+    first = next((line.strip() for line in text.splitlines() if line.strip()), "")
+    fields = [f.strip() for f in first.split(",")]
+    if len(fields) >= 2 and all(re.fullmatch(r"[A-Za-z_][A-Za-z0-9_ ]*", f) for f in fields):
+        # a header of names, but not the pose columns: a CSV with a typo, not a program (which was
+        # "compensated" with no targets, exit 0 — issue 31); neither kind is what the file says
+        from hil.compensation.targets_csv import POSE_COLUMNS
+        from hil.errors import InputError
+
+        raise InputError(f"{path}: line 1 {first[:60]!r} is a CSV header without the pose columns "
+                         f"{','.join(POSE_COLUMNS)}, and the file is no URScript program; expected a CSV "
+                         "of poses with that header or a URScript program (.script)")
+    return True
 
 
 def run(args: argparse.Namespace) -> int:
@@ -115,6 +131,10 @@ def run(args: argparse.Namespace) -> int:
     except UnicodeDecodeError:
         text = decode_input_text(raw, args.input)  # raises, naming the file and the byte
     program = _is_program(args.input, text)
+    if not program:  # a table over the row limit is refused before the controller is asked
+        from hil.files.inputs import csv_rows
+
+        csv_rows(text, args.input)
 
     if args.controller is not None:
         controller: ControllerCalibration = controller_from_file(args.controller, robot)

@@ -82,7 +82,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                           "'incomplete' (exit code 1)")
     run.add_argument("--truth", metavar="truth.json", help="--sim: the hidden truth (default: random)")
     run.add_argument("--speed", type=SIM_SPEED, default=1.0, metavar="F", help="--sim: fast-time factor")
-    run.add_argument("--seed", type=SEED, default=1, help="--sim: seed of the random truth and noise")
+    run.add_argument("--seed", type=SEED, help="--sim: seed of the random truth and noise (default: 1)")
     run.add_argument("--robot", default=None,
                      help=f"--sim: robot type ({', '.join(ROBOT_NAMES)}; default: --truth's, "
                           "--model's, else ur5e); with --config it must match robot.type")

@@ -22,7 +22,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     src.add_argument("--config", metavar="station.toml", help="station configuration")
     src.add_argument("--sim", action="store_true", help="use the simulated station")
     p.add_argument("--speed", type=SIM_SPEED, default=1.0, metavar="F", help="--sim: fast-time factor")
-    p.add_argument("--seed", type=SEED, default=1, help="--sim: seed of the random truth and noise")
+    p.add_argument("--seed", type=SEED, help="--sim: seed of the random truth and noise (default: 1)")
     p.add_argument("--robot", default=None,
                    help=f"--sim: robot type ({', '.join(ROBOT_NAMES)}; default: --truth's, else ur5e); "
                         "with --config it must match robot.type")
@@ -32,6 +32,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--candidates", type=CANDIDATES, help="selector candidates (overrides the config)")
     p.add_argument("--accept", type=rms_threshold, metavar="METRES",
                    help=f"validation RMS threshold, {RMS_THRESHOLD_HELP}; overrides the config")
+    p.add_argument("--no-warmup", action="store_true",
+                   help="measure without warming the arm up first (a quick look, or an arm that has been "
+                        "running), as hil calibrate --no-warmup; the Plan screen's w toggles it")
     p.add_argument("--db", metavar="PATH",
                    help="campaign database (default: config, $HIL_DB, data dir; with --sim: the simulated "
                         "stations' sim.db in the data dir, never $HIL_DB)")
@@ -56,7 +59,8 @@ def options_from(args: argparse.Namespace) -> object:
     check_pose_count(args.poses, args.config, args.robot)
     source = station_source(args)  # before the app opens (or creates) a store
     if source.config is not None:
-        return TuiOptions(config=source.config, db=args.db, out_dir=args.out_dir, overrides=source.overrides)
+        return TuiOptions(config=source.config, db=args.db, out_dir=args.out_dir, overrides=source.overrides,
+                          no_warmup=args.no_warmup)
     claims = option_claim(args.robot)
     if args.truth:
         from hil.calibration.model_file import load_truth
@@ -67,10 +71,10 @@ def options_from(args: argparse.Namespace) -> object:
     # a simulated station's campaigns go to the simulated stations' store unless --db names one (said
     # on stderr before the app takes the screen), never to $HIL_DB's or the default: the plant's
     db = str(store_location(args.db, source, None, say))
-    return TuiOptions(sim=True, speed=args.speed, seed=args.seed, robot=robot,
+    return TuiOptions(sim=True, speed=args.speed, seed=1 if args.seed is None else args.seed, robot=robot,
                       truth=args.truth, tracker_protocol=args.tracker_protocol or "geocom", db=db,
                       ideal=args.ideal,
-                      out_dir=args.out_dir, overrides=source.overrides)
+                      out_dir=args.out_dir, overrides=source.overrides, no_warmup=args.no_warmup)
 
 
 def check_store(db: str | None, config: object | None) -> None:

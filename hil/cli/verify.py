@@ -41,7 +41,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     src.add_argument("--sim", action="store_true", help="use the simulated station")
     p.add_argument("--truth", metavar="truth.json", help="--sim: the hidden truth (default: random)")
     p.add_argument("--speed", type=SIM_SPEED, default=1.0, metavar="F", help="--sim: fast-time factor")
-    p.add_argument("--seed", type=SEED, default=1, help="--sim: seed of the random truth and noise")
+    p.add_argument("--seed", type=SEED, help="--sim: seed of the random truth and noise (default: 1)")
     p.add_argument("--robot", default=None,
                    help=f"--sim: robot type ({', '.join(ROBOT_NAMES)}; default: the model's or --truth's, "
                         "else ur5e); with --config it must match robot.type")

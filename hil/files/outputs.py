@@ -15,6 +15,7 @@ from __future__ import annotations
 import csv
 import io
 import os
+import stat
 import tempfile
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
@@ -65,12 +66,22 @@ def check_output(path: PathArg, *, field: str,
     target = Path(name)
     if not name:
         raise InputError(f"{field}: empty path; name a file")
+    _check_name_length(target, field)  # first: stat() of a name too long fails with ENAMETOOLONG
     if target.is_dir():
         raise InputError(f"{field}: {name} is a directory; name a file")
+    if name.endswith(os.sep) or (os.altsep and name.endswith(os.altsep)):
+        raise InputError(f"{field}: {name} ends in a slash, which names a directory; name a file")
     parent = target.parent
     if not parent.is_dir():
         what = "is not a directory" if parent.exists() else "does not exist"
         raise InputError(f"{field}: cannot write {name}: folder {parent} {what}")
+    try:
+        mode = os.stat(target).st_mode
+    except OSError:
+        mode = None  # not there yet (or a dangling link, which the rename replaces)
+    if mode is not None and not stat.S_ISREG(mode):
+        raise InputError(f"{field}: {name} is {_kind(mode)}, not a regular file: hil writes a result to "
+                         "a file, whole, so it could not be read back; name a file")
     for option, other in _pairs(inputs):
         if _same_file(target, other):
             raise InputError(f"{field}: {name} is the input {option}; writing it would destroy it, "
@@ -87,6 +98,33 @@ def check_output(path: PathArg, *, field: str,
     return target
 
 
+def _check_name_length(target: Path, field: str) -> None:
+    """InputError when the file system would refuse `target`'s name or path as too long (ENAMETOOLONG
+    at the write, after the work was done): the limits are the file system's own (pathconf)."""
+    parent = target.parent if target.parent.is_dir() else Path(".")
+    try:
+        name_max = os.pathconf(parent, "PC_NAME_MAX")
+        path_max = os.pathconf(parent, "PC_PATH_MAX")
+    except (OSError, ValueError):
+        name_max, path_max = 255, 4096  # POSIX's usual values, when the file system does not say
+    length = len(os.fsencode(target.name))
+    if length > name_max:
+        raise InputError(f"{field}: the file name {target.name[:40]}... is {length} bytes long; this file "
+                         f"system allows at most {name_max}")
+    if len(os.fsencode(os.path.abspath(target))) >= path_max:
+        raise InputError(f"{field}: the path {os.fspath(target)[:40]}... is longer than this file system "
+                         f"allows ({path_max} bytes)")
+
+
+def _kind(mode: int) -> str:
+    """What a file that is not a regular file is, in words."""
+    for test, words in ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+                        (stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return words
+    return "not a regular file"
+
+
 def check_output_dir(path: PathArg, *, field: str, names: Iterable[str] = (),
                      inputs: Mapping[str, PathArg | None] | Iterable[tuple[str, PathArg | None]] = (),
                      store: PathArg | None = None, store_field: str = "--db") -> Path:
@@ -99,6 +137,7 @@ def check_output_dir(path: PathArg, *, field: str, names: Iterable[str] = (),
     target = Path(name)
     if not name:
         raise InputError(f"{field}: empty path; name a directory")
+    _check_name_length(target, field)
     if target.exists() and not target.is_dir():
         raise InputError(f"{field}: {name} is a file, not a directory; name a directory")
     if not target.exists() and not target.parent.is_dir():
@@ -126,7 +165,7 @@ def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> None:
     target = Path(path)
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name[:64]}.", suffix=".tmp")
     except OSError as exc:
         raise InputError(f"{target}: cannot write: {exc.strerror or exc}") from None
     try:
@@ -134,6 +173,9 @@ def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> None:
             fh.write(data)
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; a result is as readable as any file
         os.replace(tmp, target)
+    except OSError as exc:  # a full disk, a quota, a file system gone read-only: the user's to fix
+        Path(tmp).unlink(missing_ok=True)
+        raise InputError(f"{target}: cannot write: {exc.strerror or exc}") from None
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise

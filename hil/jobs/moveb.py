@@ -37,7 +37,7 @@ class MovebRequest:
     sim: bool = False
     truth: str | None = None
     speed: float = 1.0
-    seed: int = 1
+    seed: int | None = None  # --sim only: None is 1 (`StationSource.of`)
     robot: str | None = None  # --robot
     tracker_protocol: str | None = None
     ideal: bool | None = None  # --sim without a truth: the ideal arm (None: the simulator's default)

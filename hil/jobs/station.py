@@ -65,7 +65,7 @@ class StationSource:
 
     @classmethod
     def of(cls, *, config: str | StationConfig | None, sim: bool, truth: str | None = None,
-           speed: float = 1.0, seed: int = 1, robot: str | None = None,
+           speed: float = 1.0, seed: int | None = None, robot: str | None = None,
            tracker_protocol: str | None = None, overrides: dict[str, Any] | None = None,
            ideal: bool | None = None) -> StationSource:
         """The source the options name (``--config`` or ``--sim`` and theirs), checked before anything
@@ -78,9 +78,13 @@ class StationSource:
             if ideal is not None:
                 raise InputError(f"--{'' if ideal else 'no-'}ideal goes with --sim, not --config: it "
                                  "chooses the simulated arm")
-            if truth or speed != 1.0 or tracker_protocol:
-                raise InputError("--truth, --speed and --tracker-protocol go with --sim, not --config "
-                                 "(the configuration's tracker.protocol says which tracker it has)")
+            if truth or speed != 1.0 or tracker_protocol or seed is not None:
+                given = [o for o, v in (("--truth", truth), ("--speed", speed != 1.0),
+                                        ("--tracker-protocol", tracker_protocol),
+                                        ("--seed", seed is not None)) if v]
+                raise InputError(f"{', '.join(given)}: {'go' if len(given) > 1 else 'goes'} with --sim, not "
+                                 "--config (the configuration's tracker.protocol says which tracker it has, "
+                                 "campaign.seed its seed)")
             loaded = config if isinstance(config, StationConfig) else load_config(config)
             loaded = check_runnable(loaded)  # before a store is opened or created
             agreed_robot([config_claim(loaded), *said])  # both must name the same arm
@@ -92,7 +96,8 @@ class StationSource:
         if truth and ideal is not None:
             raise InputError(f"--{'' if ideal else 'no-'}ideal chooses a random arm: the truth {truth} "
                              "says itself whether its arm has joint errors and lost motion")
-        return cls(sim=SimulatedSpec(robot, truth, speed, seed, tracker_protocol or "geocom", ideal),
+        return cls(sim=SimulatedSpec(robot, truth, speed, 1 if seed is None else seed,
+                                     tracker_protocol or "geocom", ideal),
                    overrides=overrides)
 
     @property
@@ -152,12 +157,20 @@ def store_location(db: str | None, source: StationSource, config: StationConfig 
     configuration's ``store.url``, the user's default."""
     import os
 
-    from hil.store.paths import ENV_VAR, resolve_location
+    from hil.store.paths import ENV_VAR, check_creatable, resolve_location
 
     if source.sim is None or db:
-        return resolve_location(db, config)
-    location = resolve_location(None, simulated=True)
-    say(simulated_store_words(location, bool(os.environ.get(ENV_VAR))), "information")
+        location = resolve_location(db, config)
+        stored = config.store if config is not None else {}
+        field = ("--db" if db else f"${ENV_VAR}" if os.environ.get(ENV_VAR)
+                 else "store.url" if stored.get("url") else "store.path" if stored.get("path")
+                 else "the default store")
+    else:
+        location = resolve_location(None, simulated=True)
+        say(simulated_store_words(location, bool(os.environ.get(ENV_VAR))), "information")
+        field = "the simulated stations' store"
+    if isinstance(location, Path) and not location.exists():
+        check_creatable(location, field)  # before any connection: a store that cannot be is bad input
     return location
 
 

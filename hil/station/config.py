@@ -42,6 +42,10 @@ def _store_url(v: Any) -> str | None:
     """A store is an SQLite file (a path, or ``sqlite:///path``) or a PostgreSQL database
     (``postgresql://user@host:port/db``); another database's URL would fail only when the run starts."""
     if "://" not in v:
+        head = v.split("/", 1)[0]
+        if ":" in head and not re.fullmatch(r"[A-Za-z]:", head):  # "postgresql:/db", "dbhost:5432/hil"
+            return (f"{v!r} is not a URL (scheme://host/database) and not a file path either: a URL is "
+                    "postgresql://user@host[:port]/database, a file a path without ':'")
         return None
     scheme = v.split("://", 1)[0].lower()
     if scheme in ("postgresql", "postgres", "postgresql+psycopg"):
@@ -51,6 +55,48 @@ def _store_url(v: Any) -> str | None:
     if scheme == "sqlite":
         return None if v.startswith("sqlite:///") else "an SQLite URL is sqlite:///path/to/file.db"
     return f"must be a file path or a postgresql:// URL, got a {scheme}:// URL"
+
+
+#: The URL schemes each tracker protocol speaks (drivers.tracker.geocom.transport: pyserial's
+#: serial_for_url; drivers.tracker.emscon.transport: TCP). A plain path is a serial device (GeoCOM).
+TRACKER_SCHEMES: dict[str, tuple[str, ...]] = {
+    "geocom": ("socket", "rfc2217", "spy"),
+    "emscon": ("tcp", "socket"),
+}
+
+
+def tracker_url_problem(url: str, protocol: str) -> str | None:
+    """Why `url` cannot reach a `protocol` tracker, or None: checked with the rest of the config, so a
+    URL hil does not speak (``http://``), a port out of range or a missing host is bad input naming
+    tracker.url, not a hardware fault after a connection was tried (issue 31)."""
+    if not url:
+        return None  # required only where a campaign runs (`check_runnable`)
+    if "://" not in url:
+        if protocol == "emscon":
+            return f"an emScon tracker is reached by tcp://host[:port], got {url!r}"
+        return None if url.strip() == url and "\x00" not in url else f"not a serial device path: {url!r}"
+    scheme, rest = url.split("://", 1)
+    known = TRACKER_SCHEMES.get(protocol, ())
+    if scheme.lower() not in known:
+        return (f"{scheme}:// is not a URL a {protocol} tracker speaks; use "
+                + ("a serial device path or " if protocol == "geocom" else "")
+                + ", ".join(f"{k}://" for k in known))
+    if scheme.lower() == "spy":  # pyserial's logging wrapper around another port: spy://PORT?file=log
+        inner = rest.split("?", 1)[0]
+        if not inner:
+            return "spy:// wraps a port: spy:///dev/ttyUSB0 or spy://socket://host:port"
+        return tracker_url_problem(inner, protocol) if "://" in inner else None
+    netloc = rest.split("/", 1)[0].split("?", 1)[0]
+    host, colon, port = netloc.rpartition(":") if ":" in netloc else (netloc, "", "")
+    if not host:
+        return f"{url!r} names no host: {scheme}://host:port"
+    if not colon:
+        if protocol == "emscon":  # emScon's TPI port, 700, when none is given (its transport)
+            return _host(host)
+        return f"{url!r} names no port: {scheme}://host:port"
+    if not port.isdigit() or not 1 <= int(port) <= 65535:
+        return f"port {port!r} of {url!r} is not a TCP port (1 to 65535)"
+    return _host(host.strip("[]"))
 
 
 def _angle(v: Any) -> str | None:
@@ -572,6 +618,9 @@ def parse_config(data: dict[str, Any], source: str = "<config>") -> StationConfi
                     raise InputError(f"{where}: {problem}")
             out[name] = value
         values[section] = out
+    problem = tracker_url_problem(values["tracker"]["url"], values["tracker"]["protocol"])
+    if problem:
+        raise InputError(f"{source}: tracker.url: {problem}")
     lo, hi = values["keep_in"]["min"], values["keep_in"]["max"]
     if any(a >= b for a, b in zip(lo, hi, strict=True)):
         raise InputError(f"{source}: keep_in.min must be below keep_in.max on every axis")

@@ -110,3 +110,26 @@ def resolve_path(path: str | os.PathLike[str] | None = None, config: Any = None,
                  env: Mapping[str, str] | None = None) -> str | Path:
     """Alias of `resolve_location` (a Path for an SQLite file, a URL string for PostgreSQL)."""
     return resolve_location(path, config, env)
+
+
+def check_creatable(path: Path, field: str) -> None:
+    """InputError naming `field` when no database file can be created at `path` (a folder under
+    ``/proc``, a file where a folder should be, a read-only place): found with the rest of the config,
+    before any connection, rather than after the arm was reached (issue 31). The nearest existing
+    folder is probed with a temporary file, removed at once: permission bits do not show a pseudo or
+    read-only file system, and root passes every access() test."""
+    import tempfile
+
+    from hil.errors import InputError
+
+    folder = path.parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    if not folder.is_dir():
+        raise InputError(f"{field}: cannot create the store {path}: {folder} is not a folder")
+    try:
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as exc:
+        raise InputError(f"{field}: cannot create the store {path}: {folder}: "
+                         f"{exc.strerror or exc}") from None

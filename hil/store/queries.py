@@ -10,7 +10,6 @@ The history's one row per campaign is a single query whatever the number of camp
 from __future__ import annotations
 
 import dataclasses
-import json
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -30,7 +29,7 @@ from hil.store.records import (
     RobotIdentity,
     ValidationRecord,
 )
-from hil.store.rows import floats, loads
+from hil.store.rows import DamagedRowError, row_json
 from hil.store.transactions import TransactionalStore
 
 if TYPE_CHECKING:  # a listing needs neither: imported by the two readers that do (bench/cli_startup.py)
@@ -52,9 +51,19 @@ _MEASUREMENT_COLUMNS = (_M.c.id, _M.c.campaign, _M.c.pose, _M.c.role, _M.c.q, _M
 
 def _measurement(row: Sequence[Any]) -> Measurement:
     mid, cid, pose, role, q, p, qs, ps, samples, deviation, t = row
-    return Measurement(id=mid, campaign=cid, index=pose, role=role, q=tuple(json.loads(q)),
-                       p=tuple(json.loads(p)), q_spread=floats(qs), p_spread=floats(ps),
-                       samples=samples, deviation=deviation, t=t)
+
+    def vector(text: str | None, column: str) -> tuple[float, ...] | None:
+        value = row_json(text, table="measurements", row=mid, column=column, campaign=cid)
+        if value is None:
+            return None
+        if not isinstance(value, list) or not all(isinstance(v, int | float) for v in value):
+            raise DamagedRowError(f"damaged store row: campaign {cid}, table measurements, id {mid}: "
+                                  f"{column} is not a list of numbers")
+        return tuple(value)
+
+    return Measurement(id=mid, campaign=cid, index=pose, role=role, q=vector(q, "q") or (),
+                       p=vector(p, "p") or (), q_spread=vector(qs, "q_spread"),
+                       p_spread=vector(ps, "p_spread"), samples=samples, deviation=deviation, t=t)
 
 
 def _summary_query() -> Any:
@@ -97,7 +106,11 @@ def _summary(row: Sequence[Any]) -> CampaignSummary:
     summary = CampaignSummary(*head, passed=None if passed is None else bool(passed), kind=str(kind),
                               bootstrap_planned=int(boot_planned or 0),
                               bootstrap_measured=int(boot_measured or 0))
-    if started is not None and is_gone(json.loads(started).get("owner")):
+    try:
+        run = row_json(started, table="events", row="RunStarted", column="data", campaign=summary.id)
+    except DamagedRowError:  # the listing reads the rest; `hil show` of this campaign names the row
+        run = None
+    if isinstance(run, dict) and is_gone(run.get("owner")):
         summary = dataclasses.replace(summary, status=INTERRUPTED)
     return summary
 
@@ -108,7 +121,8 @@ def _poses(conn: Connection, campaign: str, statuses: Sequence[str] | None = Non
     q = select(p.c.idx, p.c.role, p.c.target, p.c.status, p.c.reason).where(p.c.campaign == campaign)
     if statuses is not None:
         q = q.where(p.c.status.in_(statuses))
-    return [PlannedPose(i, role, tuple(json.loads(target)), status, reason)
+    return [PlannedPose(i, role, tuple(row_json(target, table="poses", row=i, column="target",
+                                                campaign=campaign)), status, reason)
             for i, role, target, status, reason in conn.execute(q.order_by(p.c.idx))]
 
 
@@ -167,25 +181,35 @@ class StoreQueries(TransactionalStore):
             poses = _poses(conn, campaign)
             measurements = [_measurement(m) for m in conn.execute(
                 select(*_MEASUREMENT_COLUMNS).where(_M.c.campaign == campaign).order_by(_M.c.id))]
-            models = [ModelRecord(i, when, rms, json.loads(doc)) for i, when, rms, doc in conn.execute(
+            models = [ModelRecord(i, when, rms, row_json(doc, table="models", row=i, column="doc",
+                                                         campaign=campaign))
+                      for i, when, rms, doc in conn.execute(
                 select(tb.models.c.id, tb.models.c.created, tb.models.c.rms, tb.models.c.doc)
                 .where(tb.models.c.campaign == campaign).order_by(tb.models.c.id))]
             validations = [
-                ValidationRecord(i, when, m, json.loads(b), json.loads(a), bool(ok), loads(d))
+                ValidationRecord(i, when, m, *(row_json(x, table="validations", row=i, column=col,
+                                                        campaign=campaign)
+                                               for x, col in ((b, "before"), (a, "after"))),
+                                 bool(ok), row_json(d, table="validations", row=i, column="details",
+                                                    campaign=campaign))
                 for i, when, m, b, a, ok, d in conn.execute(
                     select(v.c.id, v.c.created, v.c.model, v.c.before, v.c.after, v.c.passed, v.c.details)
                     .where(v.c.campaign == campaign).order_by(v.c.id))]
             counts = {t: int(n) for t, n in conn.execute(
                 select(e.c.type, func.count()).where(e.c.campaign == campaign).group_by(e.c.type)
                 .order_by(func.min(e.c.seq)))}
+        def column(text: str | None, name: str) -> Any:
+            return row_json(text, table="campaigns", row=campaign, column=name, campaign=campaign)
+
         if summary.status == INTERRUPTED and not detail:  # read so: its process is gone (`_summary`)
             detail = "its process ended before the run did (killed, or the machine went down)"
         return CampaignRecord(
             summary=summary,
             robot=RobotIdentity(type=rtype, serial=serial or "", model=model or "", software=rsoft or ""),
-            config=json.loads(config), config_hash=chash, plan=loads(plan), detail=detail,
-            result=loads(result), software=software, poses=poses, measurements=measurements,
-            models=models, validations=validations, event_counts=counts, controller=loads(controller))
+            config=column(config, "config"), config_hash=chash, plan=column(plan, "plan"), detail=detail,
+            result=column(result, "result"), software=software, poses=poses, measurements=measurements,
+            models=models, validations=validations, event_counts=counts,
+            controller=column(controller, "controller"))
 
     def poses(self, campaign: str) -> list[PlannedPose]:
         """Every pose of the plan, by index."""
@@ -228,7 +252,8 @@ class StoreQueries(TransactionalStore):
             select(s.c.kind, s.c.value).where(s.c.measurement == measurement)
             .order_by(s.c.kind, s.c.k)).all())
         for kind, value in rows:
-            out[kind].append(tuple(json.loads(value)))
+            out[kind].append(tuple(row_json(value, table="samples", row=f"measurement {measurement}",
+                                            column="value")))
         return out
 
     def model(self, campaign: str) -> dict[str, Any] | None:
@@ -236,7 +261,8 @@ class StoreQueries(TransactionalStore):
         m = tb.models
         doc = self._query(lambda conn: conn.execute(
             select(m.c.doc).where(m.c.campaign == campaign).order_by(m.c.id.desc()).limit(1)).scalar())
-        return None if doc is None else dict(json.loads(doc))
+        return None if doc is None else dict(row_json(doc, table="models", row="latest", column="doc",
+                                                      campaign=campaign))
 
     def event_log(self, campaign: str, *, after: int = 0,
                   types: Sequence[str] | None = None) -> list[tuple[int, dict[str, Any]]]:
@@ -249,7 +275,8 @@ class StoreQueries(TransactionalStore):
         if types is not None:
             q = q.where(e.c.type.in_(list(types)))
         rows = self._query(lambda conn: conn.execute(q.order_by(e.c.seq)).all())
-        return [(seq, json.loads(data)) for seq, data in rows]
+        return [(seq, row_json(data, table="events", row=seq, column="data", campaign=campaign))
+                for seq, data in rows]
 
     def events(self, campaign: str, *, after: int = 0, types: Sequence[str] | None = None) -> list[Event]:
         """The log as Event objects (types this version does not know are left out)."""

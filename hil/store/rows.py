@@ -22,12 +22,12 @@ from typing import Any
 
 from sqlalchemy import Connection, func, select
 
+import hil
 import hil.store.tables as tb
-from hil import __version__
 from hil.campaign.ids import new_campaign_id
 from hil.store.hashing import canonical_json, config_hash, measurement_hash
 from hil.store.records import CALIBRATION, ROLES, RobotIdentity
-from hil.store.sqlite_errors import StoreError
+from hil.store.sqlite_errors import CorruptStoreError, StoreError
 
 
 # --- column text ------------------------------------------------------------------------------------
@@ -57,6 +57,26 @@ def dumps_or_null(value: Any) -> str | None:
 def loads(text: str | None) -> Any:
     """The value of a JSON column (None for SQL NULL)."""
     return None if text is None else json.loads(text)
+
+
+class DamagedRowError(CorruptStoreError):
+    """One row of the store holds a JSON column that does not parse (a disk error, a hand edit, a
+    tool that wrote into the database): bad input naming the row — campaign, table, id, column — so
+    it can be found and mended, not an internal error (issue 31)."""
+
+
+def row_json(text: str | None, *, table: str, row: Any, column: str, campaign: str | None = None) -> Any:
+    """The value of JSON column `column` of `table`'s row `row` (None for SQL NULL); `DamagedRowError`
+    naming the row when it does not parse. Every reader of the store's JSON columns goes through it."""
+    if text is None:
+        return None
+    try:
+        return json.loads(text)
+    except (ValueError, TypeError, RecursionError) as exc:
+        where = f"campaign {campaign}, " if campaign else ""
+        reason = exc.msg if isinstance(exc, json.JSONDecodeError) else type(exc).__name__
+        raise DamagedRowError(f"damaged store row: {where}table {table}, id {row}: {column} is not valid "
+                              f"JSON ({reason})") from None
 
 
 def floats(text: str | None) -> tuple[float, ...] | None:
@@ -150,7 +170,8 @@ def insert_campaign(conn: Connection, config: Any,
     conn.execute(c.insert().values(
         id=cid, station=station_id, robot=robot_id, robot_type=info.type, config=dumps(values),
         config_hash=config_hash(values), measure_hash=measurement_hash(values),
-        plan=dumps_or_null(plan), status="created", software=__version__, created=now, updated=now,
+        # hil.__version__ looked up here, not on import: a listing never pays for importlib.metadata
+        plan=dumps_or_null(plan), status="created", software=hil.__version__, created=now, updated=now,
         kind=str((plan or {}).get("kind") or CALIBRATION)))
     return cid
 

@@ -14,7 +14,7 @@ from typing import Any, ClassVar
 
 from rich.text import Text
 from textual import on
-from textual.app import App, SystemCommand
+from textual.app import App, ScreenStackError, SystemCommand
 from textual.binding import Binding, BindingType
 from textual.screen import ModalScreen, Screen
 from textual.widgets import Input
@@ -135,13 +135,24 @@ class HilApp(App[int]):
                 self.session.abandon_run()
         self.session.shutdown()
 
+    def _top(self) -> Screen[Any] | None:
+        """The screen on top, or None once the app is closing: its screens are gone while the run's
+        messages (posted from other threads) can still arrive. Reading `screen` then raised
+        ScreenStackError from a message handler, which ended a test that had timed out (the station
+        starting slowly under load) with that error instead of the time-out."""
+        try:
+            return self.screen
+        except ScreenStackError:
+            return None
+
     def _poll(self) -> None:
         if self.session.devices is not None and not self.session.run_active:
             self._work(self.session.poll, "poll", exclusive=True)
 
     def _tick(self) -> None:
-        if self.run_state.active and isinstance(self.screen, RunScreen):
-            self.screen.tick()
+        screen = self._top()
+        if self.run_state.active and isinstance(screen, RunScreen):
+            screen.tick()
 
     def _work(self, fn: Callable[..., Any], group: str, *args: Any, exclusive: bool = False) -> Worker[Any]:
         """Run `fn` on a worker thread; its errors are shown, never raised into the UI."""
@@ -154,13 +165,14 @@ class HilApp(App[int]):
 
     # --- navigation ----------------------------------------------------------------------------------
     def action_show(self, name: str) -> None:
-        if isinstance(self.screen, ModalScreen):
+        screen = self._top()
+        if screen is None or isinstance(screen, ModalScreen):
             return
-        if self.screen is not self.views[name]:
+        if screen is not self.views[name]:
             self.switch_screen(name)
 
     def action_help(self) -> None:
-        if not isinstance(self.screen, HelpScreen):
+        if not isinstance(self._top(), HelpScreen | None):
             self.push_screen(HelpScreen(simulator=self.options.sim))
 
     def nav_status(self) -> Text:
@@ -283,7 +295,8 @@ class HilApp(App[int]):
 
     def on_station_changed(self, _: StationChanged) -> None:
         self._refresh("station", "plan")  # the Plan panel's constraints come with the station's config
-        for widget in self.screen.query("NavBar"):
+        top = self._top()
+        for widget in top.query("NavBar") if top is not None else ():
             widget.refresh()
         plan = self.views["plan"]
         if isinstance(plan, PlanScreen) and plan.is_mounted and not plan.query_one("#in-poses", Input).value:
@@ -406,23 +419,23 @@ class HilApp(App[int]):
         self.run_state.apply(event)
         if (suspended is None) != (self.run_state.suspended is None):
             self.views["run"].refresh_bindings()  # skip / wait longer come and go with a suspension
-        if isinstance(event, RunStarted) and not isinstance(self.screen, ModalScreen):
+        top = self._top()
+        if isinstance(event, RunStarted) and not isinstance(top, ModalScreen):
             self.action_show("run")
         if isinstance(event, PlanReady):
             self._work(self._show_run_plan, "plan-fk", event)
         run = self.views["run"]
-        if self.screen is run:
+        if top is run:
             run.redraw()
-        else:
-            nav = self.screen.query("NavBar")
-            for widget in nav:
+        elif top is not None:
+            for widget in top.query("NavBar"):
                 widget.refresh()
 
     def on_earlier_points(self, message: EarlierPoints) -> None:
         """A resumed run's points from before: in the Run table and plot, and its counts."""
         self.run_state.restore(message.campaign, message.points)
         run = self.views["run"]
-        if self.screen is run:
+        if self._top() is run:
             run.redraw()
 
     def on_run_ended(self, message: RunEnded) -> None:

@@ -90,6 +90,7 @@ class TuiOptions:
     db: str | None = None
     out_dir: str = "."
     overrides: dict[str, Any] = field(default_factory=dict)  # "campaign.seed" or "campaign__seed" keys
+    no_warmup: bool = False  # --no-warmup: as ``hil calibrate --no-warmup`` (the Plan screen's w toggles it)
     connect: bool = True  # connect to the robot and tracker at start
     start_station: bool = True  # False: no station at all (snapshot tests feed the screens by hand)
 
@@ -135,6 +136,9 @@ class Session:
         self.devices: Any = None
         self.engine: Engine | None = None
         self.plan_overrides: dict[str, Any] = {}  # campaign.* keys set on the Plan screen
+        # measure without warming the arm up (``--no-warmup``, the Plan screen's w): as the CLI's, it
+        # overrides warmup.enabled for the next run and is not part of what identifies the campaign
+        self.no_warmup = options.no_warmup
         self.run_active = False
         self.run_campaign: str = ""  # the campaign of the run going on (once it has one)
         self.paused = False
@@ -381,10 +385,17 @@ class Session:
 
     # --- runs ----------------------------------------------------------------------------------------
     def run_config(self) -> StationConfig:
+        """The configuration the next run uses: the station's, with the Plan screen's changes and
+        without the warm-up when it is skipped (`no_warmup`)."""
         assert self.config is not None
-        if not self.plan_overrides:
-            return self.config
-        return self.config.with_overrides(**_dotted(self.plan_overrides))
+        overrides = _dotted(self.plan_overrides)
+        if self.no_warmup:
+            overrides["warmup__enabled"] = False
+        return self.config.with_overrides(**overrides) if overrides else self.config
+
+    def warmup_on(self) -> bool:
+        """Whether the next run warms the arm up first (configured on, and not skipped)."""
+        return self.config is not None and bool(self.run_config().warmup["enabled"])
 
     def run_identity(self) -> dict[str, Any]:
         """The configuration that identifies this run in the store (the Plan screen's changes included)."""
@@ -477,7 +488,7 @@ class Session:
             self.changed()
             assert self.identity is not None
             request = CalibrationRequest(station_source(self.options), identity=self.run_identity(),
-                                         campaign=resume_campaign, resume="new")
+                                         campaign=resume_campaign, resume="new", no_warmup=self.no_warmup)
             setup = StationSetup(config, self.identity, self.truth, self.sim)
             taken = self._taken
             if taken is None or taken.devices is not devices:  # devices handed to the session (tests)

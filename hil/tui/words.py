@@ -106,3 +106,16 @@ def progress_words(measured: int, planned: int, bootstrap: int = 0) -> str:
     if bootstrap:
         return f"{boot} measured, poses not chosen yet"
     return "nothing measured yet"
+
+
+def shorten_middle(text: str, width: int) -> str:
+    """`text` in at most `width` characters, cut from the middle ("20261127-1612…a1b8-model.json"): a
+    file name keeps its start (the campaign's date) and its end (the kind of file), where a cut at the
+    end would drop exactly what tells two files apart. Shown in full elsewhere (the caller's job)."""
+    if len(text) <= width:
+        return text
+    if width < 3:
+        return text[:width]
+    head = width // 2
+    tail = width - 1 - head
+    return f"{text[:head]}…{text[len(text) - tail:]}" if tail else f"{text[:head]}…"

@@ -3,9 +3,58 @@ figures in millimetres, and a quiet end (exit 141) when stdout's reader goes awa
 
 from __future__ import annotations
 
+import codecs
+import contextlib
+import errno
+import io
 import json
+import os
 import sys
 from typing import Any
+
+from hil.errors import InputError
+
+#: ASCII for the non-ASCII characters hil's words use (units, statistics, typography), so a terminal or
+#: a log in ASCII (``PYTHONIOENCODING=ascii``, the C locale) reads them; anything else becomes "?".
+ASCII_SPELLINGS: dict[str, str] = {
+    "\u2014": "--", "\u2013": "-", "\u2212": "-", "\u2026": "...", "\u00b5": "u", "\u03bc": "u",
+    "\u00b0": " deg", "\u00b1": "+/-", "\u00d7": "x", "\u00b7": ".", "\u2248": "~", "\u2264": "<=",
+    "\u2265": ">=", "\u2192": "->", "\u2190": "<-", "\u00b2": "^2", "\u00b3": "^3", "\u03c3": "sigma",
+    "\u03c1": "rho", "\u0394": "delta", "\u03b8": "theta", "\u03c0": "pi", "\u2018": "'", "\u2019": "'",
+    "\u201c": '"', "\u201d": '"', "\u2022": "*", "\u2713": "ok", "\u2717": "x", "\u00a0": " ",
+}
+ASCII_ERRORS = "hil-ascii"
+
+
+def _to_ascii(exc: UnicodeError) -> tuple[str, int]:
+    """The codec error handler behind `ASCII_ERRORS`: each character the stream cannot encode spelled
+    in ASCII (`ASCII_SPELLINGS`, else its decomposition's ASCII letters, else "?")."""
+    if not isinstance(exc, UnicodeEncodeError):
+        raise exc
+    import unicodedata
+
+    out = []
+    for ch in exc.object[exc.start:exc.end]:
+        spelled = ASCII_SPELLINGS.get(ch)
+        if spelled is None:
+            spelled = unicodedata.normalize("NFKD", ch).encode("ascii", "ignore").decode() or "?"
+        out.append(spelled)
+    return "".join(out), exc.end
+
+
+codecs.register_error(ASCII_ERRORS, _to_ascii)
+
+
+def degrade_to_ascii(*streams: Any) -> None:
+    """Let `streams` (default stdout and stderr) write what they cannot encode as ASCII instead of
+    failing: an em dash in ``hil show`` under ``PYTHONIOENCODING=ascii`` or a C locale was exit 70
+    (issue 31). A stream that encodes UTF-8, or is not a text file, is left as it is."""
+    for stream in streams or (sys.stdout, sys.stderr):
+        encoding = (getattr(stream, "encoding", None) or "").lower().replace("_", "-")
+        if encoding in ("utf-8", "utf8", "utf-16", "utf-32") or not hasattr(stream, "reconfigure"):
+            continue
+        with contextlib.suppress(ValueError, OSError, io.UnsupportedOperation):
+            stream.reconfigure(errors=ASCII_ERRORS)
 
 
 def mm(value: float) -> str:
@@ -45,30 +94,63 @@ class StdoutClosed(BrokenPipeError):
     """Stdout's reader went away (as opposed to a broken pipe to a device)."""
 
 
+class StdoutUnwritable(InputError):
+    """Stdout cannot take the output: a full device (``> /dev/full``), a file system gone read-only, or
+    no stdout at all (started with ``>&-``). The user's surroundings, not a bug: one line, exit 2."""
+
+
+class _NoStdout:
+    """What stands for stdout when the process was started without one (Python sets it to None)."""
+
+    def write(self, text: str) -> int:
+        raise OSError(errno.EBADF, "stdout is closed")
+
+    def flush(self) -> None:
+        pass
+
+
 class _GuardedStdout:
-    """A stand-in for ``sys.stdout`` that tells a closed stdout apart from other broken pipes."""
+    """A stand-in for ``sys.stdout`` that tells a closed stdout apart from other broken pipes, and
+    turns any other failed write into a one-line `StdoutUnwritable`."""
 
     def __init__(self, stream: Any) -> None:
-        self._stream = stream
+        self._stream = stream if stream is not None else _NoStdout()
 
     def write(self, text: str) -> int:
         try:
             return int(self._stream.write(text))
         except BrokenPipeError as exc:
             raise StdoutClosed(*exc.args) from None
+        except OSError as exc:
+            raise _unwritable(exc) from None
 
     def flush(self) -> None:
         try:
             self._stream.flush()
         except BrokenPipeError as exc:
             raise StdoutClosed(*exc.args) from None
+        except OSError as exc:
+            raise _unwritable(exc) from None
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._stream, name)
 
 
+def _unwritable(exc: OSError) -> StdoutUnwritable:
+    return StdoutUnwritable(f"stdout: cannot write the output: {exc.strerror or exc}")
+
+
+def _silence(stream: Any) -> None:
+    """Point `stream`'s file descriptor at /dev/null, so what is left in its buffer does not fail
+    again (and print a second error) when the interpreter flushes it at exit."""
+    # not a real file (captured in a test), or no stdout at all: nothing to silence
+    with contextlib.suppress(AttributeError, OSError, ValueError):
+        os.dup2(os.open(os.devnull, os.O_WRONLY), stream.fileno())
+
+
 def quiet_on_closed_stdout(func: Any) -> Any:
-    """`func(args)` of a subcommand, ending quietly (exit code 141) when stdout's reader goes away."""
+    """`func(args)` of a subcommand, ending quietly (exit code 141) when stdout's reader goes away, and
+    in one line (`StdoutUnwritable`, exit 2) when stdout is full, unwritable or missing."""
 
     def run(args: Any) -> Any:
         stream = sys.stdout
@@ -78,13 +160,11 @@ def quiet_on_closed_stdout(func: Any) -> Any:
             sys.stdout.flush()
             return code
         except StdoutClosed:
-            try:  # what is left in the buffer must not fail again when the interpreter exits
-                import os
-
-                os.dup2(os.open(os.devnull, os.O_WRONLY), stream.fileno())
-            except (AttributeError, OSError, ValueError):
-                pass  # not a real file (captured in a test): nothing to silence
+            _silence(stream)
             return EXIT_STDOUT_CLOSED
+        except StdoutUnwritable:
+            _silence(stream)
+            raise
         finally:
             sys.stdout = stream
 

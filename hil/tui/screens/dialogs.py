@@ -19,6 +19,7 @@ HELP = """\
 [b]Anywhere[/b]  ? help  q quit (ctrl+c too)  ctrl+p commands  tab next field
 [b]Station[/b]   c connect/disconnect  m measure SMR now  r refresh
 [b]Plan[/b]      s select poses  u use for next run  esc leave field
+          w warm-up on/off for the next run (off: as --no-warmup)
 [b]Run[/b]       g start or resume  p pause/resume  a abort
           s skip the pose (beam lost)  w wait longer
 [b]Results[/b]   m model  u URDF  y ROS YAML  h HTML report  x all

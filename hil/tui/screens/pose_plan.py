@@ -88,6 +88,8 @@ class PlanScreen(HilScreen):
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("s", "select", "Select poses"),
         Binding("u", "use", "Use for next run"),
+        # not in the footer (it would cut "q Quit" at 80 columns): the panel's warm-up line and ? show it
+        Binding("w", "toggle_warmup", "Warm-up on/off", show=False),
     ]
 
     def __init__(self) -> None:
@@ -181,6 +183,22 @@ class PlanScreen(HilScreen):
                         f"{values['campaign.validation_poses']} validation poses, "
                         f"{values['campaign.candidates']} candidates, {values['campaign.index']}")
 
+    def action_toggle_warmup(self) -> None:
+        """Skip the warm-up in the next run, or warm up again: ``hil calibrate --no-warmup``'s meaning
+        (a quick look, or an arm that has been running already); it applies to a resumed campaign
+        too, which otherwise warms up again (the arm may have cooled)."""
+        session = self.hil.session
+        if session.config is None:
+            self.hil.notify("the station is not ready yet", severity="warning")
+            return
+        if not session.no_warmup and not session.warmup_on():
+            self.hil.notify("the configuration has no warm-up (warmup.enabled = false)", severity="warning")
+            return
+        session.no_warmup = not session.no_warmup
+        self.refresh_view()
+        self.hil.notify("next run: no warm-up, it measures at once (as --no-warmup)" if session.no_warmup
+                        else "next run: warms the arm up first, as configured")
+
     def show_selection(self, report: dict[str, Any], points: np.ndarray, tracker: tuple[float, ...],
                        assumed: bool, source: str) -> None:
         self.selecting = False
@@ -220,7 +238,17 @@ class PlanScreen(HilScreen):
             ("keep-in ", "dim"), f"{_box(lo)}..{_box(hi)} m\n",
             ("SMR cone ", "dim"), f"±{config.smr['acceptance_angle']:g}°",
             ("  q2 ", "dim"), "-180..0°\n",
-            ("tracker ", "dim"), _box(pos) if pos is not None else "located by bootstrap")
+            ("tracker ", "dim"), _box(pos) if pos is not None else "located by bootstrap", "\n",
+            ("warm-up ", "dim"), self._warmup())
+
+    def _warmup(self) -> Text:
+        """Whether the next run warms the arm up, and the key that changes it."""
+        session = self.hil.session
+        if session.no_warmup:
+            return Text.assemble(("off", "bold yellow"), ("  (w: warm up)", "dim"))
+        if not session.warmup_on():
+            return Text("off in the configuration", style="dim")
+        return Text.assemble("on", ("  (w: skip it)", "dim"))
 
     def _next_run(self) -> dict[str, Any] | None:
         """The Plan fields' settings the next run will use."""

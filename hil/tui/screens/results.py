@@ -11,6 +11,7 @@ import math
 from pathlib import Path
 from typing import Any, ClassVar
 
+from rich.console import Group
 from rich.table import Table
 from rich.text import Text
 from textual.app import ComposeResult
@@ -23,6 +24,7 @@ from hil.store.records import VERIFICATION
 from hil.tui.screens.base import HilScreen
 from hil.tui.screens.history import status_words
 from hil.tui.widgets.nav import NavBar
+from hil.tui.words import shorten_middle
 
 #: A pose test's modes as the Results grid names them: whole within the 40-column panel at 80x24
 #: (the full words cut to "uncompen…"/"compensa…"); the verdict line above spells them out.
@@ -46,6 +48,21 @@ def _precision(result: Any) -> dict[str, Any] | None:
     return block if isinstance(block, dict) else None
 
 
+def _fitted_by_role(rec: Any) -> str:
+    """Where the fitted poses came from, when the bootstrap's are among them: "= 30 + 10 bootstrap"
+    from the result's ``poses`` counts (`hil.report.mes`), the same figures the report's "fitted"
+    line gives; "" when there was no bootstrap or the counts do not add up to the fit's."""
+    counts = rec.result.get("poses") if isinstance(rec.result, dict) else None
+    fit = (rec.model.doc.get("fit") or {}) if rec.model is not None else {}
+    if not isinstance(counts, dict):
+        return ""
+    boot = (counts.get("bootstrap") or {}).get("measured")
+    cal = (counts.get("calibration") or {}).get("measured")
+    if not boot or cal is None or boot + cal != fit.get("poses"):
+        return ""
+    return f"= {cal} + {boot} bootstrap"
+
+
 #: The table's columns for a calibration: its model's parameters.
 PARAMETER_COLUMNS = ("parameter", "value", "std", "unit")
 
@@ -66,6 +83,15 @@ def pose_rows(results: dict[str, Any]) -> list[tuple[str, ...]]:
                 by_pose.setdefault(str(row["pose"]), {})[str(mode)] = row
     return [(pose, *(_mm(by_pose[pose].get(m, {}).get(key)) for m in results for key in ("AP_P", "RP_l")))
             for pose in by_pose]
+
+
+def _rule_words(result: Any) -> str:
+    """Whose threshold the verdict applied, as the result's ``verdict.rule`` says: " auto" (the
+    automatic rule: 2 × the cross-validated RMS or the class bound, `hil.campaign.acceptance`) or
+    " set" (the user's ``campaign.acceptance``); nothing for an older result without it."""
+    verdict = result.get("verdict") if isinstance(result, dict) else None
+    rule = verdict.get("rule") if isinstance(verdict, dict) else None
+    return {"auto": " auto", "threshold": " set"}.get(str(rule), "")
 
 
 def parameter_cells(p: dict[str, Any]) -> tuple[str, str, str, str]:
@@ -194,7 +220,7 @@ class ResultsScreen(HilScreen):
         line = Text.assemble((f" {word} ", style), "  ", (rec.id, "bold"), f"  {s.status}")
         if v is not None and accept is not None:
             line.append(f"  RMS {_mm(v.after.get('rms'))} mm {'≤' if v.passed else '>'} "
-                        f"{_mm(accept)} mm")
+                        f"{_mm(accept)} mm{_rule_words(rec.result)}")
         precision = describe_precision(_precision(rec.result))
         if v is not None and precision is not None:
             line.append(f"\n validation RMS {precision}", "dim")
@@ -232,7 +258,11 @@ class ResultsScreen(HilScreen):
         word = "VERIFIED" if s.status == "accepted" else s.status.upper()
         style = "bold white on green" if s.status == "accepted" else "bold reverse"
         line = Text.assemble((f" {word} ", style), "  ", (rec.id, "bold"),
-                             f"  verification (ISO 9283 pose test), {s.measured}/{s.planned} poses")
+                             f"  ISO 9283 pose test, {s.measured}/{s.planned} poses")  # whole at 80
+        model = doc.get("model")
+        source = str(model.get("source", "-")) if isinstance(model, dict) else str(model or "-")
+        if source != "-":  # in full here (it wraps, never cut); the Test panel has its file name
+            line.append(f"\n model {source}", "dim")
         if rec.detail:
             line.append(f"\n{rec.detail}", "dim")
         self.query_one("#verdict", Static).update(line)
@@ -252,10 +282,14 @@ class ResultsScreen(HilScreen):
         info.add_column(style="dim")
         info.add_column()
         info.add_row("cycles", str(doc.get("cycles", "-")))
-        model = doc.get("model")
-        info.add_row("model", str(model.get("source", "-")) if isinstance(model, dict) else str(model or "-"))
         info.add_row("status", status_words(s))  # "verified", as History and `hil history` say
-        fit.update(info)
+        # the model's file name on a line of its own, the panel's whole width (half the screen less
+        # border and padding): beside a label, at 80 columns, a model's path
+        # ("out/20261127-161234-a1b8-model.json") was cut at its end, the part that names the file.
+        # The verdict above has the whole path.
+        width = max(12, self.size.width // 2 - 4) if self.size.width else 36
+        name = shorten_middle(Path(source).name, width) if source != "-" else "none"
+        fit.update(Group(info, Text("model", style="dim"), Text(name, no_wrap=True)))
         self._table(pose_columns([str(m) for m in results]), pose_rows(results))
         self._exports()
 
@@ -272,6 +306,9 @@ class ResultsScreen(HilScreen):
         grid.add_row("RMS", f"{_mm(f.get('rms'))} mm (max {_mm(f.get('max'))})")
         grid.add_row("poses", f"{f.get('used', '-')} used of {f.get('poses', '-')}, "
                               f"{len(f.get('rejected') or [])} rejected")
+        by_role = _fitted_by_role(rec)
+        if by_role:  # its own row: within the 25 columns the value has at 80
+            grid.add_row("", by_role)
         cond = f.get("condition")
         grid.add_row("condition", f"{cond:.3g}" if isinstance(cond, int | float) else "-")
         grid.add_row("parameters", str(len(model.doc.get("parameters") or [])))

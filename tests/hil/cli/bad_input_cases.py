@@ -64,6 +64,9 @@ class Case:
     read_only: tuple[str, ...] = ()
     station: bool = False  # connects to a real simulated station (motion is still a tripwire)
     timeout: float = 15.0  # s: a hang fails the case (the first case of a command also pays its imports)
+    fifos: tuple[str, ...] = ()  # named pipes made in the directory (no writer: reading one would hang)
+    stdout: str = ""  # "full": every write fails with ENOSPC (> /dev/full); "closed": none (>&-)
+    ascii: bool = False  # stdout and stderr encode ASCII only (PYTHONIOENCODING=ascii, the C locale)
 
     @property
     def name(self) -> str:
@@ -328,6 +331,23 @@ def foreign_sqlite(d: Path) -> bytes:
     data = tmp.read_bytes()
     tmp.unlink()
     return data
+
+
+def damaged_store(sql: str) -> Callable[[Path], bytes]:
+    """store.db with one row damaged by `sql` (a JSON column overwritten with text that does not
+    parse): what a disk error or a tool writing into the database leaves."""
+    def make(d: Path) -> bytes:
+        tmp = d / ".damaged.tmp"
+        shutil.copy(d / "store.db", tmp)
+        conn = sqlite3.connect(tmp)
+        conn.execute(sql)
+        conn.commit()
+        conn.close()
+        data = tmp.read_bytes()
+        for p in d.glob(".damaged.tmp*"):
+            p.unlink()
+        return data
+    return make
 
 
 def empty_store(d: Path) -> bytes:
@@ -1064,6 +1084,119 @@ def _cases() -> list[Case]:
     add("tui", "config:empty-file-no-tracker-url", ["tui", "--config", f"{d}/empty.toml", "--db",
                                                     f"{d}/tui.db"], ["tracker.url"], files={"empty.toml": ""})
 
+    # ---------------------------------------------------------------- issue 31: classes of bad surroundings
+    # ids "c<class>-..." (bench/adversarial.py prints them per class)
+    idf = ["identify", "--robot", "ur5e", "--out", f"{d}/m-out.json", "--measurements"]
+    for dev in ("/dev/zero", "/dev/urandom"):
+        add("identify", f"c1-measurements={dev}", [*idf, dev], [dev])
+        add("validate", f"c1-measurements={dev}", ["validate", "--model", f"{d}/model.json", "--measurements",
+                                                   dev], [dev])
+    add("identify", "c1-measurements=fifo", [*idf, f"{d}/pipe"], ["pipe", "fifo"], fifos=("pipe",))
+    add("fk", "c1-joints=fifo", ["fk", "--model", f"{d}/model.json", "--joints", f"{d}/pipe", "--out",
+                                 f"{d}/p-out.csv"], ["pipe"], fifos=("pipe",))
+    add("fk", "c1-model=/dev/zero", ["fk", "--model", "/dev/zero", "--joints", f"{d}/joints.csv", "--out",
+                                     f"{d}/p-out.csv"], ["/dev/zero"])
+    add("export", "c1-model=fifo", ["export", "--model", f"{d}/pipe", "--format", "urdf", "--out",
+                                    f"{d}/x.urdf"], ["pipe"], fifos=("pipe",))
+    add("compensate", "c1-input=fifo", ["compensate", "--model", f"{d}/model.json", "--config",
+                                        f"{d}/station.toml", f"{d}/pipe", "--out", f"{d}/c-out.csv"],
+        ["pipe"], fifos=("pipe",))
+    add("calibrate", "c1-config=/dev/urandom", ["calibrate", "--config", "/dev/urandom", "--db",
+                                               f"{d}/cal.db"], ["/dev/urandom"])
+    add("calibrate", "c1-config=fifo", ["calibrate", "--config", f"{d}/pipe", "--db", f"{d}/cal.db"],
+        ["pipe"], fifos=("pipe",))
+    add("moveb-plan", "c1-program=fifo", ["moveb", "plan", f"{d}/pipe", "--out", f"{d}/s.csv"], ["pipe"],
+        fifos=("pipe",))
+    rows100k = "\n".join("0.1,-1.2,1.3,-1.4,1.5,0.6,1.1,0.2,0.3" for _ in range(100_000))
+    add("identify", "c1-measurements=100000-rows", [*idf, f"{d}/big.csv"], ["big.csv", "10000"],
+        files={"big.csv": "q1,q2,q3,q4,q5,q6,x,y,z\n" + rows100k + "\n"})
+    add("validate", "c1-measurements=100000-rows",
+        ["validate", "--model", f"{d}/model.json", "--measurements", f"{d}/big.csv"], ["big.csv", "10000"],
+        files={"big.csv": "q1,q2,q3,q4,q5,q6,x,y,z\n" + rows100k + "\n"})
+    add("compensate", "c1-input=100000-rows",
+        ["compensate", "--model", f"{d}/model.json", "--config", f"{d}/station.toml", f"{d}/big.csv", "--out",
+         f"{d}/c-out.csv"], ["big.csv", "10000"],
+        files={"big.csv": "x,y,z,rx,ry,rz\n" + "\n".join("0.4,0.1,0.3,0,3.1,0" for _ in range(100_000))})
+
+    idm = ["identify", "--robot", "ur5e", "--measurements", f"{d}/measurements.csv", "--out"]
+    long_name = "a" * 300 + ".json"
+    for target in ("/dev/full", "/dev/null"):
+        add("identify", f"c2-out={target}", [*idm, target], ["--out", target])
+        add("export", f"c2-out={target}", ["export", "--model", f"{d}/model.json", "--format", "json",
+                                           "--out", target], ["--out", target])
+    add("identify", "c2-out=trailing-slash", [*idm, f"{d}/newout.json/"], ["--out", "slash"])
+    add("identify", "c2-out=300-char-name", [*idm, f"{d}/{long_name}"], ["--out", "255"])
+    add("identify", "c2-out=fifo", [*idm, f"{d}/pipe"], ["--out", "fifo"], fifos=("pipe",))
+    add("synth", "c2-out-dir=300-char-name", ["synth", "--poses", "12", "--out-dir", f"{d}/{long_name}"],
+        ["--out-dir", "255"])
+    add("fk", "c2-out=/dev/full", ["fk", "--model", f"{d}/model.json", "--joints", f"{d}/joints.csv", "--out",
+                                   "/dev/full"], ["--out", "/dev/full"])
+    add("report", "c2-out=trailing-slash", ["report", "--result", f"{d}/result.json", "--out",
+                                            f"{d}/r.html/"], ["--out", "slash"])
+    sel = ["select", "--robot", "ur5e", "--count", "10", "--candidates", "500"]
+    add("select", "c2-stdout=full", sel, ["stdout", "no space"], stdout="full", timeout=60)
+    add("select", "c2-stdout=closed", sel, ["stdout", "closed"], stdout="closed", timeout=60)
+    add("show", "c2-stdout=full", ["show", "last", "--db", f"{d}/store.db"], ["stdout"], stdout="full")
+    add("show", "c2-stdout=closed", ["show", "last", "--db", f"{d}/store.db"], ["stdout"], stdout="closed")
+
+    with_cube = {**BASE_CONFIG, "verify": {"centre": [0.4, 0.0, 0.4], "edge": 0.2}}
+    for cmd in ("calibrate", "verify"):
+        cfg = [cmd, "--config", f"{d}/bad.toml", "--db", f"{d}/c.db"]
+        base = with_cube if cmd == "verify" else BASE_CONFIG
+        for label, url in (("http", "http://tracker:80"), ("spy-empty", "spy://"),
+                           ("port-99999", "socket://tracker:99999"), ("socket-no-port", "socket://tracker"),
+                           ("rfc2217-no-host", "rfc2217://"), ("port-not-number", "socket://tracker:x")):
+            add(cmd, f"c4-tracker.url={label}", cfg, ["tracker.url"],
+                files={"bad.toml": config_with("tracker.url", url, base)}, timeout=60)
+        add(cmd, "c4-store.path=/proc", [cmd, "--config", f"{d}/bad.toml"], ["store.path", "/proc"],
+            files={"bad.toml": config_with("store.path", "/proc/hil.db", base)}, timeout=60)
+        add(cmd, "c4-config-with-seed", [cmd, "--config", f"{d}/station.toml", "--seed", "3", "--db",
+                                         f"{d}/c.db"], ["--seed"], timeout=60)
+    emscon = {**BASE_CONFIG, "tracker": {**BASE_CONFIG["tracker"], "protocol": "emscon"}}
+    add("calibrate", "c4-tracker.url=emscon-serial-device",
+        ["calibrate", "--config", f"{d}/bad.toml", "--db", f"{d}/c.db"], ["tracker.url"],
+        files={"bad.toml": toml_text(emscon)})
+    add("moveb-run", "c4-config-with-seed",
+        ["moveb", "run", f"{d}/square.moveb", "--config", f"{d}/station.toml", "--seed", "3"], ["--seed"])
+    add("tui", "c4-tracker.url=http", ["tui", "--config", f"{d}/bad.toml", "--db", f"{d}/c.db"],
+        ["tracker.url"], files={"bad.toml": config_with("tracker.url", "http://tracker")})
+    add("select", "c4-tracker-at-the-base", [*sel, "--tracker", "0,0,0"], ["--tracker"], timeout=60)
+    for cmd in ("history", "robots"):
+        add(cmd, "c4-store.url-not-a-url", [cmd, "--config", f"{d}/bad.toml"], ["store.url", "not a url"],
+            files={"bad.toml": config_with("store.url", "dbhost:5432/hil")})
+
+    damaged = {"config": ("UPDATE campaigns SET config = '{broken'", "campaigns"),
+               "joints": ("UPDATE measurements SET q = '[1, 2' WHERE id = 3", "measurements"),
+               "model": ("UPDATE models SET doc = 'nope'", "models"),
+               "target": ("UPDATE poses SET target = '[' WHERE idx = 4", "poses")}
+    for label, (sql, table) in damaged.items():
+        files = {"dmg.db": damaged_store(sql)}
+        add("show", f"c5-damaged-{label}", ["show", "last", "--db", f"{d}/dmg.db"], ["table " + table, "id"],
+            files=files)
+        add("history", f"c5-damaged-{label}-lists-the-rest", ["history", "--db", f"{d}/dmg.db"], [],
+            files=files, expect=0)
+        add("robots", f"c5-damaged-{label}-lists-the-rest", ["robots", "--db", f"{d}/dmg.db"], [],
+            files=files, expect=0)
+    add("show", "c5-damaged-joints-export", ["show", "last", "--db", f"{d}/dmg.db", "--export-measurements",
+                                             f"{d}/m-out.csv"], ["table measurements"],
+        files={"dmg.db": damaged_store(damaged["joints"][0])})
+
+    comp = ["compensate", "--model", f"{d}/model.json", "--config", f"{d}/station.toml", "--out",
+            f"{d}/c-out.txt"]
+    for label, header in (("typo", "x,y,zz,rx,ry,rz"), ("other-names", "X_mm,Y_mm,Z_mm,A,B,C")):
+        for suffix in ("txt", "dat"):
+            add("compensate", f"c6-{suffix}-csv-header-{label}", [*comp, f"{d}/poses.{suffix}"],
+                [f"poses.{suffix}", "x,y,z,rx,ry,rz"],
+                files={f"poses.{suffix}": header + "\n0.4,0.1,0.3,0,3.1,0\n"})
+    add("calibrate", "c6-ascii-error-with-a-unit", ["calibrate", "--config", f"{d}/bad.toml", "--db",
+                                                    f"{d}/c.db"], ["tracker.temperature"],
+        files={"bad.toml": config_with("tracker.temperature", -300.0)}, ascii=True)
+    add("validate", "c6-ascii-model-out-of-range", ["validate", "--model", f"{d}/m.json", "--measurements",
+                                                    f"{d}/validation.csv"], ["m.json"],
+        files={"m.json": json_with("model.json", ["smr"], [10.0, 0.0, 0.0])}, ascii=True)
+    add("history", "c6-ascii-listing", ["history", "--db", f"{d}/store.db"], [], expect=0, ascii=True)
+    add("show", "c6-ascii-show", ["show", "last", "--db", f"{d}/store.db"], [], expect=0, ascii=True)
+
     # ---------------------------------------------------------------- the top level
     add("hil", "unknown-command", ["frobnicate"], ["frobnicate"])
     add("hil", "unknown-option", ["--frobnicate", "history"], ["--frobnicate"])
@@ -1192,7 +1325,9 @@ def start_sim_station() -> SimStation:
 def _snapshot(root: Path) -> dict[str, str]:
     out = {}
     for p in sorted(root.rglob("*")):
-        if p.is_file() and not p.is_symlink():
+        if p.is_fifo():
+            out[str(p.relative_to(root))] = "fifo"
+        elif p.is_file() and not p.is_symlink():
             out[str(p.relative_to(root))] = hashlib.sha256(p.read_bytes()).hexdigest()
         elif p.is_dir():
             out[str(p.relative_to(root)) + "/"] = "dir"
@@ -1345,6 +1480,8 @@ def prepare(case: Case, fixtures: Path, workdir: Path, station: SimStation | Non
     values = {"dir": str(workdir)}
     if station is not None:
         values.update(sim_address=station.address, sim_tracker=station.tracker_url)
+    for name in case.fifos:
+        os.mkfifo(workdir / name)
     for name, content in case.files.items():
         data = content(workdir) if callable(content) else content
         if isinstance(data, str):
@@ -1352,6 +1489,13 @@ def prepare(case: Case, fixtures: Path, workdir: Path, station: SimStation | Non
         (workdir / name).parent.mkdir(parents=True, exist_ok=True)
         (workdir / name).write_bytes(data)
     return [_substitute(a, values) for a in case.argv]
+
+
+class _FullStream(io.StringIO):
+    """A stdout on a full device (``> /dev/full``): every write fails as the kernel fails it."""
+
+    def write(self, text: str) -> int:
+        raise OSError(28, "No space left on device")
 
 
 def run_case(case: Case, fixtures: Path, workdir: Path, *, station: SimStation | None = None,
@@ -1366,7 +1510,15 @@ def run_case(case: Case, fixtures: Path, workdir: Path, *, station: SimStation |
     read_only = [workdir / p for p in case.read_only]
     _set_read_only(read_only, True)
     before = _snapshot(workdir)
-    out, err = io.StringIO(), io.StringIO()
+    out: Any = io.StringIO()
+    err: Any = io.StringIO()
+    if case.ascii:
+        out = io.TextIOWrapper(io.BytesIO(), encoding="ascii", errors="strict")
+        err = io.TextIOWrapper(io.BytesIO(), encoding="ascii", errors="strict")
+    if case.stdout == "full":
+        out = _FullStream()
+    elif case.stdout == "closed":
+        out = None
     problems: list[str] = []
     code: int | None = None
     start = time.monotonic()
@@ -1386,7 +1538,11 @@ def run_case(case: Case, fixtures: Path, workdir: Path, *, station: SimStation |
         seconds = time.monotonic() - start
         _set_read_only(read_only, False)
     after = _snapshot(workdir)
-    text = err.getvalue()
+    if case.ascii:
+        err.flush()
+        text = err.buffer.getvalue().decode("ascii")
+    else:
+        text = err.getvalue()
     lines = [s for s in text.strip().splitlines() if s.strip()]
     if code is not None and code != case.expect:
         problems.insert(0, f"exit {code}, expected {case.expect}")

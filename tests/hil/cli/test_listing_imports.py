@@ -77,11 +77,12 @@ def test_the_export_formats_a_listing_offers_are_the_exporters(db: Path) -> None
     assert export_formats.format_of("m.urdf", "json") == "json"
 
 
-def test_identify_imports_neither_the_store_nor_scipy(tmp_path: Path) -> None:
+def test_identify_imports_neither_the_store_nor_scipy_nor_numpy_ma(tmp_path: Path) -> None:
     """``hil identify`` checks its output against the store's path without opening (or importing) the
     store, and on data without outliers it loads no scipy at all: the pivoted QR and the Kabsch fit are
     numpy's, and the outlier test's F distribution is imported only when a pose may be an outlier.
-    scipy's import (its linalg, special and spatial parts) was 0.35 s of the 0.75 s it took."""
+    scipy's import (its linalg, special and spatial parts) was 0.35 s of the 0.75 s it took. Nor
+    numpy.ma, which numpy 2.4's ``np.unique`` imports (a tenth of the fit's time)."""
     import numpy as np
 
     from hil.calibration.measurements import write_measurements
@@ -95,7 +96,7 @@ def test_identify_imports_neither_the_store_nor_scipy(tmp_path: Path) -> None:
             "with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):\n"
             f"    rc = main(['identify', '--robot', 'ur5e', '--measurements', {str(tmp_path / 'm.csv')!r}, "
             f"'--out', {str(tmp_path / 'model.json')!r}])\n"
-            "print(rc, ','.join(m for m in ('sqlalchemy', 'scipy') if m in sys.modules))")
+            "print(rc, ','.join(m for m in ('sqlalchemy', 'scipy', 'numpy.ma') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300,
                          env={**os.environ, "XDG_DATA_HOME": str(tmp_path / "data")})
     assert out.returncode == 0, out.stderr
@@ -105,3 +106,16 @@ def test_identify_imports_neither_the_store_nor_scipy(tmp_path: Path) -> None:
 
 def test_a_listings_help_does_not_import_the_store() -> None:
     assert loaded_by(["history", "--help"], (*HEAVY, "sqlalchemy")) == (0, [])
+
+
+def test_a_listing_does_not_look_up_hils_version(db: Path) -> None:
+    """Reading hil's package metadata is for what records the version (a new campaign, a model file),
+    not for a listing."""
+    code = ("import contextlib, io, sys\n"
+            "from hil.cli import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):\n"
+            f"    rc = main(['history', '--db', {str(db)!r}])\n"
+            "print(rc, '__version__' in vars(sys.modules['hil']))")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["0", "False"]

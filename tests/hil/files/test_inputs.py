@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from pathlib import Path
+import os
 
 import pytest
 
@@ -37,11 +37,12 @@ def test_an_unreadable_file_is_named(tmp_path, monkeypatch) -> None:
     f = tmp_path / "locked.toml"
     f.write_text("a = 1\n")
 
-    def refuse(self: Path) -> bytes:  # chmod 0 does not stop root, which CI may be
-        raise PermissionError(13, "Permission denied", str(self))
+    def refuse(path: object, flags: int, *args: object) -> int:  # chmod 0 does not stop root
+        raise PermissionError(13, "Permission denied", str(path))
 
-    monkeypatch.setattr(Path, "read_bytes", refuse)
-    with pytest.raises(InputError, match=r"locked\.toml: cannot read: Permission denied$"):
+    with monkeypatch.context() as patch, pytest.raises(
+            InputError, match=r"locked\.toml: cannot read: Permission denied$"):
+        patch.setattr(os, "open", refuse)
         read_input_text(f)
 
 

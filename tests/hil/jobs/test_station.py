@@ -240,10 +240,16 @@ def _refused(**kwargs: Any) -> str:
     return text
 
 
-@pytest.mark.parametrize("option", [{"truth": "truth.json"}, {"speed": 2.0}, {"tracker_protocol": "emscon"}])
-def test_the_simulators_options_with_a_configuration_are_refused_naming_them(option: dict[str, Any]) -> None:
+@pytest.mark.parametrize(("option", "named"), [
+    ({"truth": "truth.json"}, "--truth"), ({"speed": 2.0}, "--speed"),
+    ({"tracker_protocol": "emscon"}, "--tracker-protocol"), ({"seed": 3}, "--seed"),
+    ({"seed": 1}, "--seed"),  # the default value, given: still the simulator's option, not the config's
+    ({"seed": 3, "speed": 2.0}, "--speed, --seed"),
+])
+def test_the_simulators_options_with_a_configuration_are_refused_naming_them(option: dict[str, Any],
+                                                                             named: str) -> None:
     text = _refused(config=_station_toml(), sim=False, **option)
-    assert text.startswith("--truth, --speed and --tracker-protocol go with --sim, not --config")
+    assert text.startswith(f"{named}: go{'' if ',' in named else 'es'} with --sim, not --config"), text
 
 
 @pytest.mark.parametrize("speed", [0.0, -2.0, math.nan])
