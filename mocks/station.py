@@ -50,8 +50,8 @@ from mocks.geocom.server import GeoComSimulator, LinkConfig, SimulatorConfig
 from mocks.heating import Heating
 from mocks.ringing import Ringing
 from mocks.ur.arm import AMBIENT_TEMPERATURE, TemperatureFn
-from mocks.ur.status import RobotMode
 from mocks.ur.factory_calibration import factory_calibration
+from mocks.ur.status import RobotMode
 from mocks.world import World
 
 #: Seconds one GeoCOM measuring RPC (TMC_GetSimpleMea in tracking mode) takes inside the simulated
