@@ -52,6 +52,29 @@ CONFIDENCE = 0.99
 TEMPERATURE_RESOLUTION = 0.1
 
 
+#: Reference measurements (the last ones) over which flat joint temperatures say the arm is steady
+#: (`temperatures_flat`): two whole intervals of the warm-up's cycling, so one quiet interval is not enough.
+FLAT_POINTS = 3
+
+
+def temperatures_flat(temperatures: np.ndarray | None, resolution: float = TEMPERATURE_RESOLUTION) -> bool:
+    """Whether the joint temperatures of the last `FLAT_POINTS` measurements (rows: measurements, columns:
+    joints, °C) all stayed within the sensor's `resolution`: evidence the arm is thermally steady.
+
+    Why: an arm that was already warm when the warm-up began (it worked, or held itself, while hil
+    bootstrapped and chose its poses) shows a flat series from which no time constant can be fitted,
+    so "the series spans three time constants" is never proven and a warm arm would be cycled until
+    ``max_time``. Its own flat temperatures say it is warm; the caller still asks the positions to agree.
+    False without temperatures or with fewer than `FLAT_POINTS` rows.
+    """
+    if temperatures is None:
+        return False
+    T = np.asarray(temperatures, dtype=float)
+    if T.ndim != 2 or len(T) < FLAT_POINTS:
+        return False
+    return bool(np.all(np.ptp(T[-FLAT_POINTS:], axis=0) < resolution))
+
+
 @dataclass(frozen=True)
 class DriftFit:
     """The fitted warm-up: time constant (s), drift still to come (m), and the fit's residual RMS (m),

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hil.calibration.warmup_fit import fit_warmup
+from hil.calibration.warmup_fit import FLAT_POINTS, TEMPERATURE_RESOLUTION, fit_warmup, temperatures_flat
 
 LIMIT = 10e-6  # the example station's warmup.limit (m)
 INTERVAL = 120.0  # s between reference checks, the example's warmup.interval
@@ -96,3 +96,14 @@ def test_upper_limits_bound_the_estimates_and_few_points_give_none() -> None:
     assert fit is not None
     assert fit.remaining_upper >= fit.remaining and fit.time_constant_upper >= fit.time_constant
     assert fit_warmup(times[:3], points[:3]) is None
+
+
+def test_temperatures_are_flat_only_within_the_sensors_resolution_over_the_last_measurements():
+    steady = np.full((6, 6), 31.0)
+    steady[:3] -= [[0.9], [0.5], [0.2]]  # it warmed before: only the last measurements count
+    assert temperatures_flat(steady)
+    rising = steady.copy()
+    rising[-1, 4] += TEMPERATURE_RESOLUTION  # one joint still rising by the resolution
+    assert not temperatures_flat(rising)
+    assert not temperatures_flat(steady[:FLAT_POINTS - 1])  # too few to say
+    assert not temperatures_flat(None)
