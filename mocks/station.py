@@ -12,7 +12,8 @@ else one fitted to this truth by seed (`mocks.ur.factory_calibration`), and the 
 service reports carries it, so tests and benches know the model the controller moves with.
 
 The arm is a real one unless ``rigid``: the random truth sags under gravity and its payload and warms
-up as the controller runs (the world evaluates ``truth.warmed(t)`` on the controller's clock), and the
+up as its joints work (`mocks.heating`: moving, and a little while holding the arm; the world evaluates
+``truth.grown(ΔT)``), and the
 controller reports the warming in RTDE ``joint_temperatures`` (`joint_temperatures`). A truth file's
 ``noise.encoder_sigma`` sets the controller's encoder noise. Every arm rings after its joint moves
 (`mocks.ringing`, seen by the trackers, not by the encoders), and the GeoCOM instrument takes
@@ -46,9 +47,11 @@ from mocks.emscon.instrument import EmsconConfig
 from mocks.emscon.server import EmsconSimulator, ServerConfig
 from mocks.geocom.instrument import InstrumentConfig
 from mocks.geocom.server import GeoComSimulator, LinkConfig, SimulatorConfig
+from mocks.heating import Heating
 from mocks.ringing import Ringing
 from mocks.ur.arm import AMBIENT_TEMPERATURE, TemperatureFn
 from mocks.ur.factory_calibration import factory_calibration
+from mocks.ur.status import RobotMode
 from mocks.world import World
 
 #: Seconds one GeoCOM measuring RPC (TMC_GetSimpleMea in tracking mode) takes inside the simulated
@@ -61,15 +64,17 @@ from mocks.world import World
 GEOCOM_MEASURE_S = 0.1
 
 
-def joint_temperatures(thermal: Thermal | None) -> TemperatureFn:
-    """Every joint at the lab's ambient plus the arm's warm-up ΔT(t) (none without a thermal block).
+def joint_temperatures(thermal: Thermal | None, heating: Heating | None = None) -> TemperatureFn:
+    """Every joint at the lab's ambient plus the arm's warm-up ΔT (none without a thermal block): from
+    `heating` (what the arm did) when given, else ΔT(t) of an arm moving since the controller started.
 
     The truth's thermal block is one ΔT for the whole arm (docs/design.md, Contracts: non-geometric errors),
     so every joint reports it: the
     temperatures say how far the warm-up has come, the number a warm-up watch reads.
     """
     def at(t: float) -> list[float]:
-        rise = thermal.rise_at(t) if thermal is not None else 0.0
+        rise = (0.0 if thermal is None else heating.rise() if heating is not None
+                else thermal.rise_at(t))
         return [AMBIENT_TEMPERATURE + rise] * 6
 
     return at
@@ -127,13 +132,18 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
     if calibration is None:
         calibration = factory_calibration(geometry, seed)
     controller.set_calibration(calibration)
-    controller.arm.set_temperatures(joint_temperatures(geometry.thermal))
-    # the arm warms with the controller's running time: its SimClock counts from the controller's start
+    # the joints warm while they move (and a little while they hold the arm), on the controller's clock
+    arm = controller.arm
+    heating = None if geometry.thermal is None else Heating(
+        geometry.thermal, controller.clock.now, lambda: arm.motion_seconds,
+        lambda: arm.robot_mode == RobotMode.RUNNING)
+    arm.set_temperatures(joint_temperatures(geometry.thermal, heating))
     # a GeoCOM reading integrates the SMR's position over its measuring time
     world = World(geometry, controller.true_joints, acceptance_angle, clock=controller.clock.now,
                   ringing=Ringing(), reading_time=GEOCOM_MEASURE_S,
                   directions=controller.joint_directions, joints_at=controller.arm.true_joints_at,
-                  known_until=controller.arm.history_end)
+                  known_until=controller.arm.history_end,
+                  rise=None if heating is None else heating.rise)
     # the links ring after every joint move (`mocks.ringing`): the tracker sees it, the encoders do not
     controller.arm.listeners.append(world.ringing.listener(world.tip_direction))
     home = world.home_pose(rng)

@@ -8,10 +8,10 @@ acceptance half-angle of the line to the tracker.
 
 The truth is a real arm: it sags under gravity by its joints' compliance (`Kinematics` applies the
 truth's ``compliance`` for its ``payload``) and grows as it warms up. At simulated time t the arm is
-``truth.warmed(t)`` (docs/design.md, Contracts: non-geometric errors), t read from
-`clock`: the robot simulator's
-`SimClock`, whose seconds count from when the simulated controller started, so the running time of the
-arm is the time since its controller was switched on. Without a clock the arm stays cold.
+``truth.grown(rise())`` (docs/design.md, Contracts: non-geometric errors), the temperature rise from
+`rise`: the station's `mocks.heating.Heating`, which warms the joints while they move (and a little
+while they hold the arm), not while the controller merely runs. Without `rise` the arm is
+``truth.warmed(t)``, t read from `clock` (an arm moving all the time); with neither it stays cold.
 
 Its links also differ from its encoders by the truth's angle-dependent joint errors and lag them by
 its lost motion in the direction each joint last moved (docs/design.md, Contracts: non-geometric
@@ -72,6 +72,7 @@ class World:
     # and the newest time it has; None: only the current joints are known
     joints_at: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
     known_until: Callable[[], float | None] | None = None
+    rise: Callable[[], float] | None = None  # the arm's temperature rise now (K, `mocks.heating`)
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     def __post_init__(self) -> None:
@@ -117,12 +118,12 @@ class World:
     def _warm_kinematics(self) -> Kinematics:
         """The arm as warm as it is now (call with the lock held): rebuilt only when it grew."""
         thermal = self.truth.thermal
-        if thermal is None or self.clock is None:
+        if thermal is None or (self.clock is None and self.rise is None):
             return self._cold
-        t = self.running_time()
-        scale = thermal.scale_at(t)
+        rise = self.rise() if self.rise is not None else thermal.rise_at(self.running_time())
+        scale = thermal.scale_of(rise)
         if abs(scale - self._scale) > SCALE_TOLERANCE * scale:
-            self._kin = self._cold if scale == 1.0 else Kinematics(self.truth.warmed(t))
+            self._kin = self._cold if scale == 1.0 else Kinematics(self.truth.grown(rise))
             self._scale = scale
         return self._kin
 

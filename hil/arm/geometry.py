@@ -169,10 +169,15 @@ class Geometry:
         offset and the tracker pose do not grow (docs/design.md, Contracts: non-geometric errors).
         Without a thermal block: unchanged.
         """
+        return self.grown(None if self.thermal is None else self.thermal.rise_at(t))
+
+    def grown(self, rise: float | None) -> Geometry:
+        """The arm at a temperature rise of `rise` K (as `warmed`, for an arm that did not run all the
+        time: the simulator's `mocks.heating`). None or no thermal block: unchanged."""
         out = self.copy()
-        if self.thermal is None:
+        if self.thermal is None or rise is None:
             return out
-        k = self.thermal.scale_at(t)
+        k = self.thermal.scale_of(rise)
         out.joints = [pin.SE3(M.rotation, k * M.translation) for M in self.joints]
         out.flange = pin.SE3(self.flange.rotation, k * self.flange.translation)
         return out

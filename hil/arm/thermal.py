@@ -4,7 +4,8 @@ docs/design.md, Contracts: non-geometric errors).
 Aluminium links lengthen with temperature, and a UR's joints warm up over the first tens of minutes of
 running, so an arm measured cold and used warm is a few hundredths to tenths of a millimetre off. The
 simulator scales every joint origin's and the flange's translation by 1 + expansion·ΔT(t), with
-ΔT(t) = rise·(1 − exp(−t/time_constant)) (a first-order warm-up, t the running time); the SMR offset
+ΔT(t) = rise·(1 − exp(−t/time_constant)) (a first-order warm-up, t the time the arm has been moving;
+the simulator integrates ΔT from what the arm does, `mocks.heating`); the SMR offset
 and the tracker pose do not grow. Models never carry this block: hil handles the drift by warming the
 arm up and watching a reference pose, not by predicting temperature.
 """
@@ -37,7 +38,12 @@ class Thermal:
 
     def scale_at(self, t: float) -> float:
         """The factor every link translation is multiplied by after `t` seconds of running."""
-        return 1.0 + self.expansion * self.rise_at(t)
+        return self.scale_of(self.rise_at(t))
+
+    def scale_of(self, rise: float) -> float:
+        """The factor every link translation is multiplied by at a temperature rise of `rise` K (an arm
+        that did not run all the time: the simulator's `mocks.heating`)."""
+        return 1.0 + self.expansion * rise
 
     def to_dict(self) -> dict[str, float]:
         return {"expansion": self.expansion, "rise": self.rise, "time_constant": self.time_constant}

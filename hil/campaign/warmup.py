@@ -25,9 +25,14 @@ How (the plan steps of `ReferenceWatch`; the plan, `hil.campaign.calibration_pla
   noise decides the last micrometres). The arm is warm when the first-order fit of the whole series
   (`hil.calibration.warmup_fit.fit_warmup`, from its 4th measurement) says the drift still to come is below
   ``limit`` and the series spans three fitted time constants (the fit has then seen the curve
-  flatten, not guessed it from its start). After ``max_time`` the run goes on with a warning
-  (`WarmupFinished`, ``converged`` false), recorded in the result. The last warm-up measurement is
-  the **baseline**.
+  flatten, not guessed it from its start), both taken at the fit's upper 99 % confidence limits
+  (the most drift still to come, the longest time constant the series allows), never the point
+  estimates, which jump between visits on a noisy series. An arm that reports its joint temperatures
+  is also warm when every joint's temperature stayed within the sensor's resolution (0.1 K) over the
+  last three measurements (two intervals of cycling) and the reference moved by less than ``limit``
+  among them: an arm already warm when the warm-up began gives no curve to fit. After ``max_time``
+  the run goes on with a warning (`WarmupFinished`, ``converged`` false), recorded in the result.
+  The last warm-up measurement is the **baseline**.
 * **Drift watch** (`start`, `after_pose`, `finish`, ``[drift]``): the reference is measured again after
   every ``every`` measured poses and once when the measuring ends; its drift is its displacement from
   the baseline. Beyond ``limit`` the campaign is flagged (`DriftFlagged`, the result's ``drift``
@@ -61,7 +66,7 @@ from hil.arm.catalog import get_robot
 from hil.arm.geometry import Geometry
 from hil.arm.kinematics import Kinematics
 from hil.arm.safety import check_target
-from hil.calibration.warmup_fit import DriftFit, fit_warmup
+from hil.calibration.warmup_fit import FLAT_POINTS, DriftFit, fit_warmup, temperatures_flat
 from hil.campaign.events import (
     DriftFlagged,
     Message,
@@ -158,8 +163,10 @@ class ReferenceWatch:
 
     def settled(self, series: Sequence[ReferenceMeasured]) -> tuple[bool, DriftFit | None]:
         """Whether a warm-up `series` (this run's, in order) shows the arm warm: the fitted drift still
-        to come below ``warmup.limit`` over a series spanning three fitted time constants; and the fit
-        (None before `hil.calibration.warmup_fit.MIN_POINTS` measurements)."""
+        to come below ``warmup.limit`` over a series spanning three fitted time constants, both at their
+        upper confidence limits (`hil.calibration.warmup_fit.DriftFit`), or the joint temperatures flat
+        over the last intervals with the reference still (module docstring); and the fit (None before
+        `hil.calibration.warmup_fit.MIN_POINTS` measurements)."""
         times = np.array([p.elapsed for p in series], dtype=float)
         # the joint temperatures the controller reports, when every measurement has them, fix τ
         # without the tracker's noise (hil.calibration.warmup_fit)
@@ -171,7 +178,19 @@ class ReferenceWatch:
         if fit is None:
             return False, None
         limit = float(self.config.warmup["limit"])
-        return bool(fit.remaining < limit and times[-1] - times[0] >= 3.0 * fit.time_constant), fit
+        # on the upper confidence limits, not the point estimates: a noisy series can fit a short τ
+        # that "passes" three time constants at once and says nothing is left (issue 30)
+        span = times[-1] - times[0]
+        if fit.remaining_upper < limit and span >= 3.0 * fit.time_constant_upper:
+            return True, fit
+        # or the arm says it is steady: every joint's temperature flat (within the sensor's resolution)
+        # over the last two intervals, and the reference did not move by the limit among them (an arm
+        # that was warm before the warm-up began gives no curve to fit a time constant to)
+        if temperatures_flat(None if temps is None else np.array(temps, dtype=float)):
+            last = self.positions(series)[-FLAT_POINTS:]
+            moved = np.linalg.norm(last[:, None, :] - last[None, :, :], axis=2).max()
+            return bool(moved < limit), fit
+        return False, fit
 
     def _visit(self) -> Generator[Step, Any, tuple[PoseRecord, Conditions] | None]:
         """Approach and measure the reference; None (said in a warning) when the visit was given up."""
@@ -256,12 +275,16 @@ class ReferenceWatch:
         seconds = (yield ReadConditions(temperatures=False)).t - start
         # what `settled` compared with three time constants: the span of the series it judged
         span = series[-1].elapsed - series[0].elapsed if series else None
-        if not converged and not reason and fit is not None and fit.remaining < limit:
+        if not converged and not reason and fit is not None:
             assert span is not None  # a fit needs a series
-            three = 3 * fit.time_constant / 60
-            reason = (f"about {um(fit.remaining)} of drift is still to come, but the measurements span "
-                      f"{span / 60:.0f} min, under three fitted time constants ({three:.0f} min): too "
-                      "short to trust the fit")
+            three = 3 * fit.time_constant_upper / 60
+            if fit.remaining_upper >= limit:
+                reason = (f"about {um(fit.remaining)} of drift is still to come, and the series cannot "
+                          f"rule out {um(fit.remaining_upper)} (the fit's upper confidence limit)")
+            else:
+                reason = (f"at most {um(fit.remaining_upper)} of drift is still to come, but the "
+                          f"measurements span {span / 60:.0f} min, under three of the longest time "
+                          f"constants the fit allows ({three:.0f} min): too short to trust the fit")
         remaining = None if fit is None else fit.remaining
         tau = None if fit is None else fit.time_constant
         self.warmup = {"seconds": seconds, "converged": converged, "references": len(series),
