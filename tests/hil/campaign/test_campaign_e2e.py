@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from hil.arm.geometry import Geometry
-from hil.arm.kinematics import ALL_PARAMETER_NAMES, Kinematics
+from hil.arm.kinematics import EXTENDED_PARAMETER_NAMES, Kinematics
 from hil.calibration.model_file import truth_document, write_json
 from hil.calibration.synthetic import Noise, random_truth
 from hil.campaign.calibration_plan import CALIBRATION
@@ -50,7 +50,7 @@ def held_out_error(model_doc: dict, truth: Geometry, seed: int = 0) -> tuple[flo
     q = np.array(q)
     err = Kinematics(model).points(q) - Kinematics(truth).points(q)
     names = model_doc["covariance"]["parameters"]
-    idx = np.array([ALL_PARAMETER_NAMES.index(n) for n in names])
+    idx = np.array([EXTENDED_PARAMETER_NAMES.index(n) for n in names])
     C = np.array(model_doc["covariance"]["matrix"])
     J = Kinematics(model).jacobian(q, idx)
     predicted = np.sqrt(np.mean(np.einsum("nij,jk,nik->n", J, C, J)))
