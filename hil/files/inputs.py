@@ -52,7 +52,7 @@ def read_input_bytes(path: str | os.PathLike[str], expected: str = "a file",
         if stat.S_ISDIR(info.st_mode):
             raise InputError(f"{name}: is a directory, expected {expected}")
         if not stat.S_ISREG(info.st_mode):
-            raise InputError(f"{name}: is {_kind(info.st_mode)}, not a regular file; expected {expected}")
+            raise InputError(f"{name}: is {file_kind(info.st_mode)}, not a regular file; expected {expected}")
         if info.st_size > limit:
             raise InputError(f"{name}: {_size(info.st_size)} is larger than hil reads "
                              f"({_size(limit)}); expected {expected}")
@@ -73,8 +73,8 @@ def read_input_bytes(path: str | os.PathLike[str], expected: str = "a file",
         os.close(fd)
 
 
-def _kind(mode: int) -> str:
-    """What a file that is not a regular file is, in words."""
+def file_kind(mode: int) -> str:
+    """What a file that is not a regular file is, in words (inputs' and outputs' refusals)."""
     for test, words in ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
                         (stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISSOCK, "a socket")):
         if test(mode):

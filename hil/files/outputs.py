@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from hil.errors import InputError
+from hil.files.inputs import file_kind
 
 PathArg = str | os.PathLike[str]
 
@@ -80,7 +81,7 @@ def check_output(path: PathArg, *, field: str,
     except OSError:
         mode = None  # not there yet (or a dangling link, which the rename replaces)
     if mode is not None and not stat.S_ISREG(mode):
-        raise InputError(f"{field}: {name} is {_kind(mode)}, not a regular file: hil writes a result to "
+        raise InputError(f"{field}: {name} is {file_kind(mode)}, not a regular file: hil writes a result to "
                          "a file, whole, so it could not be read back; name a file")
     for option, other in _pairs(inputs):
         if _same_file(target, other):
@@ -114,15 +115,6 @@ def _check_name_length(target: Path, field: str) -> None:
     if len(os.fsencode(os.path.abspath(target))) >= path_max:
         raise InputError(f"{field}: the path {os.fspath(target)[:40]}... is longer than this file system "
                          f"allows ({path_max} bytes)")
-
-
-def _kind(mode: int) -> str:
-    """What a file that is not a regular file is, in words."""
-    for test, words in ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
-                        (stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISSOCK, "a socket")):
-        if test(mode):
-            return words
-    return "not a regular file"
 
 
 def check_output_dir(path: PathArg, *, field: str, names: Iterable[str] = (),
