@@ -36,12 +36,12 @@ def describe(event: Any) -> str | None:
                     f"(limit {um(event.limit)}), {event.elapsed / 60:.0f} of at most "
                     f"{event.max_time / 60:.0f} min")
         source = "joint temperatures" if event.time_constant_source == "temperatures" else "positions"
-        flat = ", joints flat" if event.temperatures_flat else ""
+        flat = "; joints flat" if event.temperatures_flat else ""
         span = "" if event.span is None else f" over {event.span / 60:.0f} min"
-        return (f"warm-up: reference moved {um(event.moved)} in {event.interval:.0f} s, {ahead} (at most "
-                f"{um(event.remaining_upper)}, limit {um(event.limit)}), τ {event.time_constant:.0f} s (at "
-                f"most {_seconds(event.time_constant_upper)}, from the {source}){span}{flat}, "
-                f"{event.elapsed / 60:.0f} of at most {event.max_time / 60:.0f} min")
+        return (f"warm-up: reference moved {um(event.moved)} in {event.interval:.0f} s, {ahead} "
+                f"(limit {um(event.limit)}), at most {um(event.remaining_upper)}; τ "
+                f"{event.time_constant:.0f} s, at most {_seconds(event.time_constant_upper)} (from the "
+                f"{source}){span}{flat}; {event.elapsed / 60:.0f} of at most {event.max_time / 60:.0f} min")
     if isinstance(event, WarmupFinished):
         if event.converged:
             if event.decision:  # the rule's own words: which rule, on what evidence
