@@ -27,12 +27,16 @@ How (the plan steps of `ReferenceWatch`; the plan, `hil.campaign.calibration_pla
   ``limit`` and the series spans three fitted time constants (the fit has then seen the curve
   flatten, not guessed it from its start), both taken at the fit's upper 99 % confidence limits
   (the most drift still to come, the longest time constant the series allows), never the point
-  estimates, which jump between visits on a noisy series. An arm that reports its joint temperatures
-  is also warm when every joint's temperature stayed within the sensor's resolution (0.1 K) over the
-  last three measurements (two intervals of cycling) and the reference moved by less than ``limit``
-  among them: an arm already warm when the warm-up began gives no curve to fit. After ``max_time``
-  the run goes on with a warning (`WarmupFinished`, ``converged`` false), recorded in the result.
-  The last warm-up measurement is the **baseline**.
+  estimates, which jump between visits on a noisy series. An arm already warm when the warm-up began
+  (its reported joint temperatures never moved 0.3 K over the series) gives no curve to fit; it is
+  warm when every joint's temperature stayed within the sensor's resolution (0.1 K) over the last
+  three measurements (two intervals of cycling) and the reference moved by less than ``limit`` among
+  them — on a warming arm that is no proof, and the fit decides. The rule and its evidence are
+  `hil.calibration.warmup_decision`; every check's `WarmupProgress` carries the evidence (the fit's
+  τ and drift still to come, their upper limits, the span, the flat-temperature figures) and the
+  verdict in words, so a user sees why the warm-up went on or stopped. After ``max_time`` the run
+  goes on with a warning (`WarmupFinished`, ``converged`` false), recorded in the result. The last
+  warm-up measurement is the **baseline**.
 * **Drift watch** (`start`, `after_pose`, `finish`, ``[drift]``): the reference is measured again after
   every ``every`` measured poses and once when the measuring ends; its drift is its displacement from
   the baseline. Beyond ``limit`` the campaign is flagged (`DriftFlagged`, the result's ``drift``
