@@ -124,3 +124,15 @@ def test_every_check_says_why_and_with_what_evidence():
     assert done.span >= 3 * done.fit.time_constant_upper and done.fit.remaining_upper < LIMIT
     # the fit's τ is the arm's (from the temperatures, not the scattered positions)
     assert done.fit.time_constant == pytest.approx(TAU, rel=0.1)
+
+
+def test_a_fast_warming_arm_whose_temperatures_rose_is_warm_by_the_fit_soon_after():
+    """An arm that warms in a 2-minute time constant (tests/hil/campaign/test_realistic_arm.py's truth)
+    rose from 1.5 K to 4.5 K within the first intervals: its temperatures moved, so the flat rule is not
+    its rule, and the fit, which sees the curve flatten, calls it warm within a quarter of an hour."""
+    rng = np.random.default_rng(1)
+    for _ in range(3):
+        times, temps, points, left = warming(rng, interval=120.0, per_kelvin=17e-6, start=1.5, steady=4.5,
+                                             scatter=5e-6, n=31, tau=120.0)
+        k, d = first_warm(times, temps, points)
+        assert k is not None and d.rule == FIT and times[k] < 15 * 60 and left[k] < LIMIT
