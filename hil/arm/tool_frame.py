@@ -104,10 +104,14 @@ def with_tool(geometry: Geometry, reflectors: int, orientation: bool) -> Geometr
     return g
 
 
-def predict(geometry: Geometry, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(m, R, 3) reflector positions and (m, 3, 3) measured-frame orientations, instrument frame."""
+def predict(geometry: Geometry, q: np.ndarray, frame: str = "tracker") -> tuple[np.ndarray, np.ndarray]:
+    """(m, R, 3) reflector positions and (m, 3, 3) measured-frame orientations, in the instrument
+    (``"tracker"``) or the robot base (``"base"``) frame; the arm as `Kinematics` moves it (its
+    compliance and joint errors included)."""
+    if frame not in ("tracker", "base"):
+        raise ValueError(f"frame must be 'tracker' or 'base', not {frame!r}")
     F = Kinematics(geometry).flange_poses(q)
-    Ti = geometry.tracker.inverse()
+    Ti = geometry.tracker.inverse() if frame == "tracker" else pin.SE3.Identity()
     s = reflector_offsets(geometry)
     base = np.einsum("nij,kj->nki", F[:, :3, :3], s) + F[:, None, :3, 3]
     p = base @ Ti.rotation.T + Ti.translation

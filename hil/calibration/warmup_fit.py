@@ -86,11 +86,12 @@ class DriftFit:
     total: float  # drift from the first reference measurement to the fitted steady state (m)
     remaining_upper: float = float("inf")  # the most drift still to come the data allow (m)
     time_constant_upper: float = float("inf")  # the longest τ the data allow (s)
+    source: str = "positions"  # what τ was fitted to: "temperatures" (the joints') or "positions"
 
-    def as_dict(self) -> dict[str, float]:
+    def as_dict(self) -> dict[str, float | str]:
         return {"time_constant": self.time_constant, "remaining": self.remaining, "rms": self.rms,
                 "total": self.total, "remaining_upper": self.remaining_upper,
-                "time_constant_upper": self.time_constant_upper}
+                "time_constant_upper": self.time_constant_upper, "source": self.source}
 
 
 def _solve(t: np.ndarray, tau: float, Y: np.ndarray) -> tuple[float, np.ndarray, float]:
@@ -142,7 +143,8 @@ def fit_warmup(times: np.ndarray, points: np.ndarray, tau_range: tuple[float, fl
     b = coef[1]
     remaining = float(np.linalg.norm(b) * np.exp(-t[-1] / tau))
     total = float(np.linalg.norm(b))
-    fit = DriftFit(tau, remaining, float(np.sqrt(cost / n)), total)
+    fit = DriftFit(tau, remaining, float(np.sqrt(cost / n)), total,
+                   source="positions" if Y is P else "temperatures")
     dof_p = 3 * n - 6 - (1 if Y is P else 0)
     if dof_y <= 0 or dof_p <= 0:
         return fit

@@ -208,6 +208,17 @@ class WarmupProgress(Event):
     max_time: float
     remaining: float | None = None  # None before the fit has enough measurements
     time_constant: float | None = None  # the fitted warm-up time constant (s)
+    # the check's evidence (`hil.calibration.warmup_decision`; None in events stored before it was kept)
+    remaining_upper: float | None = None  # the most drift still to come the series allows (m)
+    time_constant_upper: float | None = None  # the longest τ the series allows (s)
+    time_constant_source: str | None = None  # τ fitted to "temperatures" (the joints') or "positions"
+    span: float | None = None  # s the series spans (warm once ≥ 3 × time_constant_upper)
+    temperature_span: float | None = None  # K the joints' mean temperature moved over the series
+    temperatures_flat: bool | None = None  # the last three within the sensor's resolution
+    flat_moved: float | None = None  # m the reference moved among those three
+    warm: bool | None = None  # this check's verdict
+    rule: str | None = None  # which rule called it warm: "fit", "flat", "" (not warm)
+    decision: str | None = None  # the verdict and why, in one line
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -223,6 +234,11 @@ class WarmupFinished(Event):
     reason: str = ""
     remaining: float | None = None  # the fitted drift still to come (m) at the end
     time_constant: float | None = None  # the fitted time constant (s)
+    remaining_upper: float | None = None  # its upper confidence limit (m)
+    time_constant_upper: float | None = None  # its upper confidence limit (s)
+    span: float | None = None  # s the judged series spans
+    rule: str | None = None  # which rule called the arm warm ("fit", "flat"; "" when it did not settle)
+    decision: str | None = None  # the last check's verdict and why, in one line
 
 
 @dataclass(frozen=True, kw_only=True)

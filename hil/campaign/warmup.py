@@ -27,12 +27,16 @@ How (the plan steps of `ReferenceWatch`; the plan, `hil.campaign.calibration_pla
   ``limit`` and the series spans three fitted time constants (the fit has then seen the curve
   flatten, not guessed it from its start), both taken at the fit's upper 99 % confidence limits
   (the most drift still to come, the longest time constant the series allows), never the point
-  estimates, which jump between visits on a noisy series. An arm that reports its joint temperatures
-  is also warm when every joint's temperature stayed within the sensor's resolution (0.1 K) over the
-  last three measurements (two intervals of cycling) and the reference moved by less than ``limit``
-  among them: an arm already warm when the warm-up began gives no curve to fit. After ``max_time``
-  the run goes on with a warning (`WarmupFinished`, ``converged`` false), recorded in the result.
-  The last warm-up measurement is the **baseline**.
+  estimates, which jump between visits on a noisy series. An arm already warm when the warm-up began
+  (its reported joint temperatures never moved 0.3 K over the series) gives no curve to fit; it is
+  warm when every joint's temperature stayed within the sensor's resolution (0.1 K) over the last
+  three measurements (two intervals of cycling) and the reference moved by less than ``limit`` among
+  them — on a warming arm that is no proof, and the fit decides. The rule and its evidence are
+  `hil.calibration.warmup_decision`; every check's `WarmupProgress` carries the evidence (the fit's
+  τ and drift still to come, their upper limits, the span, the flat-temperature figures) and the
+  verdict in words, so a user sees why the warm-up went on or stopped. After ``max_time`` the run
+  goes on with a warning (`WarmupFinished`, ``converged`` false), recorded in the result. The last
+  warm-up measurement is the **baseline**.
 * **Drift watch** (`start`, `after_pose`, `finish`, ``[drift]``): the reference is measured again after
   every ``every`` measured poses and once when the measuring ends; its drift is its displacement from
   the baseline. Beyond ``limit`` the campaign is flagged (`DriftFlagged`, the result's ``drift``
@@ -66,7 +70,8 @@ from hil.arm.catalog import get_robot
 from hil.arm.geometry import Geometry
 from hil.arm.kinematics import Kinematics
 from hil.arm.safety import check_target
-from hil.calibration.warmup_fit import FLAT_POINTS, DriftFit, fit_warmup, temperatures_flat
+from hil.calibration.warmup_decision import WarmupDecision, decide_warm
+from hil.calibration.warmup_fit import DriftFit
 from hil.campaign.events import (
     DriftFlagged,
     Message,
@@ -162,35 +167,22 @@ class ReferenceWatch:
         return d
 
     def settled(self, series: Sequence[ReferenceMeasured]) -> tuple[bool, DriftFit | None]:
-        """Whether a warm-up `series` (this run's, in order) shows the arm warm: the fitted drift still
-        to come below ``warmup.limit`` over a series spanning three fitted time constants, both at their
-        upper confidence limits (`hil.calibration.warmup_fit.DriftFit`), or the joint temperatures flat
-        over the last intervals with the reference still (module docstring); and the fit (None before
-        `hil.calibration.warmup_fit.MIN_POINTS` measurements)."""
+        """Whether a warm-up `series` (this run's, in order) shows the arm warm, and the fit (None before
+        `hil.calibration.warmup_fit.MIN_POINTS` measurements); `decide` gives the evidence too."""
+        decision = self.decide(series)
+        return decision.warm, decision.fit
+
+    def decide(self, series: Sequence[ReferenceMeasured]) -> WarmupDecision:
+        """The warm-up's rule (`hil.calibration.warmup_decision.decide_warm`: the fitted drift still to
+        come below ``warmup.limit`` over three time constants, at their upper confidence limits, or an
+        arm warm from the start) on a `series` (this run's, in order), with its evidence."""
         times = np.array([p.elapsed for p in series], dtype=float)
         # the joint temperatures the controller reports, when every measurement has them, fix τ
         # without the tracker's noise (hil.calibration.warmup_fit)
         temps = ([p.temperatures for p in series]
                  if series and all(p.temperatures for p in series) else None)
-        fit = (fit_warmup(times, self.positions(series),
-                          temperatures=None if temps is None else np.array(temps, dtype=float))
-               if len(series) else None)
-        if fit is None:
-            return False, None
-        limit = float(self.config.warmup["limit"])
-        # on the upper confidence limits, not the point estimates: a noisy series can fit a short τ
-        # that "passes" three time constants at once and says nothing is left (issue 30)
-        span = times[-1] - times[0]
-        if fit.remaining_upper < limit and span >= 3.0 * fit.time_constant_upper:
-            return True, fit
-        # or the arm says it is steady: every joint's temperature flat (within the sensor's resolution)
-        # over the last two intervals, and the reference did not move by the limit among them (an arm
-        # that was warm before the warm-up began gives no curve to fit a time constant to)
-        if temperatures_flat(None if temps is None else np.array(temps, dtype=float)):
-            last = self.positions(series)[-FLAT_POINTS:]
-            moved = np.linalg.norm(last[:, None, :] - last[None, :, :], axis=2).max()
-            return bool(moved < limit), fit
-        return False, fit
+        return decide_warm(times, self.positions(series), float(self.config.warmup["limit"]),
+                           temperatures=None if temps is None else np.array(temps, dtype=float))
 
     def _visit(self) -> Generator[Step, Any, tuple[PoseRecord, Conditions] | None]:
         """Approach and measure the reference; None (said in a warning) when the visit was given up."""
@@ -241,7 +233,7 @@ class ReferenceWatch:
         start = (yield ReadConditions(temperatures=False)).t
         series: list[ReferenceMeasured] = []
         moved: float | None = None
-        fit: DriftFit | None = None
+        decision: WarmupDecision | None = None
         converged, reason = False, ""
         while True:
             got = yield from self._visit()
@@ -249,17 +241,19 @@ class ReferenceWatch:
                 record, conditions = got
                 elapsed = conditions.t - start
                 candidate = [*series, _as_point(record, conditions)]
-                converged, fit = self.settled(candidate)
+                decision = self.decide(candidate)
+                converged = decision.warm
                 end = converged or elapsed >= max_time
                 event = yield from self._record(record, conditions, WARMUP, limit=limit,
                                                 baseline=end and self.baseline is None)
                 if series:
                     moved = event.moved
+                    # every check says why it went on or stopped (the fit, τ and its upper limit, the
+                    # flat-temperature evidence): the JSON events, the store's log, the result
                     yield Emit(WarmupProgress(
                         campaign=self.campaign, elapsed=elapsed, moved=float(moved or 0.0),
                         interval=conditions.t - series[-1].elapsed, limit=limit, max_time=max_time,
-                        remaining=None if fit is None else fit.remaining,
-                        time_constant=None if fit is None else fit.time_constant))
+                        **decision.evidence()))
                 series.append(event)
                 if end:
                     break
@@ -273,8 +267,9 @@ class ReferenceWatch:
                 reason = "no calibration pose could be reached safely to cycle through"
                 break
         seconds = (yield ReadConditions(temperatures=False)).t - start
-        # what `settled` compared with three time constants: the span of the series it judged
+        # what the rule compared with three time constants: the span of the series it judged
         span = series[-1].elapsed - series[0].elapsed if series else None
+        fit = None if decision is None else decision.fit
         if not converged and not reason and fit is not None:
             assert span is not None  # a fit needs a series
             three = 3 * fit.time_constant_upper / 60
@@ -285,14 +280,16 @@ class ReferenceWatch:
                 reason = (f"at most {um(fit.remaining_upper)} of drift is still to come, but the "
                           f"measurements span {span / 60:.0f} min, under three of the longest time "
                           f"constants the fit allows ({three:.0f} min): too short to trust the fit")
-        remaining = None if fit is None else fit.remaining
-        tau = None if fit is None else fit.time_constant
+        evidence = {} if decision is None else decision.evidence()
+        judged = {k: evidence.get(k) for k in ("remaining", "remaining_upper", "time_constant",
+                                               "time_constant_upper", "decision")}
+        rule = str(evidence.get("rule") or "")
         self.warmup = {"seconds": seconds, "converged": converged, "references": len(series),
-                       "reason": reason, "moved": moved, "remaining": remaining, "time_constant": tau,
-                       "span": span}
+                       "reason": reason, "moved": moved, "span": span, "rule": rule, **judged,
+                       "evidence": evidence or None}
         yield Emit(WarmupFinished(campaign=self.campaign, seconds=seconds, converged=converged,
                                   references=len(series), moved=moved, limit=limit, reason=reason,
-                                  remaining=remaining, time_constant=tau))
+                                  span=span, rule=rule, **judged))
 
     def _cycle(self, cycle: Sequence[np.ndarray], until: float) -> Generator[Step, Any, bool]:
         """Move through `cycle` (going on where the last cycle stopped) until station time `until`;
@@ -359,15 +356,17 @@ class ReferenceWatch:
         for run in sorted({p.run for p in self.points} | ({self.run} if self.warmup else set())):
             if run == self.run and self.warmup is not None:
                 runs.append({"run": run, **{k: self.warmup[k] for k in (
-                    "seconds", "converged", "references", "remaining", "time_constant", "span")}})
+                    "seconds", "converged", "references", "remaining", "time_constant", "span",
+                    "remaining_upper", "time_constant_upper", "rule", "decision")}})
                 continue
             ws = [p for p in self.points if p.run == run and p.phase == WARMUP]
             if ws:  # an earlier run: judged again from its stored series
-                settled, fit = self.settled(ws)
+                decision = self.decide(ws)
+                ev = decision.evidence()
                 runs.append({"run": run, "seconds": ws[-1].elapsed - ws[0].elapsed, "references": len(ws),
-                             "converged": settled, "remaining": None if fit is None else fit.remaining,
-                             "time_constant": None if fit is None else fit.time_constant,
-                             "span": ws[-1].elapsed - ws[0].elapsed})
+                             "converged": decision.warm, "span": ws[-1].elapsed - ws[0].elapsed,
+                             **{k: ev[k] for k in ("remaining", "time_constant", "remaining_upper",
+                                                   "time_constant_upper", "rule", "decision")}})
         mine = self.warmup or {}
         return {
             "reference": [float(v) for v in self.reference],
@@ -382,7 +381,9 @@ class ReferenceWatch:
                        "ran": self.warmup is not None, "seconds": mine.get("seconds"),
                        "converged": mine.get("converged"), "reason": mine.get("reason", ""),
                        "remaining": mine.get("remaining"), "time_constant": mine.get("time_constant"),
-                       "span": mine.get("span"), "runs": runs},
+                       "span": mine.get("span"), "remaining_upper": mine.get("remaining_upper"),
+                       "time_constant_upper": mine.get("time_constant_upper"), "rule": mine.get("rule"),
+                       "decision": mine.get("decision"), "evidence": mine.get("evidence"), "runs": runs},
         }
 
 

@@ -108,10 +108,15 @@ def mes_result(data: ReportData) -> dict[str, Any]:
       "xyz": m (tracker frame), "moved": m | null, "drift": m from the baseline | null, "baseline",
       "temperatures": °C | null}], "warmup": {"enabled", "interval", "limit", "max_time", "ran",
       "seconds", "converged", "reason", "remaining": m | null, "time_constant": s | null, "span": s |
-      null, "runs": [{"run", "seconds", "converged", "references", "remaining", "time_constant",
-      "span"}]}}``: the warm-up's rule (`hil.campaign.warmup`) judged ``remaining`` (the drift the
-      first-order fit says is still to come) against ``limit`` and ``span`` (station seconds from the
-      run's first warm-up measurement to its last) against three ``time_constant``.
+      null, "remaining_upper": m | null, "time_constant_upper": s | null, "rule": "fit" | "flat" | "",
+      "decision": str | null, "evidence": {...} | null, "runs": [{"run", "seconds", "converged",
+      "references", "remaining", "time_constant", "span", "remaining_upper", "time_constant_upper",
+      "rule", "decision"}]}}``: the warm-up's rule (`hil.calibration.warmup_decision`) judged
+      ``remaining_upper`` (the most drift still to come the first-order fit allows; ``remaining`` its
+      estimate) against ``limit`` and ``span`` (station seconds from the run's first warm-up measurement
+      to its last) against three ``time_constant_upper``, or (``rule`` "flat") an arm warm from the
+      start by its flat joint temperatures; ``decision`` says it in one line, ``evidence`` holds the last
+      check's every figure (as its ``WarmupProgress`` event).
       ``flagged``: the reference drifted beyond ``limit`` while measuring; ``passed`` is still the
       validation's verdict alone
     * ``poses`` (a campaign's): ``{"bootstrap": C, "calibration": C, "validation": C}``, C =

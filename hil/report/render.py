@@ -334,10 +334,13 @@ def _warmup_figures(warm: Mapping[str, Any], series: Any) -> str:
         last = max((s["run"] for s in points), default=None)
         times = [s["elapsed"] for s in points if s["run"] == last]
         span = max(times) - min(times) if times else None
+    decision = warm.get("decision")
+    said = f"; {decision}" if isinstance(decision, str) and decision else ""
     if not _finite(remaining) or not _finite(tau):
-        return "no fit: too few reference measurements"
+        return "no fit: too few reference measurements" + said
     return (f"about {_um(remaining)} of drift still to come (limit {_um(warm.get('limit'))}); the series "
-            f"spans {_minutes(span)}, three fitted time constants {_minutes(3 * tau)} (τ = {_minutes(tau)})")
+            f"spans {_minutes(span)}, three fitted time constants {_minutes(3 * tau)} (τ = {_minutes(tau)})"
+            + said)
 
 
 def _calibration(d: ReportData) -> str:

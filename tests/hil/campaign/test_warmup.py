@@ -138,6 +138,15 @@ def test_the_warm_up_ends_once_the_fitted_drift_still_to_come_is_below_the_limit
     assert "(limit 10.0 µm)" in line
     block = outcome.result.drift
     assert block["warmup"]["converged"] and block["warmup"]["seconds"] == pytest.approx(done.seconds)
+    # why it stopped, in the events and the result: the fit's rule, its upper limits, its τ's source
+    assert done.rule == "fit" and done.decision.startswith("warm: at most")
+    assert done.remaining_upper < cell.config.warmup["limit"] and done.span >= 3 * done.time_constant_upper
+    checks = cell.of(WarmupProgress)
+    assert [c.warm for c in checks] == [False] * (len(checks) - 1) + [True]
+    assert all(c.time_constant_source == "temperatures" for c in checks if c.time_constant is not None)
+    assert all(c.decision.startswith("not yet:") for c in checks[:-1])
+    assert block["warmup"]["rule"] == "fit" and block["warmup"]["decision"] == done.decision
+    assert block["warmup"]["evidence"]["remaining_upper"] == pytest.approx(done.remaining_upper)
     assert block["baseline"] == warm[-1].seq
     # what the rule judged, for the report to state: the series' span against three time constants
     span = warm[-1].elapsed - warm[0].elapsed

@@ -58,3 +58,24 @@ def test_a_warm_up_that_did_not_settle_is_a_warning_line():
                                    moved=9e-6, limit=10e-6, remaining=18e-6, time_constant=2000.0))
     assert line == ("warning: warm-up stopped after 60.0 min without settling: about 18.0 µm of drift "
                     "still to come (limit 10.0 µm); measuring anyway")
+
+
+def test_a_check_with_its_evidence_says_the_upper_limits_and_where_tau_came_from():
+    (line, done) = lines(
+        WarmupProgress(campaign="c", elapsed=1560.0, moved=2.2e-6, interval=131.0, limit=10e-6,
+                       max_time=3600.0, remaining=10.1e-6, time_constant=826.0, remaining_upper=16.9e-6,
+                       time_constant_upper=922.0, time_constant_source="temperatures", span=1602.0,
+                       temperatures_flat=False, warm=False, rule="",
+                       decision="not yet: about 10.1 µm of drift still to come, and the series cannot rule "
+                                "out 16.9 µm (limit 10.0 µm)"),
+        WarmupFinished(campaign="c", seconds=2900.0, converged=True, references=25, moved=3e-6, limit=10e-6,
+                       remaining=3.2e-6, time_constant=905.0, remaining_upper=4.4e-6,
+                       time_constant_upper=922.0, span=2800.0, rule="fit",
+                       decision="warm: at most 4.4 µm of drift still to come (limit 10.0 µm) over 47 min, at "
+                                "least three of the longest time constants the fit allows (46 min)"))
+    assert line == ("warm-up: reference moved 2.2 µm in 131 s, about 10.1 µm still to come (limit 10.0 µm), "
+                    "at most 16.9 µm; τ 826 s, at most 922 s (from the joint temperatures) over 27 min; "
+                    "26 of at most 60 min")
+    assert done == ("warm-up: done after 48.3 min, warm: at most 4.4 µm of drift still to come "
+                    "(limit 10.0 µm) over 47 min, at least three of the longest time constants the fit "
+                    "allows (46 min)")
