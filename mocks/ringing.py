@@ -133,25 +133,6 @@ class Ringing:
             out += x * ring.direction
         return out
 
-    def offsets(self, times: np.ndarray) -> np.ndarray:
-        """(n, 3) deflections at each of `times`: `offset` at every one, in one pass over the rings. A
-        tracker's stationary measurement asks for hundreds of instants at once (an AT960 reads at
-        1000 Hz), which one call each made the simulator's slowest part."""
-        t = np.asarray(times, dtype=float).reshape(-1)
-        with self._lock:
-            rings = list(self._rings)
-        out = np.zeros((len(t), 3))
-        w2 = self.omega * self.omega
-        for ring in rings:
-            starts = np.array([s[0] for s in ring.steps])
-            deltas = np.array([s[1] for s in ring.steps])
-            tau = t[:, None] - starts[None, :]  # (n, steps); a step has started where tau >= 0
-            started = tau >= 0
-            g = step_response(np.where(started, tau, 0.0), self.omega, self.zeta)
-            x = np.sum(np.where(started, -(deltas / w2) * (1.0 - g), 0.0), axis=1)
-            out += x[:, None] * ring.direction
-        return out
-
     def listener(self, tip_direction: Callable[[np.ndarray, np.ndarray], np.ndarray]
                  ) -> Callable[..., None]:
         """A `mocks.ur.arm.SimArm` listener recording its ``movej`` and ``movej_cut`` events.

@@ -101,26 +101,3 @@ def test_the_ring_is_deterministic_given_the_motion():
         c1.t += dt
         c2.t += dt
         assert np.array_equal(w1.target().position, w2.target().position)
-
-
-@pytest.mark.parametrize("reading_time", [0.0, 0.1])
-def test_the_offsets_of_many_instants_at_once_are_each_instants_own(reading_time: float) -> None:
-    """`Ringing.offsets` and `World.ring_offsets` (a stationary measurement's hundreds of readings in
-    one call) give what `offset` and `ring_offset` give one instant at a time: during a move, as it
-    stops, while it rings and before any move started."""
-    arm, world, clock = ringing_station()
-    world.reading_time = reading_time
-    with arm.lock:
-        arm.start_movej(Q1, 0.5, 1.0)
-    for _ in range(300):  # mid-move: some steps have started, some not
-        clock.t += 0.002
-        arm.tick()
-    with arm.lock:
-        arm.start_movej(Q0, 1.0, 2.0)  # a second ring on top of the first
-    run_until_still(arm, clock)
-    times = np.linspace(-0.1, clock.t + 1.0, 701)
-    one_by_one = np.array([world.ringing.offset(float(t)) for t in times])
-    assert np.abs(one_by_one).max() > 1e-5  # it rings: the comparison below is not of zeros
-    np.testing.assert_allclose(world.ringing.offsets(times), one_by_one, rtol=0, atol=1e-15)
-    readings = np.array([world.ring_offset(float(t)) for t in times])
-    np.testing.assert_allclose(world.ring_offsets(times), readings, rtol=0, atol=1e-15)
