@@ -25,6 +25,25 @@ def screen_text(app: App) -> str:
     return "\n".join(line.rstrip() for line in console.export_text(styles=False).splitlines()) + "\n"
 
 
+async def settled_text(pilot, timeout: float = 10.0) -> str:
+    """What the terminal shows once the app has finished drawing: two frames alike in a row, with no
+    layout, repaint or widget update pending. One `pilot.pause()` processes the messages queued so far,
+    but a message's handler may queue more (a table's rows, then its scroll; a panel's text, then the
+    layout that wraps it), and on a loaded machine a read taken in between caught the screen
+    mid-layout. A screen that never settles is returned as it is at `timeout`, for the caller's
+    assertion to show."""
+    deadline = time.monotonic() + timeout
+    previous: str | None = None
+    while True:
+        await pilot.pause()
+        screen = pilot.app.screen
+        text = screen_text(pilot.app)
+        pending = screen._layout_required or screen._repaint_required or screen._dirty_widgets
+        if (text == previous and not pending) or time.monotonic() > deadline:
+            return text
+        previous = text
+
+
 def check_snapshot(app: App, name: str) -> None:
     """Compare the screen with snapshots/<name>.txt (``HIL_SNAPSHOT_UPDATE=1`` rewrites it)."""
     path = SNAPSHOTS / f"{name}.txt"

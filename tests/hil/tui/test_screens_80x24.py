@@ -20,7 +20,7 @@ from hil.tui.messages import EngineEvent, SelectionDone
 from hil.tui.screens.run import outlier_level, row_cells
 from hil.tui.state import PoseRow
 from hil.tui.widgets.plot import PlotView, Series
-from tests.hil.tui.conftest import screen_text
+from tests.hil.tui.conftest import settled_text
 from tests.hil.tui.test_snapshots import SIZE, T0, offline_app, run_events
 
 REPORT = {"index": "O1", "value": 3.7e-4, "percent_of_bound": 93.7, "method": "tabu", "seconds": 0.5,
@@ -50,8 +50,7 @@ def test_run_table_shows_every_deviation_and_status_at_80_columns():
                 app.post_message(EngineEvent(event))
             await pilot.pause()
             await pilot.press("3")
-            await pilot.pause()
-            rows = _table_lines(screen_text(app))
+            rows = _table_lines(await settled_text(pilot))
             assert "dev [mm]" in rows[0] and "status" in rows[0]
             for index, dev in ((3, "2.000"), (4, "2.333"), (5, "2.667")):
                 assert any(r.split()[:1] == [str(index)] and dev in r and "measured" in r for r in rows)
@@ -91,7 +90,7 @@ def test_plan_refuses_too_few_calibration_poses_before_selecting_or_saving():
             await pilot.press("s")
             await pilot.pause()
             assert asked == []
-            text = screen_text(app)
+            text = await settled_text(pilot)
             assert "calibration poses: at least 10" in _selection(text)
             assert "27 parameters" in _selection(text)
             assert "--count" not in text
@@ -139,13 +138,11 @@ def test_plan_says_whether_the_run_measures_the_previewed_poses(position, expect
             await pilot.press("s")
             where = position or (2.5, 0.0, 0.5)
             app.post_message(SelectionDone(REPORT, POINTS, where, position is None))
-            await pilot.pause()
-            assert expected in _selection(screen_text(app))
+            assert expected in _selection(await settled_text(pilot))
             if position is not None:  # other settings for the next run: the preview is not its plan
                 app.screen.query_one("#in-seed").value = "7"
                 await pilot.press("u")
-                await pilot.pause()
-                assert "the next run has other settings" in _selection(screen_text(app))
+                assert "the next run has other settings" in _selection(await settled_text(pilot))
 
     asyncio.run(scenario())
 
@@ -165,8 +162,7 @@ def _plot(series, size, **kwargs) -> str:
         app = _PlotApp(**kwargs)
         async with app.run_test(size=size) as pilot:
             app.query_one(PlotView).plot(series)
-            await pilot.pause()
-            return screen_text(app)
+            return await settled_text(pilot)
 
     return asyncio.run(scenario())
 
@@ -216,9 +212,8 @@ def test_a_focused_field_keeps_the_footer_keys_and_s_still_selects():
             field = app.screen.query_one("#in-poses")
             assert app.screen.focused is field
             await pilot.press("1", "4")
-            await pilot.pause()
             assert field.value == "14"  # digits go into the field (selected on focus: replaced)
-            footer = screen_text(app).splitlines()[-1]
+            footer = (await settled_text(pilot)).splitlines()[-1]
             assert "s Select poses" in footer and "u Use for next run" in footer and "esc" in footer
             await pilot.press("s")
             assert len(asked) == 1 and asked[0]["campaign.calibration_poses"] == 14
@@ -271,8 +266,7 @@ def test_one_pose_count_everywhere_after_a_resume(tmp_path):
                 app.post_message(EngineEvent(event))
             await pilot.pause()
             await pilot.press("3")
-            await pilot.pause()
-            status = next(line for line in screen_text(app).splitlines() if cid in line)
+            status = next(line for line in (await settled_text(pilot)).splitlines() if cid in line)
             assert "4/4 poses" in status
 
     asyncio.run(scenario())
@@ -290,8 +284,7 @@ def test_run_status_shows_bootstrap_points_apart_from_the_poses():
                     p_spread=[0.0] * 3, samples=5, deviation=None, target=[0.0] * 6)))
             await pilot.pause()
             await pilot.press("3")
-            await pilot.pause()
-            status = next(line for line in screen_text(app).splitlines() if cid in line)
+            status = next(line for line in (await settled_text(pilot)).splitlines() if cid in line)
             assert "0/16 poses (+3 bootstrap)" in status
 
     asyncio.run(scenario())
@@ -302,16 +295,13 @@ def test_a_terminal_below_80x24_says_so_instead_of_a_cut_screen():
     async def scenario():
         app = create_app(start_station=False, sim=True, now=lambda: T0)
         async with app.run_test(size=(70, 20)) as pilot:
-            await pilot.pause()
-            text = " ".join(screen_text(app).split())
+            text = " ".join((await settled_text(pilot)).split())
             assert "This terminal is 70×20; hil needs at least 80×24" in text
             assert "1 Station" not in text
             await pilot.press("2")
-            await pilot.pause()
-            assert "hil needs at least 80×24" in " ".join(screen_text(app).split())
+            assert "hil needs at least 80×24" in " ".join((await settled_text(pilot)).split())
             await pilot.resize_terminal(80, 24)
-            await pilot.pause()
-            text = screen_text(app)
+            text = await settled_text(pilot)
             assert "hil needs" not in text and "1 Station" in text
 
     asyncio.run(scenario())
@@ -369,9 +359,9 @@ def test_run_screen_shows_every_number_of_the_current_pose_uncut():
     target = [np.radians(v) for v in (-164.2, -117.5, 107.0, -35.4, 90.0, 175.3)]
 
     async def scenario():
-        app, _, cm = await _run_screen(_pose_events(9, target))
+        _, pilot, cm = await _run_screen(_pose_events(9, target))
         try:
-            text = screen_text(app)
+            text = await settled_text(pilot)
             for value in ("-164.2", "-117.5", "107.0", "-35.4", "90.0", "175.3"):
                 assert value in text, text  # the target of the pose under the cursor, whole
             measured = [line for line in text.splitlines() if "measured" in line and "cal" in line]
@@ -395,9 +385,9 @@ def test_run_screen_lines_are_whole_and_indented_and_the_deviation_plot_has_no_a
                                  limit=10e-6, max_time=3600.0))
 
     async def scenario():
-        app, _, cm = await _run_screen(events)
+        _, pilot, cm = await _run_screen(events)
         try:
-            text = screen_text(app)
+            text = await settled_text(pilot)
             lines = text.splitlines()
             assert all(not line or line.startswith(" ") for line in lines), text  # nothing at column 0
             joined = " ".join(" ".join(lines).split())
@@ -420,11 +410,11 @@ def test_a_suspended_pose_stays_in_view():
                                 "by itself", timeout=60.0, on_timeout="skip")]
 
     async def scenario():
-        app, pilot, cm = await _run_screen(events)
+        _, pilot, cm = await _run_screen(events)
         try:
-            await pilot.pause(0.2)
-            rows = [line.split() for line in screen_text(app).splitlines()]
-            assert ["32", "cal", "moving"] in [r[:3] for r in rows], screen_text(app)
+            text = await settled_text(pilot)
+            rows = [line.split() for line in text.splitlines()]
+            assert ["32", "cal", "moving"] in [r[:3] for r in rows], text
         finally:
             await cm.__aexit__(None, None, None)
 
@@ -441,9 +431,9 @@ def test_the_step_line_counts_the_poses_measured_so_far_not_the_phase_start():
     events = [e for e in events if getattr(e, "index", None) != 5]  # all started poses measured
 
     async def scenario():
-        app, _, cm = await _run_screen(events)
+        _, pilot, cm = await _run_screen(events)
         try:
-            text = screen_text(app)
+            text = await settled_text(pilot)
             assert "6 of 6 poses to measure" not in text, text
             assert "5 of 6" in text, text
         finally:
