@@ -12,6 +12,7 @@ from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.css.query import NoMatches
 from textual.widgets import DataTable, Footer, ProgressBar, Static
+from textual.widgets.data_table import ColumnKey
 
 from hil.tui.screens.base import HilScreen
 from hil.tui.screens.pose_plan import FIELDS, count_problem
@@ -24,8 +25,14 @@ from hil.tui.words import kind_words
 #: The table's columns, most telling first; at 80 columns every one is in view, whole. The joint targets
 #: (six angles, the widest and least read) are on the line below the table, for the pose under the
 #: cursor (`pose_line`): the current one unless the operator moves the cursor (up/down).
-COLUMNS = (("#", "idx"), ("role", "role"), ("status", "status"), ("dev [mm]", "dev"), ("Δq [mdeg]", "dq"),
-           ("measured [mm]", "p"))
+#: (label, key, width): fixed widths, so the table is whole from its first frame. Textual sizes an
+#: automatic column when the table's message queue falls idle, and under a flood of engine events
+#: on a loaded machine that came late: the operator saw "measur" under "status" until it did. Each
+#: width holds the column's longest text: an index up to 999, "measuring", a deviation of a metre
+#: ("1000.000"), a joint error of a turn, and three coordinates out to a tracker's 40 m range
+#: ("-40000.0", Leica AT960 datasheet). A longer cell widens its column at once (`_fit_width`).
+COLUMNS = (("#", "idx", 3), ("role", "role", 4), ("status", "status", 9), ("dev [mm]", "dev", 8),
+           ("Δq [mdeg]", "dq", 9), ("measured [mm]", "p", 26))
 _ROLE = {"bootstrap": "boot", "calibration": "cal", "validation": "val"}
 _STATUS = {"moving": ("moving", "yellow"), "reached": ("measuring", "yellow"), "skipped": ("skipped", "red"),
            "measured": ("measured", "")}
@@ -142,8 +149,8 @@ class RunScreen(HilScreen):
         drift.display = False
         yield drift
         table: DataTable[Text] = DataTable(id="poses", cursor_type="row", zebra_stripes=True)
-        for label, key in COLUMNS:
-            table.add_column(Text(label), key=key)  # Text: "[mm]" is not markup
+        for label, key, width in COLUMNS:
+            table.add_column(Text(label), key=key, width=width)  # Text: "[mm]" is not markup
         yield table
         yield Static(id="pose-line")
         yield PlotView("deviation from nominal [mm]", y_floor=0.0, x_label="point", integer_x=True,
@@ -288,9 +295,10 @@ class RunScreen(HilScreen):
             plain = tuple((c.plain, str(c.style)) for c in cells)  # a colour may change alone
             if self._shown.get(key) == plain:
                 continue
+            _fit_width(table, cells)
             if key in self._shown:
-                for (_, column), cell in zip(COLUMNS, cells, strict=True):
-                    table.update_cell(key, column, cell, update_width=True)
+                for (_, column, _), cell in zip(COLUMNS, cells, strict=True):
+                    table.update_cell(key, column, cell)
             else:
                 table.add_row(*cells, key=key)
             self._shown[key] = plain
@@ -318,6 +326,15 @@ class RunScreen(HilScreen):
         """The operator moved the cursor: the pose line shows that pose."""
         if self.is_mounted:
             self._pose_line(self.hil.run_state)
+
+
+def _fit_width(table: DataTable[Text], cells: tuple[Text, ...]) -> None:
+    """Widen a column whose cell is longer than its width now, rather than cut the number."""
+    for (_, key, _), cell in zip(COLUMNS, cells, strict=True):
+        column = table.columns[ColumnKey(key)]
+        if cell.cell_len > column.width:
+            column.width = cell.cell_len
+            table.refresh(layout=True)
 
 
 def _current(run: RunState) -> PoseRow | None:

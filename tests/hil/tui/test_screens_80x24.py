@@ -373,6 +373,47 @@ def test_run_screen_shows_every_number_of_the_current_pose_uncut():
     asyncio.run(scenario())
 
 
+def test_run_table_is_whole_before_the_table_falls_idle():
+    """The columns hold their longest text from the first frame. Sized automatically, they took their
+    width when the table's queue fell idle; under a flood of engine events on a loaded machine the
+    operator saw "measur" under "status" until then. Drawn here with the table's idle handler kept
+    from running, as that flood kept it."""
+    from textual.widgets import DataTable
+
+    from hil.tui.screens.run import COLUMNS
+
+    target = [np.radians(v) for v in (-164.2, -117.5, 107.0, -35.4, 90.0, 175.3)]
+
+    async def scenario():
+        app = offline_app()
+        async with app.run_test(size=SIZE) as pilot:
+            await pilot.press("3")
+            await pilot.pause()
+            table = app.screen.query_one("#poses", DataTable)
+
+            async def never_idle(_event):  # the flood: the table's queue is never empty
+                return None
+
+            table._on_idle = never_idle
+            for event in _pose_events(9, target):
+                app.post_message(EngineEvent(event))
+            await pilot.pause()
+            widths = {str(key.value): column.get_render_width(table) - 2 * table.cell_padding
+                      for key, column in table.columns.items()}
+            assert widths["status"] >= len("measuring") and widths["p"] >= len("-1234.5 2345.6 123.4")
+            far = _pose_events(2, target)[:-1]
+            far.append(PointMeasured(campaign=far[0].campaign, t=T0 + 9, index=1, role="calibration",
+                                     q=target, p=[-123.4567, 2.3456, 0.1234], p_spread=[0] * 3,
+                                     samples=5, deviation=3.5e-3, target=target))
+            for event in far:  # a point beyond the widths' 40 m: its column widens, nothing is cut
+                app.post_message(EngineEvent(event))
+            await pilot.pause()
+            column = table.columns[next(k for k in table.columns if k.value == COLUMNS[-1][1])]
+            assert column.width >= len("-123456.7 2345.6 123.4")
+
+    asyncio.run(scenario())
+
+
 def test_run_screen_lines_are_whole_and_indented_and_the_deviation_plot_has_no_acceptance_line():
     from hil.campaign.events import PhaseChanged, WarmupProgress
 
