@@ -23,6 +23,13 @@ def test_without_a_tracker_the_constraint_s_own_option_is_named() -> None:
     assert _naming_the_option(exc, SimpleNamespace(tracker=(1.0, 2.0, 0.5))).startswith("--floor: ")
 
 
+def test_the_keep_in_box_and_the_shoulder_margin_are_named() -> None:
+    exc = NoCandidatesError("no candidate configuration satisfies the constraints", "keep-in")
+    assert _naming_the_option(exc, SimpleNamespace(tracker=(2.0, 0.0, 0.5))).startswith("--keep-in: ")
+    exc = NoCandidatesError("no candidate configuration satisfies the constraints", "shoulder")
+    assert _naming_the_option(exc, SimpleNamespace(tracker=None)).startswith("--shoulder-margin: ")
+
+
 def test_other_selector_errors_are_left_as_they_are() -> None:
     none = SimpleNamespace(tracker=None)
     assert _naming_the_option(SelectorError("count too small"), none) == "count too small"

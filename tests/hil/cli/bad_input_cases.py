@@ -1160,7 +1160,20 @@ def _cases() -> list[Case]:
         ["moveb", "run", f"{d}/square.moveb", "--config", f"{d}/station.toml", "--seed", "3"], ["--seed"])
     add("tui", "c4-tracker.url=http", ["tui", "--config", f"{d}/bad.toml", "--db", f"{d}/c.db"],
         ["tracker.url"], files={"bad.toml": config_with("tracker.url", "http://tracker")})
-    add("select", "c4-tracker-at-the-base", [*sel, "--tracker", "0,0,0"], ["--tracker"], timeout=60)
+    add("select", "c4-tracker-at-the-base", [*sel, "--tracker", "0,0,0"], ["--tracker"])
+    # requests no candidate can meet, at the default 20,000 candidates (drawn 2,000,000 vectors: 15-35 s):
+    # geometry refuses them before any draw; the last falls back to sampling, whose bound is its own
+    empty = ["select", "--robot", "ur5e", "--count", "30"]
+    for label, extra, names in (
+            ("tracker-inside-the-base", ["--tracker", "0.03,-0.02,0.12"], ["--tracker", "base"]),
+            ("tracker-beyond-the-range", ["--tracker", "20,0,0", "--range", "0.8,2"], ["--tracker", "range"]),
+            ("tracker-within-the-range-min", ["--tracker", "0,0,0.3", "--range", "3,20"],
+             ["--tracker", "range"]),
+            ("keep-in-out-of-reach", ["--keep-in", "3,3,3,4,4,4"], ["--keep-in", "reach"]),
+            ("floor-above-the-shoulder", ["--floor", "1.5"], ["--floor"]),
+            ("singularity-margins-leave-nothing", ["--wrist-margin", "89.9", "--elbow-margin", "89.9"],
+             ["--wrist-margin|--elbow-margin"])):
+        add("select", f"c4-{label}", [*empty, *extra], names)
     for cmd in ("history", "robots"):
         add(cmd, "c4-store.url-not-a-url", [cmd, "--config", f"{d}/bad.toml"], ["store.url", "not a url"],
             files={"bad.toml": config_with("store.url", "dbhost:5432/hil")})
