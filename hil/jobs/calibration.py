@@ -240,6 +240,8 @@ def calibrate(request: CalibrationRequest, *, subscribers: Sequence[Callable[[Ev
     raises InputError before anything moves; a device that cannot be reached is a fault (exit 3), said."""
     from hil.station.devices import HARDWARE_ERRORS
 
+    if request.db:  # --db needs no config: refused before a simulated station starts
+        store_location(request.db, request.source, None)
     with station_setup(request.source) as setup:
         if request.no_warmup:  # not part of what identifies the campaign (`hil.store.hashing`)
             setup = StationSetup(setup.config.with_overrides(warmup__enabled=False), setup.identity,

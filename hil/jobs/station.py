@@ -157,21 +157,14 @@ def store_location(db: str | None, source: StationSource, config: StationConfig 
     configuration's ``store.url``, the user's default."""
     import os
 
-    from hil.store.paths import ENV_VAR, check_creatable, resolve_location
+    from hil.store.paths import ENV_VAR, check_store, locate
 
-    if source.sim is None or db:
-        location = resolve_location(db, config)
-        stored = config.store if config is not None else {}
-        field = ("--db" if db else f"${ENV_VAR}" if os.environ.get(ENV_VAR)
-                 else "store.url" if stored.get("url") else "store.path" if stored.get("path")
-                 else "the default store")
-    else:
-        location = resolve_location(None, simulated=True)
-        say(simulated_store_words(location, bool(os.environ.get(ENV_VAR))), "information")
-        field = "the simulated stations' store"
-    if isinstance(location, Path) and not location.exists():
-        check_creatable(location, field)  # before any connection: a store that cannot be is bad input
-    return location
+    simulated = source.sim is not None and not db
+    located = locate(db, config, simulated=simulated)
+    if simulated:
+        say(simulated_store_words(located.location, bool(os.environ.get(ENV_VAR))), "information")
+    check_store(located, create=True)  # before any connection: a store that cannot be is bad input
+    return located.location
 
 
 def open_existing_store(location: Any, config: StationConfig | None) -> Store | None:
