@@ -167,6 +167,30 @@ def store_location(db: str | None, source: StationSource, config: StationConfig 
     return located.location
 
 
+#: Seconds without an RTDE package after which ur_rtde's client drops the link (docs/design.md, Facts:
+#: ur_rtde against a simulator).
+RTDE_PATIENCE_S = 2.5
+
+
+def simulator_words(simulator: Any) -> str | None:
+    """After a fault on a simulated station, whether the simulator itself went silent: its longest
+    wall-time pause between two controller cycles (each sends the RTDE package) against ur_rtde's
+    2.5 s of patience, and its late cycles. A link lost under load is then the simulator's starving or
+    the client's own, told apart (issue 29). None for a real station, or a simulator that does not
+    answer (it may be what failed)."""
+    if simulator is None:
+        return None
+    try:
+        state = simulator.state()
+        gap, late = float(state["max_tick_gap_s"]), int(state["late_ticks"])
+    except Exception:  # a simulator that died or hangs: the fault said already is the news
+        return None
+    verdict = ("longer than ur_rtde waits: the simulator starved (a loaded machine)" if gap >= RTDE_PATIENCE_S
+               else f"within the {RTDE_PATIENCE_S:g} s ur_rtde waits: the simulator kept sending")
+    return (f"the simulated controller's longest pause between cycles was {gap:.2f} s, {verdict}; "
+            f"{late} cycles ran late")
+
+
 def open_existing_store(location: Any, config: StationConfig | None) -> Store | None:
     """The store at `location` if it exists (a server always does), opened now so that a damaged or a
     newer one is refused before the arm is touched; None for a file still to be created."""
