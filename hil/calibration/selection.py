@@ -177,7 +177,7 @@ CONSTRAINT_OPTIONS = {"range": "--range", "acceptance": "--half-angle", "wrist":
                       "keep-in": "--keep-in"}
 
 
-def _naming_the_option(exc: Exception, constraints: Constraints) -> str:
+def naming_the_option(exc: Exception, constraints: Constraints) -> str:
     """`exc`'s message, led by the option behind the constraint that left no candidates: ``--tracker
     0,0,0`` was refused as "no candidate configuration satisfies the constraints" without naming the
     option that caused it (issue 31)."""
@@ -278,7 +278,7 @@ def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str
         perm, ordered = order_poses(Q, model.max_joint_speed, start)
         order_seconds = time.perf_counter() - t0
     except selector.SelectorError as exc:
-        raise InputError(_naming_the_option(exc, constraints)) from None
+        raise InputError(naming_the_option(exc, constraints)) from None
     unordered = travel_time(Q, model.max_joint_speed, start)
     report: dict[str, Any] = {
         "format": FORMAT,

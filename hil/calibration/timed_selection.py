@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 import selector
-from hil.calibration.selection import FORMAT, design_fields, design_space
+from hil.calibration.selection import FORMAT, design_fields, design_space, naming_the_option
 from hil.errors import InputError
 from selector.candidates import Constraints
 from selector.indices import o1_from_logdet
@@ -101,7 +101,7 @@ def select_timed(robot: str, count: int, *, speed: float, acceleration: float, d
                 f"a budget of {budget:g} s fits only {len(result.chosen)} poses; identifying the {n} "
                 f"parameters takes at least {selector.minimum_poses(n)}")
     except selector.SelectorError as exc:
-        raise InputError(str(exc)) from None
+        raise InputError(naming_the_option(exc, constraints)) from None
     chosen_q = cands.q[result.chosen]
     value = float(o1_from_logdet(result.logdet, n, len(result.chosen))) if np.isfinite(result.logdet) else 0.0
     legs = _legs_outside(model, constraints, _tour_q(result, cands.q, fixed_q), start_q)

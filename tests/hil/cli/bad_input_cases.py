@@ -1174,6 +1174,8 @@ def _cases() -> list[Case]:
             ("singularity-margins-leave-nothing", ["--wrist-margin", "89.9", "--elbow-margin", "89.9"],
              ["--wrist-margin|--elbow-margin"])):
         add("select", f"c4-{label}", [*empty, *extra], names)
+    add("select", "c4-time-aware-tracker-inside-the-base",
+        [*empty, "--method", "time-aware", "--tracker", "0,0,0"], ["--tracker", "base"])
     for cmd in ("history", "robots"):
         add(cmd, "c4-store.url-not-a-url", [cmd, "--config", f"{d}/bad.toml"], ["store.url", "not a url"],
             files={"bad.toml": config_with("store.url", "dbhost:5432/hil")})
