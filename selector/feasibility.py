@@ -6,15 +6,25 @@ sampling, whose own give-up bound costs seconds.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from collections.abc import Sequence
+from typing import Protocol
 
 import numpy as np
 
 from selector.arm import point_segment_distance
+from selector.model import PoseModel
 
-if TYPE_CHECKING:
-    from selector.candidates import Constraints
-    from selector.model import PoseModel
+
+class Settings(Protocol):
+    """What `impossible` reads of `selector.candidates.Constraints` (which imports this module)."""
+
+    tracker: Sequence[float] | None
+    tracker_range: tuple[float, float]
+    keep_in_lower: Sequence[float]
+    keep_in_upper: Sequence[float]
+    floor: float
+
+    def enabled(self) -> tuple[str, ...]: ...
 
 
 #: Configurations drawn to measure the arm's fixed geometry for `impossible` (its bounds hold for any
@@ -24,7 +34,7 @@ _PROBES = 64
 _FIXED = 1e-9
 
 
-def impossible(model: PoseModel, constraints: Constraints, lo: np.ndarray, hi: np.ndarray
+def impossible(model: PoseModel, constraints: Settings, lo: np.ndarray, hi: np.ndarray
                ) -> tuple[str, str] | None:
     """(constraint, why) when geometry alone proves that no configuration passes, else None.
 
