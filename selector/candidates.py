@@ -5,8 +5,9 @@ kinematics are 2π-periodic, so wider ranges add no information, only travel and
 `Constraints.joint_lower/joint_upper` to narrow further), except q5, which is drawn uniformly over the
 values that point the SMR at the tracker (`aim_wrist`). Each batch goes through the constraints in
 cascade, cheap ones first; survivors are kept until `count` candidates are found or `max_samples` were
-drawn. When nothing survives, every constraint is evaluated on its own on a fresh batch so that the
-error can name the one that removes the most.
+drawn. A request that geometry alone shows to be empty (a tracker inside the base, a keep-in box out
+of reach…: `impossible`) is refused before any draw. When nothing survives, every constraint is
+evaluated on its own on a fresh batch so that the error can name the one that removes the most.
 
 Constraints (`Constraints.disabled` switches any of them off by name):
 
@@ -40,6 +41,7 @@ from selector.arm import (
     wrist_measure,
 )
 from selector.errors import NoCandidatesError, SelectorError
+from selector.feasibility import impossible
 from selector.model import PoseModel
 
 CONSTRAINT_NAMES: tuple[str, ...] = (
@@ -258,8 +260,10 @@ def generate_candidates(model: PoseModel, count: int, constraints: Constraints |
                         seed: int = 0, max_samples: int | None = None, batch: int = 8192) -> CandidateSet:
     """Up to `count` feasible configurations (deterministic for `seed`), with their Jacobians.
 
-    Draws at most `max_samples` (default 100·count) joint vectors. Raises NoCandidatesError when none
-    passes, naming the constraint that rejected the most draws. Fewer than `count` survivors are
+    Draws at most `max_samples` (default 100·count) joint vectors. Raises NoCandidatesError before
+    drawing when geometry proves a constraint cannot pass (`impossible`), and when none passes, naming
+    the constraint that rejected the most draws; with no survivor the draws stop at a bound of their
+    own (`hopeless`), however many candidates were asked for. Fewer than `count` survivors are
     returned as they are; the caller decides whether that is enough.
     """
     t0 = time.perf_counter()
@@ -276,8 +280,15 @@ def generate_candidates(model: PoseModel, count: int, constraints: Constraints |
     rate = 0.5  # acceptance guess until the first batch tells
     hopeless = max(10 * batch, 50_000)  # draws without a single survivor after which we give up
     aim = ("acceptance" in constraints.enabled() and hi[4] - lo[4] >= 2 * math.pi - 1e-9)
+    proof = impossible(model, constraints, lo, hi)
+    if proof is not None:
+        worst, why = proof
+        raise NoCandidatesError(f"no candidate configuration satisfies the constraints: '{worst}' cannot "
+                                f"pass: {why}; relax or disable it", worst)
     while found < count and sampled < max_samples and not (found == 0 and sampled >= hopeless):
         size = int(min(max_samples - sampled, max(batch, 1.2 * (count - found) / max(rate, 1e-3))))
+        if found == 0:  # a guess from no survivors is no guess: never draw past `hopeless` on it
+            size = min(size, max(batch, hopeless - sampled))
         q = lo + (hi - lo) * rng.random((size, 6))
         if aim:
             q = aim_wrist(model, q, constraints, rng)

@@ -173,10 +173,11 @@ def parse_constraints(*, tracker: Sequence[float] | None, disabled: Sequence[str
 TRACKER_CONSTRAINTS = frozenset({"range", "acceptance", "line-of-sight"})
 #: The ``hil select`` option that sets each constraint (for one not about the tracker's position).
 CONSTRAINT_OPTIONS = {"range": "--range", "acceptance": "--half-angle", "wrist": "--wrist-margin",
-                      "elbow": "--elbow-margin", "floor": "--floor"}
+                      "elbow": "--elbow-margin", "shoulder": "--shoulder-margin", "floor": "--floor",
+                      "keep-in": "--keep-in"}
 
 
-def _naming_the_option(exc: Exception, constraints: Constraints) -> str:
+def naming_the_option(exc: Exception, constraints: Constraints) -> str:
     """`exc`'s message, led by the option behind the constraint that left no candidates: ``--tracker
     0,0,0`` was refused as "no candidate configuration satisfies the constraints" without naming the
     option that caused it (issue 31)."""
@@ -192,13 +193,17 @@ def design_space(robot: str, count: int, *, candidates: int, seed: int, smr: Seq
                  constraints: Constraints, scaling: str, compliance: bool, payload: Any,
                  gravity: Sequence[float] | None,
                  say: Callable[[str, str], None],
-                 joint_errors: Sequence[int] = ()) -> tuple[SelectionModel, Any, np.ndarray]:
+                 joint_errors: Sequence[int] = (),
+                 check: Callable[[int], None] | None = None) -> tuple[SelectionModel, Any, np.ndarray]:
     """The selection model, its feasible candidates and their scaled Jacobian blocks (every method's
-    starting point); `selector.SelectorError` for a count the candidates cannot serve."""
+    starting point); `selector.SelectorError` for a count the candidates cannot serve. `check(n)`, given
+    the parameter count, refuses a request before the candidates are drawn (seconds of work)."""
     model = SelectionModel(robot, smr, constraints.tracker, compliance=compliance, payload=payload,
                            gravity=gravity, joint_errors=joint_errors)
     n = len(model.parameters)
     check_count(count, candidates, n)
+    if check is not None:
+        check(n)
     say("candidates", f"drawing up to {candidates} feasible configurations of the {model.spec.name}")
     cands = generate_candidates(model, candidates, constraints, seed=seed)
     say("candidates", f"{len(cands)} found ({cands.sampled} drawn) in {cands.seconds:.1f} s")
@@ -273,7 +278,7 @@ def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str
         perm, ordered = order_poses(Q, model.max_joint_speed, start)
         order_seconds = time.perf_counter() - t0
     except selector.SelectorError as exc:
-        raise InputError(_naming_the_option(exc, constraints)) from None
+        raise InputError(naming_the_option(exc, constraints)) from None
     unordered = travel_time(Q, model.max_joint_speed, start)
     report: dict[str, Any] = {
         "format": FORMAT,

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 import selector
-from hil.calibration.selection import FORMAT, design_fields, design_space
+from hil.calibration.selection import FORMAT, design_fields, design_space, naming_the_option
 from hil.errors import InputError
 from selector.candidates import Constraints
 from selector.indices import o1_from_logdet
@@ -59,11 +59,23 @@ def select_timed(robot: str, count: int, *, speed: float, acceleration: float, d
     say = progress or (lambda _phase, _text: None)
     constraints = constraints or Constraints()
     dwell = dwell or Dwell()
+    fixed_count = 0 if fixed is None else len(np.asarray(fixed, dtype=float).reshape(-1, 6))
+
+    def fits(n: int) -> None:
+        """Every pose costs at least its dwell: a budget below the fewest poses' dwell is refused before
+        the candidates are drawn and searched (it was found only after the search, seconds later)."""
+        need = selector.minimum_poses(n)
+        least = dwell.seconds * (need + fixed_count)
+        if budget is not None and budget < least:
+            raise selector.SelectorError(
+                f"a budget of {budget:g} s fits fewer than the {need} poses identifying the {n} parameters "
+                f"takes: their dwell alone is {least:g} s ({dwell.seconds:g} s a pose)")
+
     try:
         model, cands, G = design_space(robot, count, candidates=candidates, seed=seed, smr=smr,
                                        constraints=constraints, scaling=scaling, compliance=compliance,
                                        payload=payload, gravity=gravity, say=say,
-                                       joint_errors=joint_errors)
+                                       joint_errors=joint_errors, check=fits)
         profile = MotionProfile(float(speed), float(acceleration), tuple(map(float, model.max_joint_speed)))
         n = len(model.parameters)
         fixed_q = np.zeros((0, 6)) if fixed is None else np.asarray(fixed, dtype=float).reshape(-1, 6)
@@ -89,7 +101,7 @@ def select_timed(robot: str, count: int, *, speed: float, acceleration: float, d
                 f"a budget of {budget:g} s fits only {len(result.chosen)} poses; identifying the {n} "
                 f"parameters takes at least {selector.minimum_poses(n)}")
     except selector.SelectorError as exc:
-        raise InputError(str(exc)) from None
+        raise InputError(naming_the_option(exc, constraints)) from None
     chosen_q = cands.q[result.chosen]
     value = float(o1_from_logdet(result.logdet, n, len(result.chosen))) if np.isfinite(result.logdet) else 0.0
     legs = _legs_outside(model, constraints, _tour_q(result, cands.q, fixed_q), start_q)

@@ -64,9 +64,9 @@ def _open(args: argparse.Namespace) -> Store:
         from hil.station.config import load_config
 
         config = load_config(args.config)
-    from hil.store import Store, resolve_location
+    from hil.store import Store
 
-    return Store.open(resolve_location(args.db, config), readonly=True)  # read-only media too
+    return Store.open(args.db or None, config=config, readonly=True)  # read-only media too
 
 
 def _when(t: float | None, fmt: str = "%Y-%m-%d %H:%M") -> str:

@@ -142,6 +142,10 @@ def run(args: argparse.Namespace) -> int:
 
         db, where = campaign_store()
         check_output(args.out, field="--out", store=db, store_field=where)
+    else:
+        from hil.cli.support.output import check_stdout_open
+
+        check_stdout_open()  # before the search, not after it
     if args.candidates < 1:
         raise InputError(f"--candidates must be at least 1, got {args.candidates}")
     tracker = None if args.tracker is None else tuple(parse_triplet(args.tracker, "--tracker"))

@@ -27,6 +27,7 @@ from hil.jobs.station import (
     StationSetup,
     StationSource,
     TakenStation,
+    simulator_words,
     station_setup,
     store_location,
     take_station,
@@ -233,6 +234,13 @@ def run_calibration(request: CalibrationRequest, setup: StationSetup, taken: Tak
         return out
 
 
+def _say_simulator(setup: StationSetup, say: Say) -> None:
+    """After a fault on a simulated station: did the simulator go silent (`simulator_words`)?"""
+    words = simulator_words(setup.simulator)
+    if words:
+        say(words, "information")
+
+
 def calibrate(request: CalibrationRequest, *, subscribers: Sequence[Callable[[Event], None]] = (),
               say: Say = quiet) -> CalibrationOutcome:
     """``hil calibrate``: the whole headless job (module docstring): the station set up from the
@@ -240,6 +248,8 @@ def calibrate(request: CalibrationRequest, *, subscribers: Sequence[Callable[[Ev
     raises InputError before anything moves; a device that cannot be reached is a fault (exit 3), said."""
     from hil.station.devices import HARDWARE_ERRORS
 
+    if request.db:  # --db needs no config: refused before a simulated station starts
+        store_location(request.db, request.source, None)
     with station_setup(request.source) as setup:
         if request.no_warmup:  # not part of what identifies the campaign (`hil.store.hashing`)
             setup = StationSetup(setup.config.with_overrides(warmup__enabled=False), setup.identity,
@@ -257,10 +267,13 @@ def calibrate(request: CalibrationRequest, *, subscribers: Sequence[Callable[[Ev
                 taken = stack.enter_context(take_station(setup.config, what="hil calibrate", store=location))
             except HARDWARE_ERRORS as exc:
                 say(f"hardware fault: cannot connect: {type(exc).__name__}: {exc}", "error")
+                _say_simulator(setup, say)
                 return CalibrationOutcome(EXIT_FAULT, "failed")
             assert taken.store is not None
             taken.store.on_outage = outage_words(say)
             out = run_calibration(request, setup, taken, verify=after, subscribers=subscribers, say=say)
+        if out.exit_code == EXIT_FAULT:
+            _say_simulator(setup, say)
     if out.status == "interrupted" and out.recorded:  # resumable, and recorded so
         say(f"campaign {out.campaign} is resumable: re-run the same command to continue it", "information")
     return out

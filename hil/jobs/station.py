@@ -157,21 +157,38 @@ def store_location(db: str | None, source: StationSource, config: StationConfig 
     configuration's ``store.url``, the user's default."""
     import os
 
-    from hil.store.paths import ENV_VAR, check_creatable, resolve_location
+    from hil.store.paths import ENV_VAR, check_store, locate
 
-    if source.sim is None or db:
-        location = resolve_location(db, config)
-        stored = config.store if config is not None else {}
-        field = ("--db" if db else f"${ENV_VAR}" if os.environ.get(ENV_VAR)
-                 else "store.url" if stored.get("url") else "store.path" if stored.get("path")
-                 else "the default store")
-    else:
-        location = resolve_location(None, simulated=True)
-        say(simulated_store_words(location, bool(os.environ.get(ENV_VAR))), "information")
-        field = "the simulated stations' store"
-    if isinstance(location, Path) and not location.exists():
-        check_creatable(location, field)  # before any connection: a store that cannot be is bad input
-    return location
+    simulated = source.sim is not None and not db
+    located = locate(db, config, simulated=simulated)
+    if simulated:
+        say(simulated_store_words(located.location, bool(os.environ.get(ENV_VAR))), "information")
+    check_store(located, create=True)  # before any connection: a store that cannot be is bad input
+    return located.location
+
+
+#: Seconds without an RTDE package after which ur_rtde's client drops the link (docs/design.md, Facts:
+#: ur_rtde against a simulator).
+RTDE_PATIENCE_S = 2.5
+
+
+def simulator_words(simulator: Any) -> str | None:
+    """After a fault on a simulated station, whether the simulator itself went silent: its longest
+    wall-time pause between two controller cycles (each sends the RTDE package) against ur_rtde's
+    2.5 s of patience, and its late cycles. A link lost under load is then the simulator's starving or
+    the client's own, told apart (issue 29). None for a real station, or a simulator that does not
+    answer (it may be what failed)."""
+    if simulator is None:
+        return None
+    try:
+        state = simulator.state()
+        gap, late = float(state["max_tick_gap_s"]), int(state["late_ticks"])
+    except Exception:  # a simulator that died or hangs: the fault said already is the news
+        return None
+    verdict = ("longer than ur_rtde waits: the simulator starved (a loaded machine)" if gap >= RTDE_PATIENCE_S
+               else f"within the {RTDE_PATIENCE_S:g} s ur_rtde waits: the simulator kept sending")
+    return (f"the simulated controller's longest pause between cycles was {gap:.2f} s, {verdict}; "
+            f"{late} cycles ran late")
 
 
 def open_existing_store(location: Any, config: StationConfig | None) -> Store | None:

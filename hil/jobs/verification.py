@@ -127,6 +127,8 @@ def run_verification(request: VerificationRequest, *, subscribers: Sequence[Call
     from hil.verify.session import verify
 
     model = request.model
+    if request.db:  # --db needs no config: refused before a simulated station starts
+        store_location(request.db, request.source, None)
     with station_setup(request.source) as setup:
         config = setup.config
         check_model_robot(model, config)

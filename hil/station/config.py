@@ -23,6 +23,7 @@ from typing import Any
 from hil.arm.catalog import get_robot
 from hil.errors import InputError
 from hil.files.inputs import read_input_text
+from hil.station.store_url import store_url_problem
 
 EXAMPLE = Path(__file__).with_name("station.example.toml")
 PROTOCOLS = ("geocom", "emscon")
@@ -36,25 +37,6 @@ class Key:
     default: Any
     check: Callable[[Any], str | None] | None = None  # returns an error text or None
     help: str = ""
-
-
-def _store_url(v: Any) -> str | None:
-    """A store is an SQLite file (a path, or ``sqlite:///path``) or a PostgreSQL database
-    (``postgresql://user@host:port/db``); another database's URL would fail only when the run starts."""
-    if "://" not in v:
-        head = v.split("/", 1)[0]
-        if ":" in head and not re.fullmatch(r"[A-Za-z]:", head):  # "postgresql:/db", "dbhost:5432/hil"
-            return (f"{v!r} is not a URL (scheme://host/database) and not a file path either: a URL is "
-                    "postgresql://user@host[:port]/database, a file a path without ':'")
-        return None
-    scheme = v.split("://", 1)[0].lower()
-    if scheme in ("postgresql", "postgres", "postgresql+psycopg"):
-        rest = v.split("://", 1)[1]
-        host = rest.split("@")[-1].split("/", 1)[0]
-        return None if host else "a postgresql:// URL needs a host: postgresql://user@host[:port]/database"
-    if scheme == "sqlite":
-        return None if v.startswith("sqlite:///") else "an SQLite URL is sqlite:///path/to/file.db"
-    return f"must be a file path or a postgresql:// URL, got a {scheme}:// URL"
 
 
 #: The URL schemes each tracker protocol speaks (drivers.tracker.geocom.transport: pyserial's
@@ -507,7 +489,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "cycles": Key("int", 30, _within(2, 100), "cycles of the pose test (ISO 9283: 30)"),
     },
     "store": {
-        "url": Key("str", "", _store_url, help="the store: an SQLite file path or a postgresql:// URL "
+        "url": Key("str", "", store_url_problem, help="the store: an SQLite file path or a postgresql:// URL "
                                                 "shared by a plant's stations (default: store.path)"),
         "path": Key("str", "", help="SQLite database (default: the user's data directory)"),
     },

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -59,22 +60,39 @@ def simulated_path(env: Mapping[str, str] | None = None) -> Path:
 
 def _plain(text: str, field: str = "--db") -> str | Path:
     """A location as given: a PostgreSQL URL stays text, ``sqlite:///f.db`` and a path become a Path.
-    Another database's URL is bad input naming `field` (taken for a path, it would become folders)."""
-    if is_postgres(text):
-        return text
-    if "://" in text and not text.startswith("sqlite:///"):
-        from hil.errors import InputError
+    Another database's URL, a server URL without a host and a URL with a typo (``dbhost:5432/hil``) are
+    bad input naming `field`: taken for a path, they would become folders or "no such database"."""
+    from hil.errors import InputError
+    from hil.station.store_url import store_url_problem
 
+    if "://" in text and not is_postgres(text) and not text.startswith("sqlite:///"):
         raise InputError(f"{field}: {text.split('://', 1)[0]}:// is not a store; give a file path or a "
                          "postgresql:// URL")
+    problem = store_url_problem(text)
+    if problem is not None:
+        raise InputError(f"{field}: {problem}")
+    if is_postgres(text):
+        return text
     if text.startswith("sqlite:///"):
         text = text[len("sqlite:///"):]  # sqlite:////abs/path keeps its leading slash
     return Path(text).expanduser()
 
 
-def _config_store_location(config: Any) -> str | Path | None:
-    """``store.url`` (or ``store.path``) of a StationConfig or its dict; a relative file path is
-    resolved against the config file's folder."""
+@dataclass(frozen=True)
+class Located:
+    """A store's location and where it was given, so that an error names what the user typed."""
+
+    #: a Path (SQLite file) or a ``postgresql://`` URL
+    location: str | Path
+    #: how an error names it: ``--db``, ``$HIL_DB``, ``station.toml: store.url``, ``the default store``…
+    field: str
+    #: given by the user (``--db``, ``$HIL_DB``, the config), not a default whose folders hil makes
+    explicit: bool
+
+
+def _config_store_location(config: Any) -> tuple[str | Path, str] | None:
+    """(``store.url`` or ``store.path`` of a StationConfig or its dict, the key with its file); a
+    relative file path is resolved against the config file's folder."""
     if config is None:
         return None
     if hasattr(config, "as_dict"):
@@ -82,28 +100,61 @@ def _config_store_location(config: Any) -> str | Path | None:
     else:
         values, source = config, ""
     store = values.get("store") or {}
+    key = "store.url" if store.get("url") else "store.path"
     text = store.get("url") or store.get("path") or ""
     if not text:
         return None
-    location = _plain(str(text))
+    field = f"{source}: {key}" if source and not source.startswith("<") else key
+    location = _plain(str(text), field)
     if (isinstance(location, Path) and not location.is_absolute() and source
             and not source.startswith("<") and os.path.exists(source)):
         location = Path(source).resolve().parent / location
-    return location
+    return location, field
+
+
+def locate(path: str | os.PathLike[str] | None = None, config: Any = None,
+           env: Mapping[str, str] | None = None, *, simulated: bool = False) -> Located:
+    """The store to use and where it was said (see the module docstring for the precedence).
+    `simulated`: for a simulated station's campaigns: `path`, else `simulated_path`."""
+    env = os.environ if env is None else env
+    if path is not None and str(path) != "":
+        return Located(_plain(str(path)), "--db", True)
+    if simulated:
+        return Located(simulated_path(env), "the simulated stations' store", False)
+    if env.get(ENV_VAR):
+        return Located(_plain(env[ENV_VAR], f"${ENV_VAR}"), f"${ENV_VAR}", True)
+    configured = _config_store_location(config)
+    if configured is not None:
+        return Located(*configured, True)
+    return Located(default_path(env), "the default store", False)
 
 
 def resolve_location(path: str | os.PathLike[str] | None = None, config: Any = None,
                      env: Mapping[str, str] | None = None, *, simulated: bool = False) -> str | Path:
     """The store to use: a Path (SQLite file) or a ``postgresql://`` URL (see the module docstring).
     `simulated`: for a simulated station's campaigns: `path`, else `simulated_path`."""
-    env = os.environ if env is None else env
-    if path is not None and str(path) != "":
-        return _plain(str(path))
-    if simulated:
-        return simulated_path(env)
-    if env.get(ENV_VAR):
-        return _plain(env[ENV_VAR], f"${ENV_VAR}")
-    return _config_store_location(config) or default_path(env)
+    return locate(path, config, env, simulated=simulated).location
+
+
+def check_store(located: Located, *, create: bool) -> None:
+    """InputError naming `located.field` for an SQLite store that cannot be used, before anything
+    connects: with `create` False (a command that only reads) a file that does not exist, saying
+    whether its folder is missing too; with `create`, a file that cannot be created (`check_creatable`)
+    or, for a location the user gave, one whose folder does not exist — a typo or an unmounted share
+    would otherwise get a fresh, empty store of its own. The defaults' folders are made as needed."""
+    from hil.errors import InputError
+
+    path = located.location
+    if not isinstance(path, Path) or path.exists():
+        return
+    folder = path.parent
+    if not create:
+        missing = "" if folder.is_dir() else f" (nor its folder {folder})"
+        raise InputError(f"{located.field}: {path}: no such database{missing}")
+    if located.explicit and not folder.exists():
+        raise InputError(f"{located.field}: {path}: its folder {folder} does not exist; make it, or name "
+                         "another store")
+    check_creatable(path, located.field)
 
 
 def resolve_path(path: str | os.PathLike[str] | None = None, config: Any = None,

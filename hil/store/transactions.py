@@ -46,7 +46,7 @@ from sqlalchemy.exc import DBAPIError
 from hil.errors import InputError
 from hil.store.database import display_url, is_postgres, postgres_engine, sqlite_engine
 from hil.store.migrate import SCHEMA_VERSION, found_version, upgrade
-from hil.store.paths import resolve_location
+from hil.store.paths import check_store, locate
 from hil.store.sqlite_errors import StoreError, StoreUnavailable, check_intact
 
 log = logging.getLogger(__name__)
@@ -101,7 +101,7 @@ class TransactionalStore:
     def open(cls, path: str | os.PathLike[str] | None = None, *, config: Any = None,
              create: bool = True, synchronous: str = "FULL", timeout: float = 10.0,
              readonly: bool = False, outage_timeout: float | None = None) -> Self:
-        """Open (creating or upgrading as needed) the database at `path`, or where `resolve_location`
+        """Open (creating or upgrading as needed) the database at `path`, or where `locate`
         says from `config` and the environment. InputError if it is missing (with ``create=False`` or
         ``readonly=True``), empty (``readonly``), not a database, not a hil store, or newer than this
         code; StoreError if a PostgreSQL server cannot be reached.
@@ -113,7 +113,10 @@ class TransactionalStore:
         if outage_timeout is None:
             values = config.as_dict() if hasattr(config, "as_dict") else (config or {})
             outage_timeout = float((values.get("timeouts") or {}).get("database") or OUTAGE_TIMEOUT)
-        store = cls(resolve_location(path, config), create=create, synchronous=synchronous,
+        located = locate(path, config)
+        if readonly or not create:  # a missing file named as it was given (--db, $HIL_DB, store.url)
+            check_store(located, create=False)
+        store = cls(located.location, create=create, synchronous=synchronous,
                     timeout=timeout, readonly=readonly, outage_timeout=outage_timeout)
         return store.connect()
 

@@ -136,6 +136,15 @@ class _GuardedStdout:
         return getattr(self._stream, name)
 
 
+def check_stdout_open() -> None:
+    """`StdoutUnwritable` now when there is no stdout at all (started with ``>&-``): a command whose
+    output goes there says so before its work (``hil select`` searched for seconds, then failed to
+    write); a full or broken one is found only by writing."""
+    stream = getattr(sys.stdout, "_stream", sys.stdout)
+    if stream is None or isinstance(stream, _NoStdout):
+        raise _unwritable(OSError(errno.EBADF, "stdout is closed"))
+
+
 def _unwritable(exc: OSError) -> StdoutUnwritable:
     return StdoutUnwritable(f"stdout: cannot write the output: {exc.strerror or exc}")
 

@@ -75,6 +75,20 @@ def test_the_budget_form_fits_its_budget_and_a_too_small_one_is_refused(constrai
                      seed=3, constraints=constraints, time_limit=0.2)
 
 
+def test_a_budget_below_the_fewest_poses_dwell_is_refused_before_drawing(constraints, monkeypatch):
+    """10 poses of 0.85 s dwell cannot fit 5 s whatever the moves: refused before the candidates are drawn
+    and searched (seconds of work, found only after them before)."""
+    import hil.calibration.selection as selection
+
+    def drawn(*_args, **_kwargs):
+        raise AssertionError("candidates were drawn for a budget that cannot fit")
+
+    monkeypatch.setattr(selection, "generate_candidates", drawn)
+    with pytest.raises(InputError, match=r"budget of 5 s fits fewer than the 10 poses.*8\.5 s"):
+        select_timed("ur5e", 20, speed=0.5, acceleration=1.0, budget=5.0, start=START, candidates=1500,
+                     seed=3, constraints=constraints, time_limit=0.2)
+
+
 def test_the_cli_writes_the_time_aware_report(tmp_path):
     out = tmp_path / "poses.json"
     proc = subprocess.run([sys.executable, "-m", "hil", "select", "--robot", "ur5e", "--count", "15",

@@ -1160,10 +1160,50 @@ def _cases() -> list[Case]:
         ["moveb", "run", f"{d}/square.moveb", "--config", f"{d}/station.toml", "--seed", "3"], ["--seed"])
     add("tui", "c4-tracker.url=http", ["tui", "--config", f"{d}/bad.toml", "--db", f"{d}/c.db"],
         ["tracker.url"], files={"bad.toml": config_with("tracker.url", "http://tracker")})
-    add("select", "c4-tracker-at-the-base", [*sel, "--tracker", "0,0,0"], ["--tracker"], timeout=60)
+    add("select", "c4-tracker-at-the-base", [*sel, "--tracker", "0,0,0"], ["--tracker"])
+    # requests no candidate can meet, at the default 20,000 candidates (drawn 2,000,000 vectors: 15-35 s):
+    # geometry refuses them before any draw; the last falls back to sampling, whose bound is its own
+    empty = ["select", "--robot", "ur5e", "--count", "30"]
+    for label, extra, names in (
+            ("tracker-inside-the-base", ["--tracker", "0.03,-0.02,0.12"], ["--tracker", "base"]),
+            ("tracker-beyond-the-range", ["--tracker", "20,0,0", "--range", "0.8,2"], ["--tracker", "range"]),
+            ("tracker-within-the-range-min", ["--tracker", "0,0,0.3", "--range", "3,20"],
+             ["--tracker", "range"]),
+            ("keep-in-out-of-reach", ["--keep-in", "3,3,3,4,4,4"], ["--keep-in", "reach"]),
+            ("floor-above-the-shoulder", ["--floor", "1.5"], ["--floor"]),
+            ("singularity-margins-leave-nothing", ["--wrist-margin", "89.9", "--elbow-margin", "89.9"],
+             ["--wrist-margin|--elbow-margin"])):
+        add("select", f"c4-{label}", [*empty, *extra], names)
+    add("select", "c4-time-aware-tracker-inside-the-base",
+        [*empty, "--method", "time-aware", "--tracker", "0,0,0"], ["--tracker", "base"])
     for cmd in ("history", "robots"):
         add(cmd, "c4-store.url-not-a-url", [cmd, "--config", f"{d}/bad.toml"], ["store.url", "not a url"],
             files={"bad.toml": config_with("store.url", "dbhost:5432/hil")})
+    # a store's location, wherever it is given (--db, $HIL_DB, store.url), is named with what is wrong:
+    # no such file, no such folder either, not a URL (a URL with a typo was "no such database")
+    for cmd, argv in (("history", ["history"]), ("robots", ["robots"]), ("show", ["show", "last"])):
+        add(cmd, "c4-store.url-no-such-file", [*argv, "--config", f"{d}/bad.toml"],
+            ["store.url", "gone.db", "no such database"],
+            files={"bad.toml": config_with("store.url", "gone.db")})
+        add(cmd, "c4-store.url-no-such-folder", [*argv, "--config", f"{d}/bad.toml"],
+            ["store.url", "nofolder", "folder"],
+            files={"bad.toml": config_with("store.url", "nofolder/x.db")})
+        add(cmd, "c4-db-no-such-folder", [*argv, "--db", f"{d}/nofolder/x.db"],
+            ["--db", "nofolder", "folder"])
+        add(cmd, "c4-db-not-a-url", [*argv, "--db", "dbhost:5432/hil"], ["--db", "not a url"])
+        add(cmd, "c4-HIL_DB-not-a-url", argv, ["$HIL_DB", "not a url"], env={"HIL_DB": "dbhost:5432/hil"})
+        add(cmd, "c4-HIL_DB-no-such-file", argv, ["$HIL_DB", "gone.db", "no such database"],
+            env={"HIL_DB": f"{d}/gone.db"})
+        add(cmd, "c4-db-postgresql-without-a-host", [*argv, "--db", "postgresql:///hil"], ["--db", "host"])
+    for cmd in ("calibrate", "verify"):
+        base = with_cube if cmd == "verify" else BASE_CONFIG
+        add(cmd, "c4-store.url-no-such-folder", [cmd, "--config", f"{d}/bad.toml"],
+            ["store.url", "nofolder", "folder"],
+            files={"bad.toml": config_with("store.url", "nofolder/x.db", base)}, timeout=60)
+        add(cmd, "c4-sim-db-no-such-folder", [cmd, "--sim", "--db", f"{d}/nofolder/x.db"],
+            ["--db", "nofolder", "folder"], timeout=60)
+        add(cmd, "c4-HIL_DB-not-a-url", [cmd, "--config", f"{d}/ok.toml"], ["$HIL_DB", "not a url"],
+            files={"ok.toml": toml_text(base)}, env={"HIL_DB": "dbhost:5432/hil"}, timeout=60)
 
     damaged = {"config": ("UPDATE campaigns SET config = '{broken'", "campaigns"),
                "joints": ("UPDATE measurements SET q = '[1, 2' WHERE id = 3", "measurements"),

@@ -225,4 +225,4 @@ def test_real_process_has_no_traceback(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "hil", "show", "last", "--db", str(missing)],
                           cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2 and proc.stdout == ""
-    assert proc.stderr == f"hil: error: {missing}: no such database\n"
+    assert proc.stderr == f"hil: error: --db: {missing}: no such database\n"

@@ -134,3 +134,22 @@ def test_select_shows_progress_on_a_terminal_and_can_skip_the_bound(
     terminal.truncate()
     assert main([*argv, "--quiet"]) == 0
     assert terminal.getvalue().startswith("wrote ")
+
+
+def test_a_missing_stdout_is_found_before_the_work(monkeypatch) -> None:
+    """``hil select >&-`` searched for seconds and only then failed to write (issue 31)."""
+    from hil.cli.support.output import StdoutUnwritable, check_stdout_open, quiet_on_closed_stdout
+
+    worked = []
+
+    def command(_args) -> int:
+        check_stdout_open()
+        worked.append(True)
+        return 0
+
+    monkeypatch.setattr(sys, "stdout", None)
+    with pytest.raises(StdoutUnwritable, match="stdout is closed"):
+        quiet_on_closed_stdout(command)(None)
+    assert worked == []
+    monkeypatch.setattr(sys, "stdout", io.StringIO())
+    assert quiet_on_closed_stdout(command)(None) == 0 and worked == [True]
