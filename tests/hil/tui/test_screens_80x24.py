@@ -37,7 +37,7 @@ def _selection(text: str) -> str:
 
 def _table_lines(text: str) -> list[str]:
     lines = text.splitlines()
-    start = next(k for k, line in enumerate(lines) if line.lstrip().startswith("#  role"))
+    start = next(k for k, line in enumerate(lines) if line.split()[:2] == ["#", "role"])
     return lines[start:start + 9]
 
 
