@@ -22,9 +22,10 @@ from hil.store import RobotIdentity, Store
 
 ROOT = Path(__file__).resolve().parents[3]
 SERIAL = "20235500101"
-#: what a listing must not import: the numerical stack, Alembic (a store at the head revision needs no
+#: what a listing must not import: the numerical stack, SQLAlchemy (a station's SQLite file at the head
+#: revision is read with sqlite3: hil.store.sqlite_reader), Alembic (a store at the head revision needs no
 #: migration), the robot driver (ur_rtde's client) and the campaign's event types
-HEAVY = ("numpy", "scipy", "pinocchio", "matplotlib", "alembic", "drivers.robot.ur", "hil.campaign.events")
+HEAVY = ("numpy", "scipy", "pinocchio", "matplotlib", "sqlalchemy", "alembic", "drivers.robot.ur", "hil.campaign.events")
 
 
 @pytest.fixture(scope="module")
