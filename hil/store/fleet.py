@@ -21,8 +21,10 @@ Definitions the CLI, the TUI and the fleet report share:
   tracker moved), not the robot, and change between any two calibrations. A robot whose joint origins
   moved was hit or repaired.
 
-Every query is a SQLAlchemy Core expression against `hil.store.tables`, so it runs unchanged on SQLite
-and PostgreSQL, inside one `Store.reading` snapshot. The fleet listing is a fixed number of queries,
+Every read is SQL text of `hil.store.listing_sql`, which SQLite and PostgreSQL run unchanged, inside one
+snapshot of the store it is given (`hil.store.listing.Reader`: the `Store`, or on a station's SQLite
+file `hil.store.sqlite_reader.SqliteReader`, which needs no SQLAlchemy); `mark`, a write, goes through
+the Store's SQLAlchemy Core. The fleet listing is a fixed number of queries,
 whatever the fleet's size, and never reads a model document (only ids and the validations' small
 JSON); `robot_history` reads the documents of one robot's good calibrations.
 """
@@ -469,8 +471,8 @@ def geometry_changes(store: Reader, *, since: float | None = None, k: float = DE
         for serial, cid, created, model in rows(sql.GOOD_BY_SERIAL):
             by_robot.setdefault(serial, []).append((cid, float(created), int(model)))
         wanted = {}
-        for serial, rows in by_robot.items():
-            pairs = [(a, b) for a, b in itertools.pairwise(rows) if since is None or b[1] >= since]
+        for serial, good in by_robot.items():
+            pairs = [(a, b) for a, b in itertools.pairwise(good) if since is None or b[1] >= since]
             if pairs:
                 wanted[serial] = pairs
         params = _model_parameters(rows, (x[2] for pairs in wanted.values() for pair in pairs for x in pair),

@@ -25,7 +25,8 @@ SERIAL = "20235500101"
 #: what a listing must not import: the numerical stack, SQLAlchemy (a station's SQLite file at the head
 #: revision is read with sqlite3: hil.store.sqlite_reader), Alembic (a store at the head revision needs no
 #: migration), the robot driver (ur_rtde's client) and the campaign's event types
-HEAVY = ("numpy", "scipy", "pinocchio", "matplotlib", "sqlalchemy", "alembic", "drivers.robot.ur", "hil.campaign.events")
+HEAVY = ("numpy", "scipy", "pinocchio", "matplotlib", "sqlalchemy", "alembic", "drivers.robot.ur",
+         "hil.campaign.events")
 
 
 @pytest.fixture(scope="module")
