@@ -17,8 +17,10 @@ each, every campaign with its model document and validation, 5 poses measured); 
 archive HEAD | tar -x -C /tmp/old``) through PYTHONPATH on the same files, for a before/after
 comparison.
 
-Two rows are floors rather than commands: ``import sqlalchemy`` (what every listing pays before it reads
-anything) and ``import numpy, pinocchio`` (what ``hil identify`` pays before it fits).
+Two rows are floors rather than commands: ``import sqlalchemy`` (what a listing paid before it read
+anything, until a station's SQLite file was read with sqlite3 alone: `hil.store.sqlite_reader`; a
+PostgreSQL store still pays it) and ``import numpy, pinocchio`` (what ``hil identify`` pays before it
+fits).
 
 Python's bytecode cache: a command run the second time reads its modules' compiled bytecode instead of
 compiling their source, as an installed hil always does (pip compiles on install). With

@@ -8,25 +8,55 @@
 convention, shared with the simulator.
 """
 
-from drivers.tracker.device import Atmosphere, Identity, PointStatus, StreamSample, Tracker, TrackerPoint
-from drivers.tracker.emscon import EmsconConfig, EmsconTracker, TcpConfig
-from drivers.tracker.errors import (
-    ChecksumError,
-    ConnectionLost,
-    EmsconError,
-    GarbledReply,
-    GeoComError,
-    InstrumentError,
-    LinkError,
-    NotReady,
-    ProtocolError,
-    TargetLost,
-    TrackerError,
-    TrackerTimeout,
-    UnstablePoint,
-)
-from drivers.tracker.geocom import GeoComTracker, ReturnCode, SerialConfig, TrackerConfig
-from drivers.tracker.geometry import cartesian_to_polar, polar_to_cartesian
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from drivers.tracker.device import Atmosphere, Identity, PointStatus, StreamSample, Tracker, TrackerPoint
+    from drivers.tracker.emscon import EmsconConfig, EmsconTracker, TcpConfig
+    from drivers.tracker.errors import (
+        ChecksumError,
+        ConnectionLost,
+        EmsconError,
+        GarbledReply,
+        GeoComError,
+        InstrumentError,
+        LinkError,
+        NotReady,
+        ProtocolError,
+        TargetLost,
+        TrackerError,
+        TrackerTimeout,
+        UnstablePoint,
+    )
+    from drivers.tracker.geocom import GeoComTracker, ReturnCode, SerialConfig, TrackerConfig
+    from drivers.tracker.geometry import cartesian_to_polar, polar_to_cartesian
+
+#: Each public name by the module that defines it, imported when first asked for: a user of one part
+#: (`hil identify` needs only `geometry`'s polar convention) does not load both protocols' clients,
+#: which cost about a fifth of `hil identify`'s start-up (bench/cli_startup.py).
+_LAZY = {
+    **dict.fromkeys(("Atmosphere", "Identity", "PointStatus", "StreamSample", "Tracker", "TrackerPoint"),
+                    "drivers.tracker.device"),
+    **dict.fromkeys(("EmsconConfig", "EmsconTracker", "TcpConfig"), "drivers.tracker.emscon"),
+    **dict.fromkeys(("ChecksumError", "ConnectionLost", "EmsconError", "GarbledReply", "GeoComError",
+                     "InstrumentError", "LinkError", "NotReady", "ProtocolError", "TargetLost",
+                     "TrackerError", "TrackerTimeout", "UnstablePoint"), "drivers.tracker.errors"),
+    **dict.fromkeys(("GeoComTracker", "ReturnCode", "SerialConfig", "TrackerConfig"),
+                    "drivers.tracker.geocom"),
+    **dict.fromkeys(("cartesian_to_polar", "polar_to_cartesian"), "drivers.tracker.geometry"),
+}
+
+
+def __getattr__(name: str) -> object:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
 
 __all__ = [
     "Atmosphere",

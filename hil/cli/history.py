@@ -23,6 +23,7 @@ from hil.store.records import INTERRUPTED, ROLES
 
 if TYPE_CHECKING:  # the Store (SQLAlchemy) is imported when a command opens it, not for its --help
     from hil.store import CampaignRecord, CampaignSummary, Store
+    from hil.store.sqlite_reader import SqliteReader
 
 
 def _add_db_options(p: argparse.ArgumentParser) -> None:
@@ -58,15 +59,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     s.set_defaults(func=run_show)
 
 
-def _open(args: argparse.Namespace) -> Store:
+def _open(args: argparse.Namespace) -> Store | SqliteReader:
+    """The store, read-only (read-only media too); a station's SQLite file through sqlite3 alone
+    (`hil.cli.support.store_options.open_location`)."""
+    from hil.cli.support.store_options import open_location
+
     config = None
     if args.config:
         from hil.station.config import load_config
 
         config = load_config(args.config)
-    from hil.store import Store
-
-    return Store.open(args.db or None, config=config, readonly=True)  # read-only media too
+    return open_location(args.db, config)
 
 
 def _when(t: float | None, fmt: str = "%Y-%m-%d %H:%M") -> str:
@@ -121,7 +124,7 @@ def run_history(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _export(args: argparse.Namespace, store: Store, rec: CampaignRecord) -> list[str]:
+def _export(args: argparse.Namespace, store: Store | SqliteReader, rec: CampaignRecord) -> list[str]:
     """Write what ``--export-model`` and ``--export-measurements`` ask for: their libraries (numpy,
     pinocchio) are imported only then, so that showing a campaign does not pay for them."""
     written: list[str] = []

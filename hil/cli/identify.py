@@ -124,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
     from hil.cli.support.output_paths import campaign_store
     from hil.errors import InputError
     from hil.files.outputs import check_output
-    from hil.station.config import MAX_SMR_OFFSET
+    from hil.station.limits import MAX_SMR_OFFSET
 
     db, where = campaign_store()
     check_output(args.out, field="--out", store=db, store_field=where,

@@ -25,6 +25,7 @@ from hil.jobs.outcome import EXIT_OK
 if TYPE_CHECKING:
     from hil.store import Store
     from hil.store.fleet import Calibration, GeometryComparison, RobotHistory
+    from hil.store.sqlite_reader import SqliteReader
 
 # File suffixes that say which export format is meant when --format is not given (as `hil show`).
 _SUFFIX_FORMATS = {".urdf": "urdf", ".xml": "urdf", ".yaml": "ros-kinematics", ".yml": "ros-kinematics",
@@ -113,7 +114,7 @@ def _export_format(args: argparse.Namespace) -> str:
     return _SUFFIX_FORMATS.get(Path(args.export_model).suffix.lower(), "json")
 
 
-def _export(args: argparse.Namespace, store: Store, history: RobotHistory) -> str:
+def _export(args: argparse.Namespace, store: Store | SqliteReader, history: RobotHistory) -> str:
     from hil.arm.geometry import Geometry  # pinocchio: only when exporting
     from hil.calibration.exports import export
     from hil.files.outputs import atomic_write_text

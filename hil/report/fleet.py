@@ -52,6 +52,7 @@ from hil.store.fleet import (
 
 if TYPE_CHECKING:
     from hil.store import Store
+    from hil.store.listing import Reader
 
 #: Robots drawn in their own colour and named in the legend; beyond, the lines share a palette unnamed.
 MAX_LEGEND = 12
@@ -71,9 +72,10 @@ class FleetData:
     now: float
 
 
-def fleet_data(store: Store, *, since: float | None = None, k: float = DEFAULT_K,
+def fleet_data(store: Store | Reader, *, since: float | None = None, k: float = DEFAULT_K,
                now: float | None = None) -> FleetData:
-    """Read what the report shows from `store` (a `hil.store.Store`)."""
+    """Read what the report shows from `store` (a `hil.store.Store`, or a station's file's sqlite3
+    reader: `hil.store.sqlite_reader`)."""
     now = time.time() if now is None else now
     return FleetData(store.location, since, k, fleet(store, now=now), calibrations(store, since=since),
                      geometry_changes(store, since=since, k=k), now)

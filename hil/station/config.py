@@ -23,6 +23,7 @@ from typing import Any
 from hil.arm.catalog import get_robot
 from hil.errors import InputError
 from hil.files.inputs import read_input_text
+from hil.station.limits import MAX_KEEP_IN, MAX_SMR_OFFSET, MAX_TRACKER_DISTANCE  # its own module: see it
 from hil.station.store_url import store_url_problem
 
 EXAMPLE = Path(__file__).with_name("station.example.toml")
@@ -174,19 +175,6 @@ MAX_CANDIDATES = 200_000
 #: Most calibration or validation poses: at ~10 s a pose 1000 are a day of measuring, far beyond any
 #: calibration (``--poses``/``--validation`` have the same ceiling: `hil.cli.support.options.POSE_COUNT`).
 MAX_POSES = 1000
-
-#: The farthest a tracker may stand from the robot base (m): the selector keeps the SMR within the
-#: tracker's measuring range, 0.8-20 m (`selector.candidates.Constraints.tracker_range`, Leica AT960's
-#: stated range), and the SMR stays within the arm's reach (at most 1.75 m, UR20) of the base.
-MAX_TRACKER_DISTANCE = 20.0 + 1.75
-
-#: The farthest the SMR may sit from the flange (m): a nest or a short tool holds it a few centimetres
-#: out; half a metre is already a tool as long as a UR5e's upper arm, and 10 m is a value in millimetres.
-MAX_SMR_OFFSET = 0.5
-
-#: Keep-in box corners (m, robot base frame): the largest arm (UR20) reaches 1.75 m, so a corner beyond
-#: 5 m keeps nothing in and is a value typed in millimetres.
-MAX_KEEP_IN = 5.0
 
 
 def _robot(v: Any) -> str | None:

@@ -2,12 +2,14 @@
 models, validations, events and leases, on SQLite or PostgreSQL.
 
 One schema, two engines (`hil.store.tables`, migrated by Alembic: `hil.store.migrate`), and every
-query written once with SQLAlchemy Core, so both run the same statements. `Store` is put together
+query written once — the writes in SQLAlchemy Core, the listings' reads as SQL text both engines share
+(`hil.store.listing_sql`) — so both run the same statements. `Store` is put together
 from the store's parts, each in a module of its own:
 
 * `hil.store.transactions` — opening the database, its transactions, durability and threads, and
   waiting out a lost link (`TransactionalStore`, the base of the others);
-* `hil.store.queries` — the read side: the history, a campaign's record, poses, measurements, events;
+* `hil.store.queries` — the read side: the history, a campaign's record, poses, measurements
+  (`hil.store.listing`, which `hil.store.sqlite_reader` shares), events;
 * `hil.store.recorder` — the event recorder the engine subscribes: each event logged with its rows;
 * `hil.store.rows` — the rows a write adds inside its transaction, shared by the recorder and the
   direct methods here, so both write alike;

@@ -21,8 +21,10 @@ Definitions the CLI, the TUI and the fleet report share:
   tracker moved), not the robot, and change between any two calibrations. A robot whose joint origins
   moved was hit or repaired.
 
-Every query is a SQLAlchemy Core expression against `hil.store.tables`, so it runs unchanged on SQLite
-and PostgreSQL, inside one `Store.reading` snapshot. The fleet listing is a fixed number of queries,
+Every read is SQL text of `hil.store.listing_sql`, which SQLite and PostgreSQL run unchanged, inside one
+snapshot of the store it is given (`hil.store.listing.Reader`: the `Store`, or on a station's SQLite
+file `hil.store.sqlite_reader.SqliteReader`, which needs no SQLAlchemy); `mark`, a write, goes through
+the Store's SQLAlchemy Core. The fleet listing is a fixed number of queries,
 whatever the fleet's size, and never reads a model document (only ids and the validations' small
 JSON); `robot_history` reads the documents of one robot's good calibrations.
 """
@@ -40,19 +42,18 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from sqlalchemy import ColumnElement, Connection, and_, func, insert, or_, select
-
-import hil.store.tables as tb
+import hil.store.listing_sql as sql
 from hil.errors import InputError
+from hil.store.listing import Reader, Rows, UnknownCampaignError
+from hil.store.listing_sql import ACCEPTED
 from hil.store.owner import is_gone
-from hil.store.queries import UnknownCampaignError
-from hil.store.records import CALIBRATION, FINISHED, INTERRUPTED, LIVE_STATES, VERIFICATION, _AsDict
+from hil.store.records import FINISHED, INTERRUPTED, LIVE_STATES, _AsDict
 
 if TYPE_CHECKING:
     from hil.store.core import Store
 
-#: The status of a calibration whose model may be used (and the only one `current_model` considers).
-ACCEPTED = "accepted"
+__all__ = ["ACCEPTED", "DEFAULT_K", "ROBOT_PARAMETERS", "calibrations", "compare_parameters", "current_model",
+           "fleet", "geometry_changes", "mark", "robot_history"]
 
 #: Default k of "beyond uncertainty": |Δ| > k·sqrt(σa² + σb²). Each of the ~18 robot parameters is
 #: tested on its own, so k = 3 (0.27 % per parameter) would flag about 5 % of calibrations of arms that
@@ -217,51 +218,7 @@ class RobotHistory(_AsDict):
         return next((c for c in self.calibrations if c.id == campaign), None)
 
 
-# --- queries ----------------------------------------------------------------------------------------
-def _latest_id(table: Any) -> Any:
-    """The id of `table`'s newest row of the campaign in the enclosing query (a correlated subquery,
-    answered from the (campaign, ...) index)."""
-    inner = table.alias()
-    return (select(func.max(inner.c.id)).where(inner.c.campaign == tb.campaigns.c.id)
-            .correlate(tb.campaigns).scalar_subquery())
-
-
-def _not_marked_bad(mk: Any) -> ColumnElement[bool]:
-    return or_(mk.c.bad.is_(None), mk.c.bad == 0)
-
-
-def _good_campaigns() -> Any:
-    """(campaign id, robot id, created, latest model id) of every good calibration: accepted, with a
-    model, its latest mark not bad."""
-    c, m = tb.campaigns, tb.models
-    mk = tb.marks.alias("mk")
-    has_model = select(m.c.id).where(m.c.campaign == c.c.id).correlate(c).exists()
-    return (select(c.c.id, c.c.robot, c.c.created, _latest_id(tb.models).label("model"))
-            .select_from(c.outerjoin(mk, mk.c.id == _latest_id(tb.marks)))
-            .where(c.c.robot.is_not(None), c.c.kind == CALIBRATION, c.c.status == ACCEPTED, has_model,
-                   _not_marked_bad(mk)))
-
-
-def _newest_per_robot(query: Any) -> Any:
-    """Of `query`'s (id, robot, created) rows, the ids of each robot's newest (ties: the larger id)."""
-    sub = query.subquery()
-    ranked = select(sub.c.id, func.row_number().over(
-        partition_by=sub.c.robot, order_by=(sub.c.created.desc(), sub.c.id.desc())).label("rank")
-    ).subquery()
-    return select(ranked.c.id).where(ranked.c.rank == 1)
-
-
-def _all_campaigns() -> Any:
-    c = tb.campaigns
-    return select(c.c.id, c.c.robot, c.c.created).where(c.c.robot.is_not(None), c.c.kind == CALIBRATION)
-
-
-def _finished_campaigns() -> Any:
-    """(id, robot, created) of every finished calibration (`FINISHED`: a robot's last calibration is
-    the newest of these)."""
-    return _all_campaigns().where(tb.campaigns.c.status.in_(sorted(FINISHED)))
-
-
+# --- queries (SQL text: `hil.store.listing_sql`) ------------------------------------------------
 def _loads(text: str | None) -> Any:
     if text is None:
         return None
@@ -281,26 +238,15 @@ def _stat(doc: Any, key: str) -> float | None:
     return _number(doc.get(key)) if isinstance(doc, Mapping) else None
 
 
-def _calibrations(conn: Connection, where: ColumnElement[bool]) -> list[Calibration]:
-    """The calibrations matching `where` (on ``campaigns``), oldest first, with their latest
-    validation, model and mark; a fixed number of queries whatever their count."""
-    c, s, r = tb.campaigns, tb.stations, tb.robots
-    v, mk = tb.validations.alias("v"), tb.marks.alias("mk")
-    query = (
-        # The latest model's id comes from the (campaign, sha256) index alone: a models row is its
-        # document (kilobytes), and touching 10 000 of them is most of a fleet query's time.
-        select(c.c.id, r.c.serial, c.c.created, s.c.name, c.c.status, v.c.before, v.c.after, v.c.passed,
-               _latest_id(tb.models), mk.c.id, mk.c.bad, mk.c.reason, mk.c.who, mk.c.t)
-        .select_from(c.join(s, s.c.id == c.c.station).join(r, r.c.id == c.c.robot)
-                     .outerjoin(v, v.c.id == _latest_id(tb.validations))
-                     .outerjoin(mk, mk.c.id == _latest_id(tb.marks)))
-        .where(where).order_by(c.c.created, c.c.id))
-    rows = conn.execute(query).all()
-    live = [row[0] for row in rows if row[4] in LIVE_STATES]
-    gone = _gone(conn, live) if live else set()
+def _calibrations(rows: Rows, where: str, params: dict[str, Any] | None = None) -> list[Calibration]:
+    """The calibrations matching `where` (a condition on campaigns ``c``), oldest first, with their
+    latest validation, model and mark; a fixed number of queries whatever their count."""
+    found = rows(sql.CALIBRATIONS + where + sql.OLDEST_FIRST, params)
+    live = [row[0] for row in found if row[4] in LIVE_STATES]
+    gone = _gone(rows, live) if live else set()
     out = []
     for (cid, serial, created, station, status, before, after, passed, model, mark_id, bad, reason, who,
-         t) in rows:
+         t) in found:
         before, after = _loads(before), _loads(after)
         mark = None if mark_id is None else Mark(int(mark_id), cid, bool(bad), reason, who, float(t))
         out.append(Calibration(
@@ -314,23 +260,22 @@ def _calibrations(conn: Connection, where: ColumnElement[bool]) -> list[Calibrat
     return out
 
 
-def _gone(conn: Connection, campaigns: list[str]) -> set[str]:
+def _gone(rows: Rows, campaigns: list[str]) -> set[str]:
     """Of campaigns in a live status, those whose run's process has certainly ended (`is_gone`)."""
-    e = tb.events
-    newest = (select(e.c.campaign, func.max(e.c.seq).label("seq"))
-              .where(e.c.campaign.in_(campaigns), e.c.type == "RunStarted")
-              .group_by(e.c.campaign).subquery())
-    rows = conn.execute(select(e.c.campaign, e.c.data).select_from(
-        e.join(newest, and_(e.c.campaign == newest.c.campaign, e.c.seq == newest.c.seq)))).all()
-    return {cid for cid, data in rows if is_gone((_loads(data) or {}).get("owner"))}
+    return {cid for cid, data in rows(*sql.run_started(campaigns))
+            if is_gone((_loads(data) or {}).get("owner"))}
 
 
-def _robot(conn: Connection, serial: str, location: str) -> tuple[int, RobotRecord]:
-    r = tb.robots
-    row = conn.execute(select(r.c.id, r.c.serial, r.c.type, r.c.model, r.c.software, r.c.first_seen,
-                              r.c.last_seen, r.c.controller).where(r.c.serial == serial)).first()
+def _newest(query: str) -> str:
+    """The condition "c is the newest per robot of `query`'s rows"."""
+    return f"c.id IN ({sql.newest_per_robot(query)})"
+
+
+def _robot(rows: Rows, serial: str, location: str) -> tuple[int, RobotRecord]:
+    found = rows(sql.ROBOT, {"serial": serial})
+    row = found[0] if found else None
     if row is None:
-        known = conn.execute(select(func.count()).select_from(r)).scalar_one()
+        known = rows(sql.ROBOT_COUNT)[0][0]
         hint = " (see `hil robots`)" if known else " (it has no robots with a known serial yet)"
         raise UnknownSerialError(f"{location}: no robot with serial {serial!r}{hint}")
     controller = _loads(row[7])
@@ -340,7 +285,7 @@ def _robot(conn: Connection, serial: str, location: str) -> tuple[int, RobotReco
                                     controller=controller if isinstance(controller, dict) else None)
 
 
-def fleet(store: Store, *, station: str | None = None, now: float | None = None) -> list[RobotSummary]:
+def fleet(store: Reader, *, station: str | None = None, now: float | None = None) -> list[RobotSummary]:
     """Every robot with a known serial, sorted by serial: its last (finished) calibration (campaign,
     time, station, status, validation RMS before/after, passed, age in days at `now`), its calibration
     in progress (its newest campaign when not finished: running or resumable) and its current model's
@@ -348,20 +293,16 @@ def fleet(store: Store, *, station: str | None = None, now: float | None = None)
     calibration in progress runs there; InputError if no station has that name). Reads no model
     document."""
     now = time.time() if now is None else now
-    r, c, s = tb.robots, tb.campaigns, tb.stations
-    with store.reading() as conn:
-        if station is not None and conn.execute(select(s.c.id).where(s.c.name == station)).first() is None:
-            names = conn.execute(select(s.c.name).order_by(s.c.name)).scalars().all()
+    with store.snapshot() as rows:
+        if station is not None and not rows(sql.STATION_ID, {"station": station}):
+            names = [n for (n,) in rows(sql.STATION_NAMES)]
             raise InputError(f"--station: no station named {station!r} in {store.location}"
                              + (f" (stations: {', '.join(names)})" if names else " (it has none yet)"))
-        robots = conn.execute(select(r.c.id, r.c.serial, r.c.type, r.c.model).order_by(r.c.serial)).all()
-        counts = dict(conn.execute(select(c.c.robot, func.count())
-                                   .where(c.c.robot.is_not(None), c.c.kind == CALIBRATION)
-                                   .group_by(c.c.robot)).all())
-        last = {x.serial: x
-                for x in _calibrations(conn, c.c.id.in_(_newest_per_robot(_finished_campaigns())))}
-        newest = {x.serial: x for x in _calibrations(conn, c.c.id.in_(_newest_per_robot(_all_campaigns())))}
-        current = {x.serial: x for x in _calibrations(conn, c.c.id.in_(_newest_per_robot(_good_campaigns())))}
+        robots = rows(sql.ROBOTS)
+        counts = {robot: n for robot, n in rows(sql.CALIBRATION_COUNTS)}
+        last = {x.serial: x for x in _calibrations(rows, _newest(sql.FINISHED_CALIBRATIONS))}
+        newest = {x.serial: x for x in _calibrations(rows, _newest(sql.ALL_CALIBRATIONS))}
+        current = {x.serial: x for x in _calibrations(rows, _newest(sql.GOOD_CALIBRATIONS))}
     out = []
     for rid, serial, rtype, model in robots:
         x, cur = last.get(serial), current.get(serial)
@@ -385,15 +326,12 @@ def fleet(store: Store, *, station: str | None = None, now: float | None = None)
     return out
 
 
-def calibrations(store: Store, *, since: float | None = None) -> list[Calibration]:
+def calibrations(store: Reader, *, since: float | None = None) -> list[Calibration]:
     """Every calibration of a robot with a known serial, oldest first (those created at or after
     `since`, seconds since the epoch, when given): what the fleet report plots over time."""
-    c = tb.campaigns
-    where = and_(c.c.robot.is_not(None), c.c.kind == CALIBRATION)
-    if since is not None:
-        where = and_(where, c.c.created >= since)
-    with store.reading() as conn:
-        return _calibrations(conn, where)
+    where, params = (sql.OF_FLEET, None) if since is None else (sql.OF_FLEET + sql.SINCE, {"since": since})
+    with store.snapshot() as rows:
+        return _calibrations(rows, where, params)
 
 
 def _parameters(doc: Any, prefixes: tuple[str, ...]) -> dict[str, tuple[float, float]]:
@@ -465,13 +403,13 @@ def _document_parameters(text: str) -> dict[str, Any]:
     return doc if isinstance(doc, dict) else {}
 
 
-def _model_parameters(conn: Connection, models: Iterable[int], prefixes: tuple[str, ...]
+def _model_parameters(rows: Rows, models: Iterable[int], prefixes: tuple[str, ...]
                       ) -> dict[int, dict[str, tuple[float, float]]]:
     """model id -> its robot parameters (`_parameters`), each document read and parsed once."""
-    m, ids = tb.models, sorted(set(models))
+    ids = sorted(set(models))
     out = {}
     for i in range(0, len(ids), _BATCH):
-        for mid, doc in conn.execute(select(m.c.id, m.c.doc).where(m.c.id.in_(ids[i:i + _BATCH]))):
+        for mid, doc in rows(*sql.model_docs(ids[i:i + _BATCH])):
             out[int(mid)] = _parameters(_document_parameters(doc), prefixes)
     return out
 
@@ -486,31 +424,27 @@ def _comparisons(good: list[tuple[str, float, int]], params: Mapping[int, Mappin
     return out
 
 
-def robot_history(store: Store, serial: str, *, k: float = DEFAULT_K,
+def robot_history(store: Reader, serial: str, *, k: float = DEFAULT_K,
                   prefixes: tuple[str, ...] = ROBOT_PARAMETERS) -> RobotHistory:
     """One robot (UnknownSerialError if no robot has that serial): its record, every calibration oldest
     first, the campaign whose model is current, and the geometry changes between consecutive good
     calibrations (`compare_parameters` with `k`)."""
     _check_k(k)
-    with store.reading() as conn:
-        rid, robot = _robot(conn, serial, store.location)
-        rows = _calibrations(conn, and_(tb.campaigns.c.robot == rid, tb.campaigns.c.kind == CALIBRATION))
-        good = [(x.id, x.created, x.model) for x in rows if x.good and x.model is not None]
-        params = _model_parameters(conn, (m for _, _, m in good), prefixes) if len(good) > 1 else {}
-        checks = _verifications(conn, rid)
-    return RobotHistory(robot=robot, calibrations=tuple(rows), current=good[-1][0] if good else None,
+    with store.snapshot() as rows:
+        rid, robot = _robot(rows, serial, store.location)
+        found = _calibrations(rows, sql.OF_ROBOT, {"robot": rid})
+        good = [(x.id, x.created, x.model) for x in found if x.good and x.model is not None]
+        params = _model_parameters(rows, (m for _, _, m in good), prefixes) if len(good) > 1 else {}
+        checks = _verifications(rows, rid)
+    return RobotHistory(robot=robot, calibrations=tuple(found), current=good[-1][0] if good else None,
                         comparisons=tuple(_comparisons(good, params, k)), verifications=checks)
 
 
-def _verifications(conn: Connection, rid: int) -> tuple[Verification, ...]:
+def _verifications(rows: Rows, rid: int) -> tuple[Verification, ...]:
     """The robot's verification campaigns, oldest first, with the figures of their result document
     (``hil-verification/1``: ``results[mode].AP_max/RP_max``; none while unfinished)."""
-    c, s = tb.campaigns, tb.stations
     out = []
-    for cid, created, station, status, result in conn.execute(
-            select(c.c.id, c.c.created, s.c.name, c.c.status, c.c.result)
-            .select_from(c.join(s, s.c.id == c.c.station))
-            .where(c.c.robot == rid, c.c.kind == VERIFICATION).order_by(c.c.created, c.c.id)):
+    for cid, created, station, status, result in rows(sql.VERIFICATIONS, {"robot": rid}):
         doc = _loads(result)
         results = doc.get("results") if isinstance(doc, Mapping) else None
         ap: dict[str, float] = {}
@@ -526,26 +460,22 @@ def _verifications(conn: Connection, rid: int) -> tuple[Verification, ...]:
     return tuple(out)
 
 
-def geometry_changes(store: Store, *, since: float | None = None, k: float = DEFAULT_K,
+def geometry_changes(store: Reader, *, since: float | None = None, k: float = DEFAULT_K,
                      prefixes: tuple[str, ...] = ROBOT_PARAMETERS) -> list[tuple[str, GeometryComparison]]:
     """(serial, comparison) of every robot whose geometry moved between two consecutive good
     calibrations, the later one created at or after `since` (all when None), by serial and date: what
     `robot_history` reports for each robot, read for the whole fleet at once."""
     _check_k(k)
-    r = tb.robots
-    good = _good_campaigns().subquery()
     by_robot: dict[str, list[tuple[str, float, int]]] = {}
-    with store.reading() as conn:
-        for serial, cid, created, model in conn.execute(
-                select(r.c.serial, good.c.id, good.c.created, good.c.model)
-                .join(r, r.c.id == good.c.robot).order_by(r.c.serial, good.c.created, good.c.id)):
+    with store.snapshot() as rows:
+        for serial, cid, created, model in rows(sql.GOOD_BY_SERIAL):
             by_robot.setdefault(serial, []).append((cid, float(created), int(model)))
         wanted = {}
-        for serial, rows in by_robot.items():
-            pairs = [(a, b) for a, b in itertools.pairwise(rows) if since is None or b[1] >= since]
+        for serial, good in by_robot.items():
+            pairs = [(a, b) for a, b in itertools.pairwise(good) if since is None or b[1] >= since]
             if pairs:
                 wanted[serial] = pairs
-        params = _model_parameters(conn, (x[2] for pairs in wanted.values() for pair in pairs for x in pair),
+        params = _model_parameters(rows, (x[2] for pairs in wanted.values() for pair in pairs for x in pair),
                                    prefixes)
     out = []
     for serial, pairs in wanted.items():
@@ -556,20 +486,18 @@ def geometry_changes(store: Store, *, since: float | None = None, k: float = DEF
     return out
 
 
-def current_model(store: Store, serial: str) -> tuple[str, dict[str, Any]] | None:
+def current_model(store: Reader, serial: str) -> tuple[str, dict[str, Any]] | None:
     """(campaign id, model document) of the robot's current model: the latest model of its newest
     accepted calibration whose latest mark is not bad; None if it has none. UnknownSerialError if no
     robot has that serial."""
-    c, m = tb.campaigns, tb.models
-    with store.reading() as conn:
-        rid, _ = _robot(conn, serial, store.location)
-        good = _good_campaigns().where(c.c.robot == rid).subquery()
-        row = conn.execute(select(good.c.id, good.c.model).order_by(good.c.created.desc(), good.c.id.desc())
-                           .limit(1)).first()
-        if row is None:
+    with store.snapshot() as rows:
+        rid, _ = _robot(rows, serial, store.location)
+        found = rows(sql.CURRENT_OF_ROBOT, {"robot": rid})
+        if not found:
             return None
-        doc = conn.execute(select(m.c.doc).where(m.c.id == row[1])).scalar_one()
-    return str(row[0]), dict(json.loads(doc))
+        cid, model = found[0]
+        doc = rows(sql.MODEL_DOC, {"id": model})[0][0]
+    return str(cid), dict(json.loads(doc))
 
 
 def _who() -> str:
@@ -592,6 +520,10 @@ def mark(store: Store, campaign: str, *, bad: bool, reason: str, who: str | None
                          + ("bad" if bad else "good again"))
     who = (who or "").strip() or _who()
     t = time.time()
+    from sqlalchemy import insert, select  # a write: the Store's SQLAlchemy is loaded already
+
+    import hil.store.tables as tb
+
     c, mk = tb.campaigns, tb.marks
     with store.writing(f"mark campaign {campaign} {'bad' if bad else 'good'}") as conn:
         if conn.execute(select(c.c.id).where(c.c.id == campaign)).first() is None:

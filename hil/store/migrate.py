@@ -26,14 +26,12 @@ from typing import TYPE_CHECKING
 from sqlalchemy import Connection, inspect, text
 
 from hil.errors import InputError
+from hil.store.schema_version import HEAD, SCHEMA_VERSION
 
 if TYPE_CHECKING:
     from alembic.config import Config
 
-#: The newest revision this code knows (a test checks it against the migrations' head).
-HEAD = "0005"
-#: The schema version a number can say: revision "000N" is version N.
-SCHEMA_VERSION = int(HEAD)
+__all__ = ["HEAD", "SCHEMA_VERSION", "alembic_config", "found_version", "script_head", "upgrade"]
 
 _LOCATION = Path(__file__).with_name("migrations")
 _OUR_TABLES = frozenset({"stations", "robots", "campaigns", "poses", "measurements", "events"})

@@ -8,7 +8,7 @@ reason: a transaction whose COMMIT may or may not have landed before the link dr
 whole (`hil.store.transactions`).
 
 Values are kept as compact JSON text (`dumps`; numpy arrays and records included) that both SQLite
-and PostgreSQL store alike; `loads` and `floats` read them back (`hil.store.queries`).
+and PostgreSQL store alike (`hil.store.json_columns`, re-exported here); `row_json` reads them back.
 """
 
 from __future__ import annotations
@@ -16,7 +16,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import sys
 from collections.abc import Mapping
 from typing import Any
 
@@ -26,63 +25,16 @@ import hil
 import hil.store.tables as tb
 from hil.campaign.ids import new_campaign_id
 from hil.store.hashing import canonical_json, config_hash, measurement_hash
+from hil.store.json_columns import (  # re-exported: the store's modules and tests import them from here
+    DamagedRowError,  # noqa: F401
+    dumps,
+    dumps_or_null,
+    floats,  # noqa: F401
+    loads,  # noqa: F401
+    row_json,  # noqa: F401
+)
 from hil.store.records import CALIBRATION, ROLES, RobotIdentity
-from hil.store.sqlite_errors import CorruptStoreError, StoreError
-
-
-# --- column text ------------------------------------------------------------------------------------
-def dumps(value: Any) -> str:
-    """Compact JSON of plain values, numpy arrays and scalars included."""
-
-    def default(obj: Any) -> Any:
-        # numpy is not imported for it: a value can hold an array only once someone imported numpy
-        # (a listing that writes, `hil robot --mark-bad`, never does)
-        np = sys.modules.get("numpy")
-        if np is not None and isinstance(obj, np.ndarray | np.generic):
-            return obj.tolist()
-        if isinstance(obj, tuple | set | frozenset):
-            return list(obj)
-        if hasattr(obj, "as_dict"):
-            return obj.as_dict()
-        raise TypeError(f"cannot store a {type(obj).__name__} as JSON")
-
-    return json.dumps(value, separators=(",", ":"), default=default)
-
-
-def dumps_or_null(value: Any) -> str | None:
-    """JSON text, or SQL NULL for None (so "absent" is queryable as IS NULL)."""
-    return None if value is None else dumps(value)
-
-
-def loads(text: str | None) -> Any:
-    """The value of a JSON column (None for SQL NULL)."""
-    return None if text is None else json.loads(text)
-
-
-class DamagedRowError(CorruptStoreError):
-    """One row of the store holds a JSON column that does not parse (a disk error, a hand edit, a
-    tool that wrote into the database): bad input naming the row — campaign, table, id, column — so
-    it can be found and mended, not an internal error (issue 31)."""
-
-
-def row_json(text: str | None, *, table: str, row: Any, column: str, campaign: str | None = None) -> Any:
-    """The value of JSON column `column` of `table`'s row `row` (None for SQL NULL); `DamagedRowError`
-    naming the row when it does not parse. Every reader of the store's JSON columns goes through it."""
-    if text is None:
-        return None
-    try:
-        return json.loads(text)
-    except (ValueError, TypeError, RecursionError) as exc:
-        where = f"campaign {campaign}, " if campaign else ""
-        reason = exc.msg if isinstance(exc, json.JSONDecodeError) else type(exc).__name__
-        raise DamagedRowError(f"damaged store row: {where}table {table}, id {row}: {column} is not valid "
-                              f"JSON ({reason})") from None
-
-
-def floats(text: str | None) -> tuple[float, ...] | None:
-    """A JSON column holding a vector, as a tuple (None for SQL NULL)."""
-    value = loads(text)
-    return None if value is None else tuple(value)
+from hil.store.sqlite_errors import StoreError
 
 
 def vector(value: Any, n: int, what: str) -> tuple[float, ...]:

@@ -34,13 +34,12 @@ import os
 import sqlite3
 import threading
 import time
-import urllib.parse
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, Self, TypeVar
+from typing import TYPE_CHECKING, Any, Self, TypeVar
 
-from sqlalchemy import Connection, Engine
+from sqlalchemy import Connection, Engine, text
 from sqlalchemy.exc import DBAPIError
 
 from hil.errors import InputError
@@ -48,6 +47,10 @@ from hil.store.database import display_url, is_postgres, postgres_engine, sqlite
 from hil.store.migrate import SCHEMA_VERSION, found_version, upgrade
 from hil.store.paths import check_store, locate
 from hil.store.sqlite_errors import StoreError, StoreUnavailable, check_intact
+from hil.store.sqlite_reader import readonly_uri
+
+if TYPE_CHECKING:
+    from hil.store.listing import Rows
 
 log = logging.getLogger(__name__)
 
@@ -226,26 +229,9 @@ class TransactionalStore:
         return engine
 
     def _readonly_uri(self) -> str:
-        """The ``file:`` URI of a reading connection (never one that creates the file).
-
-        A WAL database needs its ``-wal`` and ``-shm`` files beside it. Where the reader may write
-        them (``mode=rw``, with ``query_only`` set on every connection), SQLite removes them again at
-        close, leaving the folder as it was; ``mode=ro`` would leave them behind. In a directory we
-        cannot write (read-only media, another user's folder) even ``mode=ro`` fails ("attempt to
-        write a readonly database"): there, unless a ``-wal`` holds commits not yet folded into the
-        file (hil closes cleanly, folding them in), ``immutable=1`` reads the file alone; with such a
-        ``-wal`` it would hide them, so ``mode=ro`` reads through the existing files.
-        """
+        """The ``file:`` URI of a reading connection (`hil.store.sqlite_reader.readonly_uri` says why)."""
         assert self.path is not None
-        path = self.path.resolve()
-        wal = path.with_name(path.name + "-wal")
-        if os.access(path.parent, os.W_OK):
-            query = "mode=rw" if os.access(path, os.W_OK) else "mode=ro"
-        elif wal.exists() and wal.stat().st_size > 0:
-            query = "mode=ro"
-        else:
-            query = "mode=ro&immutable=1"
-        return f"file:{urllib.parse.quote(str(path))}?{query}"
+        return readonly_uri(self.path)
 
     def _check_version(self, conn: Connection, *, writable: bool) -> None:
         """What `upgrade` checks, without writing: a hil store of a version this code reads.
@@ -338,6 +324,17 @@ class TransactionalStore:
                     transaction.rollback()
         except DBAPIError as exc:
             raise StoreError(f"{self.location}: cannot read: {_first_line(exc.orig)}") from exc.orig
+
+    @contextmanager
+    def snapshot(self) -> Iterator[Rows]:
+        """A `reading` snapshot as the `hil.store.listing` reads take it: a function running one SQL text
+        of `hil.store.listing_sql` (its ``:name`` parameters bound by SQLAlchemy's ``text()``) and
+        returning its rows. `hil.store.sqlite_reader` runs the same texts through sqlite3."""
+        with self.reading() as conn:
+            def rows(sql: str, params: dict[str, Any] | None = None, /) -> Sequence[Sequence[Any]]:
+                return conn.execute(text(sql), params or {}).all()  # DBAPIError: `reading` says it
+
+            yield rows
 
     def _query(self, fn: Callable[[Connection], R]) -> R:
         """`fn`'s answer, read in one `reading` snapshot."""

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from hil.store import Store
+    from hil.store.sqlite_reader import SqliteReader
 
 DB_HELP = ("the store: an SQLite file path or a postgresql:// URL (default: $HIL_DB, the config's "
            "store.url or store.path, or the user's data directory)")
@@ -24,17 +25,31 @@ def add_store_options(p: argparse.ArgumentParser, *, json: bool = True) -> None:
         p.add_argument("--json", action="store_true", help="print JSON on stdout")
 
 
-def open_store(args: argparse.Namespace, *, readonly: bool = True) -> Store:
+def open_store(args: argparse.Namespace, *, readonly: bool = True) -> Store | SqliteReader:
     """The store `args` name, opened read-only unless asked; a missing one is bad input (exit 2): a
-    command that reads (or marks) never creates a database."""
-    from hil.store import Store
-
+    command that reads (or marks) never creates a database. Read-only, a station's SQLite file at this
+    hil's schema is read through sqlite3 alone (`hil.store.sqlite_reader`: no SQLAlchemy to import,
+    the same SQL and answers); anything else opens the `Store`."""
     config = None
     if args.config:  # the station's configuration is read only when it names the store
         from hil.station.config import load_config
 
         config = load_config(args.config)
-    return Store.open(args.db or None, config=config, readonly=readonly, create=False)
+    return open_location(args.db or None, config, readonly=readonly)
+
+
+def open_location(db: str | None, config: object = None, *, readonly: bool = True) -> Store | SqliteReader:
+    """`open_store` of a ``--db`` value (None: the environment's or the config's store)."""
+    if readonly:
+        from hil.store.paths import resolve_location
+        from hil.store.sqlite_reader import open_reader
+
+        reader = open_reader(resolve_location(db, config))
+        if reader is not None:
+            return reader
+    from hil.store import Store
+
+    return Store.open(db, config=config, readonly=readonly, create=False)
 
 
 def where(store: Store) -> str:

@@ -22,9 +22,11 @@ from hil.store import RobotIdentity, Store
 
 ROOT = Path(__file__).resolve().parents[3]
 SERIAL = "20235500101"
-#: what a listing must not import: the numerical stack, Alembic (a store at the head revision needs no
+#: what a listing must not import: the numerical stack, SQLAlchemy (a station's SQLite file at the head
+#: revision is read with sqlite3: hil.store.sqlite_reader), Alembic (a store at the head revision needs no
 #: migration), the robot driver (ur_rtde's client) and the campaign's event types
-HEAVY = ("numpy", "scipy", "pinocchio", "matplotlib", "alembic", "drivers.robot.ur", "hil.campaign.events")
+HEAVY = ("numpy", "scipy", "pinocchio", "matplotlib", "sqlalchemy", "alembic", "drivers.robot.ur",
+         "hil.campaign.events")
 
 
 @pytest.fixture(scope="module")
@@ -82,7 +84,9 @@ def test_identify_imports_neither_the_store_nor_scipy_nor_numpy_ma(tmp_path: Pat
     store, and on data without outliers it loads no scipy at all: the pivoted QR and the Kabsch fit are
     numpy's, and the outlier test's F distribution is imported only when a pose may be an outlier.
     scipy's import (its linalg, special and spatial parts) was 0.35 s of the 0.75 s it took. Nor
-    numpy.ma, which numpy 2.4's ``np.unique`` imports (a tenth of the fit's time)."""
+    numpy.ma, which numpy 2.4's ``np.unique`` imports (a tenth of the fit's time). Nor the trackers'
+    protocol clients (the polar convention is all it needs of `drivers.tracker`) nor the station's
+    configuration reader (its --smr bound is `hil.station.limits`'): a fifth of its start-up."""
     import numpy as np
 
     from hil.calibration.measurements import write_measurements
@@ -96,7 +100,8 @@ def test_identify_imports_neither_the_store_nor_scipy_nor_numpy_ma(tmp_path: Pat
             "with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):\n"
             f"    rc = main(['identify', '--robot', 'ur5e', '--measurements', {str(tmp_path / 'm.csv')!r}, "
             f"'--out', {str(tmp_path / 'model.json')!r}])\n"
-            "print(rc, ','.join(m for m in ('sqlalchemy', 'scipy', 'numpy.ma') if m in sys.modules))")
+            "print(rc, ','.join(m for m in ('sqlalchemy', 'scipy', 'numpy.ma', 'drivers.tracker.emscon', "
+            "'drivers.tracker.geocom', 'hil.station.config') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300,
                          env={**os.environ, "XDG_DATA_HOME": str(tmp_path / "data")})
     assert out.returncode == 0, out.stderr
