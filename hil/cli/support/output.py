@@ -9,6 +9,7 @@ import errno
 import io
 import json
 import os
+import stat
 import sys
 from typing import Any
 
@@ -143,6 +144,18 @@ def check_stdout_open() -> None:
     stream = getattr(sys.stdout, "_stream", sys.stdout)
     if stream is None or isinstance(stream, _NoStdout):
         raise _unwritable(OSError(errno.EBADF, "stdout is closed"))
+    if _is_dev_full(stream):
+        raise _unwritable(OSError(errno.ENOSPC, "No space left on device (stdout is /dev/full)"))
+
+
+def _is_dev_full(stream: Any) -> bool:
+    """Whether `stream` is the system's /dev/full, the one device known before writing to refuse
+    every write (ENOSPC); /dev/null and ttys are character devices too, and take what is written."""
+    try:
+        mine, full = os.fstat(stream.fileno()), os.stat("/dev/full")
+    except (AttributeError, OSError, ValueError):  # no descriptor (captured), or no /dev/full here
+        return False
+    return stat.S_ISCHR(mine.st_mode) and stat.S_ISCHR(full.st_mode) and mine.st_rdev == full.st_rdev
 
 
 def _unwritable(exc: OSError) -> StdoutUnwritable:

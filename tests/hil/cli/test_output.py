@@ -153,3 +153,17 @@ def test_a_missing_stdout_is_found_before_the_work(monkeypatch) -> None:
     assert worked == []
     monkeypatch.setattr(sys, "stdout", io.StringIO())
     assert quiet_on_closed_stdout(command)(None) == 0 and worked == [True]
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="no /dev/full on this system")
+def test_stdout_on_dev_full_is_found_before_the_work(monkeypatch) -> None:
+    """``hil select > /dev/full`` searched for 2.5-3.7 s (loaded machine) before its write failed: the
+    one device known to refuse every write is named before the search; /dev/null still takes output."""
+    from hil.cli.support.output import StdoutUnwritable, check_stdout_open
+
+    with open("/dev/full", "w") as full, open("/dev/null", "w") as null:
+        monkeypatch.setattr(sys, "stdout", full)
+        with pytest.raises(StdoutUnwritable, match="No space left on device"):
+            check_stdout_open()
+        monkeypatch.setattr(sys, "stdout", null)
+        check_stdout_open()
