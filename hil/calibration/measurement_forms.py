@@ -30,6 +30,7 @@ import numpy as np
 from hil.arm.catalog import ROBOT_NAMES, get_robot
 from hil.errors import InputError
 from hil.files.inputs import csv_rows, decode_input_text, read_input_bytes
+from hil.files.quantities import real
 
 #: Farthest a laser tracker measures (m): the Leica AT960's range is 80 m in radius, the longest of
 #: the trackers hil drives. A coordinate beyond it is a unit mistake or a corrupted file.
@@ -242,10 +243,8 @@ def _cell(rows: Rows, line: int, row: list[str], col: Column) -> float:
     except ValueError:
         raise InputError(f"{rows.header.source}: line {line}, column {col.label}: {cell!r} is not a number") \
             from None
-    if not math.isfinite(value):
-        raise InputError(f"{rows.header.source}: line {line}, column {col.label}: {cell!r} is not a finite "
-                         f"number")
-    return value
+    # finite and not a denormal here; each column's range where its unit is known (`numbers`' callers)
+    return real(value, f"{rows.header.source}: line {line}, column {col.label}", cell)
 
 
 def numbers(rows: Rows, labels: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:

@@ -124,14 +124,13 @@ def run(args: argparse.Namespace) -> int:
     from hil.cli.support.output_paths import campaign_store
     from hil.errors import InputError
     from hil.files.outputs import check_output
-    from hil.station.config import MAX_SMR_OFFSET
 
     db, where = campaign_store()
     check_output(args.out, field="--out", store=db, store_field=where,
                  inputs={"--measurements": args.measurements, "--validation": args.validation,
                          "--controller": args.controller})
     robot = get_robot(args.robot).name
-    smr = triplet_or_none(args.smr, "--smr", max_length=MAX_SMR_OFFSET, where="of the flange")
+    smr = triplet_or_none(args.smr, "--smr", "smr offset", norm=True)
     meas = read_measurements(args.measurements, args.joint_units)
     held_out = read_measurements(args.validation, args.joint_units) if args.validation else None
     controller = None
@@ -140,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
 
         controller = controller_from_file(args.controller, robot)
     payload = payload_or_none(args.payload)
-    mounting = triplet_or_none(args.mounting, "--mounting")
+    mounting = triplet_or_none(args.mounting, "--mounting", "mounting angle")
     request = parse_request(args.joint_errors)
     arm = None if controller is None else controller.geometry(robot)
     if uses_tool(meas):
