@@ -97,7 +97,7 @@ def register(sub: Any) -> None:
     p.add_argument("--start", help="current joint configuration q1..q6 (rad): the route starts there")
     p.add_argument("--compliance", action="store_true",
                    help="choose poses that identify the joints' compliance too (for --payload)")
-    p.add_argument("--payload", metavar="MASS[,X,Y,Z]",
+    p.add_argument("--payload", metavar="MASS,X,Y,Z",
                    help="what the arm carries (kg; centre of mass in the flange frame, m); default nothing")
     p.add_argument("--prune", action="store_true",
                    help="drop poses that add nothing to the result: may return fewer than --count")

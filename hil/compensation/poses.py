@@ -50,12 +50,13 @@ def format_number(value: float) -> str:
     return np.format_float_positional(float(value), unique=True, trim="0")
 
 
-def check_pose(values: Sequence[float], where: str, distance: str = TARGET_DISTANCE) -> np.ndarray:
+def check_pose(values: Sequence[float], where: str, distance: str = TARGET_DISTANCE,
+               origin: str = "the base") -> np.ndarray:
     """A UR pose vector (x, y, z m; rx, ry, rz a rotation vector, rad) whose numbers are physical: every
     one real (no NaN, inf or denormal), the position within `distance`'s range and the rotation angle
     within a turn, so a pose written in millimetres or degrees is refused naming the unit (issue 31)."""
     v = [float(x) for x in values]
-    check_vector(v[:3], distance, f"{where}: position (x, y, z)", norm=True)
+    check_vector(v[:3], distance, f"{where}: position (x, y, z) from {origin}", norm=True)
     check_vector(v[3:], ROTATION, f"{where}: rotation vector (rx, ry, rz)", norm=True)
     return np.array(v)
 
@@ -67,8 +68,8 @@ def parse_six(text: str, option: str, *, unit: str) -> np.ndarray:
         values = np.array([float(p) for p in parts])
     except ValueError:
         values = np.array([])
-    if values.shape != (6,):
-        raise InputError(f"{option}: expected six numbers separated by commas ({unit}), got {text!r}")
+    if values.shape != (6,) or not np.all(np.isfinite(values)):
+        raise InputError(f"{option}: expected six finite numbers separated by commas ({unit}), got {text!r}")
     for i, v in enumerate(values):
         real(float(v), f"{option}[{i}]")
     return values
@@ -92,4 +93,4 @@ def parse_tcp(text: str | None, option: str = "--tcp") -> pin.SE3:
     if text is None:
         return pin.SE3.Identity()
     v = parse_six(text, option, unit="metres and a rotation vector in radians")
-    return to_se3(check_pose(v, option, TCP_OFFSET))
+    return to_se3(check_pose(v, option, TCP_OFFSET, "the flange"))

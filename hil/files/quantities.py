@@ -16,6 +16,7 @@ is an assumption and why that value.
 
 from __future__ import annotations
 
+import json
 import math
 import sys
 from collections.abc import Callable, Sequence
@@ -68,17 +69,19 @@ class Quantity:
         """Why `value` is not a value of this quantity (None when it is): not finite, a denormal,
         a fraction where a count is meant, or out of range (with the unit it looks typed in)."""
         text = shown if shown is not None else _shown(value)
+        unit = UNIT_WORDS.get(self.unit, self.unit)
+        note = f"; the value is in {unit}" if self.confused else ""  # a unit people get wrong: say it
         if not math.isfinite(value):
-            return f"expected a finite number in {self.span()}, got {text}"
+            return f"expected a finite number in {self.span()}, got {text}{note}"
         if value != 0 and abs(value) < SMALLEST_NORMAL:
             return (f"got {text}, a denormal number (non-zero, below {SMALLEST_NORMAL:.3g}), not a physical "
-                    f"value; expected a value in {self.span()}")
+                    f"value; expected a value in {self.span()}{note}")
         if self.integer and not float(value).is_integer():
             return f"must be a whole number in {self.span()}, got {text}"
         if self.inside(value):
             return None
-        hint = next((f"; {text} looks like {words}: the value is in {UNIT_WORDS.get(self.unit, self.unit)}"
-                     for words, factor in self.confused if self.inside(value * factor)), "")
+        hint = next((f"; {text} looks like {words}: the value is in {unit}"
+                     for words, factor in self.confused if self.inside(value * factor)), note)
         return f"must be in {self.span()}, got {text}{hint}"
 
     def check(self, value: float, where: str, shown: str | None = None) -> float:
@@ -101,7 +104,8 @@ class Quantity:
         """A JSON or TOML value as a checked number: `true` and ``"1"`` are not numbers (Python's float
         takes them, but a file holding them was not written by a tool that meant a number)."""
         if isinstance(value, bool) or not isinstance(value, int | float):
-            shown = repr(value) if isinstance(value, str | bool) or value is None else type(value).__name__
+            plain = isinstance(value, str | bool) or value is None
+            shown = json.dumps(value) if plain else type(value).__name__
             if len(shown) > 40:
                 shown = shown[:37] + "..."
             raise InputError(f"{where}: expected a number, got {shown}")
@@ -121,6 +125,9 @@ class Quantity:
             try:
                 value = int(text) if self.integer else float(text)
             except ValueError:
+                if self.confused:  # the unit is the likely mistake: say it
+                    raise argparse.ArgumentTypeError(
+                        f"{text!r} is not a number of {UNIT_WORDS.get(self.unit, self.unit)}") from None
                 raise ValueError(text) from None  # argparse's own "invalid float value: 'x'"
             why = self.problem(float(value), text)
             if why is not None:
@@ -207,6 +214,13 @@ QUANTITIES: dict[str, Quantity] = {q.name: q for q in (
     Quantity("tracker noise", "m", 0.0, 0.01,
              "a simulated σ per axis: 1 cm is hundreds of times the AT960's 7.5 µm (assumption)",
              confused=(MILLIMETRES, MICROMETRES)),
+    Quantity("position noise", "m", 0.0, 0.1,
+             "a stated σ per axis of a measured position: a camera on a chessboard ~2 mm "
+             "(hil.calibration.pose_identification), a tracker µm; 10 cm measures nothing (assumption)",
+             low_open=True, confused=(MILLIMETRES,)),
+    Quantity("orientation noise", "rad", 0.0, 0.5,
+             "a stated σ per axis of a measured orientation: ~2 mrad for a camera; half a radian "
+             "measures nothing (assumption)", low_open=True, confused=(DEGREES,)),
     Quantity("angle noise", "rad", 0.0, 0.01,
              "a simulated σ per joint reading or tracker angle: 10 mrad is thousands of times a UR "
              "encoder's or the AT960's 3 µrad (assumption)"),
@@ -257,7 +271,7 @@ QUANTITIES: dict[str, Quantity] = {q.name: q for q in (
     Quantity("laser warm-up", "s", 0.0, 7200.0,
              "a cold AT9xx laser is ready within minutes; two hours is a fault", confused=(MILLISECONDS,)),
     Quantity("time budget", "s", 0.0, 86_400.0, "a campaign's robot time: a day is milliseconds",
-             confused=(MILLISECONDS,)),
+             low_open=True, confused=(MILLISECONDS,)),
     Quantity("search time", "s", 0.0, 3600.0,
              "bench/cycle_time.py: the robot time still falls ~1 % from 10 to 20 s of search; an hour is "
              "a value in the wrong unit", low_open=True, confused=(MILLISECONDS,)),

@@ -42,6 +42,7 @@ MAX_TURN_DEG = 179.0
 #: the axis components I J K U V W are "unit vector component", checked for length and angle below.
 FIELD_QUANTITY = {"X": "program coordinate", "Y": "program coordinate", "Z": "program coordinate",
                   "D": "path tolerance", "E": "path tolerance"}
+FIELD_LABEL = {"D": "D (chord-height error)", "E": "E (point error)"}
 MAX_COORDINATE = quantity("program coordinate").high  # mm, |X|, |Y|, |Z|
 MIN_TOLERANCE = quantity("path tolerance").low  # mm, D and E
 MAX_TOLERANCE = quantity("path tolerance").high  # mm, D and E
@@ -123,7 +124,8 @@ def parse_program(text: str, source: str = "<program>") -> Program:
             raise _fail(source, number, f"{KEYWORD} needs {len(FIELDS)} numbers "
                                         f"({' '.join(FIELDS)}), got {len(words) - 1}")
         where = f"{source}: line {number}"
-        values = [quantity(FIELD_QUANTITY.get(name, "unit vector component")).parse(word, f"{where}: {name}")
+        values = [quantity(FIELD_QUANTITY.get(name, "unit vector component"))
+                  .parse(word, f"{where}: {FIELD_LABEL.get(name, name)}")
                   for name, word in zip(FIELDS, words[1:], strict=True)]
         position = np.array(values[0:3])
         z, x = np.array(values[3:6]), np.array(values[6:9])

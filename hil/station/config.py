@@ -135,12 +135,17 @@ def _quantity(name: str, *, off: float | None = None) -> Callable[[Any], str | N
 def _vector(name: str, *, norm: bool = False) -> Callable[[Any], str | None]:
     """A check that every coordinate (or, with `norm`, the length) of a vector is of quantity `name`."""
 
+    row = quantity(name)
+
     def check(v: Any) -> str | None:
-        try:
-            check_vector(v, name, "value", norm=norm)
-        except InputError as exc:
-            return str(exc).removeprefix("value")
-        return None
+        if norm:
+            try:
+                check_vector(v, name, "", norm=True)
+            except InputError as exc:
+                return str(exc).removeprefix(": ")
+            return None
+        return next((f"coordinate {i + 1}: {why}" for i, x in enumerate(v)
+                     if (why := row.problem(float(x))) is not None), None)
 
     return check
 
