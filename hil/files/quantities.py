@@ -189,6 +189,31 @@ QUANTITIES: dict[str, Quantity] = {q.name: q for q in (
              "turn; 90 is degrees", confused=(DEGREES,)),
     Quantity("mounting surface height", "m", -5.0, 5.0, "as keep-in corners: beyond 5 m is millimetres",
              confused=(MILLIMETRES,)),
+    # --- non-geometric errors and the controller's own calibration (model and truth JSON)
+    Quantity("harmonic amplitude", "rad", -1e-2, 1e-2,
+             "a joint-angle harmonic: published UR-class joints show tens of µrad "
+             "(hil.calibration.synthetic); a hundred times that is the ceiling, beyond it degrees or a "
+             "broken file", confused=(DEGREES,)),
+    Quantity("lost motion", "rad", -3e-2, 3e-2,
+             "Harmonic Drive CSF catalog, hysteresis loss: about 1 arc-min = 2.9e-4 rad is its largest "
+             "figure; a hundred times that is the ceiling", confused=(DEGREES,)),
+    Quantity("controller angle delta", "rad", -math.pi, math.pi,
+             "a UR calibration.conf's delta_theta/delta_alpha: an angle within half a turn (ur_modern_driver "
+             "issue #108 shows -0.77 rad)", confused=(DEGREES,)),
+    Quantity("controller length delta", "m", -0.1, 0.1,
+             "a UR calibration.conf's a and d deltas are physical offsets of millimetres; beyond 10 cm a "
+             "unit mistake", confused=(MILLIMETRES,)),
+    Quantity("controller parallel d delta", "m", -10_000.0, 10_000.0,
+             "the d deltas of UR's parallel joints 2-4 cancel and reach hundreds of metres (ur_modern_driver "
+             "issue #108: +232.67 m; ur_calibration's documentation: ~439 m)"),
+    Quantity("thermal expansion", "1/K", 0.0, 2e-4,
+             "linear expansion coefficients from invar (~1e-6 /K) to plastics (~2e-4 /K); UR links are "
+             "aluminium, 2.3e-5 /K"),
+    Quantity("temperature rise", "K", 0.0, 60.0,
+             "a running arm's joints warm by a few kelvin (hil.arm.thermal); 60 K is the most any motor "
+             "housing reaches (assumption)"),
+    Quantity("warm-up time constant", "s", 1.0, 86_400.0,
+             "a joint's warm-up time constant is ~15 min (hil.arm.thermal); between a second and a day"),
     # --- what the arm carries
     Quantity("payload mass", "kg", 0.0, 100.0,
              "UR's datasheets: the largest rated payload is 30 kg (UR30); a few times that is grams",
