@@ -206,6 +206,9 @@ QUANTITIES: dict[str, Quantity] = {q.name: q for q in (
     Quantity("controller parallel d delta", "m", -10_000.0, 10_000.0,
              "the d deltas of UR's parallel joints 2-4 cancel and reach hundreds of metres (ur_modern_driver "
              "issue #108: +232.67 m; ur_calibration's documentation: ~439 m)"),
+    Quantity("joint compliance", "rad/Nm", -1e-2, 1e-2,
+             "a cobot's strain-wave joint yields about 1e-5 rad/Nm (hil.arm.physical); a thousand times "
+             "that folds the arm under its own weight; a fitted value may be slightly negative"),
     Quantity("thermal expansion", "1/K", 0.0, 2e-4,
              "linear expansion coefficients from invar (~1e-6 /K) to plastics (~2e-4 /K); UR links are "
              "aluminium, 2.3e-5 /K"),
