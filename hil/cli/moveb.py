@@ -21,7 +21,6 @@ from hil.arm.catalog import ROBOT_NAMES
 from hil.cli.support.options import SEED, SIM_SPEED, option
 from hil.cli.support.output import print_json, say, wants_json, wrote
 from hil.cli.support.station_options import add_arm_choice, add_tracker_protocol
-from hil.errors import InputError
 from hil.files.outputs import check_output
 from hil.jobs.moveb import FRAMES, MovebRequest, run_moveb
 from hil.jobs.outcome import EXIT_BAD_INPUT, EXIT_FAULT, EXIT_OK
@@ -130,19 +129,14 @@ def _json_option(p: argparse.ArgumentParser) -> None:
 
 
 def run_plan(args: argparse.Namespace) -> int:
+    from hil.cli.support.output_paths import campaign_store
     from hil.moveb.path_plan import plan_program, summary, write_samples
     from hil.moveb.program import load_program
-
-    if not args.step > 0:
-        raise InputError(f"--step must be positive, got {args.step}")
-    from hil.cli.support.output_paths import campaign_store
 
     db, where = campaign_store()
     check_output(args.out, field="--out", inputs={"PROGRAM": args.program}, store=db, store_field=where)
     from hil.moveb.timing import Limits
 
-    if not args.rate > 0:
-        raise InputError(f"--rate must be positive, got {args.rate}")
     limits = Limits(args.velocity, args.acceleration, args.jerk, args.normal_acceleration)
     plan = plan_program(load_program(args.program), args.continuity)
     dense = plan.dense(args.step)

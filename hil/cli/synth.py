@@ -61,10 +61,6 @@ def run(args: argparse.Namespace) -> int:
     db, where = campaign_store()
     check_output_dir(args.out_dir, field="--out-dir", inputs={"--truth": args.truth}, store=db,
                      store_field=where, names=("truth.json", "measurements.csv", "validation.csv"))
-    if args.poses < 1 or args.validation < 0:
-        raise InputError("--poses must be at least 1 and --validation at least 0")
-    if args.noise is not None and not (np.isfinite(args.noise) and args.noise >= 0):
-        raise InputError("--noise must be a non-negative number of metres")
     if args.rigid and args.truth:
         raise InputError("--rigid makes a random arm: it cannot be combined with --truth")
     if args.ideal is not None and args.truth:
