@@ -29,7 +29,7 @@ from typing import Any
 from hil.cli.support.options import CANDIDATES, POSE_COUNT, SEED, option
 from hil.cli.support.output import wrote
 from hil.errors import InputError
-from hil.files.quantities import check_vector
+from hil.files.quantities import check_vector, quantity
 from hil.jobs.outcome import EXIT_OK
 from selector.candidates import CONSTRAINT_NAMES
 from selector.indices import INDEX_NAMES, SCALINGS
@@ -42,7 +42,7 @@ TIME_AWARE = "time-aware"
 
 #: Farthest tracker range (m) a --range may give: Leica's AT403 measures to 80 m (160 m diameter), the
 #: longest of the laser trackers hil drives.
-MAX_TRACKER_RANGE = 80.0
+MAX_TRACKER_RANGE = quantity("tracker position").high  # the table's row (hil.files.quantities)
 
 
 def register(sub: Any) -> None:

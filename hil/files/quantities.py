@@ -160,8 +160,13 @@ QUANTITIES: dict[str, Quantity] = {q.name: q for q in (
              "an SMR, reflector or TCP on a tool: UR's heaviest grippers and tools stay within a metre of "
              "the flange (assumption: half a UR10e's reach)", confused=(MILLIMETRES,)),
     Quantity("tracker position", "m", -80.0, 80.0,
-             "Leica AT960 datasheet: measuring range 80 m (MR/LR, reflector), so no coordinate of the "
-             "tracker or of a point it measures lies farther", confused=(MILLIMETRES,)),
+             "Leica's datasheets: the AT403 measures to 160 m diameter and the AT960 to 80 m, the "
+             "longest of the trackers hil drives; no coordinate of the tracker or of a point it measures "
+             "lies farther", confused=(MILLIMETRES,)),
+    Quantity("measured angle", "rad", -_TURN, _TURN,
+             "a tracker's Hz and V or a measured frame's roll, pitch, yaw: every form wraps within one turn "
+             "either side of zero (a face-II zenith angle reaches 2π); beyond is degrees or gon",
+             confused=(DEGREES, ("gon", math.pi / 200))),
     Quantity("tracker distance from the base", "m", 0.0, 21.75,
              "the selector keeps the SMR within the AT960's 0.8-20 m six-DoF range "
              "(selector.candidates.Constraints) and within the arm's reach (1.75 m, UR20) of the base",
