@@ -281,8 +281,6 @@ QUANTITIES: dict[str, Quantity] = {q.name: q for q in (
     Quantity("path tolerance", "mm", 1e-4, 100.0,
              "a MOVEB D or E: below 0.1 µm no arm or tracker resolves the difference (AT960: 15 µm MPE), "
              "above 100 mm it is larger than the parts a UR handles"),
-    Quantity("unit vector component", "", -1.01, 1.01,
-             "a component of a unit tool axis; its length is checked to 1e-3 afterwards"),
     # --- rates
     Quantity("tracker rate", "Hz", 0.0, 1000.0,
              "Leica AT960 datasheet: output rate up to 1000 points per second", low_open=True),

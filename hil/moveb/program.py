@@ -33,13 +33,14 @@ import numpy as np
 
 from hil.errors import InputError
 from hil.files.inputs import read_input_text
-from hil.files.quantities import quantity
+from hil.files.quantities import quantity, real
 
 AXIS_TOLERANCE = 1e-3
 MIN_SEGMENT = 1e-3  # mm
 MAX_TURN_DEG = 179.0
 #: The quantity of each field (rows of `hil.files.quantities`, where the ranges and their reasons are);
-#: the axis components I J K U V W are "unit vector component", checked for length and angle below.
+#: the axis components I J K U V W are only real numbers here: their quantity is the axis's unit
+#: length, checked below.
 FIELD_QUANTITY = {"X": "program coordinate", "Y": "program coordinate", "Z": "program coordinate",
                   "D": "path tolerance", "E": "path tolerance"}
 FIELD_LABEL = {"D": "D (chord-height error)", "E": "E (point error)"}
@@ -106,6 +107,18 @@ class Program:
         return out
 
 
+def _value(name: str, word: str, where: str) -> float:
+    """One field of a MOVEB line: its quantity's row for X Y Z D E, a real number for an axis component."""
+    label = f"{where}: {FIELD_LABEL.get(name, name)}"
+    if name in FIELD_QUANTITY:
+        return quantity(FIELD_QUANTITY[name]).parse(word, label)
+    try:
+        value = float(word)
+    except ValueError:
+        raise InputError(f"{label}: {word!r} is not a number") from None
+    return real(value, label, word)
+
+
 def _fail(source: str, line: int, message: str) -> InputError:
     return InputError(f"{source}: line {line}: {message}")
 
@@ -124,9 +137,7 @@ def parse_program(text: str, source: str = "<program>") -> Program:
             raise _fail(source, number, f"{KEYWORD} needs {len(FIELDS)} numbers "
                                         f"({' '.join(FIELDS)}), got {len(words) - 1}")
         where = f"{source}: line {number}"
-        values = [quantity(FIELD_QUANTITY.get(name, "unit vector component"))
-                  .parse(word, f"{where}: {FIELD_LABEL.get(name, name)}")
-                  for name, word in zip(FIELDS, words[1:], strict=True)]
+        values = [_value(name, word, where) for name, word in zip(FIELDS, words[1:], strict=True)]
         position = np.array(values[0:3])
         z, x = np.array(values[3:6]), np.array(values[6:9])
         d, e = values[9], values[10]
