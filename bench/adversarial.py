@@ -7,8 +7,9 @@
    tests/hil/cli/test_bad_input_sweep.py runs) in this process, each case with a time limit, and prints
    per subcommand: cases, how many meet the error contract (exit 2, one line naming the option/file/key,
    no traceback, nothing written, created or started), and the ids of those that fail; then per class
-   of issue 31 (case ids ``c1-`` … ``c6-``: inputs that never end, outputs that go nowhere, a config
-   checked before any connection, a damaged store row, odd environments) the cases, how many meet the
+   of issue 31 (case ids ``c1-`` … ``c6-``: inputs that never end, outputs that go nowhere, numbers that
+   are not physical, a config checked before any connection, a damaged store row, odd environments)
+   the cases, how many meet the
    contract and the longest time one took to be refused (target: under 2 s).
 2. **Faults.** Runs ``hil calibrate --sim --speed 50`` (a small campaign) in a subprocess and interrupts
    it at seeded random moments — SIGKILL of the process (``kill -9``), SIGINT to its process group
@@ -116,7 +117,8 @@ def sweep(only: set[str] | None, verbose: bool, classes_only: bool = False) -> t
 
 
 #: Issue 31's classes of bad input and bad surroundings (the table's case ids begin "c<n>-").
-CLASSES = {"c1": "inputs that never end", "c2": "outputs that go nowhere", "c4": "config before connection",
+CLASSES = {"c1": "inputs that never end", "c2": "outputs that go nowhere",
+           "c3": "numbers that are not physical", "c4": "config before connection",
            "c5": "a damaged store row", "c6": "odd environments, ambiguous kinds"}
 
 

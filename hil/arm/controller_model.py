@@ -27,6 +27,7 @@ import pinocchio as pin
 from hil.arm.catalog import RobotSpec, get_robot
 from hil.arm.geometry import Geometry, pose
 from hil.errors import InputError
+from hil.files.quantities import quantity
 
 #: The four DH quantities of a UR calibration, in the order of the contract and of KinematicsInfo.
 DELTA_KEYS: tuple[str, ...] = ("delta_theta", "delta_a", "delta_d", "delta_alpha")
@@ -38,10 +39,10 @@ DELTA_KEYS: tuple[str, ...] = ("delta_theta", "delta_a", "delta_d", "delta_alpha
 #: millimetres. So: a and the d of joints 1, 5, 6 within `MAX_DELTA_LENGTH`; each d of joints 2–4 within
 #: `MAX_PARALLEL_D` and their sum within `MAX_DELTA_LENGTH`. Beyond, a value is a unit mistake (millimetres
 #: for metres) or a corrupted file.
-MAX_DELTA_LENGTH = 0.1  # m
-MAX_PARALLEL_D = 10_000.0  # m
+MAX_DELTA_LENGTH = quantity("controller length delta").high  # m
+MAX_PARALLEL_D = quantity("controller parallel d delta").high  # m
 PARALLEL_JOINTS = (1, 2, 3)  # 0-based: joints 2, 3 and 4
-MAX_DELTA_ANGLE = float(np.pi)  # rad
+MAX_DELTA_ANGLE = quantity("controller angle delta").high  # rad
 
 
 @dataclass(frozen=True)
@@ -123,14 +124,9 @@ class ControllerCalibration:
             angle = key in ("delta_theta", "delta_alpha")
             out = np.empty(6)
             for i, v in enumerate(raw):
-                if isinstance(v, bool) or not isinstance(v, int | float) or not np.isfinite(v):
-                    raise InputError(f"{source}: {key}[{i}]: expected a finite number, got {v!r}")
-                limit = (MAX_DELTA_ANGLE if angle else
-                         MAX_PARALLEL_D if key == "delta_d" and i in PARALLEL_JOINTS else MAX_DELTA_LENGTH)
-                if abs(v) > limit:
-                    raise InputError(f"{source}: {key}[{i}] = {v} is beyond ±{limit:g} "
-                                     f"{'rad' if angle else 'm'}: a unit mistake?")
-                out[i] = float(v)
+                name = ("controller angle delta" if angle else "controller parallel d delta"
+                        if key == "delta_d" and i in PARALLEL_JOINTS else "controller length delta")
+                out[i] = quantity(name).json(v, f"{source}: {key}[{i}]")
             values[key] = out
         net = float(sum(values["delta_d"][i] for i in PARALLEL_JOINTS))
         if abs(net) > MAX_DELTA_LENGTH:

@@ -26,10 +26,10 @@ from hil.arm.joint_errors import JointErrors, block_of
 from hil.arm.payload import FLOOR_GRAVITY, Payload, parse_gravity
 from hil.arm.thermal import Thermal
 from hil.errors import InputError
+from hil.files.quantities import quantity, real
 
-#: Largest joint compliance a file may give (rad/Nm): a thousand times a cobot's strain-wave joint
-#: (about 1e-5 rad/Nm, see `hil.arm.physical`); beyond that the arm would fold under its own weight.
-MAX_COMPLIANCE = 1e-2
+#: Largest joint compliance a file may give (rad/Nm): the "joint compliance" row of `hil.files.quantities`.
+MAX_COMPLIANCE = quantity("joint compliance").high
 
 
 def pose(xyz: Sequence[float], rpy: Sequence[float] = (0.0, 0.0, 0.0)) -> pin.SE3:
@@ -243,10 +243,8 @@ class Geometry:
         compliance = None
         if data.get("compliance") is not None:
             compliance = _vector(data["compliance"], "compliance", source, 6)
-            # a fitted compliance may come out slightly negative within its standard deviation
-            if np.any(np.abs(compliance) > MAX_COMPLIANCE):
-                raise InputError(f"{source}: field 'compliance' must hold 6 values within "
-                                 f"±{MAX_COMPLIANCE:g} rad/Nm")
+            for j, c in enumerate(compliance):
+                quantity("joint compliance").check(float(c), f"{source}: field 'compliance'[{j}]")
         payload = (Payload.from_dict(data["payload"], f"{source}: payload")
                    if data.get("payload") is not None else None)
         gravity = (parse_gravity(data["gravity"], f"{source}: gravity")
@@ -285,6 +283,8 @@ def _vector(value: Any, name: str, source: str, n: int = 3) -> np.ndarray:
         raise InputError(f"{source}: field '{name}' must be a list of {n} numbers") from None
     if not np.all(np.isfinite(out)):
         raise InputError(f"{source}: field '{name}' has a non-finite value")
+    for i, v in enumerate(out):
+        real(float(v), f"{source}: field '{name}'[{i}]")  # a denormal is no physical value either
     return out
 
 

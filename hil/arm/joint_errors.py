@@ -26,10 +26,11 @@ from typing import Any
 import numpy as np
 
 from hil.errors import InputError
+from hil.files.quantities import quantity
 
 #: Largest amplitude (rad) a file may give one harmonic: a hundred times what published UR-class joints
 #: show (tens of microradians, see `hil.calibration.synthetic`); beyond it a file is in degrees or broken.
-MAX_AMPLITUDE = 1e-2
+MAX_AMPLITUDE = quantity("harmonic amplitude").high
 #: Largest harmonic order a file may give: a strain-wave gear's transmission error runs at twice the wave
 #: generator's speed, i.e. 2·ratio per output turn; UR's ratios are 100–160 (the Harmonic Drive catalog's
 #: ratios 50–160), so 2·160 = 320, with room to spare.
@@ -37,7 +38,7 @@ MAX_ORDER = 1000
 #: Largest lost motion (rad) a file may give: a hundred times a strain-wave gear's (Harmonic Drive
 #: CSF catalog, "Hysteresis loss": about 1 arc-min = 2.9e-4 rad at ratio ≥ 80 is the catalog's
 #: largest figure) — a file beyond it is in degrees or broken.
-MAX_LOST_MOTION = 3e-2
+MAX_LOST_MOTION = quantity("lost motion").high
 
 
 @dataclass(frozen=True)
@@ -123,28 +124,16 @@ def _harmonic(term: Any, where: str) -> Harmonic:
              and float(k) == int(k))
     if not whole or not 1 <= k <= MAX_ORDER:
         raise InputError(f"{where}: the order k must be a whole number from 1 to {MAX_ORDER}, got {k!r}")
-    try:
-        a_f, b_f = float(a), float(b)
-    except (TypeError, ValueError):
-        raise InputError(f"{where}: the amplitudes a and b must be numbers (rad)") from None
-    if not (np.isfinite(a_f) and np.isfinite(b_f)) or max(abs(a_f), abs(b_f)) > MAX_AMPLITUDE:
-        raise InputError(f"{where}: the amplitudes must be finite and within ±{MAX_AMPLITUDE:g} rad "
-                         f"(got {a!r}, {b!r})")
-    return Harmonic(int(k), a_f, b_f)
+    row = quantity("harmonic amplitude")  # ±MAX_AMPLITUDE, the table's row
+    return Harmonic(int(k), row.json(a, f"{where}: a"), row.json(b, f"{where}: b"))
 
 
 def parse_lost_motion(value: Any, source: str) -> np.ndarray:
     """Parse the ``lost_motion`` block: 6 angles (rad), each within ±`MAX_LOST_MOTION`."""
     if not isinstance(value, list | tuple) or len(value) != 6:
         raise InputError(f"{source}: field 'lost_motion' must be a list of 6 angles (rad)")
-    try:
-        out = np.array([float(v) for v in value])
-    except (TypeError, ValueError):
-        raise InputError(f"{source}: field 'lost_motion' must be a list of 6 angles (rad)") from None
-    if not np.all(np.isfinite(out)) or np.any(np.abs(out) > MAX_LOST_MOTION):
-        raise InputError(f"{source}: field 'lost_motion' must hold 6 finite angles within "
-                         f"±{MAX_LOST_MOTION:g} rad")
-    return out
+    row = quantity("lost motion")  # ±MAX_LOST_MOTION, the table's row
+    return np.array([row.json(v, f"{source}: field 'lost_motion'[{j}]") for j, v in enumerate(value)])
 
 
 def motion_directions(q_from: np.ndarray, q_to: np.ndarray, previous: np.ndarray | None = None,

@@ -19,14 +19,11 @@ import numpy as np
 import pinocchio as pin
 
 from hil.errors import InputError
+from hil.files.quantities import quantity
 
 #: Standard gravity (m/s²; ISO 80000-3), along −z of a floor-mounted base.
 STANDARD_GRAVITY = 9.81
 FLOOR_GRAVITY = np.array([0.0, 0.0, -STANDARD_GRAVITY])
-#: The largest payload any arm of the catalog is rated for is 35 kg (UR30 30 kg, UR20 25 kg); a few
-#: times that is a unit mistake (grams for kilograms), and a centre of mass metres off the flange is too.
-MAX_PAYLOAD_MASS = 100.0  # kg
-MAX_PAYLOAD_COM = 2.0  # m
 
 
 @dataclass(frozen=True)
@@ -50,15 +47,13 @@ class Payload:
             raise InputError(f"{source}: expected an object with 'mass' and 'com'")
         if "mass" not in data:
             raise InputError(f"{source}: missing field 'mass'")
-        mass = _number(data["mass"], f"{source}.mass")
-        if not 0.0 <= mass <= MAX_PAYLOAD_MASS:
-            raise InputError(f"{source}.mass: {mass:g} kg is outside 0..{MAX_PAYLOAD_MASS:g} kg")
+        # the ranges: the "payload mass" and "payload centre of mass" rows of hil.files.quantities
+        mass = quantity("payload mass").json(data["mass"], f"{source}.mass")
         com = data.get("com", [0.0, 0.0, 0.0])
         if not isinstance(com, list | tuple) or len(com) != 3:
             raise InputError(f"{source}.com: expected a list of 3 numbers (m, flange frame)")
-        c = tuple(_number(v, f"{source}.com") for v in com)
-        if max(abs(v) for v in c) > MAX_PAYLOAD_COM:
-            raise InputError(f"{source}.com: {list(c)} is more than {MAX_PAYLOAD_COM:g} m from the flange")
+        row = quantity("payload centre of mass")
+        c = tuple(row.json(v, f"{source}.com[{i}]") for i, v in enumerate(com))
         return cls(mass, c)  # type: ignore[arg-type]
 
 

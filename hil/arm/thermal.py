@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from hil.errors import InputError
+from hil.files.quantities import quantity
 
 #: Linear expansion coefficient of aluminium alloys (1/K): 23.1e-6 for pure Al, 23.6e-6 for 6061-T6
 #: (ASM Handbook Vol. 2; MatWeb "Aluminum 6061-T6"); UR's links are cast and extruded aluminium.
@@ -54,16 +55,11 @@ class Thermal:
         if not isinstance(data, Mapping):
             raise InputError(f"{source}: expected an object with 'expansion', 'rise' and 'time_constant'")
         out = {}
-        # bounds: invar to plastics (0..2e-4 /K), a rise a running arm can have (0..60 K), a warm-up
-        # between a second and a day
-        for key, low, high in (("expansion", 0.0, 2e-4), ("rise", 0.0, 60.0),
-                               ("time_constant", 1.0, 86400.0)):
+        # the ranges are rows of hil.files.quantities (invar to plastics, a rise a running arm can have,
+        # a warm-up between a second and a day)
+        for key, name in (("expansion", "thermal expansion"), ("rise", "temperature rise"),
+                          ("time_constant", "warm-up time constant")):
             if key not in data:
                 raise InputError(f"{source}: missing field '{key}'")
-            v = data[key]
-            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-                raise InputError(f"{source}.{key}: expected a finite number, got {v!r}")
-            if not low <= v <= high:
-                raise InputError(f"{source}.{key}: {v:g} is outside {low:g}..{high:g}")
-            out[key] = float(v)
+            out[key] = quantity(name).json(data[key], f"{source}.{key}")
         return cls(**out)

@@ -30,10 +30,12 @@ import numpy as np
 from hil.arm.catalog import ROBOT_NAMES, get_robot
 from hil.errors import InputError
 from hil.files.inputs import csv_rows, decode_input_text, read_input_bytes
+from hil.files.quantities import quantity, real
 
-#: Farthest a laser tracker measures (m): the Leica AT960's range is 80 m in radius, the longest of
-#: the trackers hil drives. A coordinate beyond it is a unit mistake or a corrupted file.
-TRACKER_RANGE = 80.0
+#: Farthest a laser tracker measures (m): the "tracker position" row of `hil.files.quantities` (the
+#: Leica AT960's 80 m). A coordinate beyond it is a unit mistake or a corrupted file. The table's rows
+#: set these limits; the checks below apply them to whole columns at once.
+TRACKER_RANGE = quantity("tracker position").high
 #: How far (rad) a joint reading may lie beyond the joint limits before it is refused: readings at a
 #: limit overshoot it by encoder noise at most, so anything past this was not read from a UR arm.
 JOINT_LIMIT_MARGIN = 0.1
@@ -43,7 +45,7 @@ QUATERNION_NORM_TOLERANCE = 1e-3
 #: Largest magnitude (rad) an angle other than a joint's may have: every form here wraps within one
 #: turn either side of zero (a zenith angle in face II reaches 2π), so a larger value is in degrees or
 #: gon with no suffix saying so.
-ANGLE_RANGE = 2.0 * math.pi
+ANGLE_RANGE = quantity("measured angle").high
 
 #: Unit suffixes (``q1_deg``) and their factor to SI; a column without a suffix is in SI (rad, m).
 ANGLE_UNITS: dict[str, float] = {"rad": 1.0, "deg": math.pi / 180.0, "gon": math.pi / 200.0}
@@ -242,10 +244,8 @@ def _cell(rows: Rows, line: int, row: list[str], col: Column) -> float:
     except ValueError:
         raise InputError(f"{rows.header.source}: line {line}, column {col.label}: {cell!r} is not a number") \
             from None
-    if not math.isfinite(value):
-        raise InputError(f"{rows.header.source}: line {line}, column {col.label}: {cell!r} is not a finite "
-                         f"number")
-    return value
+    # finite and not a denormal here; each column's range where its unit is known (`numbers`' callers)
+    return real(value, f"{rows.header.source}: line {line}, column {col.label}", cell)
 
 
 def numbers(rows: Rows, labels: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:

@@ -35,20 +35,13 @@ TRUTH_FORMAT = "hil-truth/1"
 #: controller's own calibration) and how it names its calibration.
 CONTROLLER_KEYS: tuple[str, ...] = (*DELTA_KEYS, "checksum", "calibration_status")
 
-#: Plausible magnitudes of the numbers in a geometry block, checked before anything uses them. A UR's
-#: longest link is under 0.9 m (UR20), so a joint origin or flange offset beyond a few metres is a
-#: unit mistake or a corrupted file; a tracker measures to 80 m at most (Leica AT960), so it cannot
-#: stand farther from the base; an SMR sits on a tool of at most about a metre; and URDF angles are
-#: written within a turn (hil writes them in [-π, π]).
-MAX_LINK_OFFSET = 5.0  # m
-MAX_SMR_OFFSET = 1.0  # m
-MAX_TRACKER_DISTANCE = 80.0  # m
-MAX_ANGLE = 2 * np.pi  # rad
-#: Largest simulated noise a truth may ask for: 1 cm per tracker axis, 10 mrad per joint reading,
-#: hundreds of times what real instruments show; beyond that nothing a calibration does means anything.
-MAX_TRACKER_SIGMA = 0.01  # m
-MAX_ENCODER_SIGMA = 0.01  # rad
-MAX_ANGLE_SIGMA = 0.01  # rad: a tracker angle's σ (the AT960's is 3 µrad)
+#: The quantities of a geometry block's numbers (rows of `hil.files.quantities.QUANTITIES`, where their
+#: ranges and sources are): joint origins and the flange are links, the SMR and further reflectors sit
+#: on a tool, the tracker stands within its measuring range; angles are link angles.
+PLACEMENT_QUANTITIES = {"joints": "link offset", "flange": "link offset", "tracker": "tracker position"}
+#: A truth's simulated noise (`noise.*`) and the quantity of each.
+NOISE_QUANTITIES = {"tracker_sigma": "tracker noise", "encoder_sigma": "angle noise",
+                    "distance_sigma": "tracker noise", "angle_sigma": "angle noise"}
 
 
 def software_versions() -> dict[str, str]:
@@ -287,15 +280,15 @@ def check_geometry_block(doc: dict[str, Any], source: str, prefix: str = "") -> 
     (``model.json: joints[2].xyz[0]: expected a number, got true``). Missing keys and wrong shapes are
     left to `Geometry.from_dict`, which already names them.
     """
-    def numbers(value: Any, field: str, limit: float, unit: str) -> None:
+    def numbers(value: Any, field: str, quantity: str) -> None:
         if isinstance(value, list):
             for i, v in enumerate(value):
-                json_number(v, f"{source}: {prefix}{field}[{i}]", -limit, limit, unit)
+                json_number(v, f"{source}: {prefix}{field}[{i}]", quantity)
 
-    def placement(value: Any, field: str, limit: float) -> None:
+    def placement(value: Any, field: str, quantity: str) -> None:
         if isinstance(value, dict):
-            numbers(value.get("xyz"), f"{field}.xyz", limit, "m")
-            numbers(value.get("rpy"), f"{field}.rpy", MAX_ANGLE, "rad")
+            numbers(value.get("xyz"), f"{field}.xyz", quantity)
+            numbers(value.get("rpy"), f"{field}.rpy", "link angle")
 
     robot = doc.get("robot")
     if isinstance(robot, str):
@@ -306,15 +299,15 @@ def check_geometry_block(doc: dict[str, Any], source: str, prefix: str = "") -> 
     joints = doc.get("joints")
     if isinstance(joints, list):
         for i, joint in enumerate(joints):
-            placement(joint, f"joints[{i}]", MAX_LINK_OFFSET)
-    placement(doc.get("flange"), "flange", MAX_LINK_OFFSET)
-    numbers(doc.get("smr"), "smr", MAX_SMR_OFFSET, "m")
-    numbers(doc.get("tool_rpy"), "tool_rpy", MAX_ANGLE, "rad")
+            placement(joint, f"joints[{i}]", PLACEMENT_QUANTITIES["joints"])
+    placement(doc.get("flange"), "flange", PLACEMENT_QUANTITIES["flange"])
+    numbers(doc.get("smr"), "smr", "tool offset")
+    numbers(doc.get("tool_rpy"), "tool_rpy", "link angle")
     reflectors = doc.get("reflectors")
     if isinstance(reflectors, list):
         for k, row in enumerate(reflectors):
-            numbers(row, f"reflectors[{k}]", MAX_SMR_OFFSET, "m")
-    placement(doc.get("tracker"), "tracker", MAX_TRACKER_DISTANCE)
+            numbers(row, f"reflectors[{k}]", "tool offset")
+    placement(doc.get("tracker"), "tracker", PLACEMENT_QUANTITIES["tracker"])
 
 
 def load_truth(path: str | os.PathLike[str]) -> tuple[Geometry, Noise]:
@@ -324,16 +317,14 @@ def load_truth(path: str | os.PathLike[str]) -> tuple[Geometry, Noise]:
     if not isinstance(block, dict):
         raise InputError(f"{path}: missing field 'noise'")
     values: dict[str, float | None] = {}
-    for key, high, unit in (("tracker_sigma", MAX_TRACKER_SIGMA, "m"),
-                            ("encoder_sigma", MAX_ENCODER_SIGMA, "rad")):
+    for key in ("tracker_sigma", "encoder_sigma"):
         if key not in block:
             raise InputError(f"{path}: missing field 'noise.{key}'")
         if key == "tracker_sigma" and block[key] is None:  # null: the tracker's distance-dependent model
             values[key] = None
             continue
-        values[key] = json_number(block[key], f"{path}: noise.{key}", 0.0, high, unit)
-    for key, high, unit in (("distance_sigma", MAX_TRACKER_SIGMA, "m"),
-                            ("angle_sigma", MAX_ANGLE_SIGMA, "rad")):
+        values[key] = json_number(block[key], f"{path}: noise.{key}", NOISE_QUANTITIES[key])
+    for key in ("distance_sigma", "angle_sigma"):
         if key in block:  # optional: the tracker model's figures (hil.calibration.tracker_noise) otherwise
-            values[key] = json_number(block[key], f"{path}: noise.{key}", 0.0, high, unit)
+            values[key] = json_number(block[key], f"{path}: noise.{key}", NOISE_QUANTITIES[key])
     return geometry, Noise(**values)  # type: ignore[arg-type]

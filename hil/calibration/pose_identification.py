@@ -49,6 +49,7 @@ from hil.calibration.identification import (
 from hil.calibration.measurements import Measurements, measurements_sha256
 from hil.calibration.prior import Prior, manufacturing_prior
 from hil.errors import InputError
+from hil.files.quantities import quantity
 
 #: Default σ (m per axis) of a position a camera on a chessboard measures. An assumption, stated as
 #: one: we found no published figure for this set-up. The shared UR10e camera file's README (a RealSense
@@ -247,9 +248,9 @@ def identify_pose(meas: Measurements, robot: str, smr_guess: np.ndarray | None =
     model, registered as the nominal is); `registration_only` stops after the registration (a
     nominal or controller model placed on the data)."""
     t0 = time.perf_counter()
-    for name, value in (("--position-noise", position_noise), ("--orientation-noise", orientation_noise)):
-        if not (np.isfinite(value) and value > 0):
-            raise InputError(f"{name}: {value:g} is not a noise level (a positive, finite σ per axis)")
+    for name, value, row in (("--position-noise", position_noise, "position noise"),
+                             ("--orientation-noise", orientation_noise, "orientation noise")):
+        quantity(row).check(float(value), name)
     check_design(meas, robot)
     orientation = meas.rotation is not None
     points = _measured(meas)

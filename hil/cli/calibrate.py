@@ -45,7 +45,7 @@ from hil.cli.support.options import (
     SEED,
     SIM_SPEED,
     VERIFY_CYCLES,
-    finite_float,
+    option,
     rms_threshold,
 )
 from hil.cli.support.output import say, wrote
@@ -55,11 +55,11 @@ from hil.errors import InputError
 from hil.files.outputs import atomic_write_text, check_output
 
 #: ``--stop-margin``: a fraction of the acceptance threshold, as ``campaign.stop_margin``.
-STOP_MARGIN = finite_float(0, 1, lo_open=True)
+STOP_MARGIN = option("fraction")
 #: --time-budget: robot seconds (campaign.time_budget's range, without its 0 = "no budget")
-TIME_BUDGET = finite_float(0, 86_400, "s", lo_open=True)
+TIME_BUDGET = option("time budget")
 #: --search-time: seconds (campaign.search_time's range)
-SEARCH_TIME = finite_float(0, 3600, "s", lo_open=True)
+SEARCH_TIME = option("search time")
 #: --selection: campaign.selection's values (hil.station.config.SELECTIONS)
 SELECTIONS = ("tabu", "time-aware")
 

@@ -43,7 +43,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--point", choices=("smr", "flange"), default="smr",
                    help="which point: the SMR centre (with a measured tool: every reflector and the "
                         "measured frame) or the flange centre (tool0)")
-    p.add_argument("--payload", metavar="MASS[,X,Y,Z]",
+    p.add_argument("--payload", metavar="MASS,X,Y,Z",
                    help=PAYLOAD_HELP + "; default: the payload the model was calibrated with (a compliant "
                         "model predicts the sag for it)")
     p.add_argument("--out", required=True, metavar="P.csv",

@@ -12,7 +12,7 @@ import argparse
 import datetime as _dt
 import sys
 
-from hil.cli.support.options import finite_float
+from hil.cli.support.options import option
 from hil.cli.support.store_options import add_store_options, open_store
 from hil.jobs.outcome import EXIT_OK
 
@@ -37,7 +37,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--since", metavar="YYYY-MM-DD", type=_day,
                    help="only calibrations from this day on in the plots over time, the stations, the "
                         "geometry changes and the marks (the fleet table is always the fleet now)")
-    p.add_argument("--sigmas", type=finite_float(0, 1000, "σ", lo_open=True), default=3.5, metavar="K",
+    p.add_argument("--sigmas", type=option("sigmas"), default=3.5, metavar="K",
                    help="a parameter changed when |Δ| > K·sqrt(σa² + σb²) "
                         "(default 3.5, `hil.store.fleet.DEFAULT_K`)")
     p.set_defaults(func=run_fleet_report)

@@ -15,7 +15,7 @@ from collections import Counter
 from typing import TYPE_CHECKING, Any
 
 from hil.cli.support.export_formats import FORMATS, format_of
-from hil.cli.support.options import bounded_int
+from hil.cli.support.options import option
 from hil.cli.support.output import mm, print_json
 from hil.errors import InputError
 from hil.jobs.outcome import EXIT_OK
@@ -38,7 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("history", help="list calibration campaigns",
                        description="List the campaigns in the store, newest first.")
     _add_db_options(p)
-    p.add_argument("--limit", type=bounded_int(1, 1_000_000), default=20, metavar="N",
+    p.add_argument("--limit", type=option("listed rows"), default=20, metavar="N",
                    help="at most N campaigns (default 20)")  # beyond SQLite's integers: exit 70 before
     p.add_argument("--station", metavar="NAME", help="only this station's campaigns")
     p.set_defaults(func=run_history)

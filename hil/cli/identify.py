@@ -13,7 +13,7 @@ import sys
 from typing import TYPE_CHECKING
 
 from hil.arm.catalog import ROBOT_NAMES, get_robot
-from hil.cli.support.options import PAYLOAD_HELP, add_joint_units, payload_or_none, triplet_or_none
+from hil.cli.support.options import PAYLOAD_HELP, add_joint_units, option, payload_or_none, triplet_or_none
 from hil.cli.support.output import mm, print_json, say, wrote
 from hil.jobs.outcome import EXIT_FAILED, EXIT_OK
 
@@ -49,7 +49,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "hil compensate --controller reads), cross-validated beside the fit")
     p.add_argument("--compliance", action="store_true",
                    help="identify the joints' compliance (rad/Nm) with the geometry, for --payload")
-    p.add_argument("--payload", metavar="MASS[,X,Y,Z]", help=PAYLOAD_HELP + " (default: nothing)")
+    p.add_argument("--payload", metavar="MASS,X,Y,Z", help=PAYLOAD_HELP + " (default: nothing)")
     p.add_argument("--mounting", metavar="R,P,Y",
                    help="base orientation in the world (roll, pitch, yaw in rad; default 0,0,0: floor)")
     p.add_argument("--joint-errors", default="auto", metavar="{none,auto,ORDERS}",
@@ -57,11 +57,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "harmonics of orders 1-3 and, where the d1..d6 columns show both directions, "
                         "the lost motion that cross-validation supports); or orders for every joint, "
                         "e.g. 1,2 or 1,2,lost")
-    p.add_argument("--position-noise", type=float, metavar="M",
+    p.add_argument("--position-noise", type=option("position noise"), metavar="M",
                    help="σ per axis (m) of a measured position, which weighs positions against "
                         "orientations in a 6-D fit (default 0.002, a camera on a chessboard; "
                         "hil.calibration.pose_identification says why)")
-    p.add_argument("--orientation-noise", type=float, metavar="RAD",
+    p.add_argument("--orientation-noise", type=option("orientation noise"), metavar="RAD",
                    help="σ per axis (rad) of a measured orientation in a 6-D fit (default 0.002)")
     p.add_argument("--json", action="store_true", help="print the fit summary as JSON")
     p.add_argument("--out", required=True, metavar="model.json", help="model file to write")
@@ -124,14 +124,13 @@ def run(args: argparse.Namespace) -> int:
     from hil.cli.support.output_paths import campaign_store
     from hil.errors import InputError
     from hil.files.outputs import check_output
-    from hil.station.limits import MAX_SMR_OFFSET
 
     db, where = campaign_store()
     check_output(args.out, field="--out", store=db, store_field=where,
                  inputs={"--measurements": args.measurements, "--validation": args.validation,
                          "--controller": args.controller})
     robot = get_robot(args.robot).name
-    smr = triplet_or_none(args.smr, "--smr", max_length=MAX_SMR_OFFSET, where="of the flange")
+    smr = triplet_or_none(args.smr, "--smr", "smr offset", norm=True)
     meas = read_measurements(args.measurements, args.joint_units)
     held_out = read_measurements(args.validation, args.joint_units) if args.validation else None
     controller = None
@@ -140,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
 
         controller = controller_from_file(args.controller, robot)
     payload = payload_or_none(args.payload)
-    mounting = triplet_or_none(args.mounting, "--mounting")
+    mounting = triplet_or_none(args.mounting, "--mounting", "mounting angle")
     request = parse_request(args.joint_errors)
     arm = None if controller is None else controller.geometry(robot)
     if uses_tool(meas):

@@ -18,10 +18,9 @@ from pathlib import Path
 from typing import Any
 
 from hil.arm.catalog import ROBOT_NAMES
-from hil.cli.support.options import SEED, SIM_SPEED, finite_float
+from hil.cli.support.options import SEED, SIM_SPEED, option
 from hil.cli.support.output import print_json, say, wants_json, wrote
 from hil.cli.support.station_options import add_arm_choice, add_tracker_protocol
-from hil.errors import InputError
 from hil.files.outputs import check_output
 from hil.jobs.moveb import FRAMES, MovebRequest, run_moveb
 from hil.jobs.outcome import EXIT_BAD_INPUT, EXIT_FAULT, EXIT_OK
@@ -65,19 +64,19 @@ def register(sub: argparse._SubParsersAction) -> None:
                           "(needs --sim or --model, which know where the tracker stands). Default: 'tracker' "
                           "with --sim (its tracker stands at a random place), else 'base'")
     _limit_options(run)
-    run.add_argument("--joint-speed", type=finite_float(0, 1, lo_open=True), default=1.0, metavar="F",
+    run.add_argument("--joint-speed", type=option("fraction"), default=1.0, metavar="F",
                      help="allowed fraction of the datasheet joint speeds (0 < F <= 1); the feed slows "
                           "down where the path would need more")
     # ur_rtde's limit on a joint acceleration (UR_JOINT_ACCELERATION_MAX), as for robot.acceleration
-    run.add_argument("--joint-acceleration", type=finite_float(0, 40, "rad/s²", lo_open=True), default=None,
+    run.add_argument("--joint-acceleration", type=option("joint acceleration"), default=None,
                      metavar="RAD/S2",
                      help="largest joint acceleration at the controller samples (every joint; UR "
                           "publishes none, so none by default: the peak is reported either way)")
     # Leica's trackers stream at most 1000 points a second (AT960 real-time feature pack)
-    run.add_argument("--tracker-rate", type=finite_float(0, 1000, "Hz", lo_open=True), default=100.0,
+    run.add_argument("--tracker-rate", type=option("tracker rate"), default=100.0,
                      metavar="HZ",
                      help="rate at which the tracker is sampled during the motion")
-    run.add_argument("--min-coverage", type=finite_float(0, 1, lo_open=True), default=0.9, metavar="F",
+    run.add_argument("--min-coverage", type=option("fraction"), default=0.9, metavar="F",
                      help="share of the path the tracker must measure; below it the run is reported "
                           "'incomplete' (exit code 1)")
     run.add_argument("--truth", metavar="truth.json", help="--sim: the hidden truth (default: random)")
@@ -97,11 +96,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 #: Sample spacing of ``moveb plan`` (mm): finer than 10 µm is below any UR arm's repeatability (UR5e:
 #: ±0.03 mm, ISO 9283) and a metre of path would need 10^5+ samples; 1e-9 asked numpy for 2.9 TiB.
-STEP_MM = finite_float(0.01, 1000, "mm")
+STEP_MM = option("path step")
 
 #: Controller rate for the cycle time of ``moveb plan`` (Hz): UR controllers run at 125 Hz (CB3) or
 #: 500 Hz (e-Series); the timing law makes one sample per cycle, so 1e308 Hz could not be allocated.
-CONTROLLER_RATE = finite_float(1, 1000, "Hz")
+CONTROLLER_RATE = option("controller rate")
 _CONTINUITY = ("smoothness at the corners: G2 (continuous curvature) or G3 (continuous change of "
                "curvature too: smoother, slightly longer bridges)")
 
@@ -113,13 +112,13 @@ def _limit_options(p: argparse.ArgumentParser) -> None:
     # 1.5 ms, three e-Series cycles). The lower ends keep the samples the timing law makes at the
     # controller rate in memory: 1 mm/s walks a metre in 17 minutes (500 Hz: half a million samples),
     # and 1e-30 asked for more samples than numpy can index.
-    p.add_argument("--velocity", type=finite_float(1, 3000, "mm/s"), default=100.0, metavar="MM/S",
+    p.add_argument("--velocity", type=option("tool speed"), default=100.0, metavar="MM/S",
                    help="largest tool speed along the path")
-    p.add_argument("--acceleration", type=finite_float(1, 150_000, "mm/s²"), default=1000.0, metavar="MM/S2",
+    p.add_argument("--acceleration", type=option("tool acceleration"), default=1000.0, metavar="MM/S2",
                    help="largest tool acceleration along the path")
-    p.add_argument("--jerk", type=finite_float(1, 1e8, "mm/s³"), default=10000.0, metavar="MM/S3",
+    p.add_argument("--jerk", type=option("tool jerk"), default=10000.0, metavar="MM/S3",
                    help="largest jerk along the path")
-    p.add_argument("--normal-acceleration", type=finite_float(1, 150_000, "mm/s²"), default=1000.0,
+    p.add_argument("--normal-acceleration", type=option("tool acceleration"), default=1000.0,
                    metavar="MM/S2",
                    help="largest acceleration across the path (v²·curvature): slows the feed at corners")
 
@@ -130,19 +129,14 @@ def _json_option(p: argparse.ArgumentParser) -> None:
 
 
 def run_plan(args: argparse.Namespace) -> int:
+    from hil.cli.support.output_paths import campaign_store
     from hil.moveb.path_plan import plan_program, summary, write_samples
     from hil.moveb.program import load_program
-
-    if not args.step > 0:
-        raise InputError(f"--step must be positive, got {args.step}")
-    from hil.cli.support.output_paths import campaign_store
 
     db, where = campaign_store()
     check_output(args.out, field="--out", inputs={"PROGRAM": args.program}, store=db, store_field=where)
     from hil.moveb.timing import Limits
 
-    if not args.rate > 0:
-        raise InputError(f"--rate must be positive, got {args.rate}")
     limits = Limits(args.velocity, args.acceleration, args.jerk, args.normal_acceleration)
     plan = plan_program(load_program(args.program), args.continuity)
     dense = plan.dense(args.step)

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from hil.cli.support.export_formats import FORMATS
-from hil.cli.support.options import finite_float
+from hil.cli.support.options import option
 from hil.cli.support.output import print_json
 from hil.cli.support.store_options import add_store_options, clip, mm, open_store, when, where
 from hil.errors import InputError
@@ -55,7 +55,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--export-model", metavar="FILE", help="write the robot's current model")
     p.add_argument("--format", choices=FORMATS,
                    help="export format (default: from FILE's suffix, else json)")
-    p.add_argument("--sigmas", type=finite_float(0, 1000, "σ", lo_open=True), default=3.5, metavar="K",
+    p.add_argument("--sigmas", type=option("sigmas"), default=3.5, metavar="K",
                    help="a parameter changed when |Δ| > K·sqrt(σa² + σb²) "
                         "(default 3.5, `hil.store.fleet.DEFAULT_K`)")
     p.set_defaults(func=run_robot)

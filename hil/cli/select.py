@@ -26,11 +26,11 @@ import math
 import sys
 from typing import Any
 
-from hil.cli.support.options import CANDIDATES, POSE_COUNT, SEED, finite_float
+from hil.cli.support.options import CANDIDATES, POSE_COUNT, SEED, option
 from hil.cli.support.output import wrote
 from hil.errors import InputError
+from hil.files.quantities import check_vector, quantity
 from hil.jobs.outcome import EXIT_OK
-from hil.station.config import MAX_KEEP_IN, MAX_SMR_OFFSET, MAX_TRACKER_DISTANCE
 from selector.candidates import CONSTRAINT_NAMES
 from selector.indices import INDEX_NAMES, SCALINGS
 from selector.search import METHODS
@@ -42,7 +42,7 @@ TIME_AWARE = "time-aware"
 
 #: Farthest tracker range (m) a --range may give: Leica's AT403 measures to 80 m (160 m diameter), the
 #: longest of the laser trackers hil drives.
-MAX_TRACKER_RANGE = 80.0
+MAX_TRACKER_RANGE = quantity("tracker position").high  # the table's row (hil.files.quantities)
 
 
 def register(sub: Any) -> None:
@@ -59,16 +59,16 @@ def register(sub: Any) -> None:
                    help=f"search method: {', '.join(METHODS)} (the last two are baselines to compare with), "
                         f"or {TIME_AWARE} (poses and order together, for robot time)")
     # ur_rtde's moveJ takes at most 3.14 rad/s and 40 rad/s² (hil.station.config, robot.speed)
-    p.add_argument("--speed", type=finite_float(0, 3.14, "rad/s", lo_open=True), default=0.5,
+    p.add_argument("--speed", type=option("joint speed"), default=0.5,
                    help="time-aware: joint speed of the moves (rad/s, the station's robot.speed)")
-    p.add_argument("--acceleration", type=finite_float(0, 40, "rad/s²", lo_open=True), default=1.0,
+    p.add_argument("--acceleration", type=option("joint acceleration"), default=1.0,
                    help="time-aware: joint acceleration of the moves (rad/s², robot.acceleration)")
-    p.add_argument("--dwell", type=finite_float(0, 120, "s"), default=None,
+    p.add_argument("--dwell", type=option("dwell"), default=None,
                    help="time-aware: robot seconds per pose besides moving (settle, read, measure; "
                         "default 0.85)")
-    p.add_argument("--budget", type=finite_float(0, 86_400, "s", lo_open=True), default=None,
+    p.add_argument("--budget", type=option("time budget"), default=None,
                    help="time-aware: the most accurate tour within this many seconds of robot time")
-    p.add_argument("--time-limit", type=finite_float(0, 3600, "s", lo_open=True), default=5.0,
+    p.add_argument("--time-limit", type=option("search time"), default=5.0,
                    help="time-aware: seconds of search after the first tour")
     p.add_argument("--seed", type=SEED, default=0, help="random seed; equal seeds give equal output")
     p.add_argument("--tracker", help="tracker position X,Y,Z in the robot base frame (m); without it the "
@@ -77,27 +77,27 @@ def register(sub: Any) -> None:
                    help="SMR centre in the flange frame X,Y,Z (m)")
     p.add_argument("--scaling", default="expected", help=f"column scaling for O2–O5: {', '.join(SCALINGS)}")
     p.add_argument("--keep-in", help="SMR keep-in box XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (m, base frame)")
-    # lengths in the base frame within the keep-in box's ±5 m (hil.station.config.MAX_KEEP_IN); angles as
+    # lengths in the base frame within the keep-in box's ±5 m (hil.files.quantities); angles as
     # the selector's constraints take them: an SMR is seen within a half-angle below 90°, a margin from a
     # singularity is below 90°; the shoulder margin is well inside the arm's reach (at most 1.75 m)
-    p.add_argument("--floor", type=finite_float(-MAX_KEEP_IN, MAX_KEEP_IN, "m"), default=0.0,
+    p.add_argument("--floor", type=option("mounting surface height"), default=0.0,
                    help="height of the mounting surface (m)")
     p.add_argument("--range", dest="tracker_range",
                    help=f"tracker distance MIN,MAX (m), within 0-{MAX_TRACKER_RANGE:g} (default: 0.8,20)")
-    p.add_argument("--half-angle", type=finite_float(0, 90, "degrees", lo_open=True, hi_open=True),
+    p.add_argument("--half-angle", type=option("acceptance angle"),
                    default=30.0, help="SMR acceptance half-angle (deg)")
-    p.add_argument("--wrist-margin", type=finite_float(0, 90, "degrees", hi_open=True), default=10.0,
+    p.add_argument("--wrist-margin", type=option("margin angle"), default=10.0,
                    help="min |q5| from 0/π (deg)")
-    p.add_argument("--elbow-margin", type=finite_float(0, 90, "degrees", hi_open=True), default=10.0,
+    p.add_argument("--elbow-margin", type=option("margin angle"), default=10.0,
                    help="min |q3| from 0/π (deg)")
-    p.add_argument("--shoulder-margin", type=finite_float(0, 1, "m"), default=0.05,
+    p.add_argument("--shoulder-margin", type=option("clearance"), default=0.05,
                    help="min distance of the wrist point from the shoulder singularity (m)")
     p.add_argument("--disable", action="append", default=[],
                    help=f"switch constraints off (comma list; repeatable): {', '.join(CONSTRAINT_NAMES)}")
     p.add_argument("--start", help="current joint configuration q1..q6 (rad): the route starts there")
     p.add_argument("--compliance", action="store_true",
                    help="choose poses that identify the joints' compliance too (for --payload)")
-    p.add_argument("--payload", metavar="MASS[,X,Y,Z]",
+    p.add_argument("--payload", metavar="MASS,X,Y,Z",
                    help="what the arm carries (kg; centre of mass in the flange frame, m); default nothing")
     p.add_argument("--prune", action="store_true",
                    help="drop poses that add nothing to the result: may return fewer than --count")
@@ -148,14 +148,11 @@ def run(args: argparse.Namespace) -> int:
         check_stdout_open()  # before the search, not after it
     if args.candidates < 1:
         raise InputError(f"--candidates must be at least 1, got {args.candidates}")
-    tracker = None if args.tracker is None else tuple(parse_triplet(args.tracker, "--tracker"))
-    if tracker is not None and math.hypot(*tracker) > MAX_TRACKER_DISTANCE:  # 1e308 never found a pose
-        raise InputError(f"--tracker: must be within {MAX_TRACKER_DISTANCE:g} m of the robot base (the "
-                         f"tracker's range plus the arm's reach), got {math.hypot(*tracker):g} m away")
-    smr = parse_triplet(args.smr, "--smr")
-    if math.hypot(*smr) > MAX_SMR_OFFSET:  # 10 m "from the flange" is a value in millimetres
-        raise InputError(f"--smr: must be within {MAX_SMR_OFFSET:g} m of the flange, "
-                         f"got {math.hypot(*smr):g} m away")
+    # 1e308 never found a pose; 10 m "from the flange" is a value in millimetres
+    tracker = None if args.tracker is None else check_vector(
+        parse_triplet(args.tracker, "--tracker").tolist(), "tracker distance from the base", "--tracker",
+        norm=True)
+    smr = np.array(check_vector(parse_triplet(args.smr, "--smr").tolist(), "smr offset", "--smr", norm=True))
     disabled = [s.strip() for item in args.disable for s in item.split(",") if s.strip()]
     settings: dict[str, Any] = {
         "floor": _finite(args.floor, "--floor"),
@@ -166,9 +163,7 @@ def run(args: argparse.Namespace) -> int:
     }
     box = _numbers(args.keep_in, 6, "--keep-in")
     if box is not None:
-        if any(abs(v) > MAX_KEEP_IN for v in box):
-            raise InputError(f"--keep-in: every coordinate must be in [-{MAX_KEEP_IN:g}, {MAX_KEEP_IN:g}] m, "
-                             f"got {args.keep_in}")
+        check_vector(box, "keep-in corner", "--keep-in")
         if any(a >= b for a, b in zip(box[:3], box[3:], strict=True)):
             raise InputError(f"--keep-in: XMIN,YMIN,ZMIN must be below XMAX,YMAX,ZMAX, got {args.keep_in}")
         settings["keep_in_lower"], settings["keep_in_upper"] = box[:3], box[3:]

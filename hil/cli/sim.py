@@ -13,7 +13,7 @@ import json
 import sys
 from typing import Any
 
-from hil.cli.support.options import SEED, SIM_SPEED, bounded_int, finite_float
+from hil.cli.support.options import SEED, SIM_SPEED, option
 from hil.cli.support.output import wants_json
 from hil.errors import InputError
 from hil.jobs.outcome import EXIT_OK
@@ -38,9 +38,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         if action.dest in _RANGES:  # checked by argparse: one line and exit 2, before anything serves
             action.type = _RANGES[action.dest]
     # RS-232 rates, as tracker.baudrate in the station configuration
-    p.add_argument("--baud", type=bounded_int(300, 921600, "baud"), default=None,
+    p.add_argument("--baud", type=option("baud rate"), default=None,
                    help="pace the tracker link at this baud rate")
-    p.add_argument("--acceptance-angle", type=finite_float(0, 90, "degrees", lo_open=True, hi_open=True),
+    p.add_argument("--acceptance-angle", type=option("acceptance angle"),
                    default=30.0,
                    help="SMR acceptance half-angle (degrees): beyond it the tracker loses the beam")
     from hil.cli.support.station_options import add_arm_choice
@@ -68,10 +68,10 @@ def _loopback(text: str) -> str:
 _RANGES = {
     "address": _loopback,
     "speed": SIM_SPEED,
-    "control_port": bounded_int(0, 65535),  # a TCP port; 0 lets the system choose (99999 was exit 70)
-    "speed_slider": finite_float(0, 1),  # the pendant's speed slider, a fraction
+    "control_port": option("tcp port"),  # a TCP port; 0 lets the system choose (99999 was exit 70)
+    "speed_slider": option("fraction or none"),  # the pendant's speed slider, a fraction
     # std of actual_q: UR's encoders resolve ~1e-5 rad; a milliradian is already a worn joint
-    "encoder_noise": finite_float(0, 1e-3, "rad"),
+    "encoder_noise": option("encoder noise"),
     "seed": SEED,
 }
 

@@ -12,7 +12,7 @@ from hil.arm.joint_physics import IDEAL_BY_DEFAULT
 from hil.calibration.measurements import write_measurements
 from hil.calibration.model_file import load_truth, truth_document, write_json
 from hil.calibration.synthetic import Noise, measure, random_configurations, random_truth
-from hil.cli.support.options import SEED, bounded_int, finite_float
+from hil.cli.support.options import SEED, option
 from hil.cli.support.output import wrote
 from hil.jobs.outcome import EXIT_OK
 
@@ -31,13 +31,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--robot", help=f"robot type ({', '.join(ROBOT_NAMES)}; default ur5e, or the truth's)")
     p.add_argument("--truth", metavar="truth.json", help="use this hil-truth/1 instead of a random one")
     # rows of a CSV: 100 000 are ~10 MB; 1e9 asked numpy for 45 GiB (exit 70)
-    p.add_argument("--poses", type=bounded_int(1, 100_000), default=30,
+    p.add_argument("--poses", type=option("synthetic poses"), default=30,
                    help="calibration poses (measurements.csv)")
-    p.add_argument("--validation", type=bounded_int(0, 100_000), default=100,
+    p.add_argument("--validation", type=option("synthetic poses or none"), default=100,
                    help="validation poses (validation.csv)")
     # a laser tracker's noise is micrometres (AT960: 15 µm + 6 µm/m MPE): 1 mm is already a poor
     # instrument, and 1 (m) is a value in millimetres
-    p.add_argument("--noise", type=finite_float(0, 1e-3, "m"), default=None, metavar="METRES",
+    p.add_argument("--noise", type=option("tracker noise"), default=None, metavar="METRES",
                    help="a flat tracker noise per axis instead of the default, the tracker's "
                         "distance-dependent error (hil.calibration.tracker_noise; AT960), or the truth's")
     p.add_argument("--rigid", action="store_true",
@@ -61,10 +61,6 @@ def run(args: argparse.Namespace) -> int:
     db, where = campaign_store()
     check_output_dir(args.out_dir, field="--out-dir", inputs={"--truth": args.truth}, store=db,
                      store_field=where, names=("truth.json", "measurements.csv", "validation.csv"))
-    if args.poses < 1 or args.validation < 0:
-        raise InputError("--poses must be at least 1 and --validation at least 0")
-    if args.noise is not None and not (np.isfinite(args.noise) and args.noise >= 0):
-        raise InputError("--noise must be a non-negative number of metres")
     if args.rigid and args.truth:
         raise InputError("--rigid makes a random arm: it cannot be combined with --truth")
     if args.ideal is not None and args.truth:

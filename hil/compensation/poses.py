@@ -16,18 +16,18 @@ import numpy as np
 import pinocchio as pin
 
 from hil.errors import InputError
+from hil.files.quantities import check_vector, real
 
 #: The configuration the first target's branch is chosen by when nothing else says (``--near``):
 #: upper arm up, forearm level, wrist pointing the tool down — elbow up, wrist down, the arrangement of
 #: most UR cells, and away from the three UR singularities (elbow straight q3 = 0, wrist q5 = 0, wrist
 #: centre on the base axis).
 CANONICAL_NEAR: tuple[float, ...] = (0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0)
-#: Longest TCP offset accepted from ``--tcp`` (m): UR's heaviest tools stay within a metre of the flange
-#: (as the SMR offset of a model, `hil.calibration.model_file.MAX_SMR_OFFSET`); more is a unit mistake.
-MAX_TCP_OFFSET = 1.0
-#: Farthest a target may lie from the base (m): beyond every UR's reach (UR20: 1.75 m) with room to
-#: spare; a CSV in millimetres has targets hundreds of metres away and is named as such.
-MAX_TARGET_DISTANCE = 5.0
+#: The quantities of a UR pose vector's parts (rows of `hil.files.quantities`): a target's distance
+#: from the base, a TCP's from the flange, and the rotation vector's length (its angle).
+TARGET_DISTANCE = "target distance"
+TCP_OFFSET = "tool offset"
+ROTATION = "rotation vector angle"
 
 
 def to_se3(values: Sequence[float]) -> pin.SE3:
@@ -50,6 +50,17 @@ def format_number(value: float) -> str:
     return np.format_float_positional(float(value), unique=True, trim="0")
 
 
+def check_pose(values: Sequence[float], where: str, distance: str = TARGET_DISTANCE,
+               origin: str = "the base") -> np.ndarray:
+    """A UR pose vector (x, y, z m; rx, ry, rz a rotation vector, rad) whose numbers are physical: every
+    one real (no NaN, inf or denormal), the position within `distance`'s range and the rotation angle
+    within a turn, so a pose written in millimetres or degrees is refused naming the unit (issue 31)."""
+    v = [float(x) for x in values]
+    check_vector(v[:3], distance, f"{where}: position (x, y, z) from {origin}", norm=True)
+    check_vector(v[3:], ROTATION, f"{where}: rotation vector (rx, ry, rz)", norm=True)
+    return np.array(v)
+
+
 def parse_six(text: str, option: str, *, unit: str) -> np.ndarray:
     """Six comma-separated finite numbers (``--near``, ``--tcp``); InputError naming the option."""
     parts = [p.strip() for p in str(text).split(",")]
@@ -58,8 +69,9 @@ def parse_six(text: str, option: str, *, unit: str) -> np.ndarray:
     except ValueError:
         values = np.array([])
     if values.shape != (6,) or not np.all(np.isfinite(values)):
-        raise InputError(f"{option}: expected six finite numbers separated by commas ({unit}), "
-                         f"got {text!r}")
+        raise InputError(f"{option}: expected six finite numbers separated by commas ({unit}), got {text!r}")
+    for i, v in enumerate(values):
+        real(float(v), f"{option}[{i}]")
     return values
 
 
@@ -81,7 +93,4 @@ def parse_tcp(text: str | None, option: str = "--tcp") -> pin.SE3:
     if text is None:
         return pin.SE3.Identity()
     v = parse_six(text, option, unit="metres and a rotation vector in radians")
-    if float(np.linalg.norm(v[:3])) > MAX_TCP_OFFSET:
-        raise InputError(f"{option}: the TCP lies {np.linalg.norm(v[:3]):g} m from the flange, more than "
-                         f"{MAX_TCP_OFFSET:g} m (the values are in metres)")
-    return to_se3(v)
+    return to_se3(check_pose(v, option, TCP_OFFSET, "the flange"))

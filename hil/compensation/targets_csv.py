@@ -12,17 +12,17 @@ from __future__ import annotations
 
 import csv
 import io
-import math
 from collections.abc import Sequence
 
 import numpy as np
 
 from hil.arm.ik import UnreachableError
-from hil.compensation.poses import MAX_TARGET_DISTANCE, to_se3, to_vector
+from hil.compensation.poses import check_pose, to_se3, to_vector
 from hil.compensation.solve import Compensator
 from hil.compensation.summary import Summary
 from hil.errors import InputError
 from hil.files.inputs import csv_rows
+from hil.files.quantities import real
 
 POSE_COLUMNS: tuple[str, ...] = ("x", "y", "z", "rx", "ry", "rz")
 JOINT_COLUMNS: tuple[str, ...] = ("q1", "q2", "q3", "q4", "q5", "q6")
@@ -42,9 +42,7 @@ def _cell(row: list[str], index: int, name: str, line: int, column: str) -> floa
         value = float(text)
     except ValueError:
         raise InputError(f"{name}: line {line}, column {column}: {text!r} is not a number") from None
-    if not math.isfinite(value):
-        raise InputError(f"{name}: line {line}, column {column}: {text!r} is not a finite number")
-    return value
+    return real(value, f"{name}: line {line}, column {column}", text)
 
 
 def compensate_csv(text: str, name: str, compensator: Compensator, near: Sequence[float],
@@ -78,10 +76,7 @@ def compensate_csv(text: str, name: str, compensator: Compensator, near: Sequenc
         if len(row) != len(header):
             raise InputError(f"{name}: line {line}: expected {len(header)} fields, got {len(row)}")
         values = np.array([_cell(row, i, name, line, c) for i, c in zip(pose_at, POSE_COLUMNS, strict=True)])
-        distance = float(np.linalg.norm(values[:3]))
-        if distance > MAX_TARGET_DISTANCE:
-            raise InputError(f"{name}: line {line}: the target lies {distance:g} m from the base, beyond any "
-                             f"UR's reach (x, y, z are in metres)")
+        check_pose(values, f"{name}: line {line}")
         if joint_at:
             q = np.array([_cell(row, i, name, line, c) for i, c in zip(joint_at, JOINT_COLUMNS, strict=True)])
             outside = np.flatnonzero((q < lower) | (q > upper))

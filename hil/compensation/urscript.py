@@ -45,11 +45,12 @@ import numpy as np
 import pinocchio as pin
 
 from hil.arm.ik import UnreachableError
-from hil.compensation.poses import format_number, to_se3
+from hil.compensation.poses import check_pose, format_number, to_se3
 from hil.compensation.solve import Compensator
 from hil.compensation.summary import Skipped, Summary
 from hil.compensation.urscript_tokens import Kind, Tokens, tokenize
 from hil.errors import InputError
+from hil.files.quantities import real
 
 #: Moves and the (position, keyword) of each argument that is an absolute target.
 MOVES: dict[str, tuple[tuple[int, str], ...]] = {
@@ -60,6 +61,9 @@ MOVES: dict[str, tuple[tuple[int, str], ...]] = {
 }
 INVERSE_KIN = "get_inverse_kin"  # get_inverse_kin(x, qnear, maxPositionError, maxOrientationError, tcp)
 SET_TCP = "set_tcp"
+#: Names that read as numbers but are not URScript (nan and inf written by a tool that printed floats):
+#: refused inside a literal rather than taken for a variable the program computes at run time.
+NOT_A_NUMBER = frozenset({"nan", "inf", "infinity"})
 #: Built-ins that return joint positions: a move to their result needs no compensation.
 JOINT_FUNCTIONS = frozenset({"get_actual_joint_positions", "get_target_joint_positions", INVERSE_KIN,
                              "get_actual_joint_positions_history"})
@@ -172,8 +176,11 @@ class _Program:
             sign = 1.0
             if len(toks) == 2 and toks[0].text in "+-" and toks[0].kind is Kind.OP:
                 sign, toks = (-1.0 if toks[0].text == "-" else 1.0), toks[1:]
+            if len(toks) == 1 and toks[0].kind is Kind.NAME and toks[0].text.lower() in NOT_A_NUMBER:
+                raise InputError(f"{self.name}:{toks[0].line}: {toks[0].text} in a literal is not a finite "
+                                 "number (URScript has no such constant)")
             if values is not None and len(toks) == 1 and toks[0].kind is Kind.NUMBER:
-                values.append(sign * float(toks[0].text))
+                values.append(real(sign * float(toks[0].text), f"{self.name}:{toks[0].line}", toks[0].text))
             else:
                 values = None
         inside = self.text[items[open_index].end:items[b - 1].start]
@@ -274,7 +281,7 @@ def _pose_values(prog: _Program, lit: Literal, line: int, what: str) -> np.ndarr
     if values.size != 6:
         raise InputError(f"{prog.name}:{line}: {what}: p[...] has {values.size} element"
                          f"{'s' if values.size != 1 else ''}, a pose has 6")
-    return values
+    return check_pose(values, f"{prog.name}:{line}: {what}")
 
 
 @dataclass

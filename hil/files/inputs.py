@@ -9,7 +9,6 @@ from __future__ import annotations
 import csv
 import io
 import json
-import math
 import os
 import stat
 from typing import Any
@@ -143,27 +142,10 @@ def csv_rows(text: str, name: str, limit: int = MAX_TABLE_ROWS) -> list[tuple[in
     return rows
 
 
-def json_number(value: Any, where: str, low: float, high: float, unit: str = "") -> float:
-    """`value` as a float when it is a real JSON number within [low, high]; InputError otherwise.
+def json_number(value: Any, where: str, quantity: str) -> float:
+    """`value` as a float when it is a real JSON number of `quantity` (a row of
+    `hil.files.quantities.QUANTITIES`); InputError naming `where` ("model.json: joints[2].xyz[0]") and
+    the quantity's range otherwise. JSON `true` and the string "1" are not numbers."""
+    from hil.files.quantities import quantity as row
 
-    `where` names the file and field ("model.json: joints[2].xyz[0]"). JSON `true` and the string "1"
-    are not numbers even though Python's float() takes them: a file that holds them was not written
-    by a tool that meant a number, and silently reading them as 1.0 hides the mistake.
-    """
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        shown = json.dumps(value) if isinstance(value, str | bool) or value is None else type(value).__name__
-        if len(shown) > 40:
-            shown = shown[:37] + "..."
-        raise InputError(f"{where}: expected a number, got {shown}")
-    try:
-        number = float(value)
-    except OverflowError:  # an integer with hundreds of digits
-        raise InputError(f"{where}: expected a finite number, got an integer of "
-                         f"{len(str(abs(value)))} digits") from None
-    if not math.isfinite(number):
-        raise InputError(f"{where}: expected a finite number, got {number}")
-    if not low <= number <= high:
-        suffix = f" {unit}" if unit else ""
-        raise InputError(f"{where}: {number:g}{suffix} is outside the plausible range "
-                         f"[{low:g}, {high:g}]{suffix}")
-    return number
+    return row(quantity).json(value, where)

@@ -13,11 +13,11 @@ controller: IK on another robot's kinematics would drive the arm somewhere unpla
 from __future__ import annotations
 
 import contextlib
-import math
 from dataclasses import dataclass
 from typing import Any
 
 from hil.errors import InputError
+from hil.files.quantities import quantity
 from hil.jobs.outcome import EXIT_FAILED, EXIT_FAULT, EXIT_OK, JobOutcome
 from hil.jobs.station import StationSource, station_setup, take_station
 from hil.jobs.words import Say, quiet
@@ -56,14 +56,11 @@ class MovebRequest:
 
     def check(self) -> None:
         """Refuse ranges the command line's types did not already (a caller other than the CLI)."""
-        if not self.tracker_rate > 0:
-            raise InputError(f"--tracker-rate must be positive, got {self.tracker_rate}")
-        if not 0.0 < self.joint_speed <= 1.0:
-            raise InputError(f"--joint-speed must be in (0, 1], got {self.joint_speed}")
-        if not 0.0 < self.min_coverage <= 1.0:
-            raise InputError(f"--min-coverage must be in (0, 1], got {self.min_coverage}")
-        if self.joint_acceleration is not None and not 0.0 < self.joint_acceleration < math.inf:
-            raise InputError(f"--joint-acceleration must be positive, got {self.joint_acceleration}")
+        quantity("tracker rate").check(float(self.tracker_rate), "--tracker-rate")
+        quantity("fraction").check(float(self.joint_speed), "--joint-speed")
+        quantity("fraction").check(float(self.min_coverage), "--min-coverage")
+        if self.joint_acceleration is not None:
+            quantity("joint acceleration").check(float(self.joint_acceleration), "--joint-acceleration")
 
     @property
     def place(self) -> str:

@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any
 
 from drivers.robot.model import RobotIdentity
 from hil.errors import InputError
+from hil.files.quantities import quantity
 from hil.jobs.words import Say, quiet, simulated_store_words
 from hil.station.config import StationConfig, check_runnable, load_config
 from hil.station.robot_type import Claim, agreed_robot, check_controller, config_claim, option_claim
@@ -91,8 +92,7 @@ class StationSource:
             return cls(config=loaded, overrides=overrides)
         if not sim:
             raise InputError("--config or --sim: which station?")
-        if not speed > 0:
-            raise InputError(f"--speed must be positive, got {speed}")
+        quantity("simulated speed").check(float(speed), "--speed")
         if truth and ideal is not None:
             raise InputError(f"--{'' if ideal else 'no-'}ideal chooses a random arm: the truth {truth} "
                              "says itself whether its arm has joint errors and lost motion")

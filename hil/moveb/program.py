@@ -33,13 +33,20 @@ import numpy as np
 
 from hil.errors import InputError
 from hil.files.inputs import read_input_text
+from hil.files.quantities import quantity, real
 
 AXIS_TOLERANCE = 1e-3
 MIN_SEGMENT = 1e-3  # mm
 MAX_TURN_DEG = 179.0
-MAX_COORDINATE = 5000.0  # mm, |X|, |Y|, |Z|
-MIN_TOLERANCE = 1e-4  # mm, D and E
-MAX_TOLERANCE = 100.0  # mm, D and E
+#: The quantity of each field (rows of `hil.files.quantities`, where the ranges and their reasons are);
+#: the axis components I J K U V W are only real numbers here: their quantity is the axis's unit
+#: length, checked below.
+FIELD_QUANTITY = {"X": "program coordinate", "Y": "program coordinate", "Z": "program coordinate",
+                  "D": "path tolerance", "E": "path tolerance"}
+FIELD_LABEL = {"D": "D (chord-height error)", "E": "E (point error)"}
+MAX_COORDINATE = quantity("program coordinate").high  # mm, |X|, |Y|, |Z|
+MIN_TOLERANCE = quantity("path tolerance").low  # mm, D and E
+MAX_TOLERANCE = quantity("path tolerance").high  # mm, D and E
 KEYWORD = "MOVEB"
 FIELDS = ("X", "Y", "Z", "I", "J", "K", "U", "V", "W", "D", "E")
 
@@ -100,6 +107,18 @@ class Program:
         return out
 
 
+def _value(name: str, word: str, where: str) -> float:
+    """One field of a MOVEB line: its quantity's row for X Y Z D E, a real number for an axis component."""
+    label = f"{where}: {FIELD_LABEL.get(name, name)}"
+    if name in FIELD_QUANTITY:
+        return quantity(FIELD_QUANTITY[name]).parse(word, label)
+    try:
+        value = float(word)
+    except ValueError:
+        raise InputError(f"{label}: {word!r} is not a number") from None
+    return real(value, label, word)
+
+
 def _fail(source: str, line: int, message: str) -> InputError:
     return InputError(f"{source}: line {line}: {message}")
 
@@ -117,19 +136,8 @@ def parse_program(text: str, source: str = "<program>") -> Program:
         if len(words) != 1 + len(FIELDS):
             raise _fail(source, number, f"{KEYWORD} needs {len(FIELDS)} numbers "
                                         f"({' '.join(FIELDS)}), got {len(words) - 1}")
-        values = []
-        for name, word in zip(FIELDS, words[1:], strict=True):
-            try:
-                v = float(word)
-            except ValueError:
-                raise _fail(source, number, f"{name} is not a number: {word!r}") from None
-            if not math.isfinite(v):
-                raise _fail(source, number, f"{name} must be finite, got {word!r}")
-            values.append(v)
-        for name, v in zip(FIELDS[:3], values[:3], strict=True):
-            if abs(v) > MAX_COORDINATE:
-                raise _fail(source, number, f"{name} = {v:g} mm is outside any robot's workspace "
-                                            f"(at most {MAX_COORDINATE:g} mm from the base)")
+        where = f"{source}: line {number}"
+        values = [_value(name, word, where) for name, word in zip(FIELDS, words[1:], strict=True)]
         position = np.array(values[0:3])
         z, x = np.array(values[3:6]), np.array(values[6:9])
         d, e = values[9], values[10]
@@ -140,14 +148,6 @@ def parse_program(text: str, source: str = "<program>") -> Program:
         if abs(float(z @ x)) > AXIS_TOLERANCE:
             raise _fail(source, number, f"the tool axes I J K and U V W must be orthogonal, "
                                         f"got a dot product of {z @ x:.6g}")
-        if not d > 0:
-            raise _fail(source, number, f"D (chord-height error) must be positive, got {d:g}")
-        if not e > 0:
-            raise _fail(source, number, f"E (point error) must be positive, got {e:g}")
-        for name, v in (("D (chord-height error)", d), ("E (point error)", e)):
-            if not MIN_TOLERANCE <= v <= MAX_TOLERANCE:
-                raise _fail(source, number, f"{name} = {v:g} mm is outside the plausible range "
-                                            f"[{MIN_TOLERANCE:g}, {MAX_TOLERANCE:g}] mm")
         if points and np.linalg.norm(position - points[-1].position) < MIN_SEGMENT:
             raise _fail(source, number, f"the point repeats the previous one (line {points[-1].line}); "
                                         "a zero-length segment has no direction")

@@ -42,6 +42,7 @@ from hil.arm.safety import check_target
 from hil.compensation.paths import solve_joint_path
 from hil.compensation.solve import Compensator
 from hil.errors import HilError, InputError
+from hil.files.quantities import quantity
 from hil.moveb.accuracy import Coverage, coverage, distance_to_path, path_accuracy
 from hil.moveb.joints import JointSpeedError, JointSpeeds, joint_speed_ceiling, retime
 from hil.moveb.orientation import rotation_matrices
@@ -200,10 +201,9 @@ def solve_trajectory(plan: Plan, geometry: Geometry, limits: Limits, rate_hz: fl
     `controller`: the controller's own model (its reported calibration), which picks the branch;
     its nominal model when None.
     """
-    if not 0.0 < joint_speed_fraction <= 1.0:
-        raise InputError(f"joint speed fraction must be in (0, 1], got {joint_speed_fraction}")
-    if joint_acceleration is not None and not (joint_acceleration > 0 and np.isfinite(joint_acceleration)):
-        raise InputError(f"joint acceleration must be positive, got {joint_acceleration} rad/s²")
+    quantity("fraction").check(float(joint_speed_fraction), "joint speed fraction")
+    if joint_acceleration is not None:
+        quantity("joint acceleration").check(float(joint_acceleration), "joint acceleration")
     compensator = Compensator(geometry, controller or ControllerCalibration().geometry(geometry.spec))
     source = plan.program.source
     if keep_in is not None:

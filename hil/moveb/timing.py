@@ -36,6 +36,7 @@ import numpy as np
 from scipy.ndimage import minimum_filter1d
 
 from hil.errors import InputError
+from hil.files.quantities import quantity
 
 
 @dataclass(frozen=True)
@@ -48,10 +49,9 @@ class Limits:
     normal_acceleration: float = 2000.0  # mm/s², κ·v²
 
     def __post_init__(self) -> None:
-        for name in ("velocity", "acceleration", "jerk", "normal_acceleration"):
-            value = getattr(self, name)
-            if not (value > 0 and math.isfinite(value)):
-                raise InputError(f"limit {name} must be positive and finite, got {value}")
+        for name, row in (("velocity", "tool speed"), ("acceleration", "tool acceleration"),
+                          ("jerk", "tool jerk"), ("normal_acceleration", "tool acceleration")):
+            quantity(row).check(float(getattr(self, name)), f"limit {name}")
 
 
 @dataclass(frozen=True)

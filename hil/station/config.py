@@ -11,7 +11,6 @@ is created or the arm moves. A commented example lives in ``hil/station/station.
 from __future__ import annotations
 
 import ipaddress
-import math
 import os
 import re
 import tomllib
@@ -23,7 +22,7 @@ from typing import Any
 from hil.arm.catalog import get_robot
 from hil.errors import InputError
 from hil.files.inputs import read_input_text
-from hil.station.limits import MAX_KEEP_IN, MAX_SMR_OFFSET, MAX_TRACKER_DISTANCE  # its own module: see it
+from hil.files.quantities import check_vector, quantity
 from hil.station.store_url import store_url_problem
 
 EXAMPLE = Path(__file__).with_name("station.example.toml")
@@ -89,10 +88,6 @@ def tracker_url_problem(url: str, protocol: str) -> str | None:
     return _host(host.strip("[]"))
 
 
-def _angle(v: Any) -> str | None:
-    return None if 0 < v < 90 else f"must be between 0 and 90 degrees, got {v}"
-
-
 def _plan_cache(value: Any) -> str | None:
     """A directory path, or "" (off); whether it can be created is checked when the campaign starts."""
     if not isinstance(value, str):
@@ -102,37 +97,37 @@ def _plan_cache(value: Any) -> str | None:
     return None
 
 
-def _within(lo: float, hi: float, unit: str = "", *, lo_open: bool = False,
-            hi_open: bool = False) -> Callable[[Any], str | None]:
-    """A check that a number lies in its physical range; the error shows the range with its unit
-    (``must be in (0, 3.14] rad/s, got 1e9``), so the fix is in the message."""
-    lo_text, hi_text = (str(x) if isinstance(x, int) else f"{x:g}" for x in (lo, hi))  # seeds: no 4.3e+09
-    span = f"{'(' if lo_open else '['}{lo_text}, {hi_text}{')' if hi_open else ']'}"
-    span += f" {unit}" if unit else ""
+def _quantity(name: str, *, off: float | None = None) -> Callable[[Any], str | None]:
+    """A check that a number is a value of the quantity `name` (`hil.files.quantities`: its unit,
+    range and source are there, the same row the command line's options use); `off` is a value outside
+    the range that means "none" (``time_budget = 0``)."""
+    row = quantity(name)
 
     def check(v: Any) -> str | None:
-        inside = (lo < v if lo_open else lo <= v) and (v < hi if hi_open else v <= hi)
-        return None if inside else f"must be in {span}, got {v}"
+        if off is not None and v == off:
+            return None
+        try:
+            return row.problem(float(v))
+        except OverflowError:  # an integer of hundreds of digits
+            return f"expected a finite number in {row.span()}, got an integer of {len(str(abs(v)))} digits"
 
     return check
 
 
-def _length_at_most(limit: float, what: str) -> Callable[[Any], str | None]:
-    """A check that a vector (m) is at most `limit` long: a position `what` (``of the flange``)."""
+def _vector(name: str, *, norm: bool = False) -> Callable[[Any], str | None]:
+    """A check that every coordinate (or, with `norm`, the length) of a vector is of quantity `name`."""
+
+    row = quantity(name)
 
     def check(v: Any) -> str | None:
-        length = math.hypot(*v)
-        return None if length <= limit else f"must be within {limit:g} m {what}, got {length:g} m away"
-
-    return check
-
-
-def _each_within(limit: float) -> Callable[[Any], str | None]:
-    """A check that every coordinate (m) is within ±`limit`."""
-
-    def check(v: Any) -> str | None:
-        return None if all(abs(x) <= limit for x in v) else (
-            f"every coordinate must be in [-{limit:g}, {limit:g}] m, got {list(v)}")
+        if norm:
+            try:
+                check_vector(v, name, "", norm=True)
+            except InputError as exc:
+                return str(exc).removeprefix(": ")
+            return None
+        return next((f"coordinate {i + 1}: {why}" for i, x in enumerate(v)
+                     if (why := row.problem(float(x))) is not None), None)
 
     return check
 
@@ -163,18 +158,10 @@ def _name(v: Any) -> str | None:
     return None if ok else f"must be 1 to 64 printable characters without surrounding spaces, got {v!r}"
 
 
-#: The largest RMS acceptance threshold (m): a calibrated arm is judged on tenths of a millimetre, so
-#: more is a value typed in millimetres (``acceptance = 0.1`` would pass at 100 mm). The command
-#: line's ``--accept``/``--max-rms`` have the same ceiling (`hil.cli.support.options.MAX_RMS_THRESHOLD`).
-MAX_ACCEPTANCE = 0.01
-
-#: Most candidate configurations for the selector: ~650 bytes of Jacobian each, so 200 000 are ~130 MB
-#: (1e9 asked numpy for 107 GiB). The same as ``--candidates`` (`hil.cli.support.options.MAX_CANDIDATES`).
-MAX_CANDIDATES = 200_000
-
-#: Most calibration or validation poses: at ~10 s a pose 1000 are a day of measuring, far beyond any
-#: calibration (``--poses``/``--validation`` have the same ceiling: `hil.cli.support.options.POSE_COUNT`).
-MAX_POSES = 1000
+#: The ceilings other modules name (each the high end of its row in `hil.files.quantities`).
+MAX_ACCEPTANCE = quantity("rms threshold").high
+MAX_CANDIDATES = int(quantity("candidates").high)
+MAX_POSES = int(quantity("pose count").high)
 
 
 def _robot(v: Any) -> str | None:
@@ -222,10 +209,6 @@ def _joint_errors(v: Any) -> str | None:
     return None
 
 
-def _lost_limit(v: Any) -> str | None:
-    return None if 1 <= v <= 100 else f"must be between 1 and 100, got {v}"
-
-
 #: Every parameter of the kinematic model (`hil.arm.kinematics.N_PARAMETERS`: a 6-D placement per joint
 #: and of the flange, the SMR offset, the tracker pose), of which a subset is identifiable: this many
 #: poses' worth always suffices, so a config asking for that many needs no kinematics (pinocchio) to
@@ -262,12 +245,12 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "address": Key("str", "127.0.0.1", _host, "the controller's IP address or host name"),
         # ur_rtde's moveJ takes at most 3.14 rad/s and 40 rad/s² (UR_JOINT_VELOCITY_MAX and
         # UR_JOINT_ACCELERATION_MAX), the driver's own RobotConfig check: more was exit 70 at connect
-        "speed": Key("float", 0.5, _within(0, 3.14, "rad/s", lo_open=True), "joint speed of moves (rad/s)"),
-        "acceleration": Key("float", 1.0, _within(0, 40, "rad/s²", lo_open=True),
+        "speed": Key("float", 0.5, _quantity("joint speed"), "joint speed of moves (rad/s)"),
+        "acceleration": Key("float", 1.0, _quantity("joint acceleration"),
                             "joint acceleration of moves (rad/s²)"),
         # a UR arm is steady within a fraction of a second of arriving; a minute per pose is a value
         # typed in milliseconds
-        "settle_time": Key("float", 0.3, _within(0, 60, "s"), "wait after the arm is steady (s)"),
+        "settle_time": Key("float", 0.3, _quantity("settle time"), "wait after the arm is steady (s)"),
         # "stable": measure as soon as the tracker's last readings agree within campaign.stability (the
         # arm's ring has died out), the joints read in the same window; "fixed": wait settle_time, then
         # read the joints, then measure (hil.campaign.steps.SettleMeasure)
@@ -275,17 +258,17 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                                  "(wait settle_time)"),
         # a UR's ring dies out within a second or two (mocks.ringing); a minute still ringing is a fault
         # (a loose SMR nest, a vibrating floor), not a wait
-        "settle_max": Key("float", 5.0, _within(0, 60, "s", lo_open=True),
+        "settle_max": Key("float", 5.0, _quantity("settle limit"),
                           "stable: longest wait for steady readings before the point is unstable (s)"),
         # joint readings come at the RTDE rate (500 Hz e-Series, 125 Hz CB3): 1000 are 2-8 s per pose,
         # already far past what averaging the encoders' noise gains
-        "joint_samples": Key("int", 10, _within(1, 1000), "joint readings averaged per pose"),
+        "joint_samples": Key("int", 10, _quantity("joint samples"), "joint readings averaged per pose"),
         # what the arm carries during the campaign (Polyscope's Payload: mass and centre of mass in the
         # flange frame); a compliant arm sags by compliance x the gravity torque, so the model needs it
         "payload": Key("payload?", None, help="{mass = kg, com = [x, y, z]} in the flange frame (m)"),
         # roll, pitch, yaw (rad) of the base in the world (Polyscope's Mounting tilt and rotation): a
         # floor arm is [0, 0, 0], a ceiling arm [3.14159, 0, 0]; gravity is turned with it
-        "mounting": Key("vec3", (0.0, 0.0, 0.0), _each_within(2 * math.pi),
+        "mounting": Key("vec3", (0.0, 0.0, 0.0), _vector("mounting angle"),
                         "base orientation in the world (rpy, rad)"),
     },
     "tracker": {
@@ -294,66 +277,67 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "url": Key("str", "", help="geocom: serial device or socket://, rfc2217://, spy:// URL; "
                                    "emscon: tcp://host:700"),
         # RS-232 rates: GeoCOM instruments run at 2400-115200 baud, USB adapters up to 921600
-        "baudrate": Key("int", 115200, _within(300, 921600, "baud")),
+        "baudrate": Key("int", 115200, _quantity("baud rate")),
         "parity": Key("str", "N", _parity),
         # a GeoCOM/emScon reply takes milliseconds, a measurement with a search seconds: beyond five
         # minutes a dead link would go unnoticed
-        "timeout": Key("float", 3.0, _within(0, 300, "s", lo_open=True), "reply timeout (s)"),
-        "position": Key("vec3?", None, _length_at_most(MAX_TRACKER_DISTANCE, "of the robot base"),
+        "timeout": Key("float", 3.0, _quantity("reply timeout"), "reply timeout (s)"),
+        "position": Key("vec3?", None, _vector("tracker distance from the base", norm=True),
                         "approximate position in the robot base frame (m)"),
         # the atmospheric correction of the laser's wavelength is meant for the air the tracker works in:
         # Leica's trackers operate within -15..+45 °C (AT403, the widest), at most 5500 m above sea level
         # (about 500 hPa; the sea-level record is 1084 hPa); humidity is relative, 0-100 %
-        "temperature": Key("float", 20.0, _within(-20, 50, "°C"),
+        "temperature": Key("float", 20.0, _quantity("air temperature"),
                            "air temperature (°C) for the atmospheric correction"),
-        "pressure": Key("float", 1013.25, _within(500, 1100, "hPa"), "air pressure (hPa)"),
-        "humidity": Key("float", 50.0, _within(0, 100, "%"), "relative humidity (%)"),
+        "pressure": Key("float", 1013.25, _quantity("air pressure"), "air pressure (hPa)"),
+        "humidity": Key("float", 50.0, _quantity("relative humidity"), "relative humidity (%)"),
         "reflector": Key("str", "", help="emscon: reflector name as the tracker lists it (empty: keep the "
                                          "tracker's current one)"),
         # a stationary measurement averages for a fraction of a second to a few seconds
-        "measure_time": Key("float", 0.5, _within(0, 60, "s", lo_open=True),
+        "measure_time": Key("float", 0.5, _quantity("measure time"),
                             "emscon: stationary measuring time per sample (s)"),
         "bird_bath": Key("bool", False, help="emscon: after a failed search for the SMR, send the beam to "
                                              "the bird bath for an operator to catch"),
         # a cold AT9xx laser is ready within minutes; two hours without it is a fault, not a cold start
-        "warmup": Key("float", 0.0, _within(0, 7200, "s"),
+        "warmup": Key("float", 0.0, _quantity("laser warm-up"),
                       "emscon: longest wait at connect for the laser to warm up (s); then the run waits"),
     },
     "smr": {
-        "offset": Key("vec3", (0.0, 0.0, 0.045), _length_at_most(MAX_SMR_OFFSET, "of the flange"),
+        "offset": Key("vec3", (0.0, 0.0, 0.045), _vector("smr offset", norm=True),
                       "SMR centre guess in the flange frame (m)"),
-        "acceptance_angle": Key("float", 30.0, _angle, "SMR acceptance half-angle (degrees)"),
+        "acceptance_angle": Key("float", 30.0, _quantity("acceptance angle"),
+                                "SMR acceptance half-angle (degrees)"),
     },
     "keep_in": {
-        "min": Key("vec3", (-2.0, -2.0, 0.0), _each_within(MAX_KEEP_IN),
+        "min": Key("vec3", (-2.0, -2.0, 0.0), _vector("keep-in corner"),
                    "keep-in box corner (robot base frame, m)"),
-        "max": Key("vec3", (2.0, 2.0, 2.0), _each_within(MAX_KEEP_IN)),
+        "max": Key("vec3", (2.0, 2.0, 2.0), _vector("keep-in corner")),
     },
     "campaign": {
         # the fewest calibration poses depend on the robot (checked below, with robot.type)
-        "calibration_poses": Key("int", 30, _within(1, MAX_POSES)),
-        "validation_poses": Key("int", 20, _within(1, MAX_POSES)),
+        "calibration_poses": Key("int", 30, _quantity("pose count")),
+        "validation_poses": Key("int", 20, _quantity("pose count")),
         # 0: validation poses are a simple random sample of the candidates; k > 0: a two-stage cluster
         # sample (selector.cluster_sample), k clusters of nearby poses drawn PPS, validation_poses / k
         # in each: still an unbiased sample of the workspace, in less robot time (checked below: k must
         # divide validation_poses)
-        "validation_clusters": Key("int", 0, _within(0, MAX_POSES),
+        "validation_clusters": Key("int", 0, _quantity("pose count or none"),
                                    "clustered validation: clusters drawn (0: simple random sample)"),
         # the bootstrap has 8 arm moves (hil.campaign.calibration_plan._BOOTSTRAP_DELTAS) and makes at
         # least 4: other values were silently clamped
         # plus 4 turns of the wrist (_WRIST_TURNS), which make the SMR's offset observable: 6 measures 10
-        "bootstrap_poses": Key("int", 6, _within(4, 8),
+        "bootstrap_poses": Key("int", 6, _quantity("bootstrap poses"),
                                "small arm moves measured to locate the tracker (4 wrist turns are added)"),
         # each sample is a tracker measurement (~0.1-1 s): 100 per point already averages the noise away
-        "samples": Key("int", 5, _within(1, 100), "tracker samples per point"),
+        "samples": Key("int", 5, _quantity("samples"), "tracker samples per point"),
         # a tracker's noise is micrometres (AT960: 15 µm + 6 µm/m MPE): a spread allowed above 1 mm no
         # longer says the SMR was still, and 10 (m) is a value in micrometres
-        "stability": Key("float", 50e-6, _within(0, 1e-3, "m", lo_open=True),
+        "stability": Key("float", 50e-6, _quantity("point spread"),
                          "largest per-axis spread of a point (m)"),
         # unset: the automatic verdict (hil.campaign.acceptance): better than the nominal and the
         # controller's model by cross-validation, validation within a factor of the cross-validated RMS
         # and within the robot class's bound; set: validation RMS at most this (and still better)
-        "acceptance": Key("float?", None, _within(0, MAX_ACCEPTANCE, "m", lo_open=True),
+        "acceptance": Key("float?", None, _quantity("rms threshold"),
                           "validation RMS threshold (m); unset: judged by cross-validation and the "
                           "robot class's bound"),
         "index": Key("str", "O1", _index, "observability index for pose selection"),
@@ -362,21 +346,21 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # predicted accuracy of method 000's calibration_poses, or the best within time_budget
         "selection": Key("str", "tabu", _selection, "pose selection: tabu (method 000) or time-aware"),
         # a campaign of 10 poses takes about a minute of robot time; a day is a value in milliseconds
-        "time_budget": Key("float", 0.0, _within(0, 86_400, "s"),
+        "time_budget": Key("float", 0.0, _quantity("time budget", off=0),
                            "time-aware: robot seconds for the calibration and validation tour "
                            "(0: reach method 000's accuracy in the least time)"),
         # the time-aware search improves its tour for this long before the campaign moves (ruin and
         # recreate, selector.time_aware): bench/cycle_time.py shows the robot time still falling by
         # ~1 % from 10 to 20 s; an hour is a value in the wrong unit
-        "search_time": Key("float", 10.0, _within(0, 3600, "s", lo_open=True),
+        "search_time": Key("float", 10.0, _quantity("search time"),
                            "time-aware: seconds the search improves the tour before the first move"),
         # an end-of-line cell asks the same question robot after robot (hil.campaign.plan_cache): the
         # first campaign's poses are kept there and reused, so the search is paid once per layout
         "plan_cache": Key("str", "", _plan_cache, "directory keeping pose choices for reuse by later "
                                                   "campaigns asking the same question (\"\": off)"),
-        "candidates": Key("int", 20000, _within(1, MAX_CANDIDATES), "candidate poses for the selector"),
+        "candidates": Key("int", 20000, _quantity("candidates"), "candidate poses for the selector"),
         # numpy's generators take non-negative seeds (-1 was exit 70 in the simulator); 32 bits suffice
-        "seed": Key("int", 1, _within(0, 2**32 - 1)),
+        "seed": Key("int", 1, _quantity("seed")),
         # a UR's strain-wave joints sag by tenths of a millimetre under their own weight and payload
         # (hil.arm.physical): the fit identifies the joints' compliance beside the geometry
         "compliance": Key("bool", True, help="identify the joints' compliance (rad/Nm) with the geometry"),
@@ -393,9 +377,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # from this far below it), so each joint's lost motion lags the same way at every pose and the
         # geometry absorbs it; 0 approaches each pose from wherever the arm comes. Above 0.1 rad the leg
         # costs more robot time than any lost motion (a milliradian at most) warrants
-        "approach": Key("float", 0.005, _within(0, 0.1, "rad"),
+        "approach": Key("float", 0.005, _quantity("approach distance"),
                         "approach every pose from this far below it in every joint (0: straight there)"),
-        "max_consecutive_lost": Key("int", 3, _lost_limit,
+        "max_consecutive_lost": Key("int", 3, _quantity("lost in a row"),
                                     "poses in a row that lose the beam before the run stops, saying the "
                                     "tracker position looks wrong"),
         # the stopping rule (hil.campaign.stopping): after each calibration pose, fit the points so far and
@@ -406,7 +390,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # a fraction of campaign.acceptance: the prediction is an expected RMS, and one campaign's validation
         # RMS scatters about it by up to ~1.4x (99th percentile; hil.campaign.stopping.DEFAULT_MARGIN);
         # 1 trusts the expectation itself
-        "stop_margin": Key("float", 0.7, _within(0, 1, lo_open=True),
+        "stop_margin": Key("float", 0.7, _quantity("fraction"),
                            "stop_early: stop once the predicted validation RMS is at most this fraction "
                            "of the acceptance"),
     },
@@ -422,18 +406,18 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # a joint's warm-up time constant is about 15 min (`hil.arm.thermal`, τ = 900 s): a check every
         # 2 min gives the fit 7 points per time constant and costs one reference visit (~10 s, under 10 %
         # of the motion); under 10 s is mostly reference visits, and over an hour sees no warm-up at all
-        "interval": Key("float", 120.0, _within(10, 3600, "s"),
+        "interval": Key("float", 120.0, _quantity("warm-up interval"),
                         "seconds of cycling motion between reference measurements"),
         # a tenth of the default 0.1 mm acceptance, and a third of the drift watch's limit, so a warm arm
         # does not flag the campaign; a tracker repeats an averaged point to a few µm (AT960: ±(15 µm +
         # 6 µm/m) MPE, typically half), which the fit of the whole series averages further; 1 mm is a value
         # typed in millimetres
-        "limit": Key("float", 10e-6, _within(0, 1e-3, "m", lo_open=True),
+        "limit": Key("float", 10e-6, _quantity("point spread"),
                      "warm when the drift still to come (fitted) is below this (m)"),
         # the fit is trusted once its series spans three time constants (95 % of the rise): 45 min for
         # a UR's 15; an hour leaves room for a slower arm, and an arm still drifting after it is drifting
         # for another reason (the tracker's stand, the room): the run goes on, with a warning
-        "max_time": Key("float", 3600.0, _within(10, 4 * 3600, "s"),
+        "max_time": Key("float", 3600.0, _quantity("warm-up time"),
                         "longest warm-up (s); then the run measures anyway, with a warning"),
     },
     # Drift watch (ISO 9283:1998 §7.6, drift of pose characteristics): the reference pose is measured
@@ -441,40 +425,40 @@ SCHEMA: dict[str, dict[str, Key]] = {
     # after the warm-up is flagged (it keeps the verdict its validation gives).
     "drift": {
         # every 10 poses is a reference visit per ~2 min of measuring (+10 % time); 0 turns it off
-        "every": Key("int", 10, _within(0, MAX_POSES),
+        "every": Key("int", 10, _quantity("pose count or none"),
                      "re-measure the reference after every N poses (0: off)"),
         # 30 % of the default 0.1 mm acceptance: a drift that large is a third of the error budget the
         # calibration is judged on; three times the warm-up limit, so noise alone does not flag a campaign
-        "limit": Key("float", 30e-6, _within(0, 1e-3, "m", lo_open=True),
+        "limit": Key("float", 30e-6, _quantity("point spread"),
                      "flag the campaign when the reference moved more than this (m)"),
     },
     "timeouts": {
         # how long the run waits before calling something lost; the longest move of a UR arm (half a
         # turn of a joint at the slowest useful speed, 0.01 rad/s) takes about five minutes, an operator
         # clearing a protective stop or catching the beam may take a shift (8 h); more is a value in ms
-        "connect": Key("float", 10.0, _within(0, 600, "s", lo_open=True)),
-        "move": Key("float", 60.0, _within(0, 3600, "s", lo_open=True)),
-        "measure": Key("float", 10.0, _within(0, 600, "s", lo_open=True)),
-        "suspend": Key("float", 600.0, _within(0, 8 * 3600, "s", lo_open=True),
+        "connect": Key("float", 10.0, _quantity("short timeout")),
+        "move": Key("float", 60.0, _quantity("move timeout")),
+        "measure": Key("float", 10.0, _quantity("short timeout")),
+        "suspend": Key("float", 600.0, _quantity("operator timeout"),
                        "longest wait for a suspender to clear (s)"),
-        "relock": Key("float", 30.0, _within(0, 3600, "s", lo_open=True),
+        "relock": Key("float", 30.0, _quantity("move timeout"),
                       "longest wait for a lost beam before the pose is skipped"),
         # a PostgreSQL server restarted for an update is back within a minute; a network cut may take
         # longer: the arm stands still meanwhile, and past this the run stops, resumable
-        "database": Key("float", 600.0, _within(0, 8 * 3600, "s", lo_open=True),
+        "database": Key("float", 600.0, _quantity("operator timeout"),
                         "longest wait for a lost database link before the run stops (s)"),
     },
     "verify": {
         # the ISO 9283 test cube (`hil verify`, `hil calibrate --verify`), in the robot base frame: every
         # UR's reach is within 1.75 m (UR20), so a centre beyond 2 m is a value in millimetres
-        "centre": Key("vec3?", None, _length_at_most(2.0, "of the robot base"),
+        "centre": Key("vec3?", None, _vector("cube centre distance", norm=True),
                       "ISO 9283 test cube centre (robot base frame, m); required on a station"),
         # ISO 9283's cube is as large as the used working space allows; under 5 cm it tests nothing a
         # tracker's noise would not hide, over 2 m no UR reaches its corners
-        "edge": Key("float?", None, _within(0.05, 2.0, "m"),
+        "edge": Key("float?", None, _quantity("cube edge"),
                     "test cube edge (m); default a quarter of the arm's reach"),
         # ISO 9283 §7.2: 30 cycles; repeatability's S_l needs 2, 100 is more than any acceptance asks
-        "cycles": Key("int", 30, _within(2, 100), "cycles of the pose test (ISO 9283: 30)"),
+        "cycles": Key("int", 30, _quantity("cycles"), "cycles of the pose test (ISO 9283: 30)"),
     },
     "store": {
         "url": Key("str", "", store_url_problem, help="the store: an SQLite file path or a postgresql:// URL "
@@ -552,7 +536,7 @@ def _coerce(value: Any, key: Key, where: str) -> Any:
             raise InputError(f"{where}: must be an integer, got {value!r}")
         return value
     if kind == "float":
-        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        if isinstance(value, bool) or not isinstance(value, int | float):  # the range: key.check
             raise InputError(f"{where}: must be a number, got {value!r}")
         return float(value)
     if kind == "payload":
@@ -562,8 +546,7 @@ def _coerce(value: Any, key: Key, where: str) -> Any:
         return value if isinstance(value, Payload) else Payload.from_dict(value, where)
     if kind == "vec3":
         ok = (isinstance(value, list | tuple) and len(value) == 3
-              and all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
-                      for v in value))
+              and all(isinstance(v, int | float) and not isinstance(v, bool) for v in value))
         if not ok:
             raise InputError(f"{where}: must be a list of three numbers [x, y, z], got {value!r}")
         return tuple(float(v) for v in value)

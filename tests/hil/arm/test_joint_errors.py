@@ -68,12 +68,12 @@ def test_truth_and_model_files_round_trip_the_blocks(tmp_path) -> None:
     ("joint_errors", [[]] * 5, "6 joints"),
     ("joint_errors", [[[0, 1e-5, 0]]] + [[]] * 5, "whole number from 1"),
     ("joint_errors", [[[1.5, 1e-5, 0]]] + [[]] * 5, "whole number from 1"),
-    ("joint_errors", [[[1, 0.5, 0]]] + [[]] * 5, "within ±0.01 rad"),
+    ("joint_errors", [[[1, 0.5, 0]]] + [[]] * 5, "must be in [-0.01, 0.01] rad, got 0.5"),
     ("joint_errors", [[[1, float("nan"), 0]]] + [[]] * 5, "finite"),
     ("joint_errors", [[[1, 1e-5]]] + [[]] * 5, "[k, a, b]"),
     ("joint_errors", [[[1, 1e-5, 0], [1, 0, 1e-5]]] + [[]] * 5, "order twice"),
     ("lost_motion", [1e-5] * 5, "6 angles"),
-    ("lost_motion", [1.0] + [0.0] * 5, "within ±0.03 rad"),
+    ("lost_motion", [1.0] + [0.0] * 5, "must be in [-0.03, 0.03] rad, got 1"),
 ])
 def test_bad_blocks_are_one_line_naming_the_field(block, value, words) -> None:
     doc = Geometry.nominal("ur5e").to_dict()
@@ -117,5 +117,6 @@ def test_motion_directions_remember_the_last_motion() -> None:
 
 
 def test_parse_lost_motion_refuses_text() -> None:
-    with pytest.raises(InputError, match="6 angles"):
+    says = r"^m\.json: field 'lost_motion'\[0\]: expected a number, got \"a\"$"
+    with pytest.raises(InputError, match=says):
         parse_lost_motion(["a"] * 6, "m.json")

@@ -32,8 +32,8 @@ def test_round_trip_and_extra_columns(tmp_path, rng):
     (HEADER + "\n", r"m.csv: no data rows"),
     (HEADER + "\n1,2,3,4,5,6,7,8,9\n1,2,3,4,5,6,7,8\n", r"m.csv: line 3: expected 9 fields, got 8"),
     (HEADER + "\n1,2,abc,4,5,6,7,8,9\n", r"m.csv: line 2, column q3: 'abc' is not a number"),
-    (HEADER + "\n1,2,3,4,5,6,nan,8,9\n", r"m.csv: line 2, column x: 'nan' is not a finite number"),
-    (HEADER + "\n1,2,3,4,5,6,7,inf,9\n", r"m.csv: line 2, column y: 'inf' is not a finite number"),
+    (HEADER + "\n1,2,3,4,5,6,nan,8,9\n", r"m.csv: line 2, column x: expected a finite number, got nan"),
+    (HEADER + "\n1,2,3,4,5,6,7,inf,9\n", r"m.csv: line 2, column y: expected a finite number, got inf"),
     ("q1,q1,q2,q3,q4,q5,q6,x,y,z\n", r"column\(s\) q1 appear twice"),
 ])
 def test_malformed_files_name_the_line_and_column(tmp_path, text, message):

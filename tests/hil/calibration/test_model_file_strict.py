@@ -48,12 +48,15 @@ BAD = [
     (setter("joints", 2, "xyz", 0)("1"), 'joints[2].xyz[0]: expected a number, got "1"'),
     (setter("joints", 0, "rpy", 1)(None), "joints[0].rpy[1]: expected a number, got null"),
     (setter("joints", 4, "xyz", 2)(1e308),
-     "joints[4].xyz[2]: 1e+308 m is outside the plausible range [-5, 5] m"),
-    (setter("flange", "rpy", 0)(100.0), "flange.rpy[0]: 100 rad is outside the plausible range"),
-    (setter("flange", "xyz", 1)(float("nan")), "flange.xyz[1]: expected a finite number, got nan"),
-    (setter("smr", 2)(10.0), "smr[2]: 10 m is outside the plausible range [-1, 1] m"),
-    (setter("tracker", "xyz", 0)(-500.0), "tracker.xyz[0]: -500 m is outside the plausible range"),
-    (setter("tracker", "rpy", 2)(float("inf")), "tracker.rpy[2]: expected a finite number, got inf"),
+     "joints[4].xyz[2]: must be in [-1.5, 1.5] m, got 1e+308"),
+    (setter("flange", "rpy", 0)(100.0),
+     "flange.rpy[0]: must be in [-6.28319, 6.28319] rad, got 100; 100 looks like degrees"),
+    (setter("flange", "xyz", 1)(float("nan")),
+     "flange.xyz[1]: expected a finite number in [-1.5, 1.5] m, got nan"),
+    (setter("smr", 2)(10.0), "smr[2]: must be in [-1, 1] m, got 10"),
+    (setter("tracker", "xyz", 0)(-500.0), "tracker.xyz[0]: must be in [-80, 80] m, got -500"),
+    (setter("tracker", "rpy", 2)(float("inf")),
+     "tracker.rpy[2]: expected a finite number in [-6.28319, 6.28319] rad, got inf"),
     (setter("robot")("ur99"), "robot: unknown robot 'ur99': choose one of"),
 ]
 
@@ -83,8 +86,8 @@ def test_synth_refuses_a_truth_with_a_bad_number(files, tmp_path, capsys, change
 @pytest.mark.parametrize(("key", "value", "says"), [
     ("tracker_sigma", True, "noise.tracker_sigma: expected a number, got true"),
     ("encoder_sigma", "0", 'noise.encoder_sigma: expected a number, got "0"'),
-    ("tracker_sigma", 5.0, "noise.tracker_sigma: 5 m is outside the plausible range [0, 0.01] m"),
-    ("encoder_sigma", -1e-6, "noise.encoder_sigma: -1e-06 rad is outside the plausible range"),
+    ("tracker_sigma", 5.0, "noise.tracker_sigma: must be in [0, 0.01] m, got 5"),
+    ("encoder_sigma", -1e-6, "noise.encoder_sigma: must be in [0, 0.01] rad, got -1e-06"),
 ])
 def test_a_truth_s_noise_must_be_a_plausible_number(files, tmp_path, key, value, says) -> None:
     bad = edited(files / "truth.json", tmp_path / "truth.json", setter("noise", key)(value))

@@ -1237,6 +1237,67 @@ def _cases() -> list[Case]:
     add("history", "c6-ascii-listing", ["history", "--db", f"{d}/store.db"], [], expect=0, ascii=True)
     add("show", "c6-ascii-show", ["show", "last", "--db", f"{d}/store.db"], [], expect=0, ascii=True)
 
+    # class 3: numbers that are not physical (hil.files.quantities: NaN, ±inf, denormals, out of range)
+    tiny = "1e-320"  # a denormal: non-zero, below sys.float_info.min
+    for label, pose in (("nan", "p[nan, 0, .3, 0, 3.14, 0]"), ("inf", "p[.4, inf, .3, 0, 3.14, 0]"),
+                        ("denormal", f"p[.4, {tiny}, .3, 0, 3.14, 0]"),
+                        ("rotation-1e6", "p[.4, 0, .3, 0, 1e6, 0]"),
+                        ("rotation-degrees", "p[.4, 0, .3, 0, 180, 0]")):
+        add("compensate", f"c3-urscript-{label}", [*co, f"{d}/p.script", "--out", f"{d}/o.script"],
+            ["p.script:2"], files={**ctl, "p.script": f"def f():\n  movel({pose}, a=1.2)\nend\n"})
+    for label, row, names in (("rotation-degrees", "0.4,0.1,0.3,0,180,0", ["degrees"]),
+                              ("rotation-1e6", "0.4,0.1,0.3,0,1e6,0", ["rotation"]),
+                              ("nan", "0.4,nan,0.3,0,3.1,0", []),
+                              ("denormal", f"0.4,{tiny},0.3,0,3.1,0", [])):
+        add("compensate", f"c3-pose-csv-{label}", [*co, f"{d}/t.csv", "--out", f"{d}/o.csv"],
+            ["t.csv", "line 2", *names], files={**ctl, "t.csv": "x,y,z,rx,ry,rz\n" + row + "\n"})
+    for cmd, argv_of in (("export", lambda f: ["export", "--model", f, "--format", "urdf", "--out",
+                                               f"{d}/x.urdf"]),
+                         ("validate", lambda f: ["validate", "--model", f, "--measurements",
+                                                 f"{d}/validation.csv"])):
+        for label, path, value, raw in (("flange-NaN", ["flange", "xyz"], None, "[NaN, 0, 0]"),
+                                        ("flange-rpy-inf", ["flange", "rpy"], None, "[0, Infinity, 0]"),
+                                        ("link-5m", ["joints", 2, "xyz"], [5.0, 0.0, 0.0], None),
+                                        ("link-denormal", ["joints", 2, "xyz"], None, f"[{tiny}, 0, 0]"),
+                                        ("rpy-degrees", ["joints", 1, "rpy"], [0.0, 90.0, 0.0], None)):
+            add(cmd, f"c3-model-{label}", argv_of(f"{d}/m.json"), ["m.json", path[0]],
+                files={"m.json": json_with("model.json", path, value, raw=raw)})
+    add("synth", "c3-truth-noise-denormal", ["synth", "--truth", f"{d}/t.json", "--out-dir", f"{d}/o"],
+        ["t.json", "noise"],
+        files={"t.json": json_with("truth.json", ["noise", "encoder_sigma"], None, raw=tiny)})
+    idc = ["identify", "--robot", "ur5e", "--measurements", f"{d}/measurements.csv", "--out",
+           f"{d}/m-out.json",
+           "--compliance", "--payload", "5,0,0,0.05"]
+    add("identify", "c3-mounting-degrees", [*idc, "--mounting", "90,0,0"], ["--mounting", "degrees"])
+    add("identify", "c3-mounting-nan", [*idc, "--mounting", "nan,0,0"], ["--mounting"])
+    add("fk", "c3-payload-without-com", ["fk", "--model", f"{d}/model.json", "--joints", f"{d}/joints.csv",
+                                         "--payload", "6", "--out", f"{d}/p.csv"], ["--payload", "centre"])
+    add("fk", "c3-payload-com-denormal", ["fk", "--model", f"{d}/model.json", "--joints", f"{d}/joints.csv",
+                                          "--payload", f"6,0,{tiny},0.05", "--out", f"{d}/p.csv"],
+        ["--payload"])
+    add("validate", "c3-max-rms-denormal", ["validate", "--model", f"{d}/model.json", "--measurements",
+                                            f"{d}/validation.csv", "--max-rms", tiny], ["--max-rms"])
+    add("select", "c3-time-limit-denormal", [*se, "--method", "time-aware", "--time-limit", tiny],
+        ["--time-limit"])
+    add("sim", "c3-speed-denormal", ["sim", "--speed", tiny], ["--speed"])
+    for key in ("robot.acceleration", "campaign.stability", "tracker.timeout", "campaign.search_time"):
+        add("calibrate", f"c3-{key}-denormal", ["calibrate", "--config", f"{d}/bad.toml", "--db",
+                                                f"{d}/c.db"], [key],
+            files={"bad.toml": config_with(key, Raw(tiny))})
+    add("calibrate", "c3-robot.mounting-degrees", ["calibrate", "--config", f"{d}/bad.toml", "--db",
+                                                   f"{d}/c.db"], ["robot.mounting", "degrees"],
+        files={"bad.toml": config_with("robot.mounting", [90.0, 0.0, 0.0])})
+    add("calibrate", "c3-tracker.temperature-nan", ["calibrate", "--config", f"{d}/bad.toml", "--db",
+                                                    f"{d}/c.db"], ["tracker.temperature"],
+        files={"bad.toml": config_with("tracker.temperature", Raw("nan"))})
+    add("identify", "c3-measurements-denormal", [*idf, f"{d}/m.csv"], ["m.csv", "line 3"],
+        files={"m.csv": csv_with("measurements.csv", 3, 7, tiny)})
+    add("fk", "c3-joints-denormal", ["fk", "--model", f"{d}/model.json", "--joints", f"{d}/q.csv", "--out",
+                                     f"{d}/p.csv"], ["q.csv", "line 3"],
+        files={"q.csv": csv_with("joints.csv", 3, 2, tiny)})
+    add("moveb-plan", "c3-program-denormal", ["moveb", "plan", f"{d}/p.moveb", "--out", f"{d}/s.csv"],
+        ["p.moveb"], files={"p.moveb": moveb_line(f"MOVEB 500 -50 300  0 0 -1  1 0 0  0.5 {tiny}")})
+
     # ---------------------------------------------------------------- the top level
     add("hil", "unknown-command", ["frobnicate"], ["frobnicate"])
     add("hil", "unknown-option", ["--frobnicate", "history"], ["--frobnicate"])

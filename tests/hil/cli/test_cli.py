@@ -153,5 +153,6 @@ def test_rms_thresholds_are_metres_and_plausible(tmp_path, capsys, station):
         assert main([argv[0], "--help"]) == 0
         text = " ".join(capsys.readouterr().out.split())
         assert f"{option} METRES" in text and "in METRES, e.g. 0.0001 for 0.1 mm" in text
-    assert "10 mm" in run_bad(capsys, ["validate", "--model", truth, "--measurements", m, "--max-rms", "0.1"])
+    assert "0.1 looks like millimetres: the value is in metres" in run_bad(
+        capsys, ["validate", "--model", truth, "--measurements", m, "--max-rms", "0.1"])
     assert main(["validate", "--model", truth, "--measurements", m, "--max-rms", "0.01"]) == 0

@@ -86,7 +86,7 @@ def test_identify_imports_neither_the_store_nor_scipy_nor_numpy_ma(tmp_path: Pat
     scipy's import (its linalg, special and spatial parts) was 0.35 s of the 0.75 s it took. Nor
     numpy.ma, which numpy 2.4's ``np.unique`` imports (a tenth of the fit's time). Nor the trackers'
     protocol clients (the polar convention is all it needs of `drivers.tracker`) nor the station's
-    configuration reader (its --smr bound is `hil.station.limits`'): a fifth of its start-up."""
+    configuration reader (its --smr bound is a row of `hil.files.quantities`): a fifth of its start-up."""
     import numpy as np
 
     from hil.calibration.measurements import write_measurements

@@ -83,8 +83,10 @@ def test_crlf_tables_stay_crlf_and_full_precision_is_kept() -> None:
     ("x,y,z,rx,ry,rz,q1,q2\n", "t.csv: line 1: joint columns q1,q2 without the rest"),
     ("x,y,z,rx,ry,rz\n0.4,0,0.3,3.1,0,0\n0.4,0,0.3,3.1,0\n", "t.csv: line 3: expected 6 fields, got 5"),
     ("x,y,z,rx,ry,rz\n0.4,abc,0.3,3.1,0,0\n", "t.csv: line 2, column y: 'abc' is not a number"),
-    ("x,y,z,rx,ry,rz\n0.4,nan,0.3,3.1,0,0\n", "t.csv: line 2, column y: 'nan' is not a finite number"),
-    ("x,y,z,rx,ry,rz\n400,0,300,3.1,0,0\n", "t.csv: line 2: the target lies 500 m from the base"),
+    ("x,y,z,rx,ry,rz\n0.4,nan,0.3,3.1,0,0\n", "t.csv: line 2, column y: expected a finite number, got nan"),
+    ("x,y,z,rx,ry,rz\n400,0,300,3.1,0,0\n",
+     ("t.csv: line 2: position (x, y, z) from the base: its length (target distance) must be in [0, 5] m, "
+      "got 500; 500 looks like millimetres")),
     ("x,y,z,rx,ry,rz,q1,q2,q3,q4,q5,q6\n0.4,0,0.3,3.1,0,0,0,0,9,0,0,0\n", "t.csv: line 2, column q3"),
 ])
 def test_bad_tables_are_named_by_line(text: str, says: str) -> None:

@@ -142,17 +142,20 @@ def test_parse_json_keeps_the_line_of_a_syntax_error() -> None:
     ("1", 'expected a number, got "1"'),
     (None, "expected a number, got null"),
     ([1.0], "expected a number, got list"),
-    (float("nan"), "expected a finite number, got nan"),
+    (float("nan"), "expected a finite number in [-5, 5] m, got nan; the value is in metres"),
     (10**400, "expected a finite number, got an integer of 401 digits"),
-    (6.0, "6 m is outside the plausible range [-5, 5] m"),
+    (6e6, "must be in [-5, 5] m, got 6000000; the value is in metres"),
+    (6.0, "must be in [-5, 5] m, got 6; 6 looks like millimetres: the value is in metres"),
+    (1e-320, "a denormal number (non-zero, below 2.23e-308), not a physical value; expected a value in "
+             "[-5, 5] m; the value is in metres"),
 ])
 def test_json_number_refuses_what_is_not_a_plausible_number(value, says) -> None:
     from hil.files.inputs import json_number
 
     with pytest.raises(InputError, match=r"^f\.json: a\.b\[0\]: ") as info:
-        json_number(value, "f.json: a.b[0]", -5.0, 5.0, "m")
+        json_number(value, "f.json: a.b[0]", "keep-in corner")
     assert str(info.value).endswith(says)
-    assert json_number(-5, "f.json: a", -5.0, 5.0) == -5.0
+    assert json_number(-5, "f.json: a", "keep-in corner") == -5.0
 
 
 # --- TOML --------------------------------------------------------------------------------------------

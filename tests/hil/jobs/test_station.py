@@ -252,9 +252,13 @@ def test_the_simulators_options_with_a_configuration_are_refused_naming_them(opt
     assert text.startswith(f"{named}: go{'' if ',' in named else 'es'} with --sim, not --config"), text
 
 
-@pytest.mark.parametrize("speed", [0.0, -2.0, math.nan])
-def test_a_speed_that_is_not_positive_is_refused(speed: float) -> None:
-    assert _refused(config=None, sim=True, speed=speed) == f"--speed must be positive, got {speed}"
+@pytest.mark.parametrize(("speed", "says"), [(0.0, "must be in (0, 1000], got 0"),
+                                             (-2.0, "must be in (0, 1000], got -2"),
+                                             (math.nan, "expected a finite number in (0, 1000], got nan"),
+                                             (1e-320, "a denormal number")])
+def test_a_speed_that_is_not_positive_is_refused(speed: float, says: str) -> None:
+    text = _refused(config=None, sim=True, speed=speed)
+    assert text.startswith("--speed: ") and says in text, text
 
 
 @pytest.mark.parametrize("config", [None, "station"])

@@ -24,14 +24,15 @@ def test_parses_comments_blank_lines_and_groups() -> None:
 @pytest.mark.parametrize(("text", "needle"), [
     (GOOD + "MOVE 1 2 3 0 0 1 1 0 0 1 1\n", "line 3: expected MOVEB"),
     (GOOD + "MOVEB 1 2 3 0 0 1 1 0 0 1\n", "line 3: MOVEB needs 11 numbers"),
-    (GOOD + "MOVEB 1 2 x 0 0 1 1 0 0 1 1\n", "line 3: Z is not a number"),
+    (GOOD + "MOVEB 1 2 x 0 0 1 1 0 0 1 1\n", "line 3: Z: 'x' is not a number"),
     (GOOD + "MOVEB 1 2 3 0 0 2 1 0 0 1 1\n", "line 3: the tool axis I J K must have unit length"),
     (GOOD + "MOVEB 1 2 3 0 0 1 0 0 1 1 1\n", "line 3: the tool axes I J K and U V W must be orthogonal"),
-    (GOOD + "MOVEB 1 2 3 0 0 1 1 0 0 0 1\n", "line 3: D (chord-height error) must be positive"),
-    (GOOD + "MOVEB 1 2 3 0 0 1 1 0 0 1 -1\n", "line 3: E (point error) must be positive"),
+    (GOOD + "MOVEB 1 2 3 0 0 1 1 0 0 0 1\n",
+     "line 3: D (chord-height error): must be in [0.0001, 100] mm, got 0"),
+    (GOOD + "MOVEB 1 2 3 0 0 1 1 0 0 1 -1\n", "line 3: E (point error): must be in [0.0001, 100] mm, got -1"),
     (GOOD + "MOVEB 10 0 0 0 0 1 1 0 0 0.5 0.2\n", "line 3: the point repeats"),
     (GOOD + "MOVEB 0 0 0 0 0 1 1 0 0 0.5 0.2\n", "line 2: the path reverses"),
-    (GOOD + "MOVEB 1 2 nan 0 0 1 1 0 0 1 1\n", "line 3: Z must be finite"),
+    (GOOD + "MOVEB 1 2 nan 0 0 1 1 0 0 1 1\n", "line 3: Z: expected a finite number"),
     ("# only one\nMOVEB 0 0 0 0 0 1 1 0 0 1 1\n", "at least two points"),
 ])
 def test_bad_programs_name_the_line(text: str, needle: str) -> None:

@@ -147,7 +147,7 @@ def test_cli_plan_bad_program_is_one_line_exit_2(tmp_path: Path, capsys: pytest.
     bad.write_text("MOVEB 0 0 0 0 0 1 1 0 0 1 1\n# c\nMOVEB 1 0 0 0 0 1 1 0 0 -1 1\n")
     assert main(["moveb", "plan", str(bad), "--out", str(tmp_path / "s.csv")]) == 2
     err = capsys.readouterr().err.strip()
-    assert "bad.moveb: line 3: D (chord-height error) must be positive" in err
+    assert "bad.moveb: line 3: D (chord-height error): must be in [0.0001, 100] mm, got -1" in err
     assert len(err.splitlines()) == 1
 
 

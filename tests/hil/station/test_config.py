@@ -18,7 +18,7 @@ def test_example_is_valid_and_complete():
     ("[robot]\ntype = 'abb'\n", "robot.type: unknown robot 'abb'"),
     ("[campaign]\nsamples = 2.5\n", "campaign.samples: must be an integer"),
     ("[tracker]\nposition = [1, 2]\n", r"tracker.position: must be a list of three numbers"),
-    ("[smr]\nacceptance_angle = 95\n", "smr.acceptance_angle: must be between 0 and 90"),
+    ("[smr]\nacceptance_angle = 95\n", r"smr.acceptance_angle: must be in \(0, 90\) degrees, got 95"),
     ("[keep_in]\nmin = [0, 0, 0]\nmax = [1, 1, 0]\n", "keep_in.min must be below keep_in.max"),
     ("[robot\n", "not valid TOML"),
 ])

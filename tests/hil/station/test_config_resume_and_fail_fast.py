@@ -60,7 +60,7 @@ def test_max_consecutive_lost_defaults_to_three_and_is_range_checked():
     assert default_config().campaign["max_consecutive_lost"] == 3
     assert load_config(EXAMPLE).campaign["max_consecutive_lost"] == 3
     assert parse_config({"campaign": {"max_consecutive_lost": 1}}).campaign["max_consecutive_lost"] == 1
-    for bad, says in ((0, "between 1 and 100, got 0"), (101, "between 1 and 100, got 101"),
+    for bad, says in ((0, r"must be in \[1, 100\], got 0"), (101, r"must be in \[1, 100\], got 101"),
                       (2.5, "must be an integer"), (True, "must be an integer")):
         with pytest.raises(InputError, match=f"station.toml: campaign.max_consecutive_lost: .*{says}"):
             parse_config({"campaign": {"max_consecutive_lost": bad}}, "station.toml")
