@@ -54,6 +54,10 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
+
+class _LockedAtOpen(Exception):
+    """SQLite refused a lock at once while a store was being opened (`_open_sqlite` retries)."""
+
 R = TypeVar("R")
 
 #: Seconds a write waits for a lost PostgreSQL link to come back before the run stops (resumable).
@@ -192,6 +196,22 @@ class TransactionalStore:
         elif self.readonly and self.path.stat().st_size == 0:
             # SQLite takes a 0-byte file for a new database; a reader must not turn it into a store
             raise InputError(f"{where} is empty: not a hil store")
+        deadline = time.monotonic() + self.timeout
+        while True:
+            try:
+                return self._first_open_sqlite(where)
+            except _LockedAtOpen:
+                # SQLite answers SQLITE_BUSY at once, without its busy handler, where waiting could
+                # deadlock (sqlite3_busy_handler's documentation): a first open racing another one
+                # that is upgrading the file (switching it to WAL, migrating). Rolled back: try again.
+                if time.monotonic() > deadline:
+                    raise StoreError(f"{where}: database is locked (another process kept it for "
+                                     f"{self.timeout:g} s while it was opened)") from None
+                time.sleep(0.05)
+
+    def _first_open_sqlite(self, where: str) -> Engine:
+        """One attempt of `_open_sqlite` (_LockedAtOpen when SQLite said busy without waiting)."""
+        assert self.path is not None
         engine = sqlite_engine(self.path, uri=self._readonly_uri() if self.readonly else None,
                                timeout=self.timeout, synchronous=self.synchronous,
                                readonly=self.readonly)
@@ -216,12 +236,14 @@ class TransactionalStore:
             engine.dispose()
             text = str(exc.orig)
             if "locked" in text or "busy" in text:
-                raise StoreError(f"{where}: {text}") from None
+                raise _LockedAtOpen from None
             if "not a database" in text or "malformed" in text:
                 raise InputError(f"{where}: not a hil database ({text})") from None
             raise InputError(f"{where}: cannot open: {text}") from None
         except sqlite3.DatabaseError as exc:
             engine.dispose()
+            if isinstance(exc, sqlite3.OperationalError) and ("locked" in str(exc) or "busy" in str(exc)):
+                raise _LockedAtOpen from None
             raise InputError(f"{where}: cannot open: {exc}") from None
         except BaseException:
             engine.dispose()
