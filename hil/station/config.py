@@ -543,7 +543,14 @@ def _coerce(value: Any, key: Key, where: str) -> Any:
         from hil.arm.payload import Payload
 
         # with_overrides re-parses the parsed values: a Payload is already checked
-        return value if isinstance(value, Payload) else Payload.from_dict(value, where)
+        if isinstance(value, Payload):
+            return value
+        if isinstance(value, dict) and "com" not in value and value.get("mass") not in (0, 0.0, None):
+            # as --payload MASS,X,Y,Z: a mass without its centre of mass would be put at the flange,
+            # a moment arm of zero, and the compliance the payload reveals would be fitted wrongly
+            raise InputError(f"{where}: a payload's mass needs its centre of mass: "
+                             "com = [x, y, z] (m, flange frame)")
+        return Payload.from_dict(value, where)
     if kind == "vec3":
         ok = (isinstance(value, list | tuple) and len(value) == 3
               and all(isinstance(v, int | float) and not isinstance(v, bool) for v in value))

@@ -179,3 +179,14 @@ def test_overrides_are_range_checked_too() -> None:
     """What the command line overrides (--poses, --candidates ...) meets the same ranges."""
     with pytest.raises(InputError, match=r"campaign.candidates: must be in \[1, 200000\]"):
         parse_config(BASE, "cfg").with_overrides(campaign__candidates=10**9)
+
+
+def test_a_payload_mass_without_its_centre_of_mass_is_refused_naming_the_key() -> None:
+    """As ``--payload 6`` alone is: the mass would be put at the flange, a moment arm of zero."""
+    data = {**BASE, "robot": {**BASE["robot"], "payload": {"mass": 6.0}}}
+    with pytest.raises(InputError, match=r"st\.toml: robot\.payload: .*com = \[x, y, z\]"):
+        parse_config(data, "st.toml")
+    data["robot"]["payload"] = {"mass": 6.0, "com": [0.0, 0.0, 0.05]}
+    assert parse_config(data, "st.toml").payload.mass == 6.0
+    data["robot"]["payload"] = {"mass": 0.0}
+    assert parse_config(data, "st.toml").payload.mass == 0.0
