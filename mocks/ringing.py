@@ -133,26 +133,6 @@ class Ringing:
             out += x * ring.direction
         return out
 
-    def offsets(self, t: np.ndarray) -> np.ndarray:
-        """(n, 3) `offset` at each of the controller times `t`, in one pass over the moves: a tracker's
-        stationary measurement asks for hundreds of instants at once, and asking one by one held the
-        simulator's interpreter for about 0.1 s a measurement (issue 29: emScon answers past the
-        client's timeout on a loaded machine)."""
-        t = np.atleast_1d(np.asarray(t, dtype=float))
-        with self._lock:
-            rings = list(self._rings)
-        out = np.zeros((len(t), 3))
-        w2 = self.omega * self.omega
-        for ring in rings:
-            times = np.array([s[0] for s in ring.steps])
-            deltas = np.array([s[1] for s in ring.steps])
-            tau = t[:, None] - times[None, :]
-            started = tau >= 0
-            g = step_response(np.where(started, tau, 0.0), self.omega, self.zeta)
-            x = np.sum(np.where(started, -(deltas / w2) * (1.0 - g), 0.0), axis=1)
-            out += x[:, None] * ring.direction
-        return out
-
     def listener(self, tip_direction: Callable[[np.ndarray, np.ndarray], np.ndarray]
                  ) -> Callable[..., None]:
         """A `mocks.ur.arm.SimArm` listener recording its ``movej`` and ``movej_cut`` events.

@@ -111,20 +111,6 @@ class World:
             offset = self.ringing.offset(now)
         return self.truth.tracker.rotation.T @ offset
 
-    def ring_offsets(self, ats: np.ndarray) -> np.ndarray:
-        """(n, 3) `ring_offset` of readings ending at each simulated time of `ats`, computed together
-        (`mocks.ringing.Ringing.offsets`): one stationary measurement is hundreds of readings."""
-        ats = np.atleast_1d(np.asarray(ats, dtype=float))
-        if self.ringing is None or self.clock is None:
-            return np.zeros((len(ats), 3))
-        if self.reading_time > 0:
-            back = self.reading_time * (np.arange(READING_SAMPLES) + 0.5) / READING_SAMPLES
-            offsets = self.ringing.offsets((ats[:, None] - back[None, :]).ravel())
-            offset = offsets.reshape(len(ats), READING_SAMPLES, 3).mean(axis=1)
-        else:
-            offset = self.ringing.offsets(ats)
-        return offset @ self.truth.tracker.rotation
-
     def running_time(self) -> float:
         """Simulated seconds the arm has been running (0 without a clock)."""
         return float(self.clock()) if self.clock is not None else 0.0
@@ -164,7 +150,7 @@ class World:
         T = self.truth.tracker
         p = (p_base - T.translation) @ T.rotation
         if self.ringing is not None and self.clock is not None:
-            p = p + self.ring_offsets(times)
+            p = p + np.array([self.ring_offset(float(t)) for t in times])
         return p
 
     def _in_tracker(self, p_base: np.ndarray) -> np.ndarray:

@@ -101,23 +101,3 @@ def test_the_ring_is_deterministic_given_the_motion():
         c1.t += dt
         c2.t += dt
         assert np.array_equal(w1.target().position, w2.target().position)
-
-
-@pytest.mark.parametrize("reading_time", [0.0, 0.05])
-def test_offsets_at_many_instants_are_the_offsets_one_by_one(reading_time: float) -> None:
-    """A stationary measurement asks for hundreds of instants at once (issue 29: asked one by one they
-    held the simulator for 0.1 s a measurement): the same values, at every instant, during and after
-    a move and before it (nothing yet)."""
-    ring = Ringing()
-    ring.record(0.5, 1.2, 0.3, 2.0, np.array([0.4, -0.1, 0.2]))
-    ring.record(2.0, 0.8, 0.2, 3.0, np.array([0.0, 0.3, -0.1]))
-    t = np.linspace(0.0, 4.0, 401)
-    assert np.allclose(ring.offsets(t), [ring.offset(float(x)) for x in t], rtol=1e-12, atol=1e-18)
-    arm, world, clock = ringing_station()
-    world.reading_time = reading_time
-    with arm.lock:
-        arm.start_movej(Q1, 1.0, 2.0)
-    run_until_still(arm, clock)
-    ats = clock.t - np.linspace(0.0, 1.0, 50)
-    assert np.allclose(world.ring_offsets(ats), [world.ring_offset(float(a)) for a in ats],
-                       rtol=1e-12, atol=1e-18)
