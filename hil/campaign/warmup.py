@@ -269,17 +269,8 @@ class ReferenceWatch:
         seconds = (yield ReadConditions(temperatures=False)).t - start
         # what the rule compared with three time constants: the span of the series it judged
         span = series[-1].elapsed - series[0].elapsed if series else None
-        fit = None if decision is None else decision.fit
-        if not converged and not reason and fit is not None:
-            assert span is not None  # a fit needs a series
-            three = 3 * fit.time_constant_upper / 60
-            if fit.remaining_upper >= limit:
-                reason = (f"about {um(fit.remaining)} of drift is still to come, and the series cannot "
-                          f"rule out {um(fit.remaining_upper)} (the fit's upper confidence limit)")
-            else:
-                reason = (f"at most {um(fit.remaining_upper)} of drift is still to come, but the "
-                          f"measurements span {span / 60:.0f} min, under three of the longest time "
-                          f"constants the fit allows ({three:.0f} min): too short to trust the fit")
+        if not converged and not reason and decision is not None and decision.fit is not None:
+            reason = decision.reason.removeprefix("not yet: ")  # the last check's own words
         evidence = {} if decision is None else decision.evidence()
         judged = {k: evidence.get(k) for k in ("remaining", "remaining_upper", "time_constant",
                                                "time_constant_upper", "decision")}
