@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import importlib
 import logging
-import sys
 import threading
 import time
 from collections.abc import Callable
@@ -113,52 +112,6 @@ def resolve_fk(config: SimConfig, calibration: ControllerCalibration | None = No
         factory = getattr(importlib.import_module(mod), fn)
         return factory(config.robot)
     return controller_fk(config.robot.lower(), calibration or resolve_calibration(config))
-
-
-#: Share of the controller's cycle (2 ms at 500 Hz) within which the tick thread must get the
-#: interpreter back from another thread of this process: a quarter.
-GIL_SHARE_OF_CYCLE = 0.25
-
-
-def keep_real_time(rate_hz: float) -> float:
-    """Lower this process's thread switch interval to a quarter of one controller cycle while a
-    controller runs (`release_real_time` puts the old one back after the last); the interval now.
-
-    A real controller's RTDE runs at 500 Hz in real time; here the tick thread shares one interpreter
-    with the trackers, the world and every protocol server. A thread waiting for the GIL gets it only
-    after the holder has run for the switch interval — 5 ms by default in CPython (``sys.
-    getswitchinterval``, Python docs), longer than the 2 ms cycle itself — and on a loaded machine each
-    hand-over waits for the scheduler too: with one busy thread beside it the tick thread fell from
-    500 to about 40 cycles a second and went silent for up to 0.65 s at a time (measured at load 21 on
-    2 cores), the stuff of ur_rtde's "lost RTDE link" (its client gives up after 2.5 s without data)
-    and of late tracker answers (issue 29). With a quarter cycle, the same test kept about 200 cycles
-    a second and gaps under 0.16 s. Only lowered, never raised (a test may have set it lower)."""
-    global _saved_interval, _running
-    interval = GIL_SHARE_OF_CYCLE / float(rate_hz)
-    with _interval_lock:
-        if _running == 0:
-            _saved_interval = sys.getswitchinterval()
-        _running += 1
-        if sys.getswitchinterval() > interval:
-            sys.setswitchinterval(interval)
-        return sys.getswitchinterval()
-
-
-def release_real_time() -> None:
-    """One controller fewer: after the last, the switch interval it found is back (the simulator may
-    run inside a test process or a bench, whose other threads it should not tune for good)."""
-    global _running
-    with _interval_lock:
-        if _running == 0:
-            return
-        _running -= 1
-        if _running == 0:
-            sys.setswitchinterval(_saved_interval)
-
-
-_interval_lock = threading.Lock()
-_running = 0  # controllers started and not stopped, in this process
-_saved_interval = sys.getswitchinterval()
 
 
 class SimController:
@@ -246,7 +199,6 @@ class SimController:
             for srv in started:
                 srv.stop()
             raise
-        keep_real_time(self.arm.config.rate_hz)
         self._thread = threading.Thread(target=self._run, name="ur-sim-tick", daemon=True)
         self._thread.start()
         for fault in self.config.faults:
@@ -258,8 +210,6 @@ class SimController:
         self._stop.set()
         if self._thread is not None:
             self._thread.join(timeout=2.0)
-            self._thread = None
-            release_real_time()
         for srv in self.servers:
             srv.stop()
 
