@@ -22,19 +22,55 @@ Nothing here does I/O or imports `hil`: the kinematic model arrives as an argume
 then the methods, then search); none imports this package's face.
 """
 
-from selector.bound import Bound, d_optimal_bound
-from selector.candidates import CandidateSet, Constraints, generate_candidates
-from selector.cluster_sample import ClusterSample, cluster_sample, cluster_standard_error, design_effect
-from selector.design import Selection, minimum_poses
-from selector.errors import CountError, NoCandidatesError, SelectorError, UnknownIndexError
-from selector.exchange import exchange_select
-from selector.indices import INDEX_NAMES, observability, parse_index
-from selector.motion_time import Dwell, MotionProfile
-from selector.order import order_poses, travel_time
-from selector.random_selection import random_select
-from selector.search import select
-from selector.tabu import TabuSettings, tabu_select
-from selector.time_aware import TimedSelection, time_aware_select
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from selector.bound import Bound, d_optimal_bound
+    from selector.candidates import CandidateSet, Constraints, generate_candidates
+    from selector.cluster_sample import ClusterSample, cluster_sample, cluster_standard_error, design_effect
+    from selector.design import Selection, minimum_poses
+    from selector.errors import CountError, NoCandidatesError, SelectorError, UnknownIndexError
+    from selector.exchange import exchange_select
+    from selector.indices import INDEX_NAMES, observability, parse_index
+    from selector.motion_time import Dwell, MotionProfile
+    from selector.order import order_poses, travel_time
+    from selector.random_selection import random_select
+    from selector.search import select
+    from selector.tabu import TabuSettings, tabu_select
+    from selector.time_aware import TimedSelection, time_aware_select
+
+#: Each public name by the module that defines it, imported when first asked for: a command that needs
+#: one module's names (`hil select --help` its constraint, index and method names) does not load scipy's
+#: linear algebra and clustering through every other module (0.46 s of `hil select --help`'s 0.5 s).
+_LAZY = {
+    **dict.fromkeys(("Bound", "d_optimal_bound"), "selector.bound"),
+    **dict.fromkeys(("CandidateSet", "Constraints", "generate_candidates"), "selector.candidates"),
+    **dict.fromkeys(("ClusterSample", "cluster_sample", "cluster_standard_error", "design_effect"),
+                    "selector.cluster_sample"),
+    **dict.fromkeys(("Selection", "minimum_poses"), "selector.design"),
+    **dict.fromkeys(("CountError", "NoCandidatesError", "SelectorError", "UnknownIndexError"),
+                    "selector.errors"),
+    **dict.fromkeys(("exchange_select",), "selector.exchange"),
+    **dict.fromkeys(("INDEX_NAMES", "observability", "parse_index"), "selector.indices"),
+    **dict.fromkeys(("Dwell", "MotionProfile"), "selector.motion_time"),
+    **dict.fromkeys(("order_poses", "travel_time"), "selector.order"),
+    **dict.fromkeys(("random_select",), "selector.random_selection"),
+    **dict.fromkeys(("select",), "selector.search"),
+    **dict.fromkeys(("TabuSettings", "tabu_select"), "selector.tabu"),
+    **dict.fromkeys(("TimedSelection", "time_aware_select"), "selector.time_aware"),
+}
+
+
+def __getattr__(name: str) -> object:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
 
 __all__ = [
     "INDEX_NAMES",

@@ -43,11 +43,8 @@ from selector.arm import (
 from selector.errors import NoCandidatesError, SelectorError
 from selector.feasibility import impossible
 from selector.model import PoseModel
+from selector.names import CONSTRAINT_NAMES
 
-CONSTRAINT_NAMES: tuple[str, ...] = (
-    "keep-in", "floor", "range", "acceptance", "line-of-sight", "wrist", "elbow", "shoulder",
-    "self-collision",
-)
 TRACKER_CONSTRAINTS: frozenset[str] = frozenset({"range", "acceptance", "line-of-sight"})
 
 

@@ -31,9 +31,7 @@ import math
 import numpy as np
 
 from selector.errors import SelectorError, UnknownIndexError
-
-INDEX_NAMES: tuple[str, ...] = ("O1", "O2", "O3", "O4", "O5")
-SCALINGS: tuple[str, ...] = ("expected", "unit", "none")
+from selector.names import INDEX_NAMES, SCALINGS
 
 
 def parse_index(name: str) -> str:

@@ -13,10 +13,9 @@ import numpy as np
 from selector.design import Selection
 from selector.errors import SelectorError
 from selector.exchange import exchange_select
+from selector.names import METHODS
 from selector.random_selection import random_select
 from selector.tabu import TabuSettings, tabu_select
-
-METHODS: tuple[str, ...] = ("tabu", "exchange", "random")
 
 
 def select(G: np.ndarray, count: int, *, method: str = "tabu", index: str = "O1", seed: int = 0,

@@ -31,9 +31,7 @@ from hil.cli.support.output import wrote
 from hil.errors import InputError
 from hil.files.quantities import check_vector, quantity
 from hil.jobs.outcome import EXIT_OK
-from selector.candidates import CONSTRAINT_NAMES
-from selector.indices import INDEX_NAMES, SCALINGS
-from selector.search import METHODS
+from selector.names import CONSTRAINT_NAMES, INDEX_NAMES, METHODS, SCALINGS
 
 DEFAULT_SMR = "0,0,0.045"
 
