@@ -6,6 +6,9 @@
   vector and its identifiable subset;
 * `joint_errors` — angle-dependent joint errors and lost motion (the model and its JSON blocks);
 * `joint_error_columns` — their low orders as identification parameters: names, columns, updates;
+* `gravity`, `dynamics` — the torques a (moving) arm's joints hold and the link lag c ⊙ τ they cause
+  (pinocchio's gravity and inverse dynamics on UR's published masses), and the joint modes that bound
+  where that quasi-static lag holds;
 * `ik` — inverse kinematics of a (calibrated) model, for tool paths;
 * `safety` — a motion target checked against the joint limits and the keep-in box, never clamped;
 * `self_collision` — whether a posture folds the arm onto itself (the selector's link capsules on
