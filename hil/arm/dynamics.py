@@ -136,3 +136,31 @@ def moving_link_angles(geometry: Geometry, q: JointArray, qd: JointArray | None 
         return Q
     dm = model if model is not None else DynamicsModel(geometry)
     return Q - dm.torques(Q, qd, qdd) * geometry.compliance
+
+
+class MovingArm:
+    """SMR positions of a compliant arm moving through (q, q̇, q̈): forward kinematics of the link
+    angles q − c ⊙ τ(q, q̇, q̈) + e(q) (the contract's terms at the encoder angles, the inertial torque
+    added to gravity's; no lost motion, as a prediction told nothing of the approach)."""
+
+    def __init__(self, geometry: Geometry) -> None:
+        from hil.arm.kinematics import Kinematics  # kinematics imports gravity, not this module
+
+        self.geometry = geometry.copy()
+        self.dynamics = DynamicsModel(self.geometry)
+        exact = self.geometry.copy()
+        exact.compliance, exact.joint_errors, exact.lost_motion = None, None, None
+        self._kinematics = Kinematics(exact)  # the link angles are given to it: nothing more applied
+
+    def link_angles(self, q: JointArray, qd: JointArray | None = None, qdd: JointArray | None = None
+                    ) -> np.ndarray:
+        """(N, 6) link angles of the moving arm."""
+        Q = moving_link_angles(self.geometry, q, qd, qdd, self.dynamics)
+        if self.geometry.has_joint_errors:
+            Q = Q + self.geometry.joint_errors.offsets(_configurations(q))
+        return Q
+
+    def points(self, q: JointArray, qd: JointArray | None = None, qdd: JointArray | None = None,
+               frame: str = "tracker") -> np.ndarray:
+        """(N, 3) SMR centres in the tracker (or base) frame."""
+        return self._kinematics.points(self.link_angles(q, qd, qdd), frame=frame)

@@ -101,3 +101,17 @@ def test_rigid_joints_have_no_limit_and_bad_shapes_are_refused():
         dm.torques(np.zeros((2, 6)), np.zeros((3, 6)))
     with pytest.raises(ValueError, match="tolerance"):
         dm.acceleration_limit(np.zeros(6), 0.0)
+
+
+def test_a_moving_arm_at_rest_is_the_kinematics_prediction():
+    from hil.arm.dynamics import MovingArm
+    from hil.arm.kinematics import Kinematics
+    from hil.calibration.synthetic import random_truth
+
+    truth = random_truth("ur5e", np.random.default_rng(5), ideal=False)
+    q = np.random.default_rng(6).uniform(-2, 2, (12, 6))
+    arm = MovingArm(truth)
+    np.testing.assert_allclose(arm.points(q), Kinematics(truth).points(q), atol=1e-12)
+    qdd = np.full((12, 6), 3.0)
+    moved = arm.points(q, np.zeros((12, 6)), qdd)
+    assert 1e-7 < np.linalg.norm(moved - arm.points(q), axis=1).max() < 1e-3  # micrometres, not more
