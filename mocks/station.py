@@ -24,6 +24,12 @@ motion of a UR joint (`hil.calibration.synthetic.random_truth`): the robot simul
 each joint last moved (`mocks.ur.directions`) and the world lags the links by it. A truth file's own
 blocks rule over ``rigid`` and ``ideal``.
 
+The tracker's and the controller's clocks are a real station's (`hil.calibration.stream_clocks`,
+`StationClocks.realistic` in every mode: an ideal arm still has two instruments): emScon's continuous
+samples and RTDE's ``timestamp`` carry their own clock's offset, drift, jitter and latency. The service's
+info holds them (``clocks``) and the true map between the two (``clock_map``, `StationService.clock_map`),
+so a test reads the truth a stream join must find.
+
 Faults it adds to the controller (``inject(name, **args)`` / the control channel): ``block_beam``
 (``on``, ``reason``), ``tracker_unplug``, ``tracker_garble`` (GeoCOM), ``emscon_drop`` (close the
 emScon client now), ``emscon_stall`` (``seconds``: wall seconds without reading or sending),
@@ -42,6 +48,7 @@ import numpy as np
 from hil.arm.joint_physics import IDEAL_BY_DEFAULT
 from hil.arm.thermal import Thermal
 from hil.calibration.model_file import load_truth, read_json, truth_controller, truth_document
+from hil.calibration.stream_clocks import ClockMap, StationClocks
 from hil.calibration.synthetic import Noise, random_truth
 from mocks.emscon.instrument import EmsconConfig
 from mocks.emscon.server import EmsconSimulator, ServerConfig
@@ -84,12 +91,36 @@ class StationService:
     """The tracker simulator and its world, as one service of the robot simulator's process."""
 
     def __init__(self, simulator: GeoComSimulator, world: World, truth_doc: dict[str, Any],
-                 home: np.ndarray, emscon: EmsconSimulator | None = None) -> None:
+                 home: np.ndarray, emscon: EmsconSimulator | None = None,
+                 clocks: StationClocks | None = None, controller: Any = None) -> None:
         self.simulator = simulator
         self.emscon = emscon
         self.world = world
         self.truth_doc = truth_doc
         self.home = home
+        self.clocks = StationClocks.ideal() if clocks is None else clocks
+        self.controller = controller
+
+    def clock_map(self) -> ClockMap:
+        """The true map from an emScon stamp to the RTDE ``timestamp`` of the same instant (after
+        `start`): t_ctrl = a + (1 + d)·t_trk.
+
+        The tracker's reference clock τ runs at the wall clock's rate from the emScon server's start
+        (`mocks.emscon.server`), the controller's running time at the simulated clock's from the
+        controller's start; the simulated clock is ``speed`` × the wall clock (`SimClock`), so simulated
+        time = server start + speed·τ, and the two clocks' truths (`hil.calibration.stream_clocks`) do the
+        rest. In fast time the map's drift is speed − 1 beside the quartzes' ppm: the tracker's clock
+        keeps the wall's rate, as a real tracker's does."""
+        if self.emscon is None or self.controller is None:
+            raise RuntimeError("the clock map needs the emScon simulator and the controller")
+        trk, ctrl = self.clocks.tracker, self.clocks.controller
+        speed = float(self.controller.clock.speed)
+        start = self.emscon.started_at - float(self.controller.arm.started_at)  # running time at τ = 0
+        # τ = (s − o_t)/r_t − λ_t;  t_ctrl = o_c + r_c·(start + speed·τ + λ_c)
+        slope = ctrl.rate * speed / trk.rate
+        offset = ctrl.offset_s + ctrl.rate * (start + ctrl.latency_s - speed * trk.latency_s) \
+            - slope * trk.offset_s
+        return ClockMap(offset, slope - 1.0)
 
     def start(self) -> dict[str, Any]:
         self.simulator.start()
@@ -102,6 +133,10 @@ class StationService:
                 self.simulator.stop()
                 raise
             info["tracker_emscon_url"] = self.emscon.url
+            if self.controller is not None:
+                clock_map = self.clock_map()
+                info["clock_map"] = {"offset_s": clock_map.offset_s, "drift": clock_map.drift}
+        info["clocks"] = self.clocks.to_dict()
         return info
 
     def stop(self) -> None:
@@ -154,7 +189,11 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
     # the instrument measures on the controller's clock, as the emScon simulator does: a fast-time
     # station shortens its measuring time with everything else
     simulator = GeoComSimulator(world, config, sleep=controller.clock.sleep)
-    emscon = EmsconSimulator(world, ServerConfig(instrument=EmsconConfig(seed=seed),
+    # the tracker's and the controller's clocks differ as two real instruments' do
+    # (`hil.calibration.stream_clocks`: offset, drift, jitter, latency, each with its source)
+    clocks = StationClocks.realistic()
+    controller.arm.controller_clock = clocks.controller
+    emscon = EmsconSimulator(world, ServerConfig(instrument=EmsconConfig(seed=seed, clock=clocks.tracker),
                                                  address=controller.config.address, port=0),
                              clock=controller.clock.now)
     # the trackers' faults, reachable through the robot simulator's control channel
@@ -167,11 +206,21 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
         "emscon_garbage": lambda: emscon.garbage(),
         "emscon_laser_cold": lambda seconds: emscon.laser_cold(float(seconds)),
     })
+    def clock_pair() -> list[float]:
+        """(tracker stamp, RTDE timestamp) of one instant, jitter-free, read from the running clocks
+        (the emScon server's paired read of its two clocks): what `StationService.clock_map` predicts."""
+        now, tau = emscon.paired_times()
+        running = emscon.started_at + now - controller.arm.started_at
+        return [float(clocks.tracker.reading(tau + clocks.tracker.latency_s)),
+                float(clocks.controller.reading(running + clocks.controller.latency_s))]
+
     controller.extra_state.update({
+        "clock_pair": clock_pair,
         "tracker_measurements": lambda: simulator.instrument.measurements,
         "tracker_measuring_seconds": lambda: simulator.instrument.measuring_seconds,
     })
-    return StationService(simulator, world, truth_document(geometry, noise, calibration), home, emscon)
+    return StationService(simulator, world, truth_document(geometry, noise, calibration), home, emscon,
+                          clocks, controller)
 
 
 def station_spec(truth: str | None = None, seed: int = 0, acceptance_angle: float = 30.0,

@@ -80,7 +80,11 @@ maps its stamps onto the host's clock by an offset alone; a fast-time station (s
 times faster than the wall's) stamping samples in simulated seconds would make every sample's time
 wrong by up to 95 % of its age. So the server passes that clock (``clock``: seconds of the wall clock
 since it started) beside ``now``, and a continuous sample stamped τ carries the SMR's position at the
-simulated time that τ was.
+simulated time that τ was. The stamp it carries is that clock's reading through
+`EmsconConfig.clock` (`hil.calibration.stream_clocks.InstrumentClock`: offset + (1 + drift)·(τ +
+latency) + jitter), perfect by default; the simulated station gives the tracker realistic ones, so its
+stamps and the controller's RTDE timestamps disagree as two real instruments' do. The time grid stays
+on τ (a drift of tens of ppm changes the spacing by nanoseconds).
 
 Truth: a real tracker measures the SMR where it is at each sample's instant. This simulator's thread
 runs when the machine lets it, so a source that keeps a record of its past (`positions_at(times)`, the
@@ -143,6 +147,7 @@ from drivers.tracker.emscon.packets import (
     encode_status_change,
 )
 from drivers.tracker.geometry import cartesian_to_polar, polar_to_cartesian
+from hil.calibration.stream_clocks import InstrumentClock
 from mocks.geocom.noise import NoiseSpec, atmospheric_ppm
 from mocks.geocom.target import TargetSource, TargetState
 
@@ -214,6 +219,9 @@ class EmsconConfig:
     find_s: float = 0.5
     failed_search_s: float | None = None
     stationary_rate_hz: float = 1000.0  # readings averaged by a stationary measurement
+    # how the tracker's stamps err against its reference clock (offset, drift, jitter, latency:
+    # `hil.calibration.stream_clocks`); perfect by default, the simulated station gives it realistic ones
+    clock: InstrumentClock = field(default_factory=InstrumentClock)
     reflectors: tuple[Reflector, ...] = DEFAULT_REFLECTORS
     max_distance_m: float = 20.0
     min_distance_m: float = 0.8
@@ -264,6 +272,8 @@ class EmsconInstrument:
         self.source = source
         self.config = config or EmsconConfig()
         self._rng = np.random.default_rng(self.config.seed)
+        # the stamps' jitter draws from a generator of its own: the readings' noise stays as it was
+        self._stamp_rng = np.random.default_rng(None if self.config.seed is None else (self.config.seed, 1))
         self._outbox: list[tuple[float, int, bytes]] = []
         self._seq = 0
         self._busy_until = 0.0
@@ -554,7 +564,8 @@ class EmsconInstrument:
         if due and self.locked:
             times = [m.time_of(i) for i in due]
             readings = (self._readings(times, on_clock=True) * self._length_scale).tolist()
-            for t, (x, y, z) in zip(times, readings, strict=True):
+            stamps = self._stamps(times)
+            for t, (x, y, z) in zip(stamps, readings, strict=True):
                 t1, t2 = divmod(round(t * 1e6), 1_000_000)
                 m.pending.append(MeasValue(0, t1, t2, (x, y, z)))
             m.produced += len(due)
@@ -563,6 +574,14 @@ class EmsconInstrument:
             self._flush(m, now)
         if done:
             self._measurement = None
+
+    def _stamps(self, times: list[float]) -> list[float]:
+        """The stamps of samples taken at ``times`` of the reference tracker clock: as they are with a
+        perfect clock, else through `EmsconConfig.clock` (module docstring, Clocks)."""
+        clock = self.config.clock
+        if clock == InstrumentClock():
+            return times
+        return clock.stamps(np.asarray(times), self._stamp_rng).tolist()
 
     def _flush(self, m: _Continuous, t: float) -> None:
         T, p, h = self.environment

@@ -44,7 +44,7 @@ log = logging.getLogger(__name__)
 
 ES_C_UNKNOWN = 64  # ES_C_Unknown: the command an unsolicited refusal names
 #: Seconds within which the simulated time and the tracker's clock count as read at one instant
-#: (`EmsconSimulator._times`): a tenth of the 1 ms finest sample separation TPI allows.
+#: (`EmsconSimulator.paired_times`): a tenth of the 1 ms finest sample separation TPI allows.
 PAIR_S = 1e-4
 
 
@@ -98,13 +98,18 @@ class EmsconSimulator:
         """Simulated seconds since the server started (the tracker's clock)."""
         return self._clock() - self._t0
 
+    @property
+    def started_at(self) -> float:
+        """The simulated time (the ``clock`` given) at `start()`: where the tracker's clock reads 0."""
+        return self._t0
+
     def tracker_clock(self) -> float:
         """The tracker's own clock (seconds since the server started): the wall clock's rate, also
         when ``now`` runs in fast time, as a real tracker's quartz does (`mocks.emscon.instrument`,
         Clocks)."""
         return time.monotonic() - self._t0_wall
 
-    def _times(self) -> tuple[float, float]:
+    def paired_times(self) -> tuple[float, float]:
         """(`now`, `tracker_clock`) read at one instant: a thread pre-empted between two separate reads
         (a loaded machine) would pair a simulated time with a tracker clock tenths of a second later,
         and the instrument maps its samples' stamps onto simulated time by such pairs. The wall clock
@@ -263,7 +268,7 @@ class EmsconSimulator:
                     for packet in packets:
                         with self._lock:
                             try:
-                                out = self.instrument.handle(packet, *self._times())
+                                out = self.instrument.handle(packet, *self.paired_times())
                             except PacketError as exc:
                                 log.info("emScon: closing after an undecodable packet: %s", exc)
                                 return
@@ -272,7 +277,7 @@ class EmsconSimulator:
                 if flush:
                     last_flush = time.monotonic()
                 with self._lock:
-                    now, clock = self._times()
+                    now, clock = self.paired_times()
                     out = self.instrument.tick(now, flush=flush, watch=flush, clock=clock)
                     bursts, self._garbage = self._garbage, 0
                 out += [self._garbage_bytes() for _ in range(bursts)]

@@ -10,6 +10,10 @@ Encoder noise is added to ``actual_q`` only; ``actual_TCP_pose`` is computed fro
 controller's *own* model (nominal DH plus its factory deltas, `mocks.ur.hil_model.controller_fk`), as a
 real controller does not know the arm's hidden errors. `set_fk` swaps that model (a new calibration).
 
+RTDE's ``timestamp`` is the controller's running time read on its own clock (`controller_clock`,
+perfect unless the simulated station sets its truth: `hil.calibration.stream_clocks`); the joints'
+temperatures and every internal duration run on the running time itself.
+
 ``joint_temperatures`` come from `SimArm.temperatures`, a function of the controller's running time set by
 whoever knows how the arm warms (the simulated station, from its truth's thermal block); without one
 every joint stays at the lab's `AMBIENT_TEMPERATURE`.
@@ -26,6 +30,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from hil.calibration.stream_clocks import InstrumentClock
 from hil.calibration.synthetic import ENCODER_SIGMA
 from mocks.ur.clock import SimClock
 from mocks.ur.directions import JointDirections
@@ -126,7 +131,11 @@ class SimArm:
         self.inputs: dict[str, Any] = {}
         self._t_last = clock.now()
         self._t_start = self._t_last
-        self.timestamp = 0.0
+        self.timestamp = 0.0  # simulated seconds since the controller started (its running time)
+        # how the controller's clock, which stamps RTDE's `timestamp`, errs against the simulated time
+        # (`hil.calibration.stream_clocks`): perfect unless the simulated station gives it its truth
+        self.controller_clock = InstrumentClock()
+        self._stamp_rng = np.random.default_rng((config.seed, 2))
         self.steady_since: float | None = self._t_last
         self.history.append(self._t_last, self.q, self.directions.signs)
         self.snapshot: dict[str, Any] = {}
@@ -495,13 +504,25 @@ class SimArm:
             raise ValueError(f"joint temperatures: expected 6 values, got {len(values)}")
         return values
 
+    @property
+    def started_at(self) -> float:
+        """The simulated time (`SimClock.now`) at which this controller started: its running time's 0."""
+        return self._t_start
+
+    def _stamp(self) -> float:
+        """RTDE's ``timestamp`` of this cycle: the running time read on the controller's own clock."""
+        clock = self.controller_clock
+        if clock == InstrumentClock():
+            return self.timestamp
+        return float(clock.stamps(self.timestamp, self._stamp_rng if clock.jitter_s > 0 else None))
+
     def _refresh_snapshot(self) -> None:
         noise = self._rng.normal(0.0, self.config.encoder_noise, 6) if self.config.encoder_noise > 0 else 0.0
         self.actual_q = self.q + noise
         T_act = self.fk_tcp(self.actual_q)
         zeros6 = [0.0] * 6
         snap: dict[str, Any] = {
-            "timestamp": self.timestamp,
+            "timestamp": self._stamp(),
             "target_q": (self.q_target if self.motion is not None else self.q).tolist(),
             "target_qd": self.qd.tolist(),
             "target_qdd": self.qdd.tolist(),

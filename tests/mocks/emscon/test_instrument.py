@@ -14,6 +14,7 @@ from drivers.tracker.emscon.packets import (
     Command,
     ErrorResponse,
     MeasurementStatusInfo,
+    MeasValue,
     MultiMeasResult,
     PacketError,
     Reply,
@@ -24,6 +25,7 @@ from drivers.tracker.emscon.packets import (
     decode_reply,
     encode_command,
 )
+from hil.calibration.stream_clocks import InstrumentClock
 from mocks.emscon import EmsconConfig, EmsconInstrument
 from mocks.geocom import NOISELESS, NoiseSpec, StaticTarget, atmospheric_ppm
 
@@ -343,3 +345,25 @@ def test_a_search_takes_time_and_commands_queue_behind_it() -> None:
     assert bench.send(C.GET_TRACKER_STATUS) == []  # queued behind the search
     assert bench.advance(0.6) == [Answer(C.FIND_REFLECTOR, OK), READY,
                                   Answer(C.GET_TRACKER_STATUS, OK, (2,))]
+
+
+def test_continuous_stamps_follow_the_trackers_clock_and_leave_the_readings_alone() -> None:
+    def stream(clock: InstrumentClock) -> list[MeasValue]:
+        bench = Bench(EmsconConfig(noise=NoiseSpec(), seed=4, clock=clock))
+        bench.ready()
+        bench.ok(C.SET_MEASUREMENT_MODE, 1)
+        bench.ok(C.SET_CONTINUOUS_TIME_MODE_PARAMS, 1, 2000, 0, 0)
+        bench.now = 1.5
+        bench.ok(C.START_MEASUREMENT)
+        return [s for p in bench.advance(2.5) if isinstance(p, MultiMeasResult) for s in p.samples]
+
+    perfect = stream(InstrumentClock())
+    drifting = stream(InstrumentClock(offset_s=1234.5, drift_ppm=500.0, latency_s=0.002))
+    jittery = stream(InstrumentClock(offset_s=1234.5, drift_ppm=500.0, latency_s=0.002, jitter_s=2e-5))
+    tau = np.array([s.seconds for s in perfect])
+    np.testing.assert_allclose(tau, 1.5 + 0.001 * np.arange(2000), atol=1e-6)
+    want = 1234.5 + (1 + 500e-6) * (tau + 0.002)
+    np.testing.assert_allclose([s.seconds for s in drifting], want, atol=1e-6)  # µs stamps
+    assert np.std(np.array([s.seconds for s in jittery]) - want) == pytest.approx(2e-5, rel=0.1)
+    # the clock draws nothing from the readings' noise: the same points with or without it
+    assert [s.position for s in jittery] == [s.position for s in perfect]

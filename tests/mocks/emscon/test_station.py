@@ -72,3 +72,19 @@ def test_emscon_measures_the_same_world_and_its_faults_are_injectable(station: S
         assert second.receive(5.0) == [] and second.closed  # (receive stops at the EOF)
     finally:
         second.close()
+
+
+def test_the_station_carries_two_real_clocks_and_the_true_map_between_them(station: SimProcess) -> None:
+    from hil.calibration.stream_clocks import ClockMap, StationClocks
+
+    svc = station.info["services"][0]
+    clocks = StationClocks.from_dict(svc["clocks"])
+    assert clocks == StationClocks.realistic()  # an ideal arm still has two instruments
+    truth = ClockMap(**svc["clock_map"])
+    # the tracker's clock keeps the wall's rate while the simulation runs SPEED times faster
+    assert truth.drift == pytest.approx(SPEED * clocks.controller.rate / clocks.tracker.rate - 1.0, rel=1e-12)
+    for _ in range(3):  # read from the running clocks, a while apart: the map holds at every instant
+        trk, ctrl = station.state()["services"]["clock_pair"]
+        # the pair is read within 0.1 ms of wall time (SPEED × that of the controller's time)
+        assert float(truth(trk)) == pytest.approx(ctrl, abs=SPEED * 2e-4)
+        assert trk > clocks.tracker.offset_s  # the tracker's stamps are its own clock's, not the host's
