@@ -230,19 +230,23 @@ class StreamJoin:
         return self.tracker.p - self.predicted(clock)
 
     # ------------------------------------------------------------------ the fit
-    def fit(self, initial_offset_s: float | None = None, *, scan_window_s: float = 0.25,
-            scan_step_s: float = 0.002) -> ClockFit:
+    def fit(self, initial_offset_s: float | None = None, *, initial_drift: float = 0.0,
+            scan_window_s: float = 0.25, scan_step_s: float = 0.002) -> ClockFit:
         """Estimate the map (module docstring, steps 3 and 4). An `InputError` when too few trusted
-        samples remain (fewer than 10) to fix two parameters."""
+        samples remain (fewer than 10) to fix two parameters.
+
+        `initial_drift` is where Gauss–Newton starts and the scan's fixed drift: 0 for two quartzes,
+        speed − 1 for a fast-time simulated station, whose tracker clock keeps the wall's rate."""
         t_trk = self.tracker.t
         t_ref = float(np.mean(t_trk))
-        a0 = (float(self.joints.t[0] - t_trk[0]) if initial_offset_s is None else float(initial_offset_s))
+        a0 = (float(self.joints.t[0] - (1.0 + initial_drift) * t_trk[0]) if initial_offset_s is None
+              else float(initial_offset_s))
         offsets = a0 + np.arange(-scan_window_s, scan_window_s + scan_step_s / 2, scan_step_s)
-        scores = [self._score(ClockMap(a, 0.0)) for a in offsets]
+        scores = [self._score(ClockMap(a, initial_drift)) for a in offsets]
         if not np.isfinite(scores).any():
             raise InputError("stream join: the streams do not overlap in time near the first guess "
                              f"(offset {a0:.3f} s ± {scan_window_s} s)")
-        guess = ClockMap(float(offsets[int(np.nanargmin(scores))]), 0.0)
+        guess = ClockMap(float(offsets[int(np.nanargmin(scores))]), initial_drift)
         used, left = self.trust(guess)
         for _ in range(3):
             x = self._refine(guess, used, t_ref)

@@ -104,3 +104,13 @@ def test_streams_that_cannot_be_joined_are_refused_with_one_line(truth, arm):
     far = TrackerStream(s.tracker.t + 100.0, s.tracker.p)
     with pytest.raises(InputError, match="do not overlap"):
         StreamJoin(s.joints, far, arm.points).fit(initial_offset_s=0.0)
+
+
+def test_a_fast_time_station_is_joined_from_its_speed_as_first_drift(truth, arm):
+    # a simulated station at 10x: the tracker's clock keeps the wall's rate, a tenth of the controller's
+    s = sweep_streams(truth, tool_speed=0.25, duration=4.0, clocks=StationClocks.ideal(), seed=9)
+    slow = TrackerStream(s.tracker.t / 10.0 + 5.0, s.tracker.p)
+    fit = StreamJoin(s.joints, slow, arm.points).fit(initial_drift=9.0)
+    want = ClockMap(-50.0, 9.0)
+    assert abs(fit.drift - want.drift) < 3 * fit.sigma_drift
+    assert abs(_error_at(fit, want, fit.t_ref)) < 3 * fit.sigma_at_ref_s
