@@ -10,6 +10,11 @@
 * `exports` — URDF, ROS kinematics YAML and JSON exports of a model;
 * `controller_export` — the controller's own model as the ROS kinematics YAML UR's ur_calibration writes;
 * `synthetic` — random realistic truths and simulated measurements (``hil synth``, the simulators);
+* `stream_clocks` — the tracker's and the controller's clocks against the true time (the simulated
+  station's truth) and the map between their stamps;
+* `stream_join` — a sweep's joint and tracker streams joined in time: the clock map estimated from the
+  data with its uncertainty, untrusted samples left out by reason;
+* `synthetic_stream` — synthetic sweeps (a smooth joint path, both streams on their own clocks);
 * `selection` — the glue to the `selector` package: hil's model as its `PoseModel`, ``hil select``.
 
 No I/O with devices, no campaign state: pure computations on files and arrays.
