@@ -510,11 +510,13 @@ class SimArm:
         return self._t_start
 
     def _stamp(self) -> float:
-        """RTDE's ``timestamp`` of this cycle: the running time read on the controller's own clock."""
+        """RTDE's ``timestamp`` of this cycle: the running time read on the controller's own clock
+        (plain float arithmetic: it runs every 2 ms cycle)."""
         clock = self.controller_clock
-        if clock == InstrumentClock():
-            return self.timestamp
-        return float(clock.stamps(self.timestamp, self._stamp_rng if clock.jitter_s > 0 else None))
+        stamp = clock.offset_s + clock.rate * (self.timestamp + clock.latency_s)
+        if clock.jitter_s > 0:
+            stamp += float(self._stamp_rng.normal(0.0, clock.jitter_s))
+        return stamp
 
     def _refresh_snapshot(self) -> None:
         noise = self._rng.normal(0.0, self.config.encoder_noise, 6) if self.config.encoder_noise > 0 else 0.0
