@@ -75,8 +75,7 @@ class EmsconSimulator:
                  clock: Callable[[], float] | None = None) -> None:
         self.config = config or ServerConfig()
         self._clock = clock if clock is not None else self._scaled_wall
-        self._t0_wall = time.monotonic()
-        self._t0 = self._clock()
+        self._t0_wall, self._t0 = self._start_pair()
         self.instrument = EmsconInstrument(source, self.config.instrument, now=0.0)
         self.instrument.source_epoch = self._t0
         self.stopping = threading.Event()
@@ -90,6 +89,22 @@ class EmsconSimulator:
         self._rand = random.Random(self.config.seed)
         self.port: int | None = None
         self.refused = 0  # connections turned away
+
+    def _start_pair(self) -> tuple[float, float]:
+        """(wall clock, simulated clock) at the server's start, read at one instant as `paired_times`
+        reads them: the tracker's clock (wall rate) and the simulated time both count from here, and
+        the station's true clock map (`mocks.station.StationService.clock_map`) rests on the pair.
+        Without a clock given, simulated time is the scaled wall clock from this instant (0 here)."""
+        if self._clock == self._scaled_wall:
+            self._t0_wall = time.monotonic()
+            return self._t0_wall, self._clock()
+        for _ in range(5):
+            w0 = time.monotonic()
+            t = self._clock()
+            w1 = time.monotonic()
+            if w1 - w0 < PAIR_S:
+                break
+        return 0.5 * (w0 + w1), t
 
     def _scaled_wall(self) -> float:
         return (time.monotonic() - self._t0_wall) * self.config.time_scale
@@ -137,8 +152,7 @@ class EmsconSimulator:
     def start(self) -> EmsconSimulator:
         """Listen and serve."""
         self.stopping.clear()
-        self._t0_wall = time.monotonic()
-        self._t0 = self._clock()
+        self._t0_wall, self._t0 = self._start_pair()
         self.instrument.source_epoch = self._t0  # the source's record is on the same clock
         sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
