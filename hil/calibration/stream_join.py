@@ -28,9 +28,10 @@ How (`StreamJoin`):
    per joint sample, not per trial of the map, keeps a fit over 10⁵ points to seconds.
 2. Tracker samples that cannot be trusted are left out, each with its reason counted (`ClockFit.left_out`):
    ``beam lost`` (no position), ``after a gap`` (the `relock_guard_s` after a hole in the tracker
-   stream: a re-locked tracker's first points, an assumption), ``joint gap`` (mapped into a hole in the
-   joint stream or outside it), ``acceleration`` (the joints' |q̈| beyond the quasi-static limit,
-   `hil.arm.dynamics.DynamicsModel.acceleration_limit`, at that time).
+   stream: a re-locked tracker's first points; 50 ms by default, an assumption — the TPI manual gives no
+   settling time after FindReflector, and 50 samples at 1 kHz cost little), ``joint gap`` (mapped
+   into a hole in the joint stream or outside it), ``acceleration`` (the joints' |q̈| beyond the
+   quasi-static limit, `hil.arm.dynamics.DynamicsModel.acceleration_limit`, at that time).
 3. A coarse scan of the offset (every `scan_step_s` over ±`scan_window_s` around a first guess: the
    streams' first stamps, i.e. recordings started together, unless given) finds the basin; then
    Gauss–Newton (``scipy.optimize.least_squares``, analytic Jacobian: ∂r/∂a = −ṗ, ∂r/∂d = −ṗ·(t_trk −
