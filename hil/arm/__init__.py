@@ -1,6 +1,9 @@
 """What the arm is: the robot catalog, its geometry, forward and inverse kinematics, and safe targets.
 
 * `catalog` — the UR models hil knows (nominal DH, joint limits, speeds, ur_description names);
+* `chain` — the kinematic structure of one serial arm (joint kinds RZ/PZ, nominal origins, limits),
+  a catalog UR's (`ur_chain`) or a URDF's;
+* `urdf_chain` — a chain from a URDF between a base and a tip link (`chain_from_urdf`), pinocchio parsing;
 * `geometry` — the URDF-convention joint origins, flange, SMR and tracker pose of one arm;
 * `kinematics` — batched forward kinematics and identification Jacobians (pinocchio), the parameter
   vector and its identifiable subset;
