@@ -8,6 +8,8 @@
 * `joint_error_selection` — which low-order joint errors the data support, by cross-validation;
 * `model_file` — the ``hil-model/1`` and ``hil-truth/1`` JSON documents;
 * `exports` — URDF, ROS kinematics YAML and JSON exports of a model;
+* `urdf_rewrite` — a URDF with some joints' `<origin>` values spliced in, every other byte kept;
+* `calibrated_urdf` — a URDF chain's calibrated placements written back into its own file;
 * `controller_export` — the controller's own model as the ROS kinematics YAML UR's ur_calibration writes;
 * `synthetic` — random realistic truths and simulated measurements (``hil synth``, the simulators);
 * `selection` — the glue to the `selector` package: hil's model as its `PoseModel`, ``hil select``.

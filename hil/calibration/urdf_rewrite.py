@@ -56,11 +56,14 @@ class StartTag:
 
 @dataclass(frozen=True)
 class JointSite:
-    """One top-level `<joint>` of a URDF: its name, type and line, its start tag, its `<origin>`'s start
-    tag (None when it has none), where its first child element starts, and the origin it declares."""
+    """One top-level `<joint>` of a URDF: its name, type, parent and child links and line, its start
+    tag, its `<origin>`'s start tag (None when it has none), where its first child element starts, and
+    the origin it declares."""
 
     name: str
     kind: str
+    parent: str
+    child: str
     line: int
     tag: StartTag
     origin_tag: StartTag | None
@@ -139,12 +142,14 @@ def locate_joints(data: bytes, source: str = "URDF") -> dict[str, JointSite]:
             if joint in found:
                 raise InputError(f"{source}:{line}: joint {joint!r} is declared twice")
             current.clear()
-            current.update(name=joint, kind=attrs.get("type", ""), line=line,
+            current.update(name=joint, kind=attrs.get("type", ""), parent="", child="", line=line,
                            tag=_start_tag(data, parser.CurrentByteIndex, source, line),
                            origin_tag=None, first_child=None, origin=Origin((0.0,) * 3, (0.0,) * 3))
         elif depth == 3 and stack[1] == "joint" and current:
             if current["first_child"] is None:
                 current["first_child"] = parser.CurrentByteIndex
+            if name in ("parent", "child"):
+                current[name] = attrs.get("link", "")
             if name == "origin":
                 if current["origin_tag"] is not None:
                     raise InputError(f"{source}:{line}: joint {current['name']!r} has two <origin> elements")

@@ -1,23 +1,13 @@
-"""The calibrated-URDF writer: only the joint origins change, byte for byte, and the file it writes
-loads in pinocchio (and urdfdom) with the calibrated chain's forward kinematics."""
+"""The URDF origin splicer: only the joint origins change, byte for byte, on real arms' URDFs and on
+the corner cases (a missing origin or attribute, other quotes, a transmission naming the joint)."""
 
 from __future__ import annotations
 
-import shutil
-import subprocess
 import xml.etree.ElementTree as ET
-from pathlib import Path
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
-from hil.calibration.urdf_origins import (
-    axis_rotation,
-    joint_origin,
-    origin_placement,
-    placement_origin,
-)
 from hil.calibration.urdf_rewrite import (
     Origin,
     format_triple,
@@ -26,7 +16,8 @@ from hil.calibration.urdf_rewrite import (
     rewrite_joint_origins_text,
 )
 from hil.errors import InputError
-from tests.hil.robot_urdfs import ARMS, RobotUrdf
+from tests.hil.robot_urdfs import ARMS
+from tests.hil.robot_urdfs import arm as arm_urdf
 
 
 def _random_origin(rng: np.random.Generator) -> Origin:
@@ -45,7 +36,7 @@ def _cut(data: bytes, spans: list[tuple[int, int]]) -> bytes:
 def test_every_byte_outside_the_changed_origins_is_kept(arm: str) -> None:
     """Every joint's origin changed on a real URDF: outside the `<origin>` tags the file is the same
     bytes; inside them everything but the two values is; the values read back exactly."""
-    data = ARMS[arm].path.read_bytes()
+    data = arm_urdf(arm)[0].read_bytes()
     rng = np.random.default_rng(7)
     before = locate_joints(data)
     assert len(before) == len(ET.fromstring(data).findall("joint"))  # transmissions' <joint>s are not joints
@@ -69,7 +60,7 @@ def test_every_byte_outside_the_changed_origins_is_kept(arm: str) -> None:
 
 
 def test_a_joint_named_in_a_transmission_is_changed_only_in_its_joint() -> None:
-    data = ARMS["ur5"].path.read_bytes()
+    data = arm_urdf("ur5")[0].read_bytes()
     assert data.count(b'<joint name="shoulder_pan_joint"') == 2  # the joint and its transmission's
     out = rewrite_joint_origins(data, {"shoulder_pan_joint": Origin((0.0, 0.0, 0.1), (0.0, 0.0, 0.5))})
     assert out.count(b'xyz="0.0 0.0 0.1"') == 1 and out.count(b'rpy="0.0 0.0 0.5"') == 1
@@ -137,123 +128,3 @@ def test_bad_urdfs_are_one_line_naming_file_and_line(text: str, message: str) ->
     with pytest.raises(InputError, match=message) as caught:
         rewrite_joint_origins_text(text, {"j": Origin((0.0,) * 3, (0.0,) * 3)}, "x.urdf")  # type: ignore[arg-type]
     assert "\n" not in str(caught.value)
-
-
-# --- the calibrated chain written back: pinocchio's FK of the written file is the chain's -------------------
-
-def _se3(origin_element: ET.Element | None) -> pin.SE3:
-    if origin_element is None:
-        return pin.SE3.Identity()
-    def triple(key: str) -> tuple[float, float, float]:
-        return tuple(float(v) for v in origin_element.get(key, "0 0 0").split())  # type: ignore[return-value]
-    return origin_placement(Origin(triple("xyz"), triple("rpy")))
-
-
-def _chain(arm: RobotUrdf) -> list[ET.Element]:
-    """The URDF's joints from the base link to the tip link, in order (read with ElementTree, not with
-    the module under test)."""
-    root = ET.parse(arm.path).getroot()
-    by_child = {j.find("child").get("link"): j for j in root.findall("joint")}  # type: ignore[union-attr]
-    joints, link = [], arm.tip
-    while link != arm.base:
-        joint = by_child[link]
-        joints.append(joint)
-        link = joint.find("parent").get("link")  # type: ignore[union-attr]
-    return joints[::-1]
-
-
-def _axis(joint: ET.Element) -> np.ndarray:
-    axis = joint.find("axis")
-    return np.array([float(v) for v in (axis.get("xyz") if axis is not None else "1 0 0").split()])
-
-
-def _calibrated_chain(arm: RobotUrdf, rng: np.random.Generator, scale: float):
-    """The RZ chain of the URDF (M_i = A_{i-1}⁻¹·F_i·O_i·A_i, tip = A_N⁻¹·F_tip), each placement moved
-    by a random se(3) step of size `scale`, and the origins to write for it."""
-    placements, names, origins = [], [], {}
-    fixed = pin.SE3.Identity()
-    previous_axis = pin.SE3.Identity()
-    last_fixed: tuple[str, pin.SE3] | None = None  # the last fixed joint before the tip, and F before it
-    for joint in _chain(arm):
-        origin = _se3(joint.find("origin"))
-        if joint.get("type") == "fixed":
-            last_fixed = (joint.get("name"), fixed)  # type: ignore[assignment]
-            fixed = fixed * origin
-            continue
-        A = axis_rotation(_axis(joint))
-        nominal = previous_axis.inverse() * fixed * origin * A
-        calibrated = nominal * pin.exp6(pin.Motion(rng.normal(scale=scale, size=6)))
-        written = joint_origin(previous_axis.inverse() * fixed, calibrated, A)
-        origins[joint.get("name")] = placement_origin(written)
-        placements.append((nominal, calibrated))
-        names.append(joint.get("name"))
-        fixed, previous_axis, last_fixed = pin.SE3.Identity(), A, None
-    tip_nominal = previous_axis.inverse() * fixed
-    tip = tip_nominal
-    if last_fixed is not None:  # written into the last fixed joint: what follows it is the identity
-        tip = tip_nominal * pin.exp6(pin.Motion(rng.normal(scale=scale, size=6)))
-        name, before = last_fixed
-        written = joint_origin(previous_axis.inverse() * before, tip, pin.SE3.Identity())
-        origins[name] = placement_origin(written)
-    return names, placements, (tip_nominal, tip), origins
-
-
-def _chain_fk(placements: list[pin.SE3], tip: pin.SE3, q: np.ndarray) -> pin.SE3:
-    T = pin.SE3.Identity()
-    for M, angle in zip(placements, q, strict=True):
-        T = T * M * pin.SE3(pin.exp3(np.array([0.0, 0.0, angle])), np.zeros(3))
-    return T * tip
-
-
-def _pinocchio_fk(xml: str, arm: RobotUrdf, names: list[str], q: np.ndarray) -> pin.SE3:
-    model = pin.buildModelFromXML(xml)
-    v = np.zeros(model.nv)
-    for name, angle in zip(names, q, strict=True):
-        v[model.joints[model.getJointId(name)].idx_v] = angle
-    config = pin.integrate(model, pin.neutral(model), v)
-    data = model.createData()
-    pin.framesForwardKinematics(model, data, config)
-    return data.oMf[model.getFrameId(arm.tip, pin.FrameType.BODY)]
-
-
-@pytest.mark.parametrize("arm", sorted(ARMS))
-def test_the_written_urdf_has_the_calibrated_chains_forward_kinematics(arm: str) -> None:
-    """Joint placements (and the tip, where a fixed joint leads to it) moved by a few millimetres and
-    milliradians; the file written for them loads in pinocchio and its FK at random postures is the
-    calibrated chain's to 1e-9 m — and the unchanged chain is the original file's, so the chain form
-    of the module docstring is the URDF's."""
-    robot = ARMS[arm]
-    rng = np.random.default_rng(11)
-    names, placements, (tip_nominal, tip), origins = _calibrated_chain(robot, rng, 0.005)
-    original = robot.path.read_text(encoding="utf-8")
-    written = rewrite_joint_origins_text(original, origins, arm)
-    for q in rng.uniform(-np.pi, np.pi, size=(20, len(names))):
-        nominal = _chain_fk([p[0] for p in placements], tip_nominal, q)
-        unchanged = _pinocchio_fk(original, robot, names, q)
-        assert np.allclose(unchanged.homogeneous, nominal.homogeneous, atol=1e-9)
-        calibrated = _chain_fk([p[1] for p in placements], tip, q)
-        got = _pinocchio_fk(written, robot, names, q)
-        assert np.linalg.norm(got.translation - calibrated.translation) < 1e-9
-        assert np.linalg.norm(pin.log3(got.rotation.T @ calibrated.rotation)) < 1e-9
-        assert np.linalg.norm(calibrated.translation - nominal.translation) > 1e-4  # the change shows
-
-
-def test_axis_rotation_takes_z_onto_the_axis() -> None:
-    for axis in ([0, 0, 1], [0, 0, -1], [1, 0, 0], [0, -1, 0], [0.3, -0.2, 0.9]):
-        a = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
-        assert np.allclose(axis_rotation(axis).rotation @ [0.0, 0.0, 1.0], a, atol=1e-15)
-    assert axis_rotation([0, 0, 1]).isIdentity()
-
-
-@pytest.mark.parametrize("arm", sorted(ARMS))
-def test_the_written_urdf_loads_in_urdfdom(arm: str, tmp_path: Path) -> None:
-    """urdfdom's own parser (`check_urdf`, Debian liburdfdom-tools; .ci/run installs it) accepts it."""
-    check_urdf = shutil.which("check_urdf")
-    if check_urdf is None:
-        pytest.skip("check_urdf (Debian liburdfdom-tools) is not installed: urdfdom not checked")
-    robot = ARMS[arm]
-    _, _, _, origins = _calibrated_chain(robot, np.random.default_rng(5), 0.005)
-    path = tmp_path / "calibrated.urdf"
-    path.write_bytes(rewrite_joint_origins(robot.path.read_bytes(), origins, arm))
-    result = subprocess.run([check_urdf, str(path)], capture_output=True, text=True, timeout=60, check=False)
-    assert result.returncode == 0, result.stdout + result.stderr
