@@ -13,6 +13,8 @@
 * `safety` — a motion target checked against the joint limits and the keep-in box, never clamped;
 * `self_collision` — whether a posture folds the arm onto itself (the selector's link capsules on
   these kinematics' joint frames);
+* `urdf_collision` — self-collision of a URDF arm: its own collision geometry checked in batches
+  (pinocchio/coal), capsules around the chain's links where it has none;
 * `routes` — how the arm gets to a target inside the keep-in box: straight, or the quickest safe
   detour (home, upright and folded transit postures), as the campaign moves and its dry run shows;
 * `blas_threads` — one BLAS thread per process: the model's matrices are small, and OpenBLAS's threads
