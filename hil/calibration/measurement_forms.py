@@ -285,8 +285,14 @@ POSITIONS_EXPECTED = ("x,y,z (m), x1,y1,z1[,x2,y2,z2…] (FIGAROH's markers) or 
 
 def check_measurements_header(rows: Rows) -> None:
     """Refuse a measurements header that lacks a joint or a position form, or names one in part,
-    before any row is read: a file whose header is wrong is told so, whatever its rows hold."""
+    before any row is read: a file whose header is wrong is told so, whatever its rows hold. A UR's
+    file with joint columns beyond q6 (q7.., an arm of more joints) is refused too: dropping a joint
+    would fit the wrong arm."""
     header = rows.header
+    extra = sorted(int(m["k"]) for c in header.columns if (m := _JOINT.match(c)) and int(m["k"]) > 6)
+    if extra:
+        raise InputError(header.where(f"joint columns up to q{extra[-1]}, but a UR has 6 joints "
+                                      "(q1..q6); an arm of more joints is read with --urdf"))
     choose(header, JOINT_FORMS, required=True, expected=JOINTS_EXPECTED)
     choose(header, POSITION_FORMS, required=True, expected=POSITIONS_EXPECTED)
     choose(header, ORIENTATION_FORMS, required=False, expected="")

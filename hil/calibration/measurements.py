@@ -89,10 +89,14 @@ def joint_columns(dof: int) -> tuple[str, ...]:
     return JOINT_COLUMNS if dof == 6 else tuple(f"q{k + 1}" for k in range(dof))
 
 
-def read_joints(path: str | os.PathLike[str],
-                joint_units: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+def read_joints(path: str | os.PathLike[str], joint_units: str | None = None,
+                chain: Chain | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Joint configurations (m, 6) in radians and their line numbers from a CSV with a joint form
-    (q1..q6 or the URDF's names; degrees declared by a ``_deg`` suffix or `joint_units` "deg")."""
+    (q1..q6 or the URDF's names; degrees declared by a ``_deg`` suffix or `joint_units` "deg"); for an
+    arm from its URDF (`chain`), (m, N) from q1..qN (`forms.chain_joints`)."""
+    if chain is not None and not chain.is_ur:
+        return forms.chain_joints(forms.read_rows(path), chain.joint_names, chain.kinds, chain.lower,
+                                  chain.upper, f"{chain.name} (URDF)", joint_units)
     return forms.joints(forms.read_rows(path), joint_units)
 
 
