@@ -114,11 +114,12 @@ def chain_from_urdf(path: str | os.PathLike[str], base: str | None = None, tip: 
 
 
 def chain_from_text(text: str, base: str | None = None, tip: str | None = None,
-                    source: str = "URDF") -> Chain:
+                    source: str = "URDF", file: str | None = None) -> Chain:
     """The serial chain of a URDF's text between links `base` and `tip` (module docstring): its actuated
     joints in order, fixed joints folded in, every axis turned onto z, limits and speeds from the file.
 
-    `source` names the file in errors. InputError (one line) for anything that is not one serial chain.
+    `source` names the file in errors, `file` the name the chain records (default: `source`).
+    InputError (one line) for anything that is not one serial chain.
     """
     try:
         root = ET.fromstring(text)
@@ -208,8 +209,8 @@ def chain_from_text(text: str, base: str | None = None, tip: str | None = None,
         raise InputError(f"{source}: the tip {tip!r} does not follow the chain's last joint")
     flange = pin.SE3(previous_rotation.T, np.zeros(3)) * tip_placement
     sha = hashlib.sha256(text.encode("utf-8")).hexdigest()
-    name = root.get("name") or Path(source).stem
-    urdf = UrdfSource(text, sha, base, tip, source, tuple(urdf_joints), tip_placement)
+    name = root.get("name") or Path(file or source).stem
+    urdf = UrdfSource(text, sha, base, tip, file or source, tuple(urdf_joints), tip_placement)
     return Chain(name, f"{name} (URDF, {base} → {tip})",
                  tuple(_KINDS[j.kind] for j in actuated), tuple(j.name for j in actuated),
                  tuple(origins), flange,

@@ -162,6 +162,15 @@ def export(document: dict[str, Any], geometry: Geometry, fmt: str, source: str =
         comment += (f"; RIGID GEOMETRY ONLY: this format cannot hold the model's joint compliance "
                     f"[{c}] rad/Nm ({load}); positions predicted from it omit the gravity sag, "
                     "which hil fk and hil compensate apply from the JSON model")
+    if geometry.chain is not None and fmt == "ros-kinematics":
+        raise InputError(f"{source}: --format ros-kinematics is ur_description's kinematics_params, six "
+                         f"UR joints; the {geometry.robot} model is of an arm from its URDF (export "
+                         "--format urdf or json)")
+    if geometry.chain is not None and fmt == "urdf":
+        # The hook: geometry.urdf_origins() gives each calibrated joint <origin> in the URDF's terms, and
+        # geometry.chain.urdf the file's text to rewrite (the URDF rewriting writer is not in this module).
+        raise InputError(f"{source}: --format urdf of an arm from its URDF ({geometry.robot}) is not "
+                         "available yet: export --format json")
     if fmt == "urdf":
         return to_urdf(geometry, comment)
     if fmt == "ros-kinematics":
