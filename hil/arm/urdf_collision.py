@@ -16,8 +16,8 @@ starts — and is left out; `disabled` names them, and the note says how many.
 
 **No collision geometry on the chain** (or a mesh file that cannot be found): capsules around the
 chain's links instead — from each joint's origin to the next one's, the base origin to joint 1, the
-last joint to the tip — of one radius scaled with the arm's size (`capsule_radius`); the note says so in
-one line, since capsules are coarser than the real housings.
+last joint to the tip — tapering from base to wrist as a UR's do, scaled with the arm's size
+(`capsule_radii`); the note says so in one line, since capsules are coarser than the real housings.
 
 Both checks count a posture as colliding when two checked bodies come closer than `margin` (surface to
 surface), the selector's `COLLISION_MARGIN` by default.
@@ -35,22 +35,25 @@ import pinocchio as pin
 from hil.arm.chain import PRISMATIC, Chain
 from selector.arm import COLLISION_MARGIN, UR5E_RADII, segment_distance
 
-#: A UR5e's mean link-housing radius (m) and the reach (m, `UR5E_REACH`) it goes with: the capsule
-#: radius of an arm without collision geometry is this one scaled as hil scales a UR's capsules
-#: (`hil.arm.self_collision.arm_shape`: by size^0.6). UR5e reach 850 mm: Universal Robots, UR5e
-#: technical specifications. Using a UR's housings for another arm is an assumption (no URDF without
-#: geometry says how thick its links are); the scaling keeps a desktop arm's capsules desktop-sized.
-UR5E_MEAN_RADIUS = float(np.mean(UR5E_RADII[:-1]))
+#: A UR5e's reach (m): Universal Robots, UR5e technical specifications (850 mm). The capsules of an arm
+#: without collision geometry taper from a UR5e's base housing radius to its wrist's
+#: (`selector.arm.UR5E_RADII`), scaled as hil scales a UR's capsules (`hil.arm.self_collision.arm_shape`:
+#: by size^0.6) with the arm's reach against this one. Using a UR's housings for another arm is an
+#: assumption (no URDF without geometry says how thick its links are); the scaling keeps a desktop
+#: arm's capsules desktop-sized.
 UR5E_REACH = 0.85
 #: Postures checked per C++ call: a few thousand keep the batch's arrays small and the call long
 #: enough that the Python overhead per batch does not count.
 BATCH = 4096
 
 
-def capsule_radius(reach: float) -> float:
-    """The capsule radius (m) for an arm of `reach` (m) without collision geometry (see
-    `UR5E_MEAN_RADIUS`)."""
-    return UR5E_MEAN_RADIUS * (max(reach, 1e-3) / UR5E_REACH) ** 0.6
+def capsule_radii(chain: Chain) -> np.ndarray:
+    """(dof + 1,) radii (m) of the capsules base→joint 1, …, joint n→tip of an arm without collision
+    geometry: a UR5e's base radius tapering linearly to its wrist's, scaled by (reach / 0.85 m)^0.6
+    (`UR5E_REACH`)."""
+    scale = (max(chain_reach(chain), 1e-3) / UR5E_REACH) ** 0.6
+    t = np.linspace(0.0, 1.0, chain.dof + 1)
+    return scale * (UR5E_RADII[0] + t * (UR5E_RADII[-2] - UR5E_RADII[0]))
 
 
 def chain_frames(chain: Chain, q: np.ndarray) -> np.ndarray:
@@ -75,10 +78,12 @@ def chain_frames(chain: Chain, q: np.ndarray) -> np.ndarray:
 
 
 def chain_reach(chain: Chain) -> float:
-    """The sum of the distances between consecutive joint origins and to the tip (m): an upper bound
-    of the arm's reach, what its capsules are sized by."""
-    origins = chain_frames(chain, np.zeros((1, chain.dof)))[0, :, :3, 3]
-    return float(np.sum(np.linalg.norm(np.diff(origins, axis=0), axis=1)))
+    """The arm's reach (m): the farthest the tip gets from joint 1's origin over 512 postures drawn
+    inside the limits (seeded), what its capsules are sized by (a UR5e's: 0.85 m from its base axis)."""
+    lo, hi = chain.sampling_range()
+    q = np.random.default_rng(0).uniform(lo, hi, size=(512, chain.dof))
+    frames = chain_frames(chain, q)
+    return float(np.max(np.linalg.norm(frames[:, -1, :3, 3] - frames[:, 1, :3, 3], axis=1)))
 
 
 class UrdfSelfCollision:
@@ -105,7 +110,8 @@ class UrdfSelfCollision:
         if reason:
             self.kind = "capsules"
             self._setup_capsules()
-            self.note = (f"self-collision: capsules of {self.radius * 1000:.0f} mm around the chain's links "
+            self.note = (f"self-collision: capsules of {self.radii.max() * 1000:.0f} to "
+                         f"{self.radii.min() * 1000:.0f} mm around the chain's links "
                          f"({reason}; {len(self._pairs)} pairs checked, {len(self.disabled)} touching at the "
                          "mid-range posture left out)")
         else:
@@ -194,7 +200,7 @@ class UrdfSelfCollision:
     # --- capsules --------------------------------------------------------------------------------------
 
     def _setup_capsules(self) -> None:
-        self.radius = capsule_radius(chain_reach(self.chain))
+        self.radii = capsule_radii(self.chain)
         n = self.chain.dof + 1  # capsules: base→J1, J1→J2, …, JN→tip
         candidates = np.array([(i, j) for i in range(n) for j in range(i + 2, n)], dtype=int).reshape(-1, 2)
         touching = ~self._capsule_free(self._reference()[None], candidates)[0]
@@ -202,11 +208,11 @@ class UrdfSelfCollision:
         self._pairs = candidates[~touching]
 
     def _capsule_free(self, q: np.ndarray, pairs: np.ndarray) -> np.ndarray:
-        """(N, P): whether each capsule pair keeps 2·radius + margin apart."""
+        """(N, P): whether each capsule pair keeps the sum of its radii + margin apart."""
         points = chain_frames(self.chain, q)[:, :, :3, 3]
         a, b = pairs[:, 0], pairs[:, 1]
         d = segment_distance(points[:, a], points[:, a + 1], points[:, b], points[:, b + 1])
-        return d >= 2.0 * self.radius + self.margin
+        return d >= self.radii[a] + self.radii[b] + self.margin
 
     # --- the check ---------------------------------------------------------------------------------------
 

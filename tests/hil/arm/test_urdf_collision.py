@@ -10,7 +10,7 @@ import pinocchio as pin
 import pytest
 
 from hil.arm.urdf_chain import chain_from_text, chain_from_urdf
-from hil.arm.urdf_collision import UrdfSelfCollision, capsule_radius, chain_frames
+from hil.arm.urdf_collision import UrdfSelfCollision, capsule_radii, chain_frames
 from selector.arm import COLLISION_MARGIN
 from tests.hil.robot_urdfs import arm as arm_urdf
 
@@ -97,11 +97,12 @@ def test_capsules_follow_the_chains_joint_origins() -> None:
     pa = points[None, :, a] + s * (points[None, :, a + 1] - points[None, :, a])  # (S, N, P, 3)
     pb = points[None, :, b] + s * (points[None, :, b + 1] - points[None, :, b])
     d = np.linalg.norm(pa[:, None] - pb[None], axis=-1).min(axis=(0, 1))  # sampled distance (N, P)
-    expected = np.any(d < 2 * check.radius + COLLISION_MARGIN, axis=1)
+    expected = np.any(d < check.radii[a] + check.radii[b] + COLLISION_MARGIN, axis=1)
     got = check.collides(q)
     assert np.all(got[expected])  # the sampled distance is never below the true one
     assert np.mean(got != expected) < 0.02 and 0 < expected.sum() < len(q)
-    assert capsule_radius(0.85) == pytest.approx(0.0599, abs=1e-3)  # a UR5e's mean housing radius
+    radii = capsule_radii(check.chain)
+    assert radii[0] > radii[-1] and len(radii) == check.chain.dof + 1
 
 
 def test_chain_frames_are_pinocchios() -> None:
