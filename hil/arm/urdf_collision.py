@@ -51,7 +51,7 @@ def capsule_radii(chain: Chain) -> np.ndarray:
     """(dof + 1,) radii (m) of the capsules base→joint 1, …, joint n→tip of an arm without collision
     geometry: a UR5e's base radius tapering linearly to its wrist's, scaled by (reach / 0.85 m)^0.6
     (`UR5E_REACH`)."""
-    scale = (max(chain_reach(chain), 1e-3) / UR5E_REACH) ** 0.6
+    scale = (max(tip_reach(chain), 1e-3) / UR5E_REACH) ** 0.6
     t = np.linspace(0.0, 1.0, chain.dof + 1)
     return scale * (UR5E_RADII[0] + t * (UR5E_RADII[-2] - UR5E_RADII[0]))
 
@@ -77,7 +77,7 @@ def chain_frames(chain: Chain, q: np.ndarray) -> np.ndarray:
     return np.stack(out, axis=1)
 
 
-def chain_reach(chain: Chain) -> float:
+def tip_reach(chain: Chain) -> float:
     """The arm's reach (m): the farthest the tip gets from joint 1's origin over 512 postures drawn
     inside the limits (seeded), what its capsules are sized by (a UR5e's: 0.85 m from its base axis)."""
     lo, hi = chain.sampling_range()
