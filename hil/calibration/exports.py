@@ -167,10 +167,11 @@ def export(document: dict[str, Any], geometry: Geometry, fmt: str, source: str =
                          f"UR joints; the {geometry.robot} model is of an arm from its URDF (export "
                          "--format urdf or json)")
     if geometry.chain is not None and fmt == "urdf":
-        # The hook: geometry.urdf_origins() gives each calibrated joint <origin> in the URDF's terms, and
-        # geometry.chain.urdf the file's text to rewrite (the URDF rewriting writer is not in this module).
-        raise InputError(f"{source}: --format urdf of an arm from its URDF ({geometry.robot}) is not "
-                         "available yet: export --format json")
+        # the user's own URDF with the calibrated joint origins spliced in, every other byte kept (no
+        # comment is added: the provenance stays in the JSON model)
+        from hil.calibration.calibrated_urdf import calibrated_urdf
+
+        return calibrated_urdf(geometry.chain, list(geometry.joints), geometry.flange).decode("utf-8")
     if fmt == "urdf":
         return to_urdf(geometry, comment)
     if fmt == "ros-kinematics":
