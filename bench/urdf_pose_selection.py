@@ -1,7 +1,7 @@
 """Poses selected vs random at equal count for arms read from their URDFs (issue 32): the held-out truth
 error after identification. Not a test: it prints a table and asserts nothing.
 
-    python bench/urdf_pose_selection.py [--trials 4] [--count 40] [--candidates 3000] [--seed 1]
+    python bench/urdf_pose_selection.py [--trials 4] [--count 40] [--candidates 3000] [--seed 1] [--plain]
 
 For the Franka Panda, the Kinova Jaco 2 and the Unitree Z1 of example-robot-data
 (tests/hil/robot_urdfs.py), each trial draws a rigid synthetic truth (`random_truth`: 0.5 mm / 1 mrad
@@ -9,7 +9,8 @@ placement errors on every joint and the flange, an unknown tracker 2–4 m away,
 draws the feasible candidates once (`design_space`: inside the URDF's limits, the SMR facing the tracker
 within 30°, the beam clear of the links, no self-collision on the URDF's meshes), and picks `count`
 poses from them twice: by the tabu search on O1 (method 000) and at random. Each set is measured
-(20 µm per axis, the UR's encoder noise) and identified (`identify`, hil's default MAP fit); the error
+(20 µm per axis, the UR's encoder noise) and identified (`identify`, hil's default MAP fit toward the
+nominal geometry; `--plain`: plain least squares, what the Cramér–Rao prediction is for); the error
 is the RMS distance between the identified model and the truth over 500 held-out configurations drawn
 inside the limits; the Cramér–Rao prediction is σ·√(trace(J_v (JᵀJ)⁻¹ J_vᵀ)/500) on the truth's
 Jacobian. Errors pooled over trials as root-mean-square.
@@ -41,7 +42,8 @@ SIGMA = 20e-6
 ARMS = ("panda", "kinova", "z1")
 
 
-def trial(name: str, count: int, candidates: int, rng: np.random.Generator) -> dict[str, float]:
+def trial(name: str, count: int, candidates: int, rng: np.random.Generator,
+          prior: bool = True) -> dict[str, float]:
     """Mean squared held-out errors (m²) and CR predictions of one station, selected and random."""
     path, tip = arm(name)
     chain = chain_from_urdf(path, tip=tip)
@@ -62,7 +64,7 @@ def trial(name: str, count: int, candidates: int, rng: np.random.Generator) -> d
         q = cands.q[chosen]
         q_read, p = measure(truth, q, Noise(SIGMA), rng)
         t0 = time.perf_counter()
-        fit = identify(Measurements.from_arrays(q_read, p), chain)
+        fit = identify(Measurements.from_arrays(q_read, p), chain, prior=prior)
         out[f"{method}_seconds"] = time.perf_counter() - t0
         out[method] = float(np.mean(np.sum((Kinematics(fit.geometry).points(qv) - true_v) ** 2, axis=1)))
         J = truth_kin.jacobian(q[fit.used], idx).reshape(-1, len(idx))
@@ -77,14 +79,16 @@ def main() -> None:
     parser.add_argument("--count", type=int, default=40)
     parser.add_argument("--candidates", type=int, default=3000)
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--plain", action="store_true", help="plain least squares instead of the MAP fit")
     args = parser.parse_args()
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; {args.trials} trials per arm, "
-          f"{args.count} poses from {args.candidates} candidates, 500 held-out poses, σ = 20 µm")
+          f"{args.count} poses from {args.candidates} candidates, 500 held-out poses, σ = 20 µm, "
+          f"{'plain least squares' if args.plain else 'MAP fit (hil default)'}")
     print(f"{'arm':8} {'params':>6} {'selected µm':>11} {'CR µm':>7} {'random µm':>9} {'CR µm':>7} "
           f"{'random/selected':>15} {'fit s':>6}")
     for name in ARMS:
         rng = np.random.default_rng(args.seed)
-        rows = [trial(name, args.count, args.candidates, rng) for _ in range(args.trials)]
+        rows = [trial(name, args.count, args.candidates, rng, not args.plain) for _ in range(args.trials)]
 
         def rms(key: str, rows: list[dict[str, float]] = rows) -> float:
             return float(np.sqrt(np.mean([r[key] for r in rows]))) * 1e6
