@@ -12,7 +12,8 @@ poses from them twice: by the tabu search on O1 (method 000) and at random. Each
 (20 µm per axis, the UR's encoder noise) and identified (`identify`, hil's default MAP fit toward the
 nominal geometry; `--plain`: plain least squares, what the Cramér–Rao prediction is for); the error
 is the RMS distance between the identified model and the truth over 500 held-out configurations drawn
-inside the limits; the Cramér–Rao prediction is σ·√(trace(J_v (JᵀJ)⁻¹ J_vᵀ)/500) on the truth's
+inside the limits (over the range the candidates are drawn from, `sampling_box`: all of a Kinova
+joint 2's [0.82, 5.46] rad); the Cramér–Rao prediction is σ·√(trace(J_v (JᵀJ)⁻¹ J_vᵀ)/500) on the truth's
 Jacobian. Errors pooled over trials as root-mean-square.
 """
 
@@ -33,8 +34,8 @@ from hil.arm.urdf_chain import chain_from_urdf
 from hil.calibration.identification import identify
 from hil.calibration.measurements import Measurements
 from hil.calibration.selection import design_space
-from hil.calibration.synthetic import Noise, measure, random_configurations, random_truth
-from selector.candidates import Constraints
+from hil.calibration.synthetic import Noise, measure, random_truth
+from selector.candidates import Constraints, sampling_box
 from selector.search import select
 from tests.hil.robot_urdfs import arm
 
@@ -53,7 +54,8 @@ def trial(name: str, count: int, candidates: int, rng: np.random.Generator,
                                    smr=truth.smr, constraints=Constraints(tracker=tracker),
                                    scaling="expected", compliance=False, payload=None, gravity=None,
                                    say=lambda _p, _t: None, urdf_path=str(path))
-    qv = random_configurations(chain, 500, rng)
+    lo, hi = sampling_box(model, Constraints())  # the range the candidates are drawn from
+    qv = rng.uniform(lo, hi, size=(500, chain.dof))
     truth_kin = Kinematics(truth)
     true_v = truth_kin.points(qv)
     idx = identifiable_parameters(chain)
