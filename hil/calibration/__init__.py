@@ -13,6 +13,8 @@
 * `controller_export` — the controller's own model as the ROS kinematics YAML UR's ur_calibration writes;
 * `synthetic` — random realistic truths and simulated measurements (``hil synth``, the simulators);
 * `selection` — the glue to the `selector` package: hil's model as its `PoseModel`, ``hil select``.
+* `urdf_selection` — an arm read from its URDF as the selector's `PoseModel` (``hil select --urdf``);
+* `selection_parameters` — the parameters a design is made for: expected sizes, what a station observes.
 
 No I/O with devices, no campaign state: pure computations on files and arrays.
 May import: `hil.arm`, `hil.files`, `hil.errors`, `selector`, and `drivers.tracker.geometry` (the one
