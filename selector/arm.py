@@ -1,7 +1,9 @@
 """The arm as capsules, and the singularity measures of the UR structure, from batched joint frames.
 
 Input everywhere is `frames` (N, 7, 4, 4): the six joint frames after their rotation and the flange, in
-the robot base frame (what `PoseModel.frames` returns; the URDF layout of ``ur_description``).
+the robot base frame (what `PoseModel.frames` returns; the URDF layout of ``ur_description``). Another
+serial arm (n joints, frames (N, n + 1, 4, 4)) is `ChainShape`: capsules between its frame origins, and
+no singularity measures (they are the UR structure's).
 
 **Where the links really are.** The DH frames of joints 2–4 lie in one plane, but the physical arm
 does not: the upper arm runs beside the shoulder, offset along the joint-2 axis, and the forearm comes
@@ -50,6 +52,10 @@ class ArmShape:
 
     radii: tuple[float, ...] = UR5E_RADII
     shoulder_offset: float = 1.0
+    #: Capsules before this index stand on the mounting surface (base, shoulder): the floor skips them.
+    floor_from: int = 2
+    #: The wrist/elbow/shoulder measures below are defined on this layout.
+    ur_singularities: bool = True
 
     @classmethod
     def scaled(cls, factor: float) -> ArmShape:
@@ -84,6 +90,42 @@ class ArmShape:
         surface), for capsule end points `segments` (N, 9, 2, 3) from `segments`."""
         radii = np.asarray(self.radii)
         pairs = self.collision_pairs
+        a, b = segments[:, pairs[:, 0]], segments[:, pairs[:, 1]]
+        d = segment_distance(a[:, :, 0], a[:, :, 1], b[:, :, 0], b[:, :, 1])
+        return np.all(d >= radii[pairs[:, 0]] + radii[pairs[:, 1]] + margin, axis=1)
+
+
+@dataclass(frozen=True)
+class ChainShape:
+    """Capsules of any serial chain from its joint frames (N, n + 1, 4, 4) (n joints and the flange):
+    base origin → joint 1's origin, joint i → joint i + 1, joint n → the flange, and the tool (flange →
+    SMR centre), n + 2 capsules. Without a UR's physical layout to follow, the capsules run between the
+    frame origins; `radii` (one per capsule), the checked `pairs` and `floor_from` come from the caller,
+    who knows the arm (hil sizes them from its chain). The UR singularity measures do not apply.
+    """
+
+    radii: tuple[float, ...]
+    pairs: tuple[tuple[int, int], ...]
+    floor_from: int = 1
+    ur_singularities: bool = False
+
+    def segments(self, frames: np.ndarray, smr_base: np.ndarray) -> np.ndarray:
+        """(N, n + 2, 2, 3) capsule end points in the base frame."""
+        o = np.asarray(frames, dtype=float)[:, :, :3, 3]
+        points = np.concatenate([np.zeros_like(o[:, :1]), o, np.asarray(smr_base, float)[:, None]], axis=1)
+        return np.stack([points[:, :-1], points[:, 1:]], axis=2)
+
+    @property
+    def collision_pairs(self) -> np.ndarray:
+        """(P, 2) capsule index pairs checked for self-collision."""
+        return np.asarray(self.pairs, dtype=int).reshape(-1, 2)
+
+    def collision_free(self, segments: np.ndarray, margin: float = COLLISION_MARGIN) -> np.ndarray:
+        """(N,) whether no pair of `collision_pairs` comes closer than `margin` (surface to surface)."""
+        pairs = self.collision_pairs
+        if len(pairs) == 0:
+            return np.ones(len(segments), dtype=bool)
+        radii = np.asarray(self.radii)
         a, b = segments[:, pairs[:, 0]], segments[:, pairs[:, 1]]
         d = segment_distance(a[:, :, 0], a[:, :, 1], b[:, :, 0], b[:, :, 1])
         return np.all(d >= radii[pairs[:, 0]] + radii[pairs[:, 1]] + margin, axis=1)

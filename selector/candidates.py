@@ -114,7 +114,7 @@ class Constraints:
 class CandidateSet:
     """Feasible configurations, their SMR positions and identification Jacobians."""
 
-    q: np.ndarray  # (N, 6)
+    q: np.ndarray  # (N, n joints)
     smr: np.ndarray  # (N, 3) SMR centres, base frame
     jacobian: np.ndarray  # (N, 3, n)
     sampled: int  # joint vectors drawn
@@ -126,9 +126,17 @@ class CandidateSet:
 
 
 def sampling_box(model: PoseModel, constraints: Constraints) -> tuple[np.ndarray, np.ndarray]:
-    """Joint sampling range: the limits ∩ ±π ∩ the user's joint range."""
-    lo = np.maximum(np.asarray(model.lower, float), -math.pi)
-    hi = np.minimum(np.asarray(model.upper, float), math.pi)
+    """Joint sampling range: the limits ∩ one turn ∩ the user's joint range.
+
+    A joint that turns a full turn or more within its limits is drawn over one turn, ±π where the
+    limits allow it (every UR joint: its limits are ±2π, the elbow's ±π), else the turn nearest zero
+    inside them; a joint with less than a turn keeps its limits as they are (a Kinova's joint 2 lies
+    between 0.82 and 5.46 rad: clipping it to ±π would lose half its range)."""
+    lower, upper = np.asarray(model.lower, float), np.asarray(model.upper, float)
+    turn = upper - lower >= 2 * math.pi
+    centre = np.clip(0.0, lower + math.pi, upper - math.pi)
+    lo = np.where(turn, np.maximum(lower, centre - math.pi), lower)
+    hi = np.where(turn, np.minimum(upper, centre + math.pi), upper)
     if constraints.joint_lower is not None:
         lo = np.maximum(lo, np.asarray(constraints.joint_lower, float))
     if constraints.joint_upper is not None:
@@ -144,6 +152,17 @@ _CASCADE: tuple[str, ...] = (
     "keep-in", "range", "acceptance", "wrist", "elbow", "shoulder", "floor", "self-collision",
     "line-of-sight",
 )
+#: The same for a model with its own self-collision check (`PoseModel.collides`, a URDF's meshes:
+#: hundreds of microseconds a posture), which then goes last.
+_CASCADE_OWN_COLLISION: tuple[str, ...] = (*(c for c in _CASCADE if c != "self-collision"),
+                                           "self-collision")
+#: The constraints measured on a UR's structure (`selector.arm`'s wrist, elbow and shoulder measures).
+UR_SINGULARITIES: frozenset[str] = frozenset({"wrist", "elbow", "shoulder"})
+
+
+def cascade_order(model: PoseModel) -> tuple[str, ...]:
+    """The order the constraints are applied in for `model` (cheap first)."""
+    return _CASCADE_OWN_COLLISION if getattr(model, "collides", None) is not None else _CASCADE
 
 
 def evaluate(model: PoseModel, q: np.ndarray, constraints: Constraints, *, cascade: bool = False
@@ -156,21 +175,25 @@ def evaluate(model: PoseModel, q: np.ndarray, constraints: Constraints, *, casca
     """
     c = constraints
     enabled = set(c.enabled())
+    if not getattr(model.arm, "ur_singularities", True) and enabled & UR_SINGULARITIES:
+        raise SelectorError(f"the {', '.join(sorted(enabled & UR_SINGULARITIES))} singularity measures are "
+                            "a UR's: disable them for this arm")
+    own_collision = getattr(model, "collides", None)
     n = len(q)
     F = model.frames(q)
-    R, t = F[:, 6, :3, :3], F[:, 6, :3, 3]
+    R, t = F[:, -1, :3, :3], F[:, -1, :3, 3]
     smr = np.einsum("nij,j->ni", R, np.asarray(model.smr, float)) + t
     radii = np.asarray(model.arm.radii)
     tracker = None if c.tracker is None else np.asarray(c.tracker, float)
     alive = np.ones(n, dtype=bool)
     passes: dict[str, np.ndarray] = {}
     segs: np.ndarray | None = None
-    for name in _CASCADE:
+    for name in cascade_order(model):
         if name not in enabled:
             continue
         rows = np.flatnonzero(alive) if cascade else np.arange(n)
         Fi, si = F[rows], smr[rows]
-        if name in ("floor", "self-collision", "line-of-sight"):
+        if name in ("floor", "line-of-sight") or (name == "self-collision" and own_collision is None):
             segs_i = model.arm.segments(Fi, si) if (cascade or segs is None) else segs
             if not cascade:
                 segs = segs_i
@@ -182,13 +205,14 @@ def evaluate(model: PoseModel, q: np.ndarray, constraints: Constraints, *, casca
         if name == "keep-in":
             ok = np.all((si >= c.keep_in_lower) & (si <= c.keep_in_upper), axis=1)
         elif name == "floor":
-            low = np.min(segs_i[:, 2:, :, 2], axis=2) - radii[2:]
+            first = model.arm.floor_from  # capsules before it stand on the mounting surface
+            low = np.min(segs_i[:, first:, :, 2], axis=2) - radii[first:]
             ok = np.all(low >= c.floor, axis=1)
         elif name == "range":
             ok = (dist >= c.tracker_range[0]) & (dist <= c.tracker_range[1])
         elif name == "acceptance":
             axis = np.asarray(c.opening_axis, float)
-            axis = Fi[:, 6, :3, :3] @ (axis / np.linalg.norm(axis))
+            axis = Fi[:, -1, :3, :3] @ (axis / np.linalg.norm(axis))
             ok = np.einsum("ni,ni->n", axis, u) >= math.cos(math.radians(c.half_angle_deg))
         elif name == "line-of-sight":
             start = si + u * np.minimum(c.beam_clearance, dist)[:, None]
@@ -202,6 +226,8 @@ def evaluate(model: PoseModel, q: np.ndarray, constraints: Constraints, *, casca
             ok = elbow_measure(Fi) >= math.sin(math.radians(c.elbow_margin_deg))
         elif name == "shoulder":
             ok = shoulder_measure(Fi) >= c.shoulder_margin
+        elif own_collision is not None:  # self-collision by the model's own check
+            ok = ~np.asarray(own_collision(q[rows]), dtype=bool)
         else:  # self-collision
             ok = model.arm.collision_free(segs_i, c.collision_margin)
         mask = np.zeros(n, dtype=bool)
@@ -214,7 +240,8 @@ def evaluate(model: PoseModel, q: np.ndarray, constraints: Constraints, *, casca
 
 def aim_wrist(model: PoseModel, q: np.ndarray, constraints: Constraints, rng: np.random.Generator
               ) -> np.ndarray:
-    """`q` with q5 redrawn uniformly over the values that point the SMR at the tracker.
+    """`q` with q5 (`PoseModel.aim_joint`'s joint: q5 on a UR) redrawn uniformly over the values that
+    point the SMR at the tracker.
 
     Uniform joint sampling wastes over 90 % of its draws on an SMR facing away from the tracker. For
     fixed q1–q4 and q6 the opening axis is a(q5) = A·cos q5 + B·sin q5 + C (joint 5 rotates about the z
@@ -228,29 +255,37 @@ def aim_wrist(model: PoseModel, q: np.ndarray, constraints: Constraints, rng: np
     tracker = np.asarray(c.tracker, float)
     axis = np.asarray(c.opening_axis, float)
     axis = axis / np.linalg.norm(axis)
+    k = aim_joint(model)
+    assert k is not None
     F = model.frames(q)
-    R6 = F[:, 6, :3, :3]
-    smr = np.einsum("nij,j->ni", R6, np.asarray(model.smr, float)) + F[:, 6, :3, 3]
+    R6 = F[:, -1, :3, :3]
+    smr = np.einsum("nij,j->ni", R6, np.asarray(model.smr, float)) + F[:, -1, :3, 3]
     u = tracker - smr
     u /= np.linalg.norm(u, axis=1, keepdims=True)
     # The axis in joint 5's rotated frame is fixed; rotating by δ about that frame's z gives
     # a(δ) = cos δ·R5[vx, vy, 0] + sin δ·R5[−vy, vx, 0] + R5[0, 0, vz], with δ = q5' − q5.
-    R5 = F[:, 4, :3, :3]
+    R5 = F[:, k, :3, :3]
     v = np.einsum("nji,nj->ni", R5, R6 @ axis)
     zero = np.zeros(len(q))
     A = np.einsum("nij,nj->ni", R5, np.stack([v[:, 0], v[:, 1], zero], 1))
     B = np.einsum("nij,nj->ni", R5, np.stack([-v[:, 1], v[:, 0], zero], 1))
     C = np.einsum("nij,nj->ni", R5, np.stack([zero, zero, v[:, 2]], 1))
     ua, ub, uc = (np.einsum("ni,ni->n", u, V) for V in (A, B, C))
-    rho, phi = np.hypot(ua, ub), np.arctan2(ub, ua) + q[:, 4]
+    rho, phi = np.hypot(ua, ub), np.arctan2(ub, ua) + q[:, k]
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = (math.cos(math.radians(c.half_angle_deg)) - uc) / rho
     ok = ratio <= 1.0
     half = np.arccos(np.clip(ratio, -1.0, 1.0))
     q5 = phi + half * (2.0 * rng.random(len(q)) - 1.0)
     out = q.copy()
-    out[ok, 4] = np.angle(np.exp(1j * q5[ok]))  # wrap to (−π, π]
+    out[ok, k] = np.angle(np.exp(1j * q5[ok]))  # wrap to (−π, π]
     return out
+
+
+def aim_joint(model: PoseModel) -> int | None:
+    """The revolute joint `aim_wrist` turns to face the SMR to the tracker: `PoseModel.aim_joint` when
+    the model says (None: none), else joint 5 (index 4), a UR's."""
+    return getattr(model, "aim_joint", 4)
 
 
 def generate_candidates(model: PoseModel, count: int, constraints: Constraints | None = None, *,
@@ -276,7 +311,9 @@ def generate_candidates(model: PoseModel, count: int, constraints: Constraints |
     found = sampled = 0
     rate = 0.5  # acceptance guess until the first batch tells
     hopeless = max(10 * batch, 50_000)  # draws without a single survivor after which we give up
-    aim = ("acceptance" in constraints.enabled() and hi[4] - lo[4] >= 2 * math.pi - 1e-9)
+    dof = len(lo)
+    k = aim_joint(model)
+    aim = ("acceptance" in constraints.enabled() and k is not None and hi[k] - lo[k] >= 2 * math.pi - 1e-9)
     proof = impossible(model, constraints, lo, hi)
     if proof is not None:
         worst, why = proof
@@ -286,12 +323,12 @@ def generate_candidates(model: PoseModel, count: int, constraints: Constraints |
         size = int(min(max_samples - sampled, max(batch, 1.2 * (count - found) / max(rate, 1e-3))))
         if found == 0:  # a guess from no survivors is no guess: never draw past `hopeless` on it
             size = min(size, max(batch, hopeless - sampled))
-        q = lo + (hi - lo) * rng.random((size, 6))
+        q = lo + (hi - lo) * rng.random((size, dof))
         if aim:
             q = aim_wrist(model, q, constraints, rng)
         passes, smr = evaluate(model, q, constraints, cascade=True)
         ok = np.ones(size, dtype=bool)
-        for name in _CASCADE:
+        for name in cascade_order(model):
             if name in passes:
                 rejected[name] += int(np.sum(ok & ~passes[name]))
                 ok &= passes[name]
@@ -303,7 +340,7 @@ def generate_candidates(model: PoseModel, count: int, constraints: Constraints |
     Q = np.concatenate(kept_q)[:count]
     if len(Q) == 0:
         # Rank the constraints by what each rejects on its own, on a fresh sample.
-        q = lo + (hi - lo) * rng.random((min(batch, max_samples), 6))
+        q = lo + (hi - lo) * rng.random((min(batch, max_samples), dof))
         if aim:
             q = aim_wrist(model, q, constraints, rng)
         alone = {k: int(np.sum(~v)) for k, v in evaluate(model, q, constraints)[0].items()}

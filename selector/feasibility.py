@@ -59,11 +59,12 @@ def impossible(model: PoseModel, constraints: Settings, lo: np.ndarray, hi: np.n
     """
     c = constraints
     enabled = set(c.enabled())
-    q = np.vstack([np.clip(np.zeros(6), lo, hi),
-                   lo + (hi - lo) * np.random.default_rng(0).random((_PROBES - 1, 6))])
+    dof = len(lo)
+    q = np.vstack([np.clip(np.zeros(dof), lo, hi),
+                   lo + (hi - lo) * np.random.default_rng(0).random((_PROBES - 1, dof))])
     F = model.frames(q)
     o = F[:, :, :3, 3]
-    smr = np.einsum("nij,j->ni", F[:, 6, :3, :3], np.asarray(model.smr, float)) + o[:, 6]
+    smr = np.einsum("nij,j->ni", F[:, -1, :3, :3], np.asarray(model.smr, float)) + o[:, -1]
     segs = model.arm.segments(F, smr)
     radii = np.asarray(model.arm.radii, float)
     shoulder = o[0, 1]

@@ -1,6 +1,7 @@
 """The calibration geometry of one arm + SMR + tracker, and its JSON "geometry block".
 
-A `Geometry` is what identification estimates and every other part evaluates: six joint origins in the
+A `Geometry` is what identification estimates and every other part evaluates: the joint origins (six for
+a UR; any number for an arm from its URDF, whose `hil.arm.chain.Chain` the geometry carries) in the
 URDF convention (joint i rotates about the z axis of its origin frame, joint 1's origin in the robot base
 frame, joint i's in joint i-1's rotated frame), the flange frame in joint 6's frame, the SMR centre in
 the flange frame and the tracker frame in the robot base frame. The JSON block is the contract shared by
@@ -13,6 +14,7 @@ Orientations in files are URDF ``rpy``: R = Rz(yaw)·Ry(pitch)·Rx(roll), which 
 
 from __future__ import annotations
 
+import hashlib
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -22,9 +24,11 @@ import numpy as np
 import pinocchio as pin
 
 from hil.arm.catalog import RobotSpec, get_robot
+from hil.arm.chain import Chain, Robot, ur_chain
 from hil.arm.joint_errors import JointErrors, block_of
 from hil.arm.payload import FLOOR_GRAVITY, Payload, parse_gravity
 from hil.arm.thermal import Thermal
+from hil.arm.urdf_chain import chain_from_text
 from hil.errors import InputError
 from hil.files.quantities import quantity, real
 
@@ -77,10 +81,17 @@ class Geometry:
     lost_motion: np.ndarray | None = None
     tool_rotation: np.ndarray | None = None  # (3, 3) measured frame -> flange frame
     reflectors: np.ndarray | None = None  # (R, 3) m, flange frame; reflectors[0] == smr
+    #: the arm's chain when it is not a catalog UR (from its URDF); None: the UR named by `robot`
+    chain: Chain | None = None
 
     def __post_init__(self) -> None:
-        if len(self.joints) != 6:
+        if self.chain is not None and self.chain.is_ur:
+            self.chain = None  # a UR is known by its name: one representation, as its files have
+        if self.chain is None and len(self.joints) != 6:
             raise InputError(f"a UR geometry has 6 joint origins, got {len(self.joints)}")
+        if self.chain is not None and len(self.joints) != self.chain.dof:
+            raise InputError(f"the {self.chain.name} geometry has {self.chain.dof} joint origins, got "
+                             f"{len(self.joints)}")
         self.joints = [pin.SE3(M) for M in self.joints]
         self.flange = pin.SE3(self.flange)
         self.tracker = pin.SE3(self.tracker)
@@ -118,17 +129,34 @@ class Geometry:
 
     @property
     def spec(self) -> RobotSpec:
+        """The catalog entry of a UR (UnknownRobotError for an arm from a URDF: what needs it is UR-only)."""
         return get_robot(self.robot)
 
+    @property
+    def arm(self) -> Chain:
+        """The arm's kinematic structure: its URDF chain, or the catalog UR's."""
+        return ur_chain(self.robot) if self.chain is None else self.chain
+
+    @property
+    def identity(self) -> Robot:
+        """What names the robot to the identification: the catalog name of a UR, else the chain."""
+        return self.robot if self.chain is None else self.chain
+
     @classmethod
-    def nominal(cls, robot: str | RobotSpec, smr: Sequence[float] = (0.0, 0.0, 0.0),
+    def nominal(cls, robot: Robot, smr: Sequence[float] = (0.0, 0.0, 0.0),
                 tracker: pin.SE3 | None = None) -> Geometry:
         """The nominal geometry from the catalog DH table.
 
         Standard DH T = Π Rz(qi)·Tz(di)·Tx(ai)·Rx(αi) regrouped so each joint rotates about the z axis
         of its origin: origin1 = Tz(d1), origin(i+1) = Tx(ai)·Rx(αi)·Tz(d(i+1)), flange = Tx(a6)·Rx(α6).
         This is exactly ``ur_description``'s layout, and the flange is the controller's tool0 frame.
+        An arm from a URDF (a `Chain`) takes its chain's nominal origins and flange.
         """
+        if isinstance(robot, Chain) and not robot.is_ur:
+            return cls(robot.name, list(robot.origins), robot.flange, np.asarray(smr, float),
+                       pin.SE3.Identity() if tracker is None else tracker, chain=robot)
+        if isinstance(robot, Chain):
+            robot = robot.name
         spec = robot if isinstance(robot, RobotSpec) else get_robot(robot)
         d, a, alpha = spec.dh.d, spec.dh.a, spec.dh.alpha
         joints = [pose((0.0, 0.0, d[0]))]
@@ -143,7 +171,7 @@ class Geometry:
                         self.gravity.copy(), self.thermal, self.joint_errors,
                         None if self.lost_motion is None else self.lost_motion.copy(),
                         None if self.tool_rotation is None else self.tool_rotation.copy(),
-                        None if self.reflectors is None else self.reflectors.copy())
+                        None if self.reflectors is None else self.reflectors.copy(), self.chain)
 
     def ideal(self) -> Geometry:
         """The same arm without angle-dependent joint errors and lost motion (hil's arm before they were
@@ -154,7 +182,8 @@ class Geometry:
 
     def rigid(self) -> Geometry:
         """The same arm without its non-geometric blocks (what URDF and ROS YAML can hold)."""
-        return Geometry(self.robot, list(self.joints), self.flange, self.smr.copy(), self.tracker)
+        return Geometry(self.robot, list(self.joints), self.flange, self.smr.copy(), self.tracker,
+                        chain=self.chain)
 
     def with_payload(self, payload: Payload | None) -> Geometry:
         """The same arm carrying another payload (a model predicts for the payload it is told of)."""
@@ -191,9 +220,26 @@ class Geometry:
             "flange": pose_to_dict(self.flange),
             "smr": [float(v) for v in self.smr],
             "tracker": pose_to_dict(self.tracker),
+            **self.urdf_dict(),
             **self.tool_dict(),
             **self.non_geometric_dict(),
         }
+
+    def urdf_dict(self) -> dict[str, Any]:
+        """An arm from a URDF: the ``urdf`` block (the file's name, sha256, base and tip links and its
+        whole text, so a model needs nothing else; docs/design.md, Contracts: geometry JSON). A UR: none."""
+        if self.chain is None or self.chain.urdf is None:
+            return {}
+        u = self.chain.urdf
+        return {"urdf": {"file": u.file, "sha256": u.sha256, "base": u.base, "tip": u.tip,
+                         "joints": list(self.chain.joint_names), "text": u.text}}
+
+    def urdf_origins(self) -> dict[str, pin.SE3]:
+        """This geometry's joint origins as the URDF's joint ``<origin>`` elements (joint name → pose in
+        its parent link's frame), the hook the URDF export writes from. InputError for a UR."""
+        if self.chain is None or self.chain.urdf is None:
+            raise InputError(f"the {self.robot} model was not made from a URDF")
+        return self.chain.urdf.urdf_origins(self.joints)
 
     def tool_dict(self) -> dict[str, Any]:
         """The measured tool's optional keys: ``tool_rpy`` (the measured frame's orientation in the
@@ -230,12 +276,15 @@ class Geometry:
         if not isinstance(data, Mapping):
             raise InputError(f"{source}: expected a JSON object")
         robot = _require(data, "robot", source)
-        spec = get_robot(str(robot)) if isinstance(robot, str) else None
-        if spec is None:
+        if not isinstance(robot, str):
             raise InputError(f"{source}: field 'robot' must be a robot name")
+        chain = _urdf_chain(data["urdf"], source) if data.get("urdf") is not None else None
+        spec = get_robot(robot) if chain is None else None
+        name = spec.name if spec is not None else robot
+        dof = 6 if chain is None else chain.dof
         joints = _require(data, "joints", source)
-        if not isinstance(joints, list) or len(joints) != 6:
-            raise InputError(f"{source}: field 'joints' must be a list of 6 origins")
+        if not isinstance(joints, list) or len(joints) != dof:
+            raise InputError(f"{source}: field 'joints' must be a list of {dof} origins")
         parsed = [_pose_field(j, f"joints[{i}]", source) for i, j in enumerate(joints)]
         flange = _pose_field(_require(data, "flange", source), "flange", source)
         smr = _vector(_require(data, "smr", source), "smr", source)
@@ -264,8 +313,29 @@ class Geometry:
             if not np.allclose(reflectors[0], smr, rtol=0.0, atol=1e-9):
                 raise InputError(f"{source}: field 'reflectors[0]' must equal 'smr' (the first reflector "
                                  "is the SMR)")
-        return cls(spec.name, parsed, flange, smr, tracker, compliance, payload, gravity, thermal,
-                   joint_errors, lost_motion, tool_rotation, reflectors)
+        if chain is not None and (compliance is not None or thermal is not None or joint_errors is not None
+                                  or lost_motion is not None):
+            raise InputError(f"{source}: compliance, thermal growth and joint errors are modelled for "
+                             "Universal Robots arms only, not for an arm from its URDF")
+        return cls(name, parsed, flange, smr, tracker, compliance, payload, gravity, thermal,
+                   joint_errors, lost_motion, tool_rotation, reflectors, chain)
+
+
+def _urdf_chain(block: Any, source: str) -> Chain:
+    """The chain a model's ``urdf`` block names: its text parsed again between its base and tip, the
+    text's sha256 checked against the block's (a file edited by hand is refused, not trusted)."""
+    if not isinstance(block, Mapping):
+        raise InputError(f"{source}: field 'urdf' must be an object with file, sha256, base, tip, text")
+    fields = {}
+    for key in ("file", "sha256", "base", "tip", "text"):
+        value = _require(block, key, f"{source}: urdf")
+        if not isinstance(value, str):
+            raise InputError(f"{source}: field 'urdf.{key}' must be a string")
+        fields[key] = value
+    if hashlib.sha256(fields["text"].encode("utf-8")).hexdigest() != fields["sha256"]:
+        raise InputError(f"{source}: field 'urdf.text' does not match 'urdf.sha256' (the URDF was changed)")
+    return chain_from_text(fields["text"], fields["base"], fields["tip"],
+                           f"{source}: urdf ({fields['file']})", fields["file"])
 
 
 def _require(data: Mapping[str, Any], key: str, source: str) -> Any:

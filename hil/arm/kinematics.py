@@ -2,7 +2,7 @@
 
 The calibration parameters are small errors applied *multiplicatively* to the current geometry:
 
-* a 6-D error δ = (v, ω) per joint origin, M_i ← M_i·exp(δ_i)          (36, ``joint{i}.tx … rz``)
+* a 6-D error δ = (v, ω) per joint origin, M_i ← M_i·exp(δ_i)          (6n, ``joint{i}.tx … rz``)
 * a 6-D error of the flange frame, M_f ← M_f·exp(δ_f)                   (6, ``flange.*``)
 * the SMR centre in the flange frame, s ← s + δ_s                        (3, ``smr.x/y/z``)
 * the tracker frame in the base frame, T_bt ← T_bt·exp(δ_t)              (6, ``tracker.*``)
@@ -16,6 +16,11 @@ A geometry may also carry angle-dependent joint errors e(q) and lost motion h (`
 any link-angle error reaches the measured point. Their low orders are parameters too, applied
 additively (`hil.arm.joint_error_columns`: ``joint{j}.cos{k}``, ``joint{j}.sin{k}``,
 ``lost_motion.j{j}``, indices 57..98 of `EXTENDED_PARAMETER_NAMES`).
+
+The layout above is a UR's (n = 6 joints: 51 geometric parameters, the constants below); an arm from
+a URDF (`hil.arm.chain`, any n, each joint a rotation or translation about its z) has the same groups
+with 6n joint columns (`parameter_layout`, `parameter_names`), and geometry only: compliance, joint
+errors and thermal growth stay UR-only (refused in one line for another arm).
 
 A measured point is p = T_bt⁻¹ · T_base_flange(q_link) · s (the tracker frame); every forward kinematics
 here evaluates at the link angles of the geometry's compliance and payload (`hil.arm.gravity`), so all
@@ -31,6 +36,7 @@ rest with vectorised numpy, which is what the selector's tens of thousands of ca
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
 
@@ -39,9 +45,11 @@ import pinocchio as pin
 
 from hil.arm import joint_error_columns as jec
 from hil.arm.catalog import RobotSpec, get_robot
+from hil.arm.chain import PRISMATIC, Chain, Robot, chain_of
 from hil.arm.geometry import Geometry, pose
 from hil.arm.payload import FLOOR_GRAVITY, Payload
 from hil.arm.pivoted_qr import pivoted_qr
+from hil.errors import InputError
 
 _AXES = ("tx", "ty", "tz", "rx", "ry", "rz")
 
@@ -69,6 +77,75 @@ N_EXTENDED_PARAMETERS = len(EXTENDED_PARAMETER_NAMES)  # 99
 JOINT_ERROR_SLICE = slice(N_ALL_PARAMETERS, N_EXTENDED_PARAMETERS)
 
 
+@dataclass(frozen=True)
+class ParameterLayout:
+    """Where each group of the geometric parameter vector lies for an arm of `dof` joints: 6·dof joint
+    columns, then the flange's 6, the SMR's 3 and the tracker's 6 (a UR's is the module constants)."""
+
+    dof: int
+
+    @property
+    def size(self) -> int:
+        """Length of the geometric parameter vector: 6·dof + 15."""
+        return 6 * self.dof + 15
+
+    @property
+    def joints(self) -> slice:
+        return slice(0, 6 * self.dof)
+
+    @property
+    def flange(self) -> slice:
+        return slice(6 * self.dof, 6 * self.dof + 6)
+
+    @property
+    def smr(self) -> slice:
+        return slice(6 * self.dof + 6, 6 * self.dof + 9)
+
+    @property
+    def tracker(self) -> slice:
+        return slice(6 * self.dof + 9, 6 * self.dof + 15)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The geometric parameters' names, in order (`PARAMETER_NAMES` for six joints)."""
+        return (tuple(f"joint{i + 1}.{ax}" for i in range(self.dof) for ax in _AXES)
+                + tuple(f"flange.{ax}" for ax in _AXES) + ("smr.x", "smr.y", "smr.z")
+                + tuple(f"tracker.{ax}" for ax in _AXES))
+
+    @property
+    def registration(self) -> np.ndarray:
+        """Indices of the tracker pose and the SMR offset: what registering a nominal arm fits."""
+        return np.r_[np.arange(self.size)[self.tracker], np.arange(self.size)[self.smr]]
+
+    @property
+    def group_order(self) -> tuple[slice, ...]:
+        """Which group wins where columns are exactly equivalent (`select_identifiable`): tracker, SMR,
+        the joints from base to tip, then the flange."""
+        return (self.tracker, self.smr, *(slice(6 * i, 6 * i + 6) for i in range(self.dof)), self.flange)
+
+
+@lru_cache(maxsize=32)
+def parameter_layout(dof: int) -> ParameterLayout:
+    """The geometric parameter layout of an arm of `dof` joints."""
+    return ParameterLayout(int(dof))
+
+
+def parameter_names(robot: Robot) -> tuple[str, ...]:
+    """Names of every parameter an arm's identification can index: a UR's `EXTENDED_PARAMETER_NAMES`
+    (geometry, compliance, joint errors), another arm's geometric ones (`ParameterLayout.names`)."""
+    chain = chain_of(robot)
+    return EXTENDED_PARAMETER_NAMES if chain.is_ur else parameter_layout(chain.dof).names
+
+
+def refuse_non_ur(robot: Robot, what: str) -> None:
+    """InputError (one line) when `what` (compliance, joint errors, thermal growth …) is asked of an arm
+    that is not a catalog UR: they rest on the UR's gravity, joint physics and controller models."""
+    chain = chain_of(robot)
+    if not chain.is_ur:
+        raise InputError(f"{what} is modelled for Universal Robots arms only, not for {chain.name} "
+                         "(from its URDF): identify its geometry alone")
+
+
 def _skew(v: np.ndarray) -> np.ndarray:
     """Batched cross-product matrices [v]× of shape (..., 3, 3)."""
     v = np.asarray(v, dtype=float)
@@ -80,11 +157,11 @@ def _skew(v: np.ndarray) -> np.ndarray:
     ], -2)
 
 
-def as_configurations(q: np.ndarray | Sequence[Sequence[float]]) -> np.ndarray:
-    """(N, 6) float array of joint vectors from one vector or a batch."""
+def as_configurations(q: np.ndarray | Sequence[Sequence[float]], dof: int = 6) -> np.ndarray:
+    """(N, dof) float array of joint vectors from one vector or a batch."""
     Q = np.atleast_2d(np.asarray(q, dtype=float))
-    if Q.ndim != 2 or Q.shape[1] != 6:
-        raise ValueError(f"joint configurations must have 6 values each, got shape {Q.shape}")
+    if Q.ndim != 2 or Q.shape[1] != dof:
+        raise ValueError(f"joint configurations must have {dof} values each, got shape {Q.shape}")
     return Q
 
 
@@ -99,18 +176,21 @@ class Kinematics:
 
     def __init__(self, geometry: Geometry) -> None:
         self.geometry = geometry.copy()
-        spec = get_robot(geometry.robot)
+        chain = self.chain = geometry.arm
+        n = self.dof = chain.dof
+        self.layout = parameter_layout(n)
         model = pin.Model()
-        model.name = spec.name
+        model.name = chain.name
         parent = 0
-        for i, origin in enumerate(self.geometry.joints):
-            parent = model.addJoint(parent, pin.JointModelRZ(), origin, f"joint{i + 1}")
-        model.lowerPositionLimit = spec.lower.copy()
-        model.upperPositionLimit = spec.upper.copy()
-        model.velocityLimit = spec.max_joint_speed.copy()
-        model.addFrame(pin.Frame("flange", 6, self.geometry.flange, pin.FrameType.OP_FRAME))
+        for i, (kind, origin) in enumerate(zip(chain.kinds, self.geometry.joints, strict=True)):
+            joint = pin.JointModelPZ() if kind == PRISMATIC else pin.JointModelRZ()
+            parent = model.addJoint(parent, joint, origin, f"joint{i + 1}")
+        model.lowerPositionLimit = chain.lower.copy()
+        model.upperPositionLimit = chain.upper.copy()
+        model.velocityLimit = chain.velocity.copy()
+        model.addFrame(pin.Frame("flange", n, self.geometry.flange, pin.FrameType.OP_FRAME))
         self._smr_placement = self.geometry.flange * pose(self.geometry.smr)
-        model.addFrame(pin.Frame("smr", 6, self._smr_placement, pin.FrameType.OP_FRAME))
+        model.addFrame(pin.Frame("smr", n, self._smr_placement, pin.FrameType.OP_FRAME))
         self.model = model
         self.data = model.createData()
         self._tracker_inv = self.geometry.tracker.inverse()
@@ -134,7 +214,7 @@ class Kinematics:
         reading, which lost motion needs; None: no lost motion is applied (a model told nothing about
         the approach predicts the middle of the lost-motion band).
         """
-        return self._link_angles(as_configurations(q), directions)
+        return self._link_angles(as_configurations(q, self.dof), directions)
 
     def _link_angles(self, Q: np.ndarray, directions: np.ndarray | None,
                      torques: np.ndarray | None = None) -> np.ndarray:
@@ -152,15 +232,16 @@ class Kinematics:
 
     # --- forward kinematics --------------------------------------------------------------------
     def joint_frames(self, q: np.ndarray, directions: np.ndarray | None = None) -> np.ndarray:
-        """(N, 7, 4, 4): the six joint frames (after their rotation) and the flange, base frame."""
+        """(N, n + 1, 4, 4): the n joint frames (after their motion) and the flange, base frame."""
         Q = self.link_angles(q, directions)
-        out = np.empty((len(Q), 7, 4, 4))
+        dof = self.dof
+        out = np.empty((len(Q), dof + 1, 4, 4))
         model, data, flange = self.model, self.data, self.geometry.flange
         for n, qn in enumerate(Q):
             pin.forwardKinematics(model, data, qn)
-            for j in range(6):
+            for j in range(dof):
                 out[n, j] = data.oMi[j + 1].homogeneous
-            out[n, 6] = (data.oMi[6] * flange).homogeneous
+            out[n, dof] = (data.oMi[dof] * flange).homogeneous
         return out
 
     def flange_poses(self, q: np.ndarray, directions: np.ndarray | None = None) -> np.ndarray:
@@ -168,10 +249,10 @@ class Kinematics:
         `directions` as in `link_angles`."""
         Q = self.link_angles(q, directions)
         out = np.empty((len(Q), 4, 4))
-        model, data, flange = self.model, self.data, self.geometry.flange
+        model, data, flange, last = self.model, self.data, self.geometry.flange, self.dof
         for n, qn in enumerate(Q):
             pin.forwardKinematics(model, data, qn)
-            out[n] = (data.oMi[6] * flange).homogeneous
+            out[n] = (data.oMi[last] * flange).homogeneous
         return out
 
     def points(self, q: np.ndarray, frame: str = "tracker", point: str = "smr",
@@ -206,39 +287,43 @@ class Kinematics:
         ∂p/∂q_j times cos(k·q_j), sin(k·q_j) at the encoder angle, the lost-motion ones times −d_j
         (`directions`; zero without them).
         """
-        Q = as_configurations(q)
-        n = len(Q)
+        Q = as_configurations(q, self.dof)
+        n, dof, lay = len(Q), self.dof, self.layout
+        if compliance:
+            refuse_non_ur(self.chain, "joint compliance")
+        if joint_errors:
+            refuse_non_ur(self.chain, "angle-dependent joint errors and lost motion")
         torques = self.gravity.torques(Q) if (compliance or self.geometry.compliant) else None
         Q_link = self._link_angles(Q, directions, torques)
-        J_joint = np.empty((n, 3, 36))
+        J_joint = np.empty((n, 3, 6 * dof))
         R6 = np.empty((n, 3, 3))
         p_base = np.empty((n, 3))
-        axes = np.empty((n, 6, 3))
-        origins = np.empty((n, 6, 3))
+        axes = np.empty((n, dof, 3))
+        origins = np.empty((n, dof, 3))
         sensitivities = compliance or joint_errors
         model, data, placement = self.model, self.data, self._smr_placement
         for k, qk in enumerate(Q_link):
             pin.forwardKinematics(model, data, qk)
-            reg = pin.computeJointKinematicRegressor(model, data, 6, pin.LOCAL_WORLD_ALIGNED, placement)
+            reg = pin.computeJointKinematicRegressor(model, data, dof, pin.LOCAL_WORLD_ALIGNED, placement)
             J_joint[k] = reg[:3]
-            M6 = data.oMi[6]
+            M6 = data.oMi[dof]
             R6[k] = M6.rotation
             p_base[k] = M6.act(placement.translation)
             if sensitivities:
-                for j in range(6):
+                for j in range(dof):
                     axes[k, j] = data.oMi[j + 1].rotation[:, 2]
                     origins[k, j] = data.oMi[j + 1].translation
         Ti = self._tracker_inv
         Rt = Ti.rotation  # base -> tracker rotation
         p = p_base @ Rt.T + Ti.translation
-        width = N_EXTENDED_PARAMETERS if joint_errors else N_ALL_PARAMETERS if compliance else N_PARAMETERS
+        width = N_EXTENDED_PARAMETERS if joint_errors else N_ALL_PARAMETERS if compliance else lay.size
         J = np.zeros((n, 3, width)) if joint_errors and not compliance else np.empty((n, 3, width))
-        J[:, :, JOINT_SLICE] = np.einsum("ij,njk->nik", Rt, J_joint)
+        J[:, :, lay.joints] = np.einsum("ij,njk->nik", Rt, J_joint)
         R_bs = np.einsum("ij,njk->nik", Rt, R6 @ self.geometry.flange.rotation)  # flange axes in tracker
         s = self.geometry.smr
-        J[:, :, FLANGE_SLICE] = np.concatenate([R_bs, -R_bs @ _skew(s)], axis=2)
-        J[:, :, SMR_SLICE] = R_bs
-        J[:, :, TRACKER_SLICE] = np.concatenate(
+        J[:, :, lay.flange] = np.concatenate([R_bs, -R_bs @ _skew(s)], axis=2)
+        J[:, :, lay.smr] = R_bs
+        J[:, :, lay.tracker] = np.concatenate(
             [np.broadcast_to(-np.eye(3), (n, 3, 3)), _skew(p)], axis=2)
         if sensitivities:
             dp_dq = np.cross(axes, p_base[:, None, :] - origins)  # (n, 6, 3) base frame
@@ -256,18 +341,21 @@ class Kinematics:
         lost-motion columns of an identification are these columns times ∂q_link/∂(their parameter).
         """
         Q_link = self.link_angles(q, directions)
-        n = len(Q_link)
-        axes = np.empty((n, 6, 3))
-        origins = np.empty((n, 6, 3))
+        n, dof = len(Q_link), self.dof
+        axes = np.empty((n, dof, 3))
+        origins = np.empty((n, dof, 3))
         p_base = np.empty((n, 3))
         model, data, placement = self.model, self.data, self._smr_placement
         for k, qk in enumerate(Q_link):
             pin.forwardKinematics(model, data, qk)
-            for j in range(6):
+            for j in range(dof):
                 axes[k, j] = data.oMi[j + 1].rotation[:, 2]
                 origins[k, j] = data.oMi[j + 1].translation
-            p_base[k] = data.oMi[6].act(placement.translation)
-        dp_dq = np.cross(axes, p_base[:, None, :] - origins)  # (n, 6, 3) base frame
+            p_base[k] = data.oMi[dof].act(placement.translation)
+        # a revolute joint moves the point by axis × lever, a prismatic one along its axis
+        prismatic = np.array([k == PRISMATIC for k in self.chain.kinds])
+        dp_dq = np.where(prismatic[None, :, None], axes,
+                         np.cross(axes, p_base[:, None, :] - origins))  # (n, dof, 3) base frame
         return np.einsum("ij,nkj->nik", self._tracker_inv.rotation, dp_dq)
 
     def jacobian(self, q: np.ndarray, params: np.ndarray | None = None,
@@ -276,7 +364,8 @@ class Kinematics:
         51..56 are compliance columns, 57.. joint-error and lost-motion ones, computed only then;
         `directions` as in `point_and_jacobian`)."""
         idx = None if params is None else np.asarray(params)
-        compliance = idx is not None and bool(np.any((idx >= N_PARAMETERS) & (idx < N_ALL_PARAMETERS)))
+        geo = self.layout.size
+        compliance = idx is not None and bool(np.any((idx >= geo) & (idx < geo + 6)))
         joint_errors = idx is not None and bool(np.any(idx >= N_ALL_PARAMETERS))
         _, J = self.point_and_jacobian(q, compliance, directions, joint_errors)
         return J if idx is None else J[:, :, idx]
@@ -287,13 +376,14 @@ def apply_update(geometry: Geometry, delta: np.ndarray) -> Geometry:
     errors and lost motion), applied multiplicatively on SE(3) (the rest additively)."""
     delta = np.asarray(delta, dtype=float)
     g = geometry.copy()
+    lay = parameter_layout(len(g.joints))
     g.joints = [M * pin.exp6(delta[6 * i: 6 * i + 6]) for i, M in enumerate(g.joints)]
-    g.flange = g.flange * pin.exp6(delta[FLANGE_SLICE])
-    g.smr = g.smr + delta[SMR_SLICE]
+    g.flange = g.flange * pin.exp6(delta[lay.flange])
+    g.smr = g.smr + delta[lay.smr]
     if g.reflectors is not None:  # the first reflector is the SMR
         g.reflectors[0] = g.smr
-    g.tracker = g.tracker * pin.exp6(delta[TRACKER_SLICE])
-    if delta.size > N_PARAMETERS and np.any(delta[COMPLIANCE_SLICE] != 0.0):
+    g.tracker = g.tracker * pin.exp6(delta[lay.tracker])
+    if delta.size > lay.size and np.any(delta[COMPLIANCE_SLICE] != 0.0):
         base = np.zeros(6) if g.compliance is None else g.compliance
         g.compliance = base + delta[COMPLIANCE_SLICE]
     if delta.size > N_ALL_PARAMETERS:
@@ -307,13 +397,17 @@ def deviation_from(reference: Geometry, geometry: Geometry, compliance: bool = F
     """Full-length parameter vector δ with `geometry` = `reference` updated by δ (log on SE(3)): 51
     long, 57 with the compliance difference, 99 with the joint errors' and lost motion's too (a
     missing block counts as zero)."""
-    width = N_EXTENDED_PARAMETERS if joint_errors else N_ALL_PARAMETERS if compliance else N_PARAMETERS
+    lay = parameter_layout(len(geometry.joints))
+    if len(reference.joints) != lay.dof:
+        raise ValueError(f"a deviation needs arms of one joint count, got {len(reference.joints)} and "
+                         f"{lay.dof}")
+    width = N_EXTENDED_PARAMETERS if joint_errors else N_ALL_PARAMETERS if compliance else lay.size
     out = np.zeros(width)
-    for i in range(6):
+    for i in range(lay.dof):
         out[6 * i: 6 * i + 6] = pin.log6(reference.joints[i].inverse() * geometry.joints[i]).vector
-    out[FLANGE_SLICE] = pin.log6(reference.flange.inverse() * geometry.flange).vector
-    out[SMR_SLICE] = geometry.smr - reference.smr
-    out[TRACKER_SLICE] = pin.log6(reference.tracker.inverse() * geometry.tracker).vector
+    out[lay.flange] = pin.log6(reference.flange.inverse() * geometry.flange).vector
+    out[lay.smr] = geometry.smr - reference.smr
+    out[lay.tracker] = pin.log6(reference.tracker.inverse() * geometry.tracker).vector
     if compliance:
         out[COMPLIANCE_SLICE] = ((np.zeros(6) if geometry.compliance is None else geometry.compliance)
                                  - (np.zeros(6) if reference.compliance is None else reference.compliance))
@@ -338,7 +432,7 @@ RANK_TOLERANCE = 1e-7
 MIN_COMPLIANCE_EFFECT = 1e-6
 
 
-def generic_geometry(robot: str | RobotSpec) -> Geometry:
+def generic_geometry(robot: Robot) -> Geometry:
     """Nominal geometry at a generic point: SMR off the joint-6 axis, tracker in a general pose.
 
     At a special point (SMR on the axis) one parameter looks unidentifiable that is identifiable
@@ -348,10 +442,18 @@ def generic_geometry(robot: str | RobotSpec) -> Geometry:
                            tracker=pose((2.1, -1.3, 0.4), (0.05, -0.08, 2.4)))
 
 
-def generic_configurations(robot: str | RobotSpec, count: int = 60, seed: int = 7) -> np.ndarray:
-    """Deterministic random configurations used to find the identifiable set."""
+def generic_configurations(robot: Robot, count: int = 60, seed: int = 7) -> np.ndarray:
+    """Deterministic random configurations used to find the identifiable set: a UR's uniform in ±π
+    (every joint of a UR turns that far), another arm's uniform within its limits
+    (`Chain.sampling_range`), with at least 2·(6n + 15)/3 configurations so the stacked Jacobian has
+    twice the rows it needs."""
     rng = np.random.default_rng(seed)
-    return rng.uniform(-np.pi, np.pi, size=(count, 6))
+    chain = chain_of(robot)
+    if chain.is_ur:
+        return rng.uniform(-np.pi, np.pi, size=(count, 6))
+    lo, hi = chain.sampling_range()
+    count = max(count, -(-2 * parameter_layout(chain.dof).size // 3))
+    return rng.uniform(lo, hi, size=(count, chain.dof))
 
 
 def select_identifiable(J: np.ndarray, tol: float = RANK_TOLERANCE,
@@ -365,7 +467,7 @@ def select_identifiable(J: np.ndarray, tol: float = RANK_TOLERANCE,
     already chosen, and pivoted QR then keeps those whose residual exceeds `tol`. Within a group the
     pivoting picks the best-conditioned columns; across groups the order settles exact equivalences so
     the set is stable. `groups` replaces that order for other column layouts (a 6-D fit's,
-    `hil.arm.tool_frame`).
+    `hil.arm.tool_frame`; an arm from a URDF's, `ParameterLayout.group_order`).
     """
     J = np.asarray(J, dtype=float)
     norms = np.linalg.norm(J, axis=0)
@@ -402,9 +504,21 @@ def _identifiable_cached(robot: str) -> tuple[int, ...]:
     return tuple(select_identifiable(J))
 
 
-def identifiable_parameters(robot: str | RobotSpec) -> np.ndarray:
-    """Indices (into `PARAMETER_NAMES`) of the identifiable parameter set: 27 for a UR arm."""
-    name = robot.name if isinstance(robot, RobotSpec) else get_robot(robot).name
+@lru_cache(maxsize=16)
+def _identifiable_chain_cached(chain: Chain) -> tuple[int, ...]:
+    kin = Kinematics(generic_geometry(chain))
+    J = kin.jacobian(generic_configurations(chain))
+    groups = parameter_layout(chain.dof).group_order
+    return tuple(select_identifiable(J.reshape(-1, J.shape[2]), groups=groups))
+
+
+def identifiable_parameters(robot: Robot) -> np.ndarray:
+    """Indices (into `PARAMETER_NAMES`, or `parameter_names` of another arm) of the identifiable
+    parameter set: 27 for a UR arm; for an arm from a URDF whatever the same pivoted QR at the generic
+    point finds for its chain."""
+    if isinstance(robot, Chain) and not robot.is_ur:
+        return np.array(_identifiable_chain_cached(robot), dtype=int)
+    name = robot.name if isinstance(robot, RobotSpec | Chain) else get_robot(robot).name
     return np.array(_identifiable_cached(name), dtype=int)
 
 

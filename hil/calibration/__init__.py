@@ -8,6 +8,8 @@
 * `joint_error_selection` — which low-order joint errors the data support, by cross-validation;
 * `model_file` — the ``hil-model/1`` and ``hil-truth/1`` JSON documents;
 * `exports` — URDF, ROS kinematics YAML and JSON exports of a model;
+* `urdf_rewrite` — a URDF with some joints' `<origin>` values spliced in, every other byte kept;
+* `calibrated_urdf` — a URDF chain's calibrated placements written back into its own file;
 * `controller_export` — the controller's own model as the ROS kinematics YAML UR's ur_calibration writes;
 * `synthetic` — random realistic truths and simulated measurements (``hil synth``, the simulators);
 * `stream_clocks` — the tracker's and the controller's clocks against the true time (the simulated
@@ -16,6 +18,8 @@
   data with its uncertainty, untrusted samples left out by reason;
 * `synthetic_stream` — synthetic sweeps (a smooth joint path, both streams on their own clocks);
 * `selection` — the glue to the `selector` package: hil's model as its `PoseModel`, ``hil select``.
+* `urdf_selection` — an arm read from its URDF as the selector's `PoseModel` (``hil select --urdf``);
+* `selection_parameters` — the parameters a design is made for: expected sizes, what a station observes.
 
 No I/O with devices, no campaign state: pure computations on files and arrays.
 May import: `hil.arm`, `hil.files`, `hil.errors`, `selector`, and `drivers.tracker.geometry` (the one

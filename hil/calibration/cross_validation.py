@@ -74,7 +74,7 @@ from typing import Any
 import numpy as np
 
 from hil.arm.geometry import Geometry
-from hil.arm.kinematics import N_PARAMETERS, SMR_SLICE, TRACKER_SLICE, Kinematics
+from hil.arm.kinematics import N_PARAMETERS, SMR_SLICE, TRACKER_SLICE, Kinematics, parameter_layout
 from hil.calibration.distributions import student_t_cdf
 from hil.calibration.identification import ErrorStats, FitResult, register
 from hil.calibration.measurements import Measurements
@@ -266,7 +266,8 @@ def _registered(geometry: Geometry, q: np.ndarray, p: np.ndarray,
     """Held-out errors of a model whose tracker pose and SMR offset are refitted in each fold on the
     `train` poses (the poses outside it predicted by the registration on all of them)."""
     model, J = Kinematics(geometry).point_and_jacobian(q)
-    return ErrorStats.of(held_out_residuals(p - model, J[:, :, REGISTRATION], fold, train=train))
+    registration = parameter_layout(len(geometry.joints)).registration
+    return ErrorStats.of(held_out_residuals(p - model, J[:, :, registration], fold, train=train))
 
 
 def cross_validate(meas: Measurements, fit: FitResult, *, controller: Geometry | None = None,

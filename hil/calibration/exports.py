@@ -162,6 +162,16 @@ def export(document: dict[str, Any], geometry: Geometry, fmt: str, source: str =
         comment += (f"; RIGID GEOMETRY ONLY: this format cannot hold the model's joint compliance "
                     f"[{c}] rad/Nm ({load}); positions predicted from it omit the gravity sag, "
                     "which hil fk and hil compensate apply from the JSON model")
+    if geometry.chain is not None and fmt == "ros-kinematics":
+        raise InputError(f"{source}: --format ros-kinematics is ur_description's kinematics_params, six "
+                         f"UR joints; the {geometry.robot} model is of an arm from its URDF (export "
+                         "--format urdf or json)")
+    if geometry.chain is not None and fmt == "urdf":
+        # the user's own URDF with the calibrated joint origins spliced in, every other byte kept (no
+        # comment is added: the provenance stays in the JSON model)
+        from hil.calibration.calibrated_urdf import calibrated_urdf
+
+        return calibrated_urdf(geometry.chain, list(geometry.joints), geometry.flange).decode("utf-8")
     if fmt == "urdf":
         return to_urdf(geometry, comment)
     if fmt == "ros-kinematics":

@@ -34,13 +34,12 @@ from typing import Any
 
 import numpy as np
 
+from hil.arm.chain import Robot, chain_of, robot_name
 from hil.arm.geometry import Geometry
 from hil.arm.kinematics import (
     EXTENDED_PARAMETER_NAMES,
     N_ALL_PARAMETERS,
     N_PARAMETERS,
-    SMR_SLICE,
-    TRACKER_SLICE,
     Kinematics,
     apply_update,
     deviation_from,
@@ -48,6 +47,9 @@ from hil.arm.kinematics import (
     identifiable_parameters,
     identifiable_with_compliance,
     numerical_rank,
+    parameter_layout,
+    parameter_names,
+    refuse_non_ur,
 )
 from hil.arm.payload import Payload
 from hil.arm.pivoted_qr import pivoted_qr
@@ -97,7 +99,7 @@ class FitResult:
     """The calibrated geometry and everything a report needs about how well it is determined."""
 
     geometry: Geometry
-    robot: str
+    robot: Robot  # a catalog name, or the chain of an arm from its URDF
     indices: np.ndarray  # identified parameters (into EXTENDED_PARAMETER_NAMES: 51.. compliances,
     # 57.. joint errors and lost motion)
     values: np.ndarray  # their deviation from the nominal geometry (m, rad; SMR absolute)
@@ -127,16 +129,26 @@ class FitResult:
 
     @property
     def names(self) -> list[str]:
-        return [POSE_PARAMETER_NAMES[i] for i in self.indices]
+        table = POSE_PARAMETER_NAMES if chain_of(self.robot).is_ur else parameter_names(self.robot)
+        return [table[i] for i in self.indices]
+
+    @property
+    def robot_name(self) -> str:
+        """The robot's name as files and reports give it."""
+        return robot_name(self.robot)
 
     @property
     def with_compliance(self) -> bool:
         """Whether the joints' compliance was identified with the geometry."""
+        if not chain_of(self.robot).is_ur:
+            return False
         return bool(np.any((self.indices >= N_PARAMETERS) & (self.indices < N_ALL_PARAMETERS)))
 
     @property
     def with_joint_errors(self) -> bool:
         """Whether joint-error or lost-motion terms were identified with the geometry."""
+        if not chain_of(self.robot).is_ur:
+            return False
         return bool(np.any((self.indices >= N_ALL_PARAMETERS)
                            & (self.indices < len(EXTENDED_PARAMETER_NAMES))))
 
@@ -151,10 +163,15 @@ def minimum_poses(n_parameters: int) -> int:
     return -(-(n_parameters + 3) // 3)
 
 
-def _parameters(robot: str, compliance: bool, template: Geometry,
+def _parameters(robot: Robot, compliance: bool, template: Geometry,
                 joint_errors: Sequence[int] = ()) -> np.ndarray:
     """The identified set: the geometry's, plus the identifiable compliances when asked, plus the
-    joint-error terms `joint_errors` (indices into `EXTENDED_PARAMETER_NAMES`, 57..)."""
+    joint-error terms `joint_errors` (indices into `EXTENDED_PARAMETER_NAMES`, 57..). An arm from its
+    URDF has its geometry's only (InputError when more is asked)."""
+    if compliance:
+        refuse_non_ur(robot, "joint compliance")
+    if len(joint_errors):
+        refuse_non_ur(robot, "angle-dependent joint errors and lost motion")
     idx = (identifiable_parameters(robot) if not compliance
            else identifiable_with_compliance(robot, template.payload, template.gravity))
     # sorted(set()), not np.unique: numpy 2.4's unique imports numpy.ma (~50 ms of `hil identify`)
@@ -165,7 +182,7 @@ def _parameters(robot: str, compliance: bool, template: Geometry,
     return np.r_[idx, terms].astype(int)
 
 
-def check_design(meas: Measurements, robot: str, compliance: bool = False,
+def check_design(meas: Measurements, robot: Robot, compliance: bool = False,
                  template: Geometry | None = None, joint_errors: Sequence[int] = ()) -> None:
     """Raise InputError if these poses cannot identify the model, naming what is wrong.
 
@@ -173,6 +190,10 @@ def check_design(meas: Measurements, robot: str, compliance: bool = False,
     `joint_errors` as in `identify`.
     """
     template = Geometry.nominal(robot) if template is None else template
+    chain = chain_of(robot)
+    if meas.q.shape[1] != chain.dof:
+        raise InputError(f"{meas.source}: {meas.q.shape[1]} joint columns, but the {chain.name} has "
+                         f"{chain.dof} joints (q1..q{chain.dof})")
     idx = _parameters(robot, compliance, template, joint_errors)
     n, m, src = len(idx), len(meas), meas.source
     need = minimum_poses(n)
@@ -182,7 +203,7 @@ def check_design(meas: Measurements, robot: str, compliance: bool = False,
     spread = np.ptp(meas.q, axis=0)
     if np.max(np.linalg.norm(meas.q - meas.q[0], axis=1)) < MIN_JOINT_SPREAD:
         raise InputError(f"{src}: all {m} poses are the same joint configuration")
-    still = [f"q{j + 1}" for j in range(6) if spread[j] < MIN_JOINT_SPREAD]
+    still = [f"q{j + 1}" for j in range(chain.dof) if spread[j] < MIN_JOINT_SPREAD]
     if still:
         raise InputError(f"{src}: column(s) {', '.join(still)} never change (spread below "
                          f"{MIN_JOINT_SPREAD} rad): every joint must move for its parameters to be "
@@ -193,7 +214,8 @@ def check_design(meas: Measurements, robot: str, compliance: bool = False,
     if numerical_rank(J) < n:
         norms = np.linalg.norm(J, axis=0)
         _, d, piv = pivoted_qr(J / norms)
-        lost = [EXTENDED_PARAMETER_NAMES[idx[piv[k]]] for k in range(n) if d[k] <= 1e-7 * d[0]]
+        names = parameter_names(robot)
+        lost = [names[idx[piv[k]]] for k in range(n) if d[k] <= 1e-7 * d[0]]
         raise InputError(f"{src}: degenerate pose set: the poses cannot identify {', '.join(lost)} "
                          "(use more distinct poses that move every joint)")
     extent = np.linalg.svd(meas.p - meas.p.mean(axis=0), compute_uv=False) / np.sqrt(m)
@@ -378,10 +400,12 @@ def _outlier(Jp: np.ndarray, res: np.ndarray, inv: np.ndarray, level: float) -> 
     return (k, float(pvals[k])) if pvals[k] < level else None
 
 
-_REGISTRATION = np.r_[np.arange(N_PARAMETERS)[TRACKER_SLICE], np.arange(N_PARAMETERS)[SMR_SLICE]]
+def _registration(robot: Robot) -> np.ndarray:
+    """Indices of the tracker pose and the SMR offset in `robot`'s parameter vector."""
+    return parameter_layout(chain_of(robot).dof).registration
 
 
-def register(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None,
+def register(meas: Measurements, robot: Robot, smr_guess: np.ndarray | None = None,
              max_iter: int = 50, *, arm: Geometry | None = None) -> Geometry:
     """The nominal arm with only the tracker pose and the SMR offset fitted to `meas`.
 
@@ -392,13 +416,14 @@ def register(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
     """
     nominal = Geometry.nominal(robot, smr=(0.0, 0.0, 0.0) if smr_guess is None else smr_guess)
     if arm is not None:
-        nominal = Geometry(nominal.robot, list(arm.joints), arm.flange, nominal.smr, nominal.tracker)
+        nominal = Geometry(nominal.robot, list(arm.joints), arm.flange, nominal.smr, nominal.tracker,
+                           chain=nominal.chain)
     state = _State.at(align_tracker(nominal, meas), meas.q)
-    state, _, _ = _levenberg_marquardt(state, meas.q, meas.p, _REGISTRATION, max_iter)
+    state, _, _ = _levenberg_marquardt(state, meas.q, meas.p, _registration(robot), max_iter)
     return state.geometry
 
 
-def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None, *,
+def identify(meas: Measurements, robot: Robot, smr_guess: np.ndarray | None = None, *,
              reject_outliers: bool = True, alpha: float = 0.01, max_iter: int = 100,
              correlation_threshold: float = 0.95, compliance: bool = False,
              payload: Payload | None = None, gravity: np.ndarray | None = None,
@@ -411,7 +436,8 @@ def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
     `EXTENDED_PARAMETER_NAMES`; which ones the data support is `hil.calibration.joint_error_selection`'s
     question); the model then carries its ``joint_errors`` and ``lost_motion`` blocks.
     `prior` (default) makes it the MAP fit toward the nominal geometry (`hil.calibration.prior`);
-    False gives the plain least-squares fit.
+    False gives the plain least-squares fit. `robot` is a catalog name or, for any other serial arm,
+    its chain (`hil.arm.urdf_chain.chain_from_urdf`): then the geometry alone is identified.
     """
     t0 = time.perf_counter()
     nominal = Geometry.nominal(robot, smr=(0.0, 0.0, 0.0) if smr_guess is None else smr_guess)
@@ -430,7 +456,7 @@ def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
     initial_rms = float(np.sqrt(np.mean(np.sum((meas.p - state.p) ** 2, axis=1))))
 
     # Tracker pose and SMR offset first: a far-off SMR guess otherwise drags the joints around.
-    state, iterations, _ = _levenberg_marquardt(state, meas.q, meas.p, _REGISTRATION, max_iter)
+    state, iterations, _ = _levenberg_marquardt(state, meas.q, meas.p, _registration(robot), max_iter)
     baseline = state.geometry
     rejected: list[RejectedPose] = []
     max_reject = min(m // 5, m - minimum_poses(n))
@@ -480,7 +506,8 @@ def identify(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None
     std = np.sqrt(np.maximum(np.diag(cov), 0.0))
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(std, std)
-    names = [EXTENDED_PARAMETER_NAMES[i] for i in idx]
+    table = parameter_names(robot)
+    names = [table[i] for i in idx]
     correlated = [Correlation(names[a], names[b], float(corr[a, b]))
                   for a in range(n) for b in range(a + 1, n)
                   if abs(corr[a, b]) >= correlation_threshold]

@@ -95,6 +95,8 @@ DIRECTIONS = Form("direction", "directions", ("d1", "d2", "d3", "d4", "d5", "d6"
 _UNITS = {"angle": ANGLE_UNITS, "length": LENGTH_UNITS, "number": {}}
 _SUFFIX = re.compile(r"^(?P<base>.+)_(?P<unit>rad|deg|gon|mm|m)$")
 _MARKER = re.compile(r"^(?P<axis>[xyz])(?P<k>[1-9][0-9]*)$")
+#: A joint column of an arm with any number of joints (an arm from its URDF): q1..qN.
+_JOINT = re.compile(r"^q(?P<k>[1-9][0-9]*)$")
 
 
 def _quantity_of(base: str) -> str | None:
@@ -104,6 +106,8 @@ def _quantity_of(base: str) -> str | None:
             return form.quantities[form.columns.index(base)]
     if _MARKER.match(base):
         return "length"
+    if _JOINT.match(base):
+        return "angle"  # q7.. of an arm from its URDF (a prismatic joint's metres are read as written)
     return None
 
 
@@ -281,8 +285,14 @@ POSITIONS_EXPECTED = ("x,y,z (m), x1,y1,z1[,x2,y2,z2…] (FIGAROH's markers) or 
 
 def check_measurements_header(rows: Rows) -> None:
     """Refuse a measurements header that lacks a joint or a position form, or names one in part,
-    before any row is read: a file whose header is wrong is told so, whatever its rows hold."""
+    before any row is read: a file whose header is wrong is told so, whatever its rows hold. A UR's
+    file with joint columns beyond q6 (q7.., an arm of more joints) is refused too: dropping a joint
+    would fit the wrong arm."""
     header = rows.header
+    extra = sorted(int(m["k"]) for c in header.columns if (m := _JOINT.match(c)) and int(m["k"]) > 6)
+    if extra:
+        raise InputError(header.where(f"joint columns up to q{extra[-1]}, but a UR has 6 joints "
+                                      "(q1..q6); an arm of more joints is read with --urdf"))
     choose(header, JOINT_FORMS, required=True, expected=JOINTS_EXPECTED)
     choose(header, POSITION_FORMS, required=True, expected=POSITIONS_EXPECTED)
     choose(header, ORIENTATION_FORMS, required=False, expected="")
@@ -316,6 +326,37 @@ def joints(rows: Rows, declared: str | None = None) -> tuple[np.ndarray, np.ndar
                      "--joint-units deg")
         raise InputError(f"{header.source}: line {lines[i]}, column {header.columns[form.columns[j]].label}: "
                          f"{text}")
+    return q, lines
+
+
+def chain_joints(rows: Rows, names: Sequence[str], kinds: Sequence[str], lower: np.ndarray,
+                 upper: np.ndarray, arm: str, declared: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Joint values (m, N) of an arm from its URDF and the line numbers, from columns ``q1..qN``
+    (radians, or degrees by suffix or `declared`; a prismatic joint in metres, as its URDF gives it).
+
+    The header must hold exactly q1..qN for the N joints (`names` are the URDF's joint names, shown in
+    the error): another count is one line naming the file and the header line. A value beyond the
+    URDF's limits by more than `JOINT_LIMIT_MARGIN` is refused naming its line and column.
+    """
+    header = rows.header
+    present = sorted(int(m["k"]) for c in header.columns if (m := _JOINT.match(c)))
+    n = len(names)
+    if present != list(range(1, n + 1)):
+        found = ",".join(f"q{k}" for k in present) or "none"
+        raise InputError(header.where(f"joint columns {found}, but the {arm} has {n} joints "
+                                      f"({', '.join(names)}): expected q1..q{n}"))
+    form = Form("joint", f"q1..q{n}", tuple(f"q{k}" for k in range(1, n + 1)), ("angle",) * n)
+    unit = joint_unit(header, form, declared)
+    values, lines = numbers(rows, form.columns)
+    factor = np.array([ANGLE_UNITS[unit] if kind == "RZ" else 1.0 for kind in kinds])
+    q = values * factor
+    margin = np.array([JOINT_LIMIT_MARGIN if kind == "RZ" else 0.0 for kind in kinds])
+    bad = _first_bad((q < lower - margin) | (q > upper + margin))
+    if bad is not None:
+        i, j = bad
+        raise InputError(f"{header.source}: line {lines[i]}, column {header.columns[form.columns[j]].label}: "
+                         f"{values[i, j]:g} is beyond the URDF's limits of {names[j]} "
+                         f"({lower[j] / factor[j]:.4g} to {upper[j] / factor[j]:.4g})")
     return q, lines
 
 

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hil.arm.chain import Chain
 from hil.calibration import measurement_forms as forms
 from hil.files.outputs import atomic_write_text, format_csv
 
@@ -35,7 +36,7 @@ class Measurements:
     knows only positions reads every file the same way.
     """
 
-    q: np.ndarray  # (m, 6) radians
+    q: np.ndarray  # (m, 6) radians (m, N for an arm of N joints from its URDF)
     p: np.ndarray  # (m, 3) metres, tracker frame
     lines: np.ndarray  # (m,) 1-based line numbers in the source file
     source: str = "<memory>"
@@ -60,7 +61,8 @@ class Measurements:
                     directions: np.ndarray | None = None) -> Measurements:
         """Measurements from arrays, hashed by `measurements_sha256`; line numbers as in that CSV
         unless `lines` names the poses otherwise (a campaign names them by pose index)."""
-        q = np.asarray(q, dtype=float).reshape(-1, 6)
+        q = np.asarray(q, dtype=float)
+        q = q.reshape(-1, q.shape[-1] if q.ndim == 2 else 6)
         p = np.asarray(p, dtype=float).reshape(-1, 3)
         lines = np.arange(2, len(q) + 2) if lines is None else np.asarray(lines, dtype=int)
         d = None if directions is None else np.asarray(directions, dtype=float).reshape(-1, 6)
@@ -75,21 +77,45 @@ def measurements_sha256(q: np.ndarray, p: np.ndarray) -> str:
     hashed as the file they would be, so writing them out and running ``sha256sum`` gives the same
     digest, and a model always names the data it was fitted to.
     """
-    rows = np.hstack([np.asarray(q, dtype=float).reshape(-1, 6), np.asarray(p, dtype=float).reshape(-1, 3)])
-    return hashlib.sha256(format_csv(JOINT_COLUMNS + POINT_COLUMNS, rows).encode("utf-8")).hexdigest()
+    Q = np.asarray(q, dtype=float)
+    Q = Q.reshape(-1, Q.shape[-1] if Q.ndim == 2 else 6)
+    rows = np.hstack([Q, np.asarray(p, dtype=float).reshape(-1, 3)])
+    text = format_csv(joint_columns(Q.shape[1]) + POINT_COLUMNS, rows)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
-def read_joints(path: str | os.PathLike[str],
-                joint_units: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+def joint_columns(dof: int) -> tuple[str, ...]:
+    """The joint columns hil writes for an arm of `dof` joints: q1..q6 for a UR, q1..qN for any arm."""
+    return JOINT_COLUMNS if dof == 6 else tuple(f"q{k + 1}" for k in range(dof))
+
+
+def read_joints(path: str | os.PathLike[str], joint_units: str | None = None,
+                chain: Chain | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Joint configurations (m, 6) in radians and their line numbers from a CSV with a joint form
-    (q1..q6 or the URDF's names; degrees declared by a ``_deg`` suffix or `joint_units` "deg")."""
+    (q1..q6 or the URDF's names; degrees declared by a ``_deg`` suffix or `joint_units` "deg"); for an
+    arm from its URDF (`chain`), (m, N) from q1..qN (`forms.chain_joints`)."""
+    if chain is not None and not chain.is_ur:
+        return forms.chain_joints(forms.read_rows(path), chain.joint_names, chain.kinds, chain.lower,
+                                  chain.upper, f"{chain.name} (URDF)", joint_units)
     return forms.joints(forms.read_rows(path), joint_units)
 
 
-def read_measurements(path: str | os.PathLike[str], joint_units: str | None = None) -> Measurements:
+def read_measurements(path: str | os.PathLike[str], joint_units: str | None = None,
+                      chain: Chain | None = None) -> Measurements:
     """A measurements CSV in any form `measurement_forms` knows (with optional d1..d6), as
     `Measurements` in radians and metres; `joint_units` ("rad" or "deg") declares the unit of joint
-    columns without a suffix."""
+    columns without a suffix.
+
+    For an arm from its URDF (`chain`, not a UR) the joints are ``q1..qN`` (`forms.chain_joints`: a
+    count that is not the chain's is one line naming the file and line) and the positions any position
+    form; orientations and further reflectors are not read (its fit is of positions only)."""
+    if chain is not None and not chain.is_ur:
+        rows = forms.read_rows(path)
+        forms.choose(rows.header, forms.POSITION_FORMS, required=True, expected=forms.POSITIONS_EXPECTED)
+        q, lines = forms.chain_joints(rows, chain.joint_names, chain.kinds, chain.lower, chain.upper,
+                                      f"{chain.name} (URDF)", joint_units)
+        p, _, _ = forms.positions(rows, lines)
+        return Measurements(q, p, lines, rows.header.source, rows.sha256)
     rows = forms.read_rows(path)
     forms.check_measurements_header(rows)
     q, lines = forms.joints(rows, joint_units)
@@ -115,9 +141,10 @@ def unused_by_position_fit(meas: Measurements, user: str = "the fit") -> list[st
 
 def write_measurements(path: str | os.PathLike[str], q: np.ndarray, p: np.ndarray,
                        directions: np.ndarray | None = None) -> None:
-    """Write a measurements CSV (q1..q6, x, y, z, and d1..d6 when `directions` are given)."""
+    """Write a measurements CSV (q1..q6, x, y, z, and d1..d6 when `directions` are given; q1..qN for an
+    arm of N joints)."""
     if directions is None:
-        atomic_write_text(path, format_csv(JOINT_COLUMNS + POINT_COLUMNS, np.hstack([q, p])))
+        atomic_write_text(path, format_csv(joint_columns(np.shape(q)[1]) + POINT_COLUMNS, np.hstack([q, p])))
     else:
         atomic_write_text(path, format_csv(JOINT_COLUMNS + POINT_COLUMNS + DIRECTION_COLUMNS,
                                            np.hstack([q, p, directions])))

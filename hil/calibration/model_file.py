@@ -291,7 +291,7 @@ def check_geometry_block(doc: dict[str, Any], source: str, prefix: str = "") -> 
             numbers(value.get("rpy"), f"{field}.rpy", "link angle")
 
     robot = doc.get("robot")
-    if isinstance(robot, str):
+    if isinstance(robot, str) and doc.get("urdf") is None:  # an arm from its URDF is named by it
         try:
             get_robot(robot)
         except InputError as exc:  # the catalog's message does not know which file it came from

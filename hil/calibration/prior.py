@@ -42,7 +42,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hil.arm.kinematics import ALL_PARAMETER_NAMES, N_ALL_PARAMETERS, N_PARAMETERS
+from hil.arm.chain import Robot, chain_of
+from hil.arm.kinematics import ALL_PARAMETER_NAMES, N_ALL_PARAMETERS, N_PARAMETERS, parameter_names
 
 #: Prior standard deviation of a joint origin's or the flange's translation, per axis (m); see the
 #: module docstring for its sources and why it is twice the simulated truths' 0.5 mm.
@@ -83,11 +84,21 @@ class Prior:
 JOINT_ERROR_TOLERANCE = ROTATION_TOLERANCE
 
 
-def manufacturing_prior(robot: str, indices: np.ndarray) -> Prior:
-    """The tolerance prior (module docstring) on the identified parameters `indices` of `robot`."""
+def manufacturing_prior(robot: Robot, indices: np.ndarray) -> Prior:
+    """The tolerance prior (module docstring) on the identified parameters `indices` of `robot`.
+
+    An arm from its URDF gets the same joint-origin and flange tolerances: no maker of the arms hil
+    reads URDFs of publishes its own, and 1 mm / 2 mrad is loose for any machined arm (an assumption,
+    the UR's figures reused)."""
     from hil.arm.physical import typical_compliance
 
     idx = np.asarray(indices, dtype=int)
+    if not chain_of(robot).is_ur:
+        names = parameter_names(robot)
+        std = np.array([np.inf if not names[i].startswith(("joint", "flange"))
+                        else TRANSLATION_TOLERANCE if names[i].split(".")[1].startswith("t")
+                        else ROTATION_TOLERANCE for i in idx])
+        return Prior(idx, np.zeros(len(idx)), std)
     typical = typical_compliance(robot)
     mean = np.zeros(len(idx))
     std = np.full(len(idx), np.inf)

@@ -23,14 +23,16 @@ Choices made here:
 * **Joint errors** (``joint_errors``, orders): the harmonics of those orders of every joint
   (`hil.arm.kinematics.identifiable_joint_errors`) join the parameters, so the chosen poses spread each
   joint's angle over its turn — a harmonic is only seen where its joint takes different angles. Their
-  expected magnitude is `JOINT_ERROR_MAGNITUDE`. Lost motion is not designed for: the campaign
-  approaches every pose from one side, which makes it a constant the geometry holds.
+  expected magnitude is `hil.calibration.selection_parameters.JOINT_ERROR_MAGNITUDE`. Lost motion is
+  not designed for: the campaign approaches every pose from one side, which makes it a constant the
+  geometry holds.
 * **Link thickness** scales with the upper-arm length: (|a2| / 0.425)^0.6 times a UR5e's
   (`hil.arm.self_collision.arm_shape`, the capsules the campaign's routes are checked with too).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import time
@@ -38,10 +40,10 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 
 import selector
 from hil.arm.catalog import get_robot
+from hil.arm.chain import Chain, Robot
 from hil.arm.geometry import Geometry, look_at_tracker
 from hil.arm.joint_error_columns import harmonic_index
 from hil.arm.kinematics import (
@@ -50,8 +52,11 @@ from hil.arm.kinematics import (
     identifiable_joint_errors,
     identifiable_parameters,
     identifiable_with_compliance,
+    refuse_non_ur,
 )
 from hil.arm.self_collision import arm_shape
+from hil.calibration.selection_parameters import drop_unobservable, expected_magnitude
+from hil.calibration.urdf_selection import NON_UR_DISABLED, UrdfSelectionModel
 from hil.errors import InputError
 from selector.bound import d_optimal_bound
 from selector.candidates import CONSTRAINT_NAMES, Constraints, evaluate, generate_candidates
@@ -63,26 +68,6 @@ from selector.tabu import TabuSettings
 
 DEFAULT_TRACKER_FOR_JACOBIAN = (2.5, 0.0, 0.5)
 FORMAT = "hil-poses/1"
-#: Expected size (rad) of one harmonic coefficient of a joint's angle error, for the "expected" column
-#: scaling. An assumption, not a measurement: tens of microradians is what leaves a calibrated UR at the
-#: tenth of a millimetre real arms reach (docs/design.md, Facts: what real arms reach) over its reach.
-#: O1, the default index, does not depend on it.
-JOINT_ERROR_MAGNITUDE = 50e-6
-
-
-def _expected_magnitude(name: str, robot: str) -> float:
-    group, axis = name.split(".")
-    if axis.startswith(("cos", "sin")):
-        return JOINT_ERROR_MAGNITUDE
-    if group == "compliance":
-        from hil.arm.physical import typical_compliance
-
-        return float(typical_compliance(robot)[int(axis[1:]) - 1])
-    if group == "smr":
-        return 1e-3
-    if group == "tracker":
-        return 1e-3
-    return 0.5e-3 if axis.startswith("t") else 1e-3
 
 
 class SelectionModel:
@@ -110,7 +95,7 @@ class SelectionModel:
         self._flange = self.geometry.flange.homogeneous
         self.parameters, self.unobservable = self._observable_parameters()
         self.parameter_names = tuple(EXTENDED_PARAMETER_NAMES[i] for i in self.parameters)
-        self.parameter_scale = np.array([_expected_magnitude(n, self.spec.name)
+        self.parameter_scale = np.array([expected_magnitude(n, self.spec.name)
                                          for n in self.parameter_names])
 
     def _observable_parameters(self) -> tuple[np.ndarray, list[str]]:
@@ -125,13 +110,7 @@ class SelectionModel:
                       for kind in ("cos", "sin")]
             idx = np.r_[idx, [i for i in wanted if i in free]].astype(int)
         q = np.random.default_rng(11).uniform(-math.pi, math.pi, size=(120, 6))
-        J = self.kinematics.jacobian(q, idx).reshape(-1, len(idx))
-        J = J / np.linalg.norm(J, axis=0)
-        _, r, piv = scipy.linalg.qr(J, mode="economic", pivoting=True)
-        d = np.abs(np.diag(r))
-        keep = np.sort(piv[d > 1e-7 * d[0]])
-        lost = [EXTENDED_PARAMETER_NAMES[idx[i]] for i in np.sort(piv[d <= 1e-7 * d[0]])]
-        return idx[keep], lost
+        return drop_unobservable(self.kinematics, q, idx, EXTENDED_PARAMETER_NAMES)
 
     def frames(self, q: np.ndarray) -> np.ndarray:
         """(N, 7, 4, 4) joint frames and flange in the base frame.
@@ -189,33 +168,76 @@ def naming_the_option(exc: Exception, constraints: Constraints) -> str:
     return f"{option}: {exc}" if option else str(exc)
 
 
-def design_space(robot: str, count: int, *, candidates: int, seed: int, smr: Sequence[float],
+def selection_model(robot: Robot, smr: Sequence[float], tracker: Sequence[float] | None, *,
+                    compliance: bool = False, payload: Any = None, gravity: Sequence[float] | None = None,
+                    joint_errors: Sequence[int] = (), urdf_path: str | None = None
+                    ) -> SelectionModel | UrdfSelectionModel:
+    """The selector's model of `robot`: a UR's `SelectionModel`, or for a chain read from a URDF its
+    `UrdfSelectionModel` (`urdf_path`: where the file is, for its meshes); compliance and joint errors
+    are a UR's, refused for another arm in one line."""
+    if isinstance(robot, Chain) and not robot.is_ur:
+        if compliance:
+            refuse_non_ur(robot, "compliance")
+        if joint_errors:
+            refuse_non_ur(robot, "joint errors")
+        return UrdfSelectionModel(robot, smr, tracker, urdf_path=urdf_path)
+    return SelectionModel(robot.name if isinstance(robot, Chain) else robot, smr, tracker,
+                          compliance=compliance, payload=payload, gravity=gravity, joint_errors=joint_errors)
+
+
+def model_name(model: SelectionModel | UrdfSelectionModel) -> str:
+    """The robot's name in reports: the catalog name, or the URDF's robot name."""
+    return model.name if isinstance(model, UrdfSelectionModel) else model.spec.name
+
+
+def constraints_for(model: SelectionModel | UrdfSelectionModel, constraints: Constraints) -> Constraints:
+    """`constraints` with the UR singularity margins switched off for an arm that is not a UR
+    (`hil.calibration.urdf_selection.NON_UR_DISABLED`)."""
+    if isinstance(model, UrdfSelectionModel):
+        return dataclasses.replace(constraints, disabled=frozenset(constraints.disabled) | NON_UR_DISABLED)
+    return constraints
+
+
+def design_space(robot: Robot, count: int, *, candidates: int, seed: int, smr: Sequence[float],
                  constraints: Constraints, scaling: str, compliance: bool, payload: Any,
                  gravity: Sequence[float] | None,
                  say: Callable[[str, str], None],
                  joint_errors: Sequence[int] = (),
-                 check: Callable[[int], None] | None = None) -> tuple[SelectionModel, Any, np.ndarray]:
+                 check: Callable[[int], None] | None = None, urdf_path: str | None = None,
+                 ) -> tuple[SelectionModel | UrdfSelectionModel, Any, np.ndarray]:
     """The selection model, its feasible candidates and their scaled Jacobian blocks (every method's
     starting point); `selector.SelectorError` for a count the candidates cannot serve. `check(n)`, given
-    the parameter count, refuses a request before the candidates are drawn (seconds of work)."""
-    model = SelectionModel(robot, smr, constraints.tracker, compliance=compliance, payload=payload,
-                           gravity=gravity, joint_errors=joint_errors)
+    the parameter count, refuses a request before the candidates are drawn (seconds of work). For an
+    arm that is not a UR the UR singularity margins of `constraints` are off (`constraints_for`)."""
+    model = selection_model(robot, smr, constraints.tracker, compliance=compliance, payload=payload,
+                            gravity=gravity, joint_errors=joint_errors, urdf_path=urdf_path)
+    constraints = constraints_for(model, constraints)
     n = len(model.parameters)
     check_count(count, candidates, n)
     if check is not None:
         check(n)
-    say("candidates", f"drawing up to {candidates} feasible configurations of the {model.spec.name}")
+    if isinstance(model, UrdfSelectionModel):
+        say("self-collision", model.collision.note)
+    say("candidates", f"drawing up to {candidates} feasible configurations of the {model_name(model)}")
     cands = generate_candidates(model, candidates, constraints, seed=seed)
     say("candidates", f"{len(cands)} found ({cands.sampled} drawn) in {cands.seconds:.1f} s")
     check_count(count, len(cands), n)
     return model, cands, scale_columns(cands.jacobian, scaling, model.parameter_scale)
 
 
-def design_fields(model: SelectionModel, cands: Any, requested: int, scaling: str,
+def design_fields(model: SelectionModel | UrdfSelectionModel, cands: Any, requested: int, scaling: str,
                   constraints: Constraints) -> dict[str, Any]:
     """The report fields every selection method shares: the parameters, the SMR, the candidates and the
-    constraints they met."""
-    return {"parameters": len(model.parameters), "parameter_names": list(model.parameter_names),
+    constraints they met; for an arm from a URDF, the file (name, sha256, base, tip) and how its
+    self-collision was checked."""
+    constraints = constraints_for(model, constraints)
+    extra: dict[str, Any] = {}
+    if isinstance(model, UrdfSelectionModel) and model.chain.urdf is not None:
+        source = model.chain.urdf
+        extra = {"urdf": {"file": source.file, "sha256": source.sha256, "base": source.base,
+                          "tip": source.tip},
+                 "self_collision": {"check": model.collision.kind, "note": model.collision.note}}
+    return {**extra,"parameters": len(model.parameters), "parameter_names": list(model.parameter_names),
             "unobservable": model.unobservable, "scaling": scaling,
             "smr": [float(v) for v in model.smr],
             "candidates": {"requested": requested, "found": len(cands), "sampled": cands.sampled,
@@ -223,15 +245,16 @@ def design_fields(model: SelectionModel, cands: Any, requested: int, scaling: st
             "constraints": constraints.as_dict()}
 
 
-def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str = "O1",
+def select_poses(robot: Robot, count: int, *, candidates: int = 20_000, index: str = "O1",
                  method: str = "tabu", seed: int = 0, smr: Sequence[float] = (0.0, 0.0, 0.045),
                  constraints: Constraints | None = None, scaling: str = "expected",
                  start: Sequence[float] | None = None, settings: TabuSettings | None = None,
                  bound: bool = True, progress: Callable[[str, str], None] | None = None,
                  compliance: bool = False, payload: Any = None,
                  gravity: Sequence[float] | None = None,
-                 joint_errors: Sequence[int] = ()) -> dict[str, Any]:
-    """Choose `count` measurement poses for `robot`; the JSON-ready report (see ``hil select``).
+                 joint_errors: Sequence[int] = (), urdf_path: str | None = None) -> dict[str, Any]:
+    """Choose `count` measurement poses for `robot` (a catalog name, or a chain read from the URDF at
+    `urdf_path`); the JSON-ready report (see ``hil select``).
 
     With `compliance` the identifiable joint compliances (for `payload` and `gravity`) are parameters
     of the design too, and so are the harmonics of the orders `joint_errors` of every joint.
@@ -251,7 +274,7 @@ def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str
         model, cands, G = design_space(robot, count, candidates=candidates, seed=seed, smr=smr,
                                        constraints=constraints, scaling=scaling, compliance=compliance,
                                        payload=payload, gravity=gravity, say=say,
-                                       joint_errors=joint_errors)
+                                       joint_errors=joint_errors, urdf_path=urdf_path)
         options: dict[str, object] = {"settings": settings} if method == "tabu" and settings else {}
         t0 = time.perf_counter()
         say("search", f"{method} search for {count} poses maximising {index}")
@@ -272,8 +295,8 @@ def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str
             b = None
         bound_seconds = time.perf_counter() - t0
         Q = cands.q[result.chosen]
-        if start is not None and len(start) != 6:
-            raise selector.SelectorError("--start needs 6 joint values")
+        if start is not None and len(start) != len(model.lower):
+            raise selector.SelectorError(f"--start needs {len(model.lower)} joint values")
         t0 = time.perf_counter()
         perm, ordered = order_poses(Q, model.max_joint_speed, start)
         order_seconds = time.perf_counter() - t0
@@ -282,7 +305,7 @@ def select_poses(robot: str, count: int, *, candidates: int = 20_000, index: str
     unordered = travel_time(Q, model.max_joint_speed, start)
     report: dict[str, Any] = {
         "format": FORMAT,
-        "robot": model.spec.name,
+        "robot": model_name(model),
         "index": index,
         "value": result.value,
         "o1": result.o1,

@@ -28,10 +28,11 @@ import numpy as np
 import pinocchio as pin
 
 from hil.arm.catalog import get_robot
+from hil.arm.chain import Chain, Robot, chain_of
 from hil.arm.geometry import Geometry, look_at_tracker
 from hil.arm.joint_errors import motion_directions
 from hil.arm.joint_physics import IDEAL_BY_DEFAULT, typical_joint_errors, typical_lost_motion
-from hil.arm.kinematics import N_PARAMETERS, SMR_SLICE, TRACKER_SLICE, Kinematics, apply_update
+from hil.arm.kinematics import Kinematics, apply_update, parameter_layout, refuse_non_ur
 from hil.arm.payload import Payload
 from hil.arm.physical import typical_compliance
 from hil.arm.thermal import Thermal
@@ -101,7 +102,13 @@ class Noise:
                 "distance_sigma": self.distance_sigma, "angle_sigma": self.angle_sigma}
 
 
-def random_truth(robot: str, rng: np.random.Generator, *, translation_sigma: float = 0.5e-3,
+def chain_reach(chain: Chain) -> float:
+    """An arm's reach from its chain (m): the sum of its origins' and flange's offsets, an upper bound
+    of the flange's distance from the first joint, for an arm without a datasheet figure here."""
+    return float(sum(np.linalg.norm(M.translation) for M in (*chain.origins[1:], chain.flange)))
+
+
+def random_truth(robot: Robot, rng: np.random.Generator, *, translation_sigma: float = 0.5e-3,
                  rotation_sigma: float = 1e-3, smr: np.ndarray | None = None,
                  tracker_distance: tuple[float, float] = (2.0, 4.0), rigid: bool = False,
                  ideal: bool = IDEAL_BY_DEFAULT) -> Geometry:
@@ -113,22 +120,32 @@ def random_truth(robot: str, rng: np.random.Generator, *, translation_sigma: flo
     it is), so a seed gives the same geometry either way, and the caller's later draws (poses, noise)
     are the same too: a rigid, an ideal and a realistic arm of one seed differ only by those blocks
     (the joint errors are drawn after the compliance, so the ideal and the realistic arm share it).
+
+    An arm from its URDF (a `Chain`) has only the geometric truth: `rigid` must be set, since its
+    compliance, joint errors and warm-up are modelled for URs only.
     """
-    spec = get_robot(robot)
+    chain = chain_of(robot)
+    if not rigid:
+        refuse_non_ur(chain, "a realistic (compliant, warming) truth")
+    reach = get_robot(chain.name).reach if chain.is_ur else chain_reach(chain)
     if smr is None:
         smr = np.array([rng.uniform(-0.04, 0.04), rng.uniform(-0.04, 0.04), rng.uniform(0.02, 0.06)])
     heading = rng.uniform(-np.pi, np.pi)
-    dist = rng.uniform(*tracker_distance) * max(spec.reach / 0.85, 1.0) ** 0.5
+    dist = rng.uniform(*tracker_distance) * max(reach / 0.85, 1.0) ** 0.5
     position = np.array([dist * np.cos(heading), dist * np.sin(heading), rng.uniform(-0.3, 0.6)])
     tracker = look_at_tracker(position) * pin.exp6(np.r_[np.zeros(3), rng.normal(0, 0.02, 3)])
-    errors = np.zeros(N_PARAMETERS)
-    placements = np.r_[np.tile(np.r_[np.full(3, translation_sigma), np.full(3, rotation_sigma)], 7)]
+    lay = parameter_layout(chain.dof)
+    errors = np.zeros(lay.size)
+    placements = np.r_[np.tile(np.r_[np.full(3, translation_sigma), np.full(3, rotation_sigma)],
+                               chain.dof + 1)]
     errors[: placements.size] = rng.normal(0.0, placements)
-    errors[SMR_SLICE] = 0.0
-    errors[TRACKER_SLICE] = 0.0
-    truth = apply_update(Geometry.nominal(spec, smr=smr, tracker=tracker), errors)
+    errors[lay.smr] = 0.0
+    errors[lay.tracker] = 0.0
+    truth = apply_update(Geometry.nominal(robot if chain.is_ur else chain, smr=smr, tracker=tracker),
+                         errors)
     if rigid:
         return truth
+    spec = get_robot(chain.name)
     child = rng.spawn(1)[0]
     truth.compliance = typical_compliance(spec.name) * child.uniform(*COMPLIANCE_SPREAD, 6)
     truth.payload = smr_payload(truth.smr)
@@ -145,10 +162,14 @@ def random_truth(robot: str, rng: np.random.Generator, *, translation_sigma: flo
     return truth
 
 
-def random_configurations(robot: str, count: int, rng: np.random.Generator) -> np.ndarray:
-    """Joint vectors uniformly spread over ±π per joint (inside every UR joint limit)."""
-    get_robot(robot)
-    return rng.uniform(-np.pi, np.pi, size=(count, 6))
+def random_configurations(robot: Robot, count: int, rng: np.random.Generator) -> np.ndarray:
+    """Joint vectors uniformly spread over ±π per joint (inside every UR joint limit); for an arm from
+    its URDF uniformly within its limits (a revolute joint's clipped to ±π, `Chain.sampling_range`)."""
+    chain = chain_of(robot)
+    if chain.is_ur:
+        return rng.uniform(-np.pi, np.pi, size=(count, 6))
+    lo, hi = chain.sampling_range()
+    return rng.uniform(lo, hi, size=(count, chain.dof))
 
 
 def measure(truth: Geometry, q: np.ndarray, noise: Noise, rng: np.random.Generator,

@@ -29,10 +29,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("fk", help="forward kinematics of a model",
                        description="Write x,y,z (metres) of the SMR or flange for each row of a joints "
                                    "CSV (q1..q6 in radians, q1_deg..q6_deg in degrees, or the URDF's "
-                                   "joint names). A model of a measured tool (a 6-D fit's tool_rpy, "
-                                   "several reflectors) also gets every reflector (x2,y2,z2, ...) and "
-                                   "the measured frame's orientation: rx,ry,rz (rotation vector, rad) "
-                                   "and roll,pitch,yaw (URDF: R = Rz(yaw) Ry(pitch) Rx(roll), rad).")
+                                   "joint names; q1..qN for a model of an arm from its URDF, which "
+                                   "the model file carries). A model of a measured tool (a 6-D fit's "
+                                   "tool_rpy, several reflectors) also gets every reflector (x2,y2,z2, "
+                                   "...) and the measured frame's orientation: rx,ry,rz (rotation "
+                                   "vector, rad) and roll,pitch,yaw (URDF: R = Rz(yaw) Ry(pitch) "
+                                   "Rx(roll), rad).")
     p.add_argument("--model", required=True, metavar="model.json", help="hil-model/1 or hil-truth/1")
     p.add_argument("--joints", required=True, metavar="Q.csv",
                    help="joint configurations: CSV with columns q1..q6 (radians) or another joint form")
@@ -101,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
     payload = payload_or_none(args.payload)
     if payload is not None:
         geometry = geometry.with_payload(payload if payload.mass > 0 else None)
-    q, _ = read_joints(args.joints, args.joint_units)
+    q, _ = read_joints(args.joints, args.joint_units, chain=geometry.chain)
     tool = args.point == "smr" and (geometry.tool_rotation is not None or geometry.reflectors is not None)
     if tool:
         header, rows, doc = tool_table(geometry, q, args.frame)

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 from hil.arm.catalog import ROBOT_NAMES, get_robot
 from hil.cli.support.options import PAYLOAD_HELP, add_joint_units, option, payload_or_none, triplet_or_none
 from hil.cli.support.output import mm, print_json, say, wrote
+from hil.cli.support.urdf_options import URDF_SCOPE, add_urdf_options, urdf_chain_or_none
 from hil.jobs.outcome import EXIT_FAILED, EXIT_OK
 
 if TYPE_CHECKING:
@@ -34,8 +35,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "joints in degrees, polar hz,v,d, FIGAROH's x1,y1,z1,phix1,…) and "
                                    "write a hil-model/1 JSON. The fit is cross-validated beside the "
                                    "nominal model (and the controller's own with --controller); exit 1 "
-                                   "when it does not predict held-out poses better than them.")
-    p.add_argument("--robot", required=True, help=f"robot type ({', '.join(ROBOT_NAMES)})")
+                                   "when it does not predict held-out poses better than them. "
+                                   + URDF_SCOPE + " Such an arm's measurements are q1..qN,x,y,z (N its "
+                                   "joints) and its geometry alone is identified.")
+    p.add_argument("--robot", help=f"robot type ({', '.join(ROBOT_NAMES)}), or --urdf")
+    add_urdf_options(p)
     p.add_argument("--measurements", required=True, metavar="M.csv", help="measurements CSV")
     p.add_argument("--smr", metavar="X,Y,Z", help="rough SMR offset in the flange frame (m)")
     p.add_argument("--validation", metavar="V.csv", help="held-out measurements to validate on")
@@ -71,7 +75,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def summary(fit: FitResult, cv: CrossValidation | None = None) -> dict:
     """The fit figures a user looks at first."""
     out = {
-        "robot": fit.robot, "poses": len(fit.used), "used": int(fit.used.sum()),
+        "robot": fit.robot_name, "poses": len(fit.used), "used": int(fit.used.sum()),
         "parameters": len(fit.indices), "initial_rms": fit.initial_rms, "rms": fit.rms,
         "max": fit.max_error, "sigma": fit.sigma, "iterations": fit.iterations,
         "condition": fit.condition, "seconds": fit.seconds, "prior": fit.prior is not None,
@@ -112,6 +116,20 @@ def _pose_fit(args: argparse.Namespace, meas: Measurements, robot: str, smr: np.
     return fit, cv, notes
 
 
+def _urdf_request(args: argparse.Namespace) -> None:
+    """Refuse what an arm from its URDF does not have, one line each: its compliance, joint errors and
+    the controller's own model are UR-only (`hil.arm.kinematics.refuse_non_ur`)."""
+    from hil.errors import InputError
+
+    for flag, given in (("--compliance", args.compliance), ("--payload", args.payload is not None),
+                          ("--mounting", args.mounting is not None),
+                          ("--controller", args.controller is not None),
+                          ("--joint-errors", args.joint_errors not in ("auto", "none"))):
+        if given:
+            raise InputError(f"{flag}: modelled for Universal Robots arms only, not for an arm from "
+                             f"its URDF ({args.urdf}): its geometry alone is identified")
+
+
 def run(args: argparse.Namespace) -> int:
     from hil.arm.payload import gravity_of_mounting
     from hil.calibration.cross_validation import cross_validate
@@ -128,11 +146,18 @@ def run(args: argparse.Namespace) -> int:
     db, where = campaign_store()
     check_output(args.out, field="--out", store=db, store_field=where,
                  inputs={"--measurements": args.measurements, "--validation": args.validation,
-                         "--controller": args.controller})
-    robot = get_robot(args.robot).name
+                         "--controller": args.controller, "--urdf": args.urdf})
+    chain = urdf_chain_or_none(args)
+    if chain is None and args.robot is None:
+        raise InputError("the arm: give --robot (a catalog UR) or --urdf FILE (any serial arm)")
+    if chain is not None:
+        _urdf_request(args)
+        args.joint_errors = "none"
+    robot = get_robot(args.robot).name if chain is None else chain
+    arm_name = robot if chain is None else chain.name
     smr = triplet_or_none(args.smr, "--smr", "smr offset", norm=True)
-    meas = read_measurements(args.measurements, args.joint_units)
-    held_out = read_measurements(args.validation, args.joint_units) if args.validation else None
+    meas = read_measurements(args.measurements, args.joint_units, chain=chain)
+    held_out = read_measurements(args.validation, args.joint_units, chain=chain) if args.validation else None
     controller = None
     if args.controller is not None:
         from hil.compensation.controller_source import controller_from_file
@@ -174,7 +199,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print_json(info)
         return code
-    print(f"{robot}: {info['used']}/{info['poses']} poses, {info['parameters']} parameters, "
+    print(f"{arm_name}: {info['used']}/{info['poses']} poses, {info['parameters']} parameters, "
           f"{fit.iterations} iterations, condition {fit.condition:.1f}, {fit.seconds * 1e3:.0f} ms"
           + ("" if fit.prior is not None else ", no prior"))
     print(f"  after tracker alignment  RMS {mm(fit.initial_rms)}")

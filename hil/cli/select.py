@@ -28,6 +28,7 @@ from typing import Any
 
 from hil.cli.support.options import CANDIDATES, POSE_COUNT, SEED, option
 from hil.cli.support.output import wrote
+from hil.cli.support.urdf_options import URDF_SCOPE, add_urdf_options, urdf_chain_or_none
 from hil.errors import InputError
 from hil.files.quantities import check_vector, quantity
 from hil.jobs.outcome import EXIT_OK
@@ -46,8 +47,11 @@ MAX_TRACKER_RANGE = quantity("tracker position").high  # the table's row (hil.fi
 def register(sub: Any) -> None:
     """Add the ``select`` subcommand to the dispatcher's subparsers."""
     p = sub.add_parser("select", help="choose optimal measurement poses (JSON out)",
-                       description=__doc__.split("\n\n")[0])
-    p.add_argument("--robot", required=True, help="robot type, e.g. ur5e")
+                       description=__doc__.split("\n\n")[0] + " " + URDF_SCOPE + " For such an arm "
+                       "self-collision is checked on the URDF's collision geometry, and the UR "
+                       "singularity margins, compliance, joint errors and --method time-aware do not apply.")
+    p.add_argument("--robot", help="robot type, e.g. ur5e; or --urdf")
+    add_urdf_options(p)
     p.add_argument("--count", required=True, type=POSE_COUNT, help="number of poses to choose")
     p.add_argument("--candidates", type=CANDIDATES, default=20_000,
                    help="random feasible configurations to choose from")
@@ -146,6 +150,15 @@ def run(args: argparse.Namespace) -> int:
         check_stdout_open()  # before the search, not after it
     if args.candidates < 1:
         raise InputError(f"--candidates must be at least 1, got {args.candidates}")
+    chain = urdf_chain_or_none(args)
+    if chain is None and args.robot is None:
+        raise InputError("the arm: give --robot (a catalog UR) or --urdf FILE (any serial arm)")
+    if chain is not None:
+        for flag, given in (("--method time-aware", args.method == TIME_AWARE),
+                            ("--compliance", args.compliance), ("--payload", args.payload is not None)):
+            if given:
+                raise InputError(f"{flag} is modelled for Universal Robots arms only, not for {chain.name} "
+                                 f"(from its URDF {args.urdf})")
     # 1e308 never found a pose; 10 m "from the flange" is a value in millimetres
     tracker = None if args.tracker is None else check_vector(
         parse_triplet(args.tracker, "--tracker").tolist(), "tracker distance from the base", "--tracker",
@@ -171,15 +184,15 @@ def run(args: argparse.Namespace) -> int:
             raise InputError(f"--range: needs 0 <= MIN < MAX <= {MAX_TRACKER_RANGE:g} m, "
                              f"got {args.tracker_range}")
         settings["tracker_range"] = rng
-    start = _numbers(args.start, 6, "--start")
+    start = _numbers(args.start, 6 if chain is None else chain.dof, "--start")
     if start is not None:  # outside the joint limits the route search never ended (1e300, 20 rad)
-        from hil.arm.catalog import get_robot
+        from hil.arm.chain import chain_of
 
-        spec = get_robot(args.robot)
-        outside = [f"q{j + 1} = {v:g} is outside [{spec.lower[j]:.4g}, {spec.upper[j]:.4g}]"
-                   for j, v in enumerate(start) if not spec.lower[j] <= v <= spec.upper[j]]
+        limits = chain_of(chain if chain is not None else args.robot)
+        outside = [f"q{j + 1} = {v:g} is outside [{limits.lower[j]:.4g}, {limits.upper[j]:.4g}]"
+                   for j, v in enumerate(start) if not limits.lower[j] <= v <= limits.upper[j]]
         if outside:
-            raise InputError(f"--start: {'; '.join(outside)} rad, the {spec.title}'s joint limits")
+            raise InputError(f"--start: {'; '.join(outside)}, the {limits.title}'s joint limits")
     constraints = parse_constraints(tracker=tracker, disabled=disabled, **settings)
     from hil.cli.support.options import payload_or_none
 
@@ -206,12 +219,14 @@ def run(args: argparse.Namespace) -> int:
                 payload=payload if payload is not None and payload.mass > 0 else None,
                 time_limit=args.time_limit, progress=status)
         else:
-            report = select_poses(args.robot, args.count, candidates=args.candidates, index=args.index,
+            report = select_poses(chain if chain is not None else args.robot, args.count,
+                                  candidates=args.candidates, index=args.index,
                                   method=args.method, seed=args.seed, smr=smr, constraints=constraints,
                                   scaling=args.scaling, start=None if start is None else np.array(start),
                                   settings=TabuSettings(prune=True) if args.prune else None,
                                   bound=args.bound, progress=status, compliance=args.compliance,
-                                  payload=payload if payload is not None and payload.mass > 0 else None)
+                                  payload=payload if payload is not None and payload.mass > 0 else None,
+                                  urdf_path=args.urdf)
     except BaseException:
         status.close(keep=False)  # the error is then the one line below the finished phases
         raise

@@ -13,7 +13,8 @@ from hil.calibration.measurements import write_measurements
 from hil.calibration.model_file import load_truth, truth_document, write_json
 from hil.calibration.synthetic import Noise, measure, random_configurations, random_truth
 from hil.cli.support.options import SEED, option
-from hil.cli.support.output import wrote
+from hil.cli.support.output import say, wrote
+from hil.cli.support.urdf_options import URDF_SCOPE, add_urdf_options, urdf_chain_or_none
 from hil.jobs.outcome import EXIT_OK
 
 
@@ -27,8 +28,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "It also has the joint errors and lost motion of a UR's joints "
                                    "(every pose approached from below in every joint, as hil's campaign "
                                    "approaches them), which keep a calibrated model at tenths of a "
-                                   "millimetre as on a real arm; --ideal leaves them out.")
+                                   "millimetre as on a real arm; --ideal leaves them out. "
+                                   + URDF_SCOPE + " Such an arm's random truth has geometric errors "
+                                   "only (its compliance, joint errors and warm-up are not modelled) "
+                                   "and its measurements are q1..qN,x,y,z.")
     p.add_argument("--robot", help=f"robot type ({', '.join(ROBOT_NAMES)}; default ur5e, or the truth's)")
+    add_urdf_options(p)
     p.add_argument("--truth", metavar="truth.json", help="use this hil-truth/1 instead of a random one")
     # rows of a CSV: 100 000 are ~10 MB; 1e9 asked numpy for 45 GiB (exit 70)
     p.add_argument("--poses", type=option("synthetic poses"), default=30,
@@ -59,7 +64,8 @@ def run(args: argparse.Namespace) -> int:
     from hil.files.outputs import check_output_dir
 
     db, where = campaign_store()
-    check_output_dir(args.out_dir, field="--out-dir", inputs={"--truth": args.truth}, store=db,
+    check_output_dir(args.out_dir, field="--out-dir", inputs={"--truth": args.truth, "--urdf": args.urdf},
+                     store=db,
                      store_field=where, names=("truth.json", "measurements.csv", "validation.csv"))
     if args.rigid and args.truth:
         raise InputError("--rigid makes a random arm: it cannot be combined with --truth")
@@ -69,11 +75,27 @@ def run(args: argparse.Namespace) -> int:
     rng = np.random.default_rng(args.seed)
     from hil.station.robot_type import Claim, agreed_robot, option_claim
 
+    chain = urdf_chain_or_none(args)
+    if chain is not None and args.truth:
+        raise InputError("--urdf makes a random arm from a URDF: it cannot be combined with --truth, "
+                         "which carries its own URDF")
+    if chain is not None and args.ideal is False:
+        raise InputError("--no-ideal: joint errors and lost motion are modelled for Universal Robots "
+                         f"arms only, not for an arm from its URDF ({args.urdf})")
     claims = option_claim(args.robot)
-    if args.truth:
+    if chain is not None:
+        truth, noise = random_truth(chain, rng, rigid=True), Noise()
+        if not args.rigid:
+            say(f"{args.urdf}: the random {chain.name} has geometric errors only (compliance, joint errors "
+                "and warm-up are modelled for Universal Robots arms only)")
+    elif args.truth:
         truth, noise = load_truth(args.truth)
+        if truth.chain is not None and claims:
+            raise InputError(f"--robot names a catalog UR, but the truth {args.truth} is of "
+                             f"{truth.robot} from its URDF")
         # --robot beside --truth must name the truth's arm: silently using either hides a mistake
-        agreed_robot([*claims, Claim(truth.robot, f"the truth {args.truth} is for {truth.robot}")])
+        if truth.chain is None:
+            agreed_robot([*claims, Claim(truth.robot, f"the truth {args.truth} is for {truth.robot}")])
     else:
         ideal = IDEAL_BY_DEFAULT if args.ideal is None else args.ideal
         truth, noise = random_truth(agreed_robot(claims, default="ur5e"), rng, rigid=args.rigid,
@@ -81,9 +103,10 @@ def run(args: argparse.Namespace) -> int:
     if args.noise is not None:
         noise = Noise(args.noise, noise.encoder_sigma)
     out = Path(args.out_dir)
-    up = np.ones(6)  # every pose approached from below in every joint, as a campaign does
-    q, p = measure(truth, random_configurations(truth.robot, args.poses, rng), noise, rng, directions=up)
-    qv, pv = measure(truth, random_configurations(truth.robot, args.validation, rng), noise, rng,
+    # every pose approached from below in every joint, as a campaign does (a UR's lost motion needs it)
+    up = np.ones(6) if truth.chain is None else None
+    q, p = measure(truth, random_configurations(truth.identity, args.poses, rng), noise, rng, directions=up)
+    qv, pv = measure(truth, random_configurations(truth.identity, args.validation, rng), noise, rng,
                      directions=up)
     write_json(out / "truth.json", truth_document(truth, noise))
     write_measurements(out / "measurements.csv", q, p)

@@ -19,7 +19,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "ones (CSV q1..q6,x,y,z or another form of docs/design.md); on a "
                                    "6-D or several-reflector file also every reflector the model knows "
                                    "and the orientation error of a model with a tool frame. Exit "
-                                   "code 1 when --max-rms is exceeded (by all compared reflectors).")
+                                   "code 1 when --max-rms is exceeded (by all compared reflectors). "
+                                   "A model of an arm from its URDF carries the URDF: its measurements "
+                                   "are q1..qN,x,y,z.")
     p.add_argument("--model", required=True, metavar="model.json",
                    help="model to check (hil-model/1, or a hil-truth/1 to see the noise floor)")
     p.add_argument("--measurements", required=True, metavar="V.csv",
@@ -33,7 +35,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     geometry, _ = load_geometry(args.model)
-    meas = read_measurements(args.measurements, args.joint_units)
+    meas = read_measurements(args.measurements, args.joint_units, chain=geometry.chain)
     stats = validate(geometry, meas)
     tool = validate_tool(geometry, meas)
     notes = [] if tool is None else tool.notes
