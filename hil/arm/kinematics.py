@@ -383,6 +383,8 @@ def apply_update(geometry: Geometry, delta: np.ndarray) -> Geometry:
     if g.reflectors is not None:  # the first reflector is the SMR
         g.reflectors[0] = g.smr
     g.tracker = g.tracker * pin.exp6(delta[lay.tracker])
+    if g.chain is not None:  # an arm from its URDF: the geometry is all its parameters
+        return g
     if delta.size > lay.size and np.any(delta[COMPLIANCE_SLICE] != 0.0):
         base = np.zeros(6) if g.compliance is None else g.compliance
         g.compliance = base + delta[COMPLIANCE_SLICE]

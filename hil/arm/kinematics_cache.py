@@ -34,7 +34,7 @@ def geometry_key(geometry: Geometry) -> Hashable:
     frozen dataclasses, hashed as they are."""
     frames = [*geometry.joints, geometry.flange, geometry.tracker]
     numbers = np.concatenate([*(M.homogeneous.ravel() for M in frames), geometry.smr, geometry.gravity])
-    return (geometry.robot, numbers.tobytes(),
+    return (geometry.robot, None if geometry.chain is None else geometry.chain.key, numbers.tobytes(),
             None if geometry.compliance is None else geometry.compliance.tobytes(),
             None if geometry.lost_motion is None else geometry.lost_motion.tobytes(),
             geometry.payload, geometry.thermal, geometry.joint_errors)

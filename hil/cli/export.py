@@ -20,7 +20,9 @@ WHICH: tuple[str, ...] = ("hil", "controller")
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("export", help="export a model (URDF, ROS kinematics YAML, JSON)",
-                       description="Write a calibrated model in a format other tools load.")
+                       description="Write a calibrated model in a format other tools load. A model of "
+                                   "an arm from its URDF (hil identify --urdf) exports as json; "
+                                   "ros-kinematics holds a UR's six joints and is refused for it.")
     p.add_argument("--model", required=True, metavar="model.json",
                    help="calibrated model to export (hil-model/1, from hil identify)")
     p.add_argument("--format", required=True, choices=FORMATS,

@@ -19,6 +19,8 @@ ARMS: dict[str, tuple[str, str | None]] = {
     "z1": ("z1_description/urdf/z1.urdf", "link06"),
     "so100": ("so_arm_description/urdf/so100.urdf", "gripper"),
     "ur5": ("ur_description/urdf/ur5_robot.urdf", "tool0"),
+    # the Panda out to its left finger: seven revolute joints and a prismatic one
+    "panda_finger": ("panda_description/urdf/panda.urdf", "panda_leftfinger"),
 }
 
 

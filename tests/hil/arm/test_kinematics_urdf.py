@@ -56,7 +56,7 @@ def test_smr_positions_equal_pinocchio_on_the_whole_urdf(name: str) -> None:
         np.testing.assert_allclose(p, expected, atol=1e-12)
 
 
-@pytest.mark.parametrize("name", ["panda", "so100"])
+@pytest.mark.parametrize("name", ["panda", "so100", "panda_finger"])
 def test_jacobian_equals_finite_differences(name: str) -> None:
     _, chain = _chain(name)
     geometry = generic_geometry(chain)
@@ -101,9 +101,10 @@ def test_identifiable_set_size_equals_an_independent_rank(name: str) -> None:
     _, chain = _chain(name)
     idx = identifiable_parameters(chain)
     assert len(idx) == _finite_difference_rank(chain)
-    # every revolute serial arm measured by position: 4 per joint + 6 − 3 (Everett, Driels & Mooring
-    # 1987: 4R + 2P + 6 for a full pose; three fewer with positions only, the SMR's orientation)
-    assert len(idx) == 4 * chain.dof + 3
+    # a serial arm measured by position: Everett, Driels & Mooring (1987) count 4R + 2P + 6 for a full
+    # pose, three fewer with positions only (the SMR's orientation is not measured)
+    revolute = chain.kinds.count("RZ")
+    assert len(idx) == 4 * revolute + 2 * (chain.dof - revolute) + 3
 
 
 def test_ur5e_through_a_urdf_of_its_dh_table_equals_the_catalog_path() -> None:

@@ -11,7 +11,7 @@ from hil.arm.urdf_chain import chain_from_text, chain_from_urdf
 from hil.errors import InputError
 from tests.hil.robot_urdfs import ARMS, arm, urdf_path
 
-_DOF = {"panda": 7, "kinova": 6, "z1": 6, "so100": 5, "ur5": 6}
+_DOF = {"panda": 7, "kinova": 6, "z1": 6, "so100": 5, "ur5": 6, "panda_finger": 8}
 
 
 def _full_model_pose(path, chain, q: np.ndarray) -> np.ndarray:
@@ -58,6 +58,13 @@ def test_urdf_origins_of_the_nominal_chain_are_the_files_own(name: str) -> None:
     back = chain.urdf.urdf_origins(list(chain.origins))
     for joint in chain.urdf.joints:
         np.testing.assert_allclose(back[joint.name].homogeneous, joint.origin.homogeneous, atol=1e-12)
+
+
+def test_a_prismatic_joint_becomes_a_translation_along_z() -> None:
+    path, tip = arm("panda_finger")
+    chain = chain_from_urdf(path, tip=tip)
+    assert chain.kinds == ("RZ",) * 7 + ("PZ",)
+    assert chain.lower[7] == 0.0 and chain.upper[7] == pytest.approx(0.04)
 
 
 def test_limits_come_from_the_urdf() -> None:
