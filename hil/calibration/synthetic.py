@@ -87,6 +87,10 @@ class Noise:
     encoder_sigma: float = ENCODER_SIGMA  # rad, per joint reading (a UR joint's, see ENCODER_SIGMA)
     distance_sigma: float = DISTANCE_SIGMA  # m, along the beam (tracker model only)
     angle_sigma: float = ANGLE_SIGMA  # rad, of each angle (tracker model only)
+    # rad, σ of each joint's stop-to-stop position error, seen by its encoder (the simulated arm's
+    # repeatability, `hil.arm.joint_physics.standstill_sigma`); offline measurements take the joints
+    # as they stand, so only the robot simulator, which is commanded, uses it
+    standstill_sigma: float = 0.0
 
     def perturb(self, points: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """(N, 3) tracker-frame `points` as measured: with the flat σ, or as the tracker reads them."""
@@ -98,7 +102,8 @@ class Noise:
     def as_dict(self) -> dict[str, float | None]:
         """The truth file's ``noise`` block (docs/design.md): ``tracker_sigma`` null for the tracker model."""
         return {"tracker_sigma": self.tracker_sigma, "encoder_sigma": self.encoder_sigma,
-                "distance_sigma": self.distance_sigma, "angle_sigma": self.angle_sigma}
+                "distance_sigma": self.distance_sigma, "angle_sigma": self.angle_sigma,
+                "standstill_sigma": self.standstill_sigma}
 
 
 def random_truth(robot: str, rng: np.random.Generator, *, translation_sigma: float = 0.5e-3,
