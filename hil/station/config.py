@@ -431,6 +431,17 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # calibration is judged on; three times the warm-up limit, so noise alone does not flag a campaign
         "limit": Key("float", 30e-6, _quantity("point spread"),
                      "flag the campaign when the reference moved more than this (m)"),
+        # a reference visit (drift watch and warm-up) must see micrometres, while the arm rings after its
+        # approach for a while (a lightweight arm's first modes 7-12 Hz, structural damping 2-3.6 %:
+        # mocks.ringing's sources), and a window's spread cannot tell an aliased ring from the tracker's
+        # noise (a realistic simulated UR5e's drift watch read 9-24 µm of ring with 0.4-5 µm of true drift,
+        # docs/design.md, Facts: what a drift watch sees). 2 s still is 3 envelope time constants of a
+        # 3.6 %-damped 7 Hz mode (4 % of its ring left; hil's assumption that a UR's servos damp no less)
+        "settle": Key("float", 2.0, _quantity("settle time"),
+                      "seconds the arm stands still at the reference before it is read"),
+        # 20 readings average the tracker's noise by 2 against a pose's 5 and the ring's remainder over
+        # a 2 s window (GeoCOM's 0.1 s readings; an emScon point's 0.5 s makes it 10 s)
+        "samples": Key("int", 20, _quantity("samples"), "tracker samples per reference measurement"),
     },
     "timeouts": {
         # how long the run waits before calling something lost; the longest move of a UR arm (half a
