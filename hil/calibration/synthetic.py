@@ -47,7 +47,8 @@ DEFAULT_SMR = (0.0, 0.0, 0.045)  # flange-mounted SMR nest, 45 mm out along the 
 #: RP = l̄ + 3·S_l is 3.6 σ for an isotropic Gaussian scatter of σ per axis, so σ ≤ 8 µm; the six
 #: joints of a UR5e in a working pose move the flange by √Σr² ≈ 0.9 m per radian, about 0.5 m per
 #: axis, so a joint may read at most 1.6e-5 rad noisy. Friction and servo error take most of that
-#: budget, so a third of it is the encoders': 5e-6 rad, about one count of a 20-bit absolute encoder
+#: budget (the simulated arm's stop-to-stop error, `hil.arm.joint_physics.standstill_sigma`, is that
+#: whole budget), so a third of it is the encoders': 5e-6 rad, about one count of a 20-bit absolute encoder
 #: (2π/2²⁰ = 6.0e-6 rad).
 ENCODER_SIGMA = 5e-6
 

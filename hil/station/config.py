@@ -404,8 +404,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
     "warmup": {
         "enabled": Key("bool", True, help="warm the arm up before measuring"),
         # a joint's warm-up time constant is about 15 min (`hil.arm.thermal`, τ = 900 s): a check every
-        # 2 min gives the fit 7 points per time constant and costs one reference visit (~10 s, under 10 %
-        # of the motion); under 10 s is mostly reference visits, and over an hour sees no warm-up at all
+        # 2 min gives the fit 7 points per time constant and costs one reference visit (~10 s, plus
+        # drift.settle's 2 s and drift.samples' 2 s of GeoCOM readings: about a tenth of the motion);
+        # under 10 s is mostly reference visits, and over an hour sees no warm-up at all
         "interval": Key("float", 120.0, _quantity("warm-up interval"),
                         "seconds of cycling motion between reference measurements"),
         # a tenth of the default 0.1 mm acceptance, and a third of the drift watch's limit, so a warm arm
