@@ -75,7 +75,10 @@ def input_file(expected: str, limit: int | None = None) -> Callable[[str], str]:
 
     def check(text: str) -> str:
         import argparse
+        import os
 
+        if not os.path.lexists(text):  # named by its reader, after the options' values are checked
+            return text
         try:
             inputs.check_input_file(text, expected, inputs.MAX_INPUT_BYTES if limit is None else limit)
         except InputError as exc:
