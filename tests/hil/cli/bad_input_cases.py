@@ -1693,10 +1693,22 @@ def prepare(case: Case, fixtures: Path, workdir: Path, station: SimStation | Non
 
 
 class _FullStream(io.StringIO):
-    """A stdout on a full device (``> /dev/full``): every write fails as the kernel fails it."""
+    """A stdout on a full device (``> /dev/full``): every write fails as the kernel fails it, and its
+    descriptor is /dev/full's, as a shell's redirection makes it, so hil can tell it before writing."""
 
     def write(self, text: str) -> int:
         raise OSError(28, "No space left on device")
+
+    def fileno(self) -> int:
+        if not hasattr(self, "_fd"):
+            self._fd = os.open("/dev/full", os.O_WRONLY)
+        return self._fd
+
+    def close(self) -> None:
+        if hasattr(self, "_fd"):
+            os.close(self._fd)
+            del self._fd
+        super().close()
 
 
 def run_case(case: Case, fixtures: Path, workdir: Path, *, station: SimStation | None = None,
@@ -1738,6 +1750,8 @@ def run_case(case: Case, fixtures: Path, workdir: Path, *, station: SimStation |
     finally:
         seconds = time.monotonic() - start
         _set_read_only(read_only, False)
+        if isinstance(out, _FullStream):
+            out.close()
     after = _snapshot(workdir)
     if case.ascii:
         err.flush()
