@@ -75,6 +75,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _is_program(path: str, text: str) -> bool:
     from hil.compensation.targets_csv import looks_like_csv
 
+    if not text.strip():  # nothing to tell the kind by, and nothing to compensate (was exit 0)
+        from hil.errors import InputError
+
+        raise InputError(f"{path}: empty file; expected a CSV of poses (x,y,z,rx,ry,rz) or a URScript "
+                         "program")
     suffix = os.path.splitext(path)[1].lower()
     if suffix in PROGRAM_SUFFIXES:
         return True

@@ -1352,6 +1352,13 @@ def _cases() -> list[Case]:
         stdout="closed")
     add("validate", "c2-r2-stdout=full", ["validate", "--model", f"{d}/model.json", "--measurements",
                                           f"{d}/validation.csv"], ["stdout"], stdout="full")
+    # class 5, failed: a table dropped by hand was a failed job (exit 1), not a damaged store
+    add("show", "c5-r2-events-table-dropped", ["show", "last", "--db", f"{d}/dmg.db"], ["dmg.db", "events"],
+        files={"dmg.db": damaged_store("DROP TABLE events")})
+    # class 6, failed: an empty input, whose kind nothing tells, was "compensated" with no targets, exit 0
+    for name in ("poses", "empty.script"):
+        add("compensate", f"c6-r2-empty-input-{name}", [*co, f"{d}/{name}", "--out", f"{d}/o.csv"],
+            [name, "empty"], files={**ctl, name: "\n  \n"})
     # passed before, kept
     add("identify", "c1-r2-controller=/dev/zero", [*ir2, f"{d}/measurements.csv", "--controller",
         "/dev/zero"],
