@@ -38,14 +38,14 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    # the report's libraries (matplotlib, the kinematics) load here, not when the command line is read:
-    # a --result that is no file is refused before them, in a fraction of a second
-    from hil.calibration.model_file import read_json
     from hil.cli.support.output_paths import campaign_store
-    from hil.report import report_data_from_result, write_report
 
     db, where = campaign_store()
     check_output(args.out, field="--out", inputs={"--result": args.result}, store=db, store_field=where)
+    # the report's libraries (matplotlib, the kinematics) load only now, not when the command line is
+    # read: a --result that is no file, or an --out that cannot be written, is refused before them
+    from hil.calibration.model_file import read_json
+    from hil.report import report_data_from_result, write_report
     doc = read_json(args.result)
     if doc.get("format") == VERIFICATION_FORMAT:
         return _verification(doc, args)

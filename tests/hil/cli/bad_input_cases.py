@@ -1355,6 +1355,10 @@ def _cases() -> list[Case]:
     # class 5, failed: a table dropped by hand was a failed job (exit 1), not a damaged store
     add("show", "c5-r2-events-table-dropped", ["show", "last", "--db", f"{d}/dmg.db"], ["dmg.db", "events"],
         files={"dmg.db": damaged_store("DROP TABLE events")})
+    add("robot", "c5-r2-damaged-model-export",
+        ["robot", "20235500001", "--db", f"{d}/dmg.db", "--export-model", f"{d}/m-out.json"],
+        ["table models", "id"],
+        files={"dmg.db": damaged_store("UPDATE models SET doc = '{'")})
     # class 6, failed: an empty input, whose kind nothing tells, was "compensated" with no targets, exit 0
     for name in ("poses", "empty.script"):
         add("compensate", f"c6-r2-empty-input-{name}", [*co, f"{d}/{name}", "--out", f"{d}/o.csv"],
