@@ -132,15 +132,19 @@ def by_class(results: list[Any]) -> None:
     refused (or, for the cases that must succeed, to finish) — on its first run (cold: the command's
     imports included) and its second (warm: a failing second run counts as infinite); then the longest
     over the whole table."""
-    print("\nBy class (issue 31): cases, meeting the contract, longest time to refuse (cold / warm)")
-    print(f"{'class':<40} {'cases':>5} {'meet':>5} {'cold':>8} {'warm':>8}  slowest warm case")
+    print("\nBy class (issue 31): cases, meeting the contract, longest time to refuse (cold / warm); "
+          "r2: the cases of the second independent pass among them (ids c<n>-r2-...)")
+    print(f"{'class':<40} {'cases':>5} {'meet':>5} {'r2':>4} {'r2 meet':>7} {'cold':>8} {'warm':>8}  "
+          "slowest warm case")
     for key, words in CLASSES.items():
         rs = [r for r in results if r.case.id.startswith(f"{key}-")]
         if not rs:
             continue
+        second = [r for r in rs if r.case.id.startswith(f"{key}-r2-")]
         cold = max(r.seconds for r in rs)
         warm = max(rs, key=lambda r: WARM.get(r.case.name, r.seconds))
-        print(f"{key + ' ' + words:<40} {len(rs):>5} {sum(r.ok for r in rs):>5} {cold:>7.2f}s "
+        print(f"{key + ' ' + words:<40} {len(rs):>5} {sum(r.ok for r in rs):>5} {len(second):>4} "
+              f"{sum(r.ok for r in second):>7} {cold:>7.2f}s "
               f"{WARM.get(warm.case.name, warm.seconds):>7.2f}s  {warm.case.name}")
     refused = [r for r in results if r.case.expect == 2]
     if refused:

@@ -162,7 +162,7 @@ def read_rows(path: str | os.PathLike[str]) -> Rows:
     """The header and data rows of a CSV file (comments and blank lines dropped), and its sha256."""
     name = str(path)
     raw = read_input_bytes(path, "a CSV file")
-    text = decode_input_text(raw, name)
+    text = decode_input_text(raw, name, "a CSV file")
     rows = [(n, row) for n, row in csv_rows(text, name)
             if row and any(c.strip() for c in row) and not row[0].lstrip().startswith("#")]
     if not rows:

@@ -25,7 +25,7 @@ from hil.arm.geometry import Geometry
 from hil.calibration.identification import FitResult
 from hil.calibration.synthetic import Noise
 from hil.errors import InputError
-from hil.files.inputs import json_number, parse_json, read_input_text
+from hil.files.inputs import MAX_JSON_BYTES, json_number, parse_json, read_input_text
 from hil.files.outputs import atomic_write_text
 
 MODEL_FORMAT = "hil-model/1"
@@ -244,7 +244,7 @@ def write_json(path: str | os.PathLike[str], doc: dict[str, Any]) -> None:
 def read_json(path: str | os.PathLike[str]) -> dict[str, Any]:
     """Parse a JSON file; InputError naming the file and line when it is not valid JSON."""
     name = str(path)
-    doc = parse_json(read_input_text(path, "a JSON file"), name)
+    doc = parse_json(read_input_text(path, "a JSON file", line_based=False, limit=MAX_JSON_BYTES), name)
     if not isinstance(doc, dict):
         raise InputError(f"{name}: expected a JSON object")
     return doc

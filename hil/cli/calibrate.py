@@ -40,10 +40,12 @@ from hil.arm.catalog import ROBOT_NAMES
 from hil.cli.support.options import (
     CANDIDATES,
     CYCLES,
+    JSON_FILE,
     POSE_COUNT,
     RMS_THRESHOLD_HELP,
     SEED,
     SIM_SPEED,
+    TOML_FILE,
     VERIFY_CYCLES,
     option,
     rms_threshold,
@@ -69,9 +71,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description=__doc__.split("\n\n")[0],
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     src = p.add_mutually_exclusive_group(required=True)
-    src.add_argument("--config", metavar="station.toml", help="station configuration")
+    src.add_argument("--config", metavar="station.toml", type=TOML_FILE, help="station configuration")
     src.add_argument("--sim", action="store_true", help="use the simulated station")
-    p.add_argument("--truth", metavar="truth.json", help="--sim: the hidden truth (default: random)")
+    p.add_argument("--truth", metavar="truth.json", type=JSON_FILE,
+                   help="--sim: the hidden truth (default: random)")
     p.add_argument("--speed", type=SIM_SPEED, default=1.0, metavar="F", help="--sim: fast-time factor")
     p.add_argument("--seed", type=SEED, help="--sim: seed of the random truth and noise (default: 1)")
     p.add_argument("--robot", default=None,

@@ -12,6 +12,7 @@ import os
 import re
 import sys
 
+from hil.cli.support.options import JSON_FILE, POSES_OR_PROGRAM, TOML_FILE
 from hil.cli.support.output import print_json, wrote
 from hil.jobs.outcome import EXIT_OK
 
@@ -36,18 +37,18 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "pose_trans and everything else stay byte for byte). Moves whose target is computed "
                     "at run time are listed as not compensated. A summary of how far the targets moved "
                     "goes to stderr (or JSON to stdout with --json).")
-    p.add_argument("input", metavar="INPUT",
+    p.add_argument("input", metavar="INPUT", type=POSES_OR_PROGRAM,
                    help="targets: a CSV (.csv) or a URScript program (.script, .urscript, .txt); another "
                         "name is read as a CSV when its first line names x,y,z,rx,ry,rz, else as a program")
-    p.add_argument("--model", required=True, metavar="model.json",
+    p.add_argument("--model", required=True, metavar="model.json", type=JSON_FILE,
                    help="the calibrated model (hil-model/1, a campaign result that embeds one, or a "
                         "simulator truth)")
     src = p.add_mutually_exclusive_group(required=True)
-    src.add_argument("--controller", metavar="K.json",
+    src.add_argument("--controller", metavar="K.json", type=JSON_FILE,
                      help="a JSON file with the controller's 'controller' block (delta_theta, delta_a, "
                           "delta_d, delta_alpha): a truth, a model that carries one, or "
                           '{"robot": ..., "controller": {...}}')
-    src.add_argument("--config", metavar="station.toml",
+    src.add_argument("--config", metavar="station.toml", type=TOML_FILE,
                      help="read the controller's calibration from the arm at robot.address (primary "
                           "interface, port 30001, within timeouts.connect)")
     p.add_argument("--out", required=True, metavar="OUTPUT",
@@ -74,6 +75,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _is_program(path: str, text: str) -> bool:
     from hil.compensation.targets_csv import looks_like_csv
 
+    if not text.strip():  # nothing to tell the kind by, and nothing to compensate (was exit 0)
+        from hil.errors import InputError
+
+        raise InputError(f"{path}: empty file; expected a CSV of poses (x,y,z,rx,ry,rz) or a URScript "
+                         "program")
     suffix = os.path.splitext(path)[1].lower()
     if suffix in PROGRAM_SUFFIXES:
         return True
@@ -107,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
     from hil.compensation.targets_csv import compensate_csv
     from hil.compensation.urscript import compensate_program
     from hil.errors import InputError
-    from hil.files.inputs import decode_input_text, read_input_bytes
+    from hil.files.inputs import check_text_lines, decode_input_text, read_input_bytes
     from hil.files.outputs import atomic_write_text, check_output
 
     db, where = campaign_store(None, args.config)
@@ -130,6 +136,7 @@ def run(args: argparse.Namespace) -> int:
         text = raw.decode("utf-8")  # a byte-order mark stays: the program is copied byte for byte
     except UnicodeDecodeError:
         text = decode_input_text(raw, args.input)  # raises, naming the file and the byte
+    check_text_lines(text, args.input, "a CSV of poses or a URScript program")
     program = _is_program(args.input, text)
     if not program:  # a table over the row limit is refused before the controller is asked
         from hil.files.inputs import csv_rows

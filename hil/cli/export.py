@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 
 from hil.calibration.exports import FORMATS
+from hil.cli.support.options import JSON_FILE
 from hil.cli.support.output import wrote
 from hil.errors import InputError
 from hil.jobs.outcome import EXIT_OK
@@ -23,7 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description="Write a calibrated model in a format other tools load. A model of "
                                    "an arm from its URDF (hil identify --urdf) exports as json; "
                                    "ros-kinematics holds a UR's six joints and is refused for it.")
-    p.add_argument("--model", required=True, metavar="model.json",
+    p.add_argument("--model", required=True, metavar="model.json", type=JSON_FILE,
                    help="calibrated model to export (hil-model/1, from hil identify)")
     p.add_argument("--format", required=True, choices=FORMATS,
                    help="urdf: a URDF of the calibrated arm; ros-kinematics: ur_description's "

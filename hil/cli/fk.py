@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from hil.cli.support.options import PAYLOAD_HELP, add_joint_units, payload_or_none
+from hil.cli.support.options import CSV_FILE, JSON_FILE, PAYLOAD_HELP, add_joint_units, payload_or_none
 from hil.cli.support.output import print_json, wrote
 from hil.jobs.outcome import EXIT_OK
 
@@ -35,8 +35,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "...) and the measured frame's orientation: rx,ry,rz (rotation "
                                    "vector, rad) and roll,pitch,yaw (URDF: R = Rz(yaw) Ry(pitch) "
                                    "Rx(roll), rad).")
-    p.add_argument("--model", required=True, metavar="model.json", help="hil-model/1 or hil-truth/1")
-    p.add_argument("--joints", required=True, metavar="Q.csv",
+    p.add_argument("--model", required=True, metavar="model.json", type=JSON_FILE,
+                   help="hil-model/1 or hil-truth/1")
+    p.add_argument("--joints", required=True, metavar="Q.csv", type=CSV_FILE,
                    help="joint configurations: CSV with columns q1..q6 (radians) or another joint form")
     add_joint_units(p)
     p.add_argument("--frame", choices=("tracker", "base"), default="tracker",

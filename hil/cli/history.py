@@ -15,7 +15,7 @@ from collections import Counter
 from typing import TYPE_CHECKING, Any
 
 from hil.cli.support.export_formats import FORMATS, format_of
-from hil.cli.support.options import option
+from hil.cli.support.options import TOML_FILE, option
 from hil.cli.support.output import mm, print_json
 from hil.errors import InputError
 from hil.jobs.outcome import EXIT_OK
@@ -30,7 +30,8 @@ def _add_db_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--db", metavar="LOCATION", help="the store: an SQLite file or a postgresql:// URL "
                                                     "(default: $HIL_DB, the config's store.url or "
                                                     "store.path, or the user's data directory)")
-    p.add_argument("--config", metavar="station.toml", help="take the database location from it")
+    p.add_argument("--config", metavar="station.toml", type=TOML_FILE,
+                   help="take the database location from it")
     p.add_argument("--json", action="store_true", help="print JSON on stdout")
 
 

@@ -13,7 +13,15 @@ import sys
 from typing import TYPE_CHECKING
 
 from hil.arm.catalog import ROBOT_NAMES, get_robot
-from hil.cli.support.options import PAYLOAD_HELP, add_joint_units, option, payload_or_none, triplet_or_none
+from hil.cli.support.options import (
+    CSV_FILE,
+    JSON_FILE,
+    PAYLOAD_HELP,
+    add_joint_units,
+    option,
+    payload_or_none,
+    triplet_or_none,
+)
 from hil.cli.support.output import mm, print_json, say, wrote
 from hil.cli.support.urdf_options import URDF_SCOPE, add_urdf_options, urdf_chain_or_none
 from hil.jobs.outcome import EXIT_FAILED, EXIT_OK
@@ -40,15 +48,17 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "joints) and its geometry alone is identified.")
     p.add_argument("--robot", help=f"robot type ({', '.join(ROBOT_NAMES)}), or --urdf")
     add_urdf_options(p)
-    p.add_argument("--measurements", required=True, metavar="M.csv", help="measurements CSV")
+    p.add_argument("--measurements", required=True, metavar="M.csv", type=CSV_FILE,
+                   help="measurements CSV")
     p.add_argument("--smr", metavar="X,Y,Z", help="rough SMR offset in the flange frame (m)")
-    p.add_argument("--validation", metavar="V.csv", help="held-out measurements to validate on")
+    p.add_argument("--validation", metavar="V.csv", type=CSV_FILE,
+                   help="held-out measurements to validate on")
     add_joint_units(p)
     p.add_argument("--no-reject", action="store_true", help="keep every pose (no outlier rejection)")
     p.add_argument("--no-prior", action="store_true",
                    help="plain least squares: no prior toward the nominal geometry (manufacturing "
                         "tolerances); few or noisy poses then chase the noise")
-    p.add_argument("--controller", metavar="K.json",
+    p.add_argument("--controller", metavar="K.json", type=JSON_FILE,
                    help="the controller's own calibration (a JSON file with a 'controller' block, as "
                         "hil compensate --controller reads), cross-validated beside the fit")
     p.add_argument("--compliance", action="store_true",

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from hil.arm.catalog import ROBOT_NAMES
-from hil.cli.support.options import SEED, SIM_SPEED, option
+from hil.cli.support.options import JSON_FILE, MOVEB_FILE, SEED, SIM_SPEED, TOML_FILE, option
 from hil.cli.support.output import print_json, say, wants_json, wrote
 from hil.cli.support.station_options import add_arm_choice, add_tracker_protocol
 from hil.files.outputs import check_output
@@ -31,7 +31,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description=__doc__.split("\n\n")[0])
     moveb = p.add_subparsers(dest="moveb_command", metavar="ACTION")
     plan = moveb.add_parser("plan", help="plan a MOVEB program and write dense samples")
-    plan.add_argument("program", metavar="PROGRAM", help="MOVEB program (hil/moveb/examples/ has two)")
+    plan.add_argument("program", metavar="PROGRAM", type=MOVEB_FILE,
+                      help="MOVEB program (hil/moveb/examples/ has two)")
     plan.add_argument("--continuity", choices=("G2", "G3"), default="G2", help=_CONTINUITY)
     plan.add_argument("--out", required=True, metavar="samples.csv",
                       help="CSV of dense samples to write (s,x,y,z,i,j,k,u,v,w,curvature)")
@@ -43,14 +44,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     _json_option(plan)
     plan.set_defaults(func=run_plan)
 
-    run = moveb.add_parser("run", help="run a MOVEB program on the robot and measure it")
-    run.add_argument("program", metavar="PROGRAM", help="MOVEB program (hil/moveb/examples/ has two)")
+    run = moveb.add_parser("run",
+                           help="run a MOVEB program on the robot and measure it")
+    run.add_argument("program", metavar="PROGRAM", type=MOVEB_FILE,
+                     help="MOVEB program (hil/moveb/examples/ has two)")
     src = run.add_mutually_exclusive_group(required=True)
-    src.add_argument("--config", metavar="station.toml", help="station configuration")
+    src.add_argument("--config", metavar="station.toml", type=TOML_FILE, help="station configuration")
     src.add_argument("--sim", action="store_true", help="use the simulated station")
     add_tracker_protocol(run)
     add_arm_choice(run)
-    run.add_argument("--model", metavar="model.json",
+    run.add_argument("--model", metavar="model.json", type=JSON_FILE,
                      help="calibrated model (hil-model/1, a campaign result that embeds one, or a truth): "
                           "IK and the tracker pose")
     run.add_argument("--ik", choices=("model", "nominal"), default="model",
@@ -79,7 +82,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--min-coverage", type=option("fraction"), default=0.9, metavar="F",
                      help="share of the path the tracker must measure; below it the run is reported "
                           "'incomplete' (exit code 1)")
-    run.add_argument("--truth", metavar="truth.json", help="--sim: the hidden truth (default: random)")
+    run.add_argument("--truth", metavar="truth.json", type=JSON_FILE,
+                     help="--sim: the hidden truth (default: random)")
     run.add_argument("--speed", type=SIM_SPEED, default=1.0, metavar="F", help="--sim: fast-time factor")
     run.add_argument("--seed", type=SEED, help="--sim: seed of the random truth and noise (default: 1)")
     run.add_argument("--robot", default=None,

@@ -14,12 +14,11 @@ import contextlib
 from collections.abc import Iterator
 from typing import Any
 
-from hil.calibration.model_file import read_json
+from hil.cli.support.options import JSON_FILE
 from hil.cli.support.output import wrote
 from hil.errors import InputError
 from hil.files.outputs import check_output
 from hil.jobs.outcome import EXIT_OK
-from hil.report import report_data_from_result, write_report
 
 #: `hil.verify.result.FORMAT`, the ``hil verify --out`` document (not imported: the verification's
 #: kinematics are not needed to tell it).
@@ -32,7 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "result JSON (hil calibrate --out, or hil verify --out for the ISO 9283 "
                                    "pose test's report). Results without per-pose data give a report "
                                    "without the per-pose plots.")
-    p.add_argument("--result", required=True, metavar="result.json",
+    p.add_argument("--result", required=True, metavar="result.json", type=JSON_FILE,
                    help="the campaign's result (hil calibrate --out or hil verify --out)")
     p.add_argument("--out", required=True, metavar="report.html", help="HTML file to write")
     p.set_defaults(func=run)
@@ -43,6 +42,10 @@ def run(args: argparse.Namespace) -> int:
 
     db, where = campaign_store()
     check_output(args.out, field="--out", inputs={"--result": args.result}, store=db, store_field=where)
+    # the report's libraries (matplotlib, the kinematics) load only now, not when the command line is
+    # read: a --result that is no file, or an --out that cannot be written, is refused before them
+    from hil.calibration.model_file import read_json
+    from hil.report import report_data_from_result, write_report
     doc = read_json(args.result)
     if doc.get("format") == VERIFICATION_FORMAT:
         return _verification(doc, args)

@@ -144,10 +144,7 @@ def run(args: argparse.Namespace) -> int:
 
         db, where = campaign_store()
         check_output(args.out, field="--out", store=db, store_field=where)
-    else:
-        from hil.cli.support.output import check_stdout_open
-
-        check_stdout_open()  # before the search, not after it
+    # stdout (full, closed) is checked before any subcommand runs: hil.cli.support.output
     if args.candidates < 1:
         raise InputError(f"--candidates must be at least 1, got {args.candidates}")
     chain = urdf_chain_or_none(args)

@@ -13,7 +13,7 @@ import json
 import sys
 from typing import Any
 
-from hil.cli.support.options import SEED, SIM_SPEED, option
+from hil.cli.support.options import JSON_FILE, SEED, SIM_SPEED, option
 from hil.cli.support.output import wants_json
 from hil.errors import InputError
 from hil.jobs.outcome import EXIT_OK
@@ -35,6 +35,8 @@ def register(sub: argparse._SubParsersAction) -> None:
             action.default = None
             action.help = ("serial number the simulated controller reports (default: the simulated arm's "
                            "own, from --robot, --seed and --truth; the same arm always has the same)")
+        if action.dest == "truth":  # a FIFO or a folder: one line before the station starts
+            action.type = JSON_FILE
         if action.dest in _RANGES:  # checked by argparse: one line and exit 2, before anything serves
             action.type = _RANGES[action.dest]
     # RS-232 rates, as tracker.baudrate in the station configuration

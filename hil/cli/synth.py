@@ -12,7 +12,7 @@ from hil.arm.joint_physics import IDEAL_BY_DEFAULT, standstill_sigma
 from hil.calibration.measurements import write_measurements
 from hil.calibration.model_file import load_truth, truth_document, write_json
 from hil.calibration.synthetic import Noise, measure, random_configurations, random_truth
-from hil.cli.support.options import SEED, option
+from hil.cli.support.options import JSON_FILE, SEED, option
 from hil.cli.support.output import say, wrote
 from hil.cli.support.urdf_options import URDF_SCOPE, add_urdf_options, urdf_chain_or_none
 from hil.jobs.outcome import EXIT_OK
@@ -34,7 +34,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "and its measurements are q1..qN,x,y,z.")
     p.add_argument("--robot", help=f"robot type ({', '.join(ROBOT_NAMES)}; default ur5e, or the truth's)")
     add_urdf_options(p)
-    p.add_argument("--truth", metavar="truth.json", help="use this hil-truth/1 instead of a random one")
+    p.add_argument("--truth", metavar="truth.json", type=JSON_FILE,
+                   help="use this hil-truth/1 instead of a random one")
     # rows of a CSV: 100 000 are ~10 MB; 1e9 asked numpy for 45 GiB (exit 70)
     p.add_argument("--poses", type=option("synthetic poses"), default=30,
                    help="calibration poses (measurements.csv)")

@@ -10,7 +10,16 @@ from __future__ import annotations
 import argparse
 
 from hil.arm.catalog import ROBOT_NAMES
-from hil.cli.support.options import CANDIDATES, POSE_COUNT, RMS_THRESHOLD_HELP, SEED, SIM_SPEED, rms_threshold
+from hil.cli.support.options import (
+    CANDIDATES,
+    JSON_FILE,
+    POSE_COUNT,
+    RMS_THRESHOLD_HELP,
+    SEED,
+    SIM_SPEED,
+    TOML_FILE,
+    rms_threshold,
+)
 from hil.cli.support.station_options import add_arm_choice, add_tracker_protocol
 
 
@@ -19,14 +28,15 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description=__doc__.split("\n\n")[0],
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     src = p.add_mutually_exclusive_group(required=True)
-    src.add_argument("--config", metavar="station.toml", help="station configuration")
+    src.add_argument("--config", metavar="station.toml", type=TOML_FILE, help="station configuration")
     src.add_argument("--sim", action="store_true", help="use the simulated station")
     p.add_argument("--speed", type=SIM_SPEED, default=1.0, metavar="F", help="--sim: fast-time factor")
     p.add_argument("--seed", type=SEED, help="--sim: seed of the random truth and noise (default: 1)")
     p.add_argument("--robot", default=None,
                    help=f"--sim: robot type ({', '.join(ROBOT_NAMES)}; default: --truth's, else ur5e); "
                         "with --config it must match robot.type")
-    p.add_argument("--truth", metavar="truth.json", help="--sim: the hidden truth (default: random)")
+    p.add_argument("--truth", metavar="truth.json", type=JSON_FILE,
+                   help="--sim: the hidden truth (default: random)")
     p.add_argument("--poses", type=POSE_COUNT, help="calibration poses (overrides the config)")
     p.add_argument("--validation", type=POSE_COUNT, help="validation poses (overrides the config)")
     p.add_argument("--candidates", type=CANDIDATES, help="selector candidates (overrides the config)")

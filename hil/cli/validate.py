@@ -8,7 +8,7 @@ from hil.calibration.identification import validate
 from hil.calibration.measurements import read_measurements
 from hil.calibration.model_file import load_geometry
 from hil.calibration.pose_validation import validate_tool
-from hil.cli.support.options import RMS_THRESHOLD_HELP, add_joint_units, rms_threshold
+from hil.cli.support.options import CSV_FILE, JSON_FILE, RMS_THRESHOLD_HELP, add_joint_units, rms_threshold
 from hil.cli.support.output import mm, print_json, say
 from hil.jobs.outcome import EXIT_FAILED, EXIT_OK
 
@@ -22,9 +22,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "code 1 when --max-rms is exceeded (by all compared reflectors). "
                                    "A model of an arm from its URDF carries the URDF: its measurements "
                                    "are q1..qN,x,y,z.")
-    p.add_argument("--model", required=True, metavar="model.json",
+    p.add_argument("--model", required=True, metavar="model.json", type=JSON_FILE,
                    help="model to check (hil-model/1, or a hil-truth/1 to see the noise floor)")
-    p.add_argument("--measurements", required=True, metavar="V.csv",
+    p.add_argument("--measurements", required=True, metavar="V.csv", type=CSV_FILE,
                    help="measurements the model was not fitted to: CSV q1..q6,x,y,z (or another form)")
     add_joint_units(p)
     p.add_argument("--max-rms", type=rms_threshold, metavar="METRES",

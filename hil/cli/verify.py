@@ -25,7 +25,7 @@ import json
 from typing import Any
 
 from hil.arm.catalog import ROBOT_NAMES
-from hil.cli.support.options import SEED, SIM_SPEED, VERIFY_CYCLES
+from hil.cli.support.options import JSON_FILE, SEED, SIM_SPEED, TOML_FILE, VERIFY_CYCLES
 from hil.errors import InputError
 from hil.files.outputs import atomic_write_text, check_output
 
@@ -37,15 +37,17 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description=__doc__.split("\n\n")[0],
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     src = p.add_mutually_exclusive_group(required=True)
-    src.add_argument("--config", metavar="station.toml", help="station configuration (its [verify] cube)")
+    src.add_argument("--config", metavar="station.toml", type=TOML_FILE,
+                     help="station configuration (its [verify] cube)")
     src.add_argument("--sim", action="store_true", help="use the simulated station")
-    p.add_argument("--truth", metavar="truth.json", help="--sim: the hidden truth (default: random)")
+    p.add_argument("--truth", metavar="truth.json", type=JSON_FILE,
+                   help="--sim: the hidden truth (default: random)")
     p.add_argument("--speed", type=SIM_SPEED, default=1.0, metavar="F", help="--sim: fast-time factor")
     p.add_argument("--seed", type=SEED, help="--sim: seed of the random truth and noise (default: 1)")
     p.add_argument("--robot", default=None,
                    help=f"--sim: robot type ({', '.join(ROBOT_NAMES)}; default: the model's or --truth's, "
                         "else ur5e); with --config it must match robot.type")
-    p.add_argument("--model", metavar="M",
+    p.add_argument("--model", metavar="M", type=JSON_FILE,
                    help="hil's calibrated model (model JSON or a calibrate result): adds the compensated "
                         "test; without it, the uncompensated test only")
     p.add_argument("--cycles", type=VERIFY_CYCLES, default=None,

@@ -21,7 +21,7 @@ from typing import Any
 
 from hil.arm.catalog import get_robot
 from hil.errors import InputError
-from hil.files.inputs import read_input_text
+from hil.files.inputs import MAX_CONFIG_BYTES, read_input_text
 from hil.files.quantities import check_vector, quantity
 from hil.station.store_url import store_url_problem
 
@@ -632,7 +632,7 @@ def load_config(path: str | os.PathLike[str]) -> StationConfig:
     """Read and validate a station TOML file."""
     name = str(path)
     try:
-        data = tomllib.loads(read_input_text(path, "a TOML file"))
+        data = tomllib.loads(read_input_text(path, "a TOML file", limit=MAX_CONFIG_BYTES))
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{name}: not valid TOML: {exc}") from None
     except RecursionError:  # arrays nested thousands deep: tomllib recurses once per level

@@ -45,6 +45,7 @@ from hil.store.rows import (
     insert_model,
     insert_validation,
     require_campaign,
+    row_json,
     set_status,
     skip_pose,
     touch,
@@ -129,7 +130,8 @@ class Store(EventRecorder, StoreQueries):
             q = q.where(r.c.serial == robot_serial)
         q = q.order_by(c.c.created.desc(), c.c.id.desc())
         for cid, stored in self._query(lambda conn: conn.execute(q).all()):
-            if address is None or (json.loads(stored).get("robot") or {}).get("address") == address:
+            stored_config = row_json(stored, table="campaigns", row=cid, column="config", campaign=str(cid))
+            if address is None or ((stored_config or {}).get("robot") or {}).get("address") == address:
                 return str(cid)
         return None
 

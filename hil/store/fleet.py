@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING, Any
 
 import hil.store.listing_sql as sql
 from hil.errors import InputError
+from hil.store.json_columns import DamagedRowError, row_json
 from hil.store.listing import Reader, Rows, UnknownCampaignError
 from hil.store.listing_sql import ACCEPTED
 from hil.store.owner import is_gone
@@ -497,7 +498,11 @@ def current_model(store: Reader, serial: str) -> tuple[str, dict[str, Any]] | No
             return None
         cid, model = found[0]
         doc = rows(sql.MODEL_DOC, {"id": model})[0][0]
-    return str(cid), dict(json.loads(doc))
+    value = row_json(doc, table="models", row=model, column="doc", campaign=str(cid))
+    if not isinstance(value, dict):
+        raise DamagedRowError(f"damaged store row: campaign {cid}, table models, id {model}: doc is not a "
+                              "JSON object")
+    return str(cid), value
 
 
 def _who() -> str:

@@ -145,7 +145,18 @@ def check_store(located: Located, *, create: bool) -> None:
     from hil.errors import InputError
 
     path = located.location
-    if not isinstance(path, Path) or path.exists():
+    if not isinstance(path, Path):
+        return
+    if path.exists():
+        import stat
+
+        from hil.files.inputs import file_kind
+
+        mode = path.stat().st_mode
+        if stat.S_ISDIR(mode):
+            raise InputError(f"{located.field}: {path} is a folder, not a database file")
+        if not stat.S_ISREG(mode):  # SQLite would block on a FIFO or read /dev/zero for ever
+            raise InputError(f"{located.field}: {path} is {file_kind(mode)}, not a database file")
         return
     folder = path.parent
     if not create:

@@ -32,9 +32,18 @@ class CorruptStoreError(StoreError, InputError):
 _DAMAGED = frozenset({11, 26})
 
 
+#: What SQLite says (SQLITE_ERROR, 1) when a query names a table or column the file lacks. The schema
+#: is migrated to this hil's version at open, so in a store that opened it means a table was dropped
+#: or altered by hand: damage, which ``hil show`` reported as a failed job (exit 1; issue 31).
+_MISSING_SCHEMA = ("no such table", "no such column")
+
+
 def damaged(exc: sqlite3.DatabaseError, where: str) -> BaseException:
-    """`exc` as a `CorruptStoreError` naming the file when it says the file is damaged, else itself."""
+    """`exc` as a `CorruptStoreError` naming the file when it says the file is damaged (a damaged
+    page, not SQLite at all, or a table or column of its schema missing), else itself."""
     code = getattr(exc, "sqlite_errorcode", None)
+    if code is not None and code & 0xFF == 1 and str(exc).startswith(_MISSING_SCHEMA):
+        return CorruptStoreError(f"{where} is not a readable hil store: {exc} (its schema was altered)")
     if code is None or code & 0xFF not in _DAMAGED:
         return exc
     if code & 0xFF == 26:  # SQLITE_NOTADB: not SQLite at all (a text file, an image)

@@ -29,7 +29,7 @@ from typing import Any, Self
 from hil.store.listing import ListingQueries, Rows
 from hil.store.paths import is_url
 from hil.store.schema_version import HEAD, SCHEMA_VERSION
-from hil.store.sqlite_errors import StoreConnection, StoreError
+from hil.store.sqlite_errors import CorruptStoreError, StoreConnection, StoreError, damaged
 
 __all__ = ["SqliteReader", "open_reader", "readonly_uri"]
 
@@ -102,6 +102,9 @@ class SqliteReader(ListingQueries):
                 if conn.in_transaction:
                     conn.execute("ROLLBACK")
         except sqlite3.Error as exc:
+            problem = damaged(exc, str(self.location)) if isinstance(exc, sqlite3.DatabaseError) else exc
+            if isinstance(problem, CorruptStoreError):
+                raise problem from None
             raise StoreError(f"{self.location}: cannot read: {_first_line(exc)}") from exc
 
 

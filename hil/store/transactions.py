@@ -46,7 +46,7 @@ from hil.errors import InputError
 from hil.store.database import display_url, is_postgres, postgres_engine, sqlite_engine
 from hil.store.migrate import SCHEMA_VERSION, found_version, upgrade
 from hil.store.paths import check_store, locate
-from hil.store.sqlite_errors import StoreError, StoreUnavailable, check_intact
+from hil.store.sqlite_errors import CorruptStoreError, StoreError, StoreUnavailable, check_intact, damaged
 from hil.store.sqlite_reader import readonly_uri
 
 if TYPE_CHECKING:
@@ -345,6 +345,10 @@ class TransactionalStore:
                 finally:
                     transaction.rollback()
         except DBAPIError as exc:
+            if isinstance(exc.orig, sqlite3.DatabaseError):
+                problem = damaged(exc.orig, str(self.location))
+                if isinstance(problem, CorruptStoreError):
+                    raise problem from None
             raise StoreError(f"{self.location}: cannot read: {_first_line(exc.orig)}") from exc.orig
 
     @contextmanager

@@ -172,12 +172,17 @@ def _silence(stream: Any) -> None:
 
 def quiet_on_closed_stdout(func: Any) -> Any:
     """`func(args)` of a subcommand, ending quietly (exit code 141) when stdout's reader goes away, and
-    in one line (`StdoutUnwritable`, exit 2) when stdout is full, unwritable or missing."""
+    in one line (`StdoutUnwritable`, exit 2) when stdout is full, unwritable or missing.
+
+    A stdout that is missing or /dev/full is refused before `func` runs, for every subcommand: found
+    only at the first write, it failed ``hil identify`` and ``hil fk --json`` after they had written
+    their files (issue 31), and a campaign after its hours of work."""
 
     def run(args: Any) -> Any:
         stream = sys.stdout
         sys.stdout = _GuardedStdout(stream)  # type: ignore[assignment]
         try:
+            check_stdout_open()
             code = func(args)
             sys.stdout.flush()
             return code

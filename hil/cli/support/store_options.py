@@ -10,6 +10,8 @@ import os
 import time
 from typing import TYPE_CHECKING
 
+from hil.cli.support.options import TOML_FILE
+
 if TYPE_CHECKING:
     from hil.store import Store
     from hil.store.sqlite_reader import SqliteReader
@@ -20,7 +22,8 @@ DB_HELP = ("the store: an SQLite file path or a postgresql:// URL (default: $HIL
 
 def add_store_options(p: argparse.ArgumentParser, *, json: bool = True) -> None:
     p.add_argument("--db", metavar="LOCATION", help=DB_HELP)
-    p.add_argument("--config", metavar="station.toml", help="take the store's location from it")
+    p.add_argument("--config", metavar="station.toml", type=TOML_FILE,
+                   help="take the store's location from it")
     if json:
         p.add_argument("--json", action="store_true", help="print JSON on stdout")
 

@@ -23,7 +23,9 @@ URDF_SCOPE = ("An arm that is not a UR is read from its URDF (--urdf, --tip, --b
 
 def add_urdf_options(parser: argparse.ArgumentParser) -> None:
     """``--urdf``, ``--tip`` and ``--base`` on `parser`."""
-    parser.add_argument("--urdf", metavar="FILE",
+    from hil.cli.support.options import URDF_FILE
+
+    parser.add_argument("--urdf", metavar="FILE", type=URDF_FILE,
                         help="any serial arm from its URDF instead of a catalog UR (revolute, continuous "
                              "and prismatic joints; fixed joints folded in)")
     parser.add_argument("--tip", metavar="LINK",

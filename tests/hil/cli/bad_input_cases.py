@@ -1298,6 +1298,117 @@ def _cases() -> list[Case]:
     add("moveb-plan", "c3-program-denormal", ["moveb", "plan", f"{d}/p.moveb", "--out", f"{d}/s.csv"],
         ["p.moveb"], files={"p.moveb": moveb_line(f"MOVEB 500 -50 300  0 0 -1  1 0 0  0.5 {tiny}")})
 
+    # ---------------------------------------------------------------- issue 31, second independent pass
+    # ids "c<class>-r2-...": cases of a pass invented without reading this table (bench/adversarial.py
+    # counts them apart). The first group failed before its fix; the rest passed and are kept so they stay so.
+    from hil.files.inputs import MAX_LINE_CHARS, MAX_TEXT_LINES
+
+    many_lines = "\n" * (MAX_TEXT_LINES + 1)  # 1 MB of nothing: the line count, not the size, refuses it
+    long_line = "1," * (MAX_LINE_CHARS // 2 + 1)
+    hdr = "q1,q2,q3,q4,q5,q6,x,y,z\n"
+    ir2 = ["identify", "--robot", "ur5e", "--out", f"{d}/m-out.json", "--measurements"]
+    # class 1, failed: files that end but whose lines or size kept a reader busy for minutes
+    add("identify", "c1-r2-measurements=a-million-newlines", [*ir2, f"{d}/nl.csv"], ["nl.csv", "lines"],
+        files={"nl.csv": hdr + many_lines})
+    add("identify", "c1-r2-measurements=a-million-comment-lines", [*ir2, f"{d}/cm.csv"], ["cm.csv", "lines"],
+        files={"cm.csv": hdr + "#\n" * (MAX_TEXT_LINES + 1)})
+    add("identify", "c1-r2-measurements=one-line-of-half-a-million-fields", [*ir2, f"{d}/one.csv"],
+        ["one.csv", "line 1", "characters"], files={"one.csv": "q1," + long_line + "\n"})
+    add("moveb-plan", "c1-r2-program=a-million-newlines", ["moveb", "plan", f"{d}/nl.moveb", "--out",
+                                                           f"{d}/s.csv"], ["nl.moveb", "lines"],
+        files={"nl.moveb": many_lines})
+    add("moveb-plan", "c1-r2-program=one-long-line", ["moveb", "plan", f"{d}/one.moveb", "--out",
+        f"{d}/s.csv"],
+        ["one.moveb", "line 1"], files={"one.moveb": "MOVEB " + long_line.replace(",", " ") + "\n"})
+    add("calibrate", "c1-r2-config=over-1MiB", ["calibrate", "--config", f"{d}/big.toml", "--db",
+        f"{d}/c.db"],
+        ["big.toml", "1 MiB"], files={"big.toml": lambda dd: (dd / "station.toml").read_text()
+                                      + "# " + "x" * (1 << 20) + "\n"})
+    add("calibrate", "c1-r2-config=a-million-newlines", ["calibrate", "--config", f"{d}/nl.toml", "--db",
+                                                         f"{d}/c.db"], ["nl.toml", "lines"],
+        files={"nl.toml": lambda dd: (dd / "station.toml").read_text() + many_lines})
+    add("compensate", "c1-r2-input=script-of-a-million-newlines",
+        [*co, f"{d}/nl.script", "--out", f"{d}/o.script"], ["nl.script", "lines"],
+        files={**ctl, "nl.script": "def f():\n" + many_lines + "end\n"})
+    add("validate", "c1-r2-model=json-over-16MiB", ["validate", "--model", f"{d}/big.json", "--measurements",
+                                                    f"{d}/validation.csv"], ["big.json", "16 MiB"],
+        files={"big.json": "[" + "1," * (8 << 20) + "1]"})
+    add("report", "c1-r2-result=fifo", ["report", "--result", f"{d}/pipe", "--out", f"{d}/r.html"],
+        ["--result", "pipe", "FIFO"], fifos=("pipe",))
+    add("verify", "c1-r2-model=fifo", ["verify", "--sim", "--model", f"{d}/pipe", "--db", f"{d}/v.db"],
+        ["--model", "pipe"], fifos=("pipe",))
+    add("sim", "c1-r2-truth=fifo", ["sim", "--truth", f"{d}/pipe"], ["--truth", "pipe"], fifos=("pipe",))
+    add("fleet-report", "c1-r2-db=fifo", ["fleet-report", "--db", f"{d}/pipe", "--out", f"{d}/f.html"],
+        ["--db", "pipe", "FIFO"], fifos=("pipe",))
+    add("history", "c1-r2-db=/dev/zero", ["history", "--db", "/dev/zero"], ["--db", "/dev/zero", "device"])
+    add("robots", "c1-r2-db=directory", ["robots", "--db", f"{d}/sub"], ["--db", "sub", "folder"])
+    add("calibrate", "c1-r2-sim-db=fifo", ["calibrate", "--sim", "--db", f"{d}/pipe"], ["--db", "pipe"],
+        fifos=("pipe",))
+    # class 2, failed: a stdout that cannot take the result was found after the files were written
+    add("identify", "c2-r2-stdout=full", [*ir2, f"{d}/measurements.csv"], ["stdout", "no space"],
+        stdout="full")
+    add("fk", "c2-r2-json-stdout=closed", ["fk", "--model", f"{d}/model.json", "--joints", f"{d}/joints.csv",
+                                           "--out", f"{d}/p-out.csv", "--json"], ["stdout", "closed"],
+        stdout="closed")
+    add("validate", "c2-r2-stdout=full", ["validate", "--model", f"{d}/model.json", "--measurements",
+                                          f"{d}/validation.csv"], ["stdout"], stdout="full")
+    # class 5, failed: a table dropped by hand was a failed job (exit 1), not a damaged store
+    add("show", "c5-r2-events-table-dropped", ["show", "last", "--db", f"{d}/dmg.db"], ["dmg.db", "events"],
+        files={"dmg.db": damaged_store("DROP TABLE events")})
+    add("robot", "c5-r2-damaged-model-export",
+        ["robot", "20235500001", "--db", f"{d}/dmg.db", "--export-model", f"{d}/m-out.json"],
+        ["table models", "id"],
+        files={"dmg.db": damaged_store("UPDATE models SET doc = '{'")})
+    # class 6, failed: an empty input, whose kind nothing tells, was "compensated" with no targets, exit 0
+    for name in ("poses", "empty.script"):
+        add("compensate", f"c6-r2-empty-input-{name}", [*co, f"{d}/{name}", "--out", f"{d}/o.csv"],
+            [name, "empty"], files={**ctl, name: "\n  \n"})
+    # passed before, kept
+    add("identify", "c1-r2-controller=/dev/zero", [*ir2, f"{d}/measurements.csv", "--controller",
+        "/dev/zero"],
+        ["/dev/zero"])
+    add("compensate", "c1-r2-input=/dev/zero", [*co, "/dev/zero", "--out", f"{d}/o.script"], ["/dev/zero"],
+        files=ctl)
+    add("synth", "c1-r2-truth=/dev/zero", ["synth", "--truth", "/dev/zero", "--out-dir", f"{d}/o"],
+        ["/dev/zero"])
+    add("tui", "c1-r2-config=fifo", ["tui", "--config", f"{d}/pipe"], ["pipe"], fifos=("pipe",))
+    add("export", "c2-r2-out=same-as-model", ["export", "--model", f"{d}/model.json", "--format", "json",
+                                              "--out", f"{d}/model.json"], ["--out", "--model"])
+    add("fleet-report", "c2-r2-out=the-store", ["fleet-report", "--db", f"{d}/store.db", "--out",
+                                                f"{d}/store.db"], ["--out", "store"])
+    add("fleet-report", "c2-r2-out=through-a-file", ["fleet-report", "--db", f"{d}/store.db", "--out",
+                                                     f"{d}/model.json/f.html"], ["--out", "not a directory"])
+    add("moveb-plan", "c2-r2-out=fifo", ["moveb", "plan", f"{d}/square.moveb", "--out", f"{d}/pipe"],
+        ["--out", "FIFO"], fifos=("pipe",))
+    add("synth", "c2-r2-out-dir=a-file", ["synth", "--out-dir", f"{d}/model.json"], ["--out-dir",
+        "model.json"])
+    add("calibrate", "c2-r2-out-is-report", ["calibrate", "--sim", "--db", f"{d}/c.db", "--out",
+        f"{d}/x.html",
+                                             "--report", f"{d}/x.html"], ["--report", "--out"])
+    add("compensate", "c3-r2-tcp-in-millimetres", [*co, f"{d}/t.csv", "--out", f"{d}/o.csv", "--tcp",
+                                                   "0,0,100,0,0,0"], ["--tcp"],
+        files={**ctl, "t.csv": "x,y,z,rx,ry,rz\n0.4,0.1,0.3,0,3.1,0\n"})
+    add("compensate", "c3-r2-near-in-degrees", [*co, f"{d}/t.csv", "--out", f"{d}/o.csv", "--near",
+                                                "0,-90,90,0,90,0"], ["--near"],
+        files={**ctl, "t.csv": "x,y,z,rx,ry,rz\n0.4,0.1,0.3,0,3.1,0\n"})
+    add("identify", "c3-r2-smr-in-millimetres", [*ir2, f"{d}/measurements.csv", "--smr", "0,0,45"], ["--smr"])
+    add("moveb-plan", "c3-r2-step-denormal", ["moveb", "plan", f"{d}/square.moveb", "--out", f"{d}/s.csv",
+                                              "--step", "1e-320"], ["--step"])
+    add("fleet-report", "c3-r2-since-no-such-date", ["fleet-report", "--db", f"{d}/store.db", "--out",
+                                                     f"{d}/f.html", "--since", "2026-13-45"], ["--since"])
+    add("calibrate", "c4-r2-tracker.url=port-0", ["calibrate", "--config", f"{d}/bad.toml", "--db",
+        f"{d}/c.db"],
+        ["tracker.url"], files={"bad.toml": config_with("tracker.url", "socket://tracker:0")})
+    add("calibrate", "c4-r2-config-with-truth", ["calibrate", "--config", f"{d}/station.toml", "--truth",
+                                                 f"{d}/truth.json", "--db", f"{d}/c.db"], ["--truth"])
+    add("calibrate", "c4-r2-sim-db=/proc", ["calibrate", "--sim", "--db", "/proc/hil-r2.db"], ["--db",
+        "/proc"])
+    add("show", "c5-r2-not-sqlite", ["show", "last", "--db", f"{d}/x.db"], ["x.db"],
+        files={"x.db": "hello, this is not sqlite\n" * 100})
+    add("compensate", "c6-r2-csv-suffix-holding-a-script", [*co, f"{d}/p.csv", "--out", f"{d}/o.csv"],
+        ["p.csv"],
+        files={**ctl, "p.csv": "def f():\n  movel(p[.4, 0, .3, 0, 3.14, 0], a=1.2)\nend\n"})
+
     # ---------------------------------------------------------------- the top level
     add("hil", "unknown-command", ["frobnicate"], ["frobnicate"])
     add("hil", "unknown-option", ["--frobnicate", "history"], ["--frobnicate"])
@@ -1593,10 +1704,22 @@ def prepare(case: Case, fixtures: Path, workdir: Path, station: SimStation | Non
 
 
 class _FullStream(io.StringIO):
-    """A stdout on a full device (``> /dev/full``): every write fails as the kernel fails it."""
+    """A stdout on a full device (``> /dev/full``): every write fails as the kernel fails it, and its
+    descriptor is /dev/full's, as a shell's redirection makes it, so hil can tell it before writing."""
 
     def write(self, text: str) -> int:
         raise OSError(28, "No space left on device")
+
+    def fileno(self) -> int:
+        if not hasattr(self, "_fd"):
+            self._fd = os.open("/dev/full", os.O_WRONLY)
+        return self._fd
+
+    def close(self) -> None:
+        if hasattr(self, "_fd"):
+            os.close(self._fd)
+            del self._fd
+        super().close()
 
 
 def run_case(case: Case, fixtures: Path, workdir: Path, *, station: SimStation | None = None,
@@ -1638,6 +1761,8 @@ def run_case(case: Case, fixtures: Path, workdir: Path, *, station: SimStation |
     finally:
         seconds = time.monotonic() - start
         _set_read_only(read_only, False)
+        if isinstance(out, _FullStream):
+            out.close()
     after = _snapshot(workdir)
     if case.ascii:
         err.flush()

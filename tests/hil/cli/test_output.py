@@ -167,3 +167,20 @@ def test_stdout_on_dev_full_is_found_before_the_work(monkeypatch) -> None:
             check_stdout_open()
         monkeypatch.setattr(sys, "stdout", null)
         check_stdout_open()
+
+
+def test_every_command_is_refused_before_it_runs_when_stdout_is_unusable(monkeypatch, tmp_path) -> None:
+    """``hil identify > /dev/full`` wrote its model and then failed on stdout (issue 31, second pass):
+    the wrapper every subcommand runs in checks stdout first, whether or not the command asks."""
+    from hil.cli import main
+    from hil.cli.support.output import StdoutUnwritable, quiet_on_closed_stdout
+
+    worked = []
+    monkeypatch.setattr(sys, "stdout", None)
+    with pytest.raises(StdoutUnwritable, match="stdout is closed"):
+        quiet_on_closed_stdout(lambda _args: worked.append(True))(None)
+    assert worked == []
+    model = tmp_path / "m.json"
+    assert main(["identify", "--robot", "ur5e", "--measurements", str(tmp_path / "none.csv"),
+                 "--out", str(model)]) == 2  # refused for stdout before the missing file is looked at
+    assert not model.exists()
