@@ -1195,6 +1195,11 @@ def _cases() -> list[Case]:
         add(cmd, "c4-HIL_DB-no-such-file", argv, ["$HIL_DB", "gone.db", "no such database"],
             env={"HIL_DB": f"{d}/gone.db"})
         add(cmd, "c4-db-postgresql-without-a-host", [*argv, "--db", "postgresql:///hil"], ["--db", "host"])
+        add(cmd, "c4-db-postgresql-port-0", [*argv, "--db", "postgresql://hil@127.0.0.1:0/hil"],
+            ["--db", "port", "65535"])
+        add(cmd, "c4-store.url-postgresql-port-99999", [*argv, "--config", f"{d}/bad.toml"],
+            ["store.url", "port", "65535"],
+            files={"bad.toml": config_with("store.url", "postgresql://hil@127.0.0.1:99999/hil")})
     for cmd in ("calibrate", "verify"):
         base = with_cube if cmd == "verify" else BASE_CONFIG
         add(cmd, "c4-store.url-no-such-folder", [cmd, "--config", f"{d}/bad.toml"],
