@@ -44,7 +44,7 @@ from typing import TYPE_CHECKING, Any
 
 import hil.store.listing_sql as sql
 from hil.errors import InputError
-from hil.store.json_columns import DamagedRowError, row_json
+from hil.store.json_columns import DamagedRowError, row_json, row_number
 from hil.store.listing import Reader, Rows, UnknownCampaignError
 from hil.store.listing_sql import ACCEPTED
 from hil.store.owner import is_gone
@@ -249,9 +249,13 @@ def _calibrations(rows: Rows, where: str, params: dict[str, Any] | None = None) 
     for (cid, serial, created, station, status, before, after, passed, model, mark_id, bad, reason, who,
          t) in found:
         before, after = _loads(before), _loads(after)
-        mark = None if mark_id is None else Mark(int(mark_id), cid, bool(bad), reason, who, float(t))
+        mark = None if mark_id is None else Mark(
+            int(mark_id), cid, bool(bad), reason, who,
+            float(row_number(t, table="marks", row=mark_id, column="t", campaign=cid)))
         out.append(Calibration(
-            id=cid, serial=serial, created=float(created), station=station,
+            id=cid, serial=serial,
+            created=float(row_number(created, table="campaigns", row=cid, column="created", campaign=cid)),
+            station=station,
             status=INTERRUPTED if cid in gone else status,
             before_rms=_stat(before, "rms"), before_max=_stat(before, "max"),
             after_rms=_stat(after, "rms"), after_max=_stat(after, "max"),

@@ -7,6 +7,7 @@ these columns exactly as every other reader does.
 from __future__ import annotations
 
 import json
+import math
 import sys
 from typing import Any
 
@@ -61,6 +62,21 @@ def row_json(text: str | None, *, table: str, row: Any, column: str, campaign: s
         reason = exc.msg if isinstance(exc, json.JSONDecodeError) else type(exc).__name__
         raise DamagedRowError(f"damaged store row: {where}table {table}, id {row}: {column} is not valid "
                               f"JSON ({reason})") from None
+
+
+def row_number(value: Any, *, table: str, row: Any, column: str, campaign: str | None = None,
+               optional: bool = False) -> float | None:
+    """The value of number column `column` of `table`'s row `row` as a float (None for SQL NULL when
+    `optional`); `DamagedRowError` naming the row when it is not a finite number. SQLite keeps whatever
+    was written into a column (text in a REAL column, from a hand edit or another tool), so a reader
+    checks the number columns it reads as it checks the JSON ones."""
+    if value is None and optional:
+        return None
+    if isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value):
+        return float(value)
+    where = f"campaign {campaign}, " if campaign else ""
+    raise DamagedRowError(f"damaged store row: {where}table {table}, id {row}: {column} is not a number "
+                          f"({str(value)[:40]!r})")
 
 
 def floats(text: str | None) -> tuple[float, ...] | None:

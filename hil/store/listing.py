@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import hil.store.listing_sql as sql
 from hil.errors import InputError
-from hil.store.json_columns import DamagedRowError, row_json
+from hil.store.json_columns import DamagedRowError, row_json, row_number
 from hil.store.owner import is_gone
 from hil.store.records import (
     INTERRUPTED,
@@ -68,6 +68,9 @@ def measurement(row: Sequence[Any]) -> Measurement:
                                   f"{column} is not a list of numbers")
         return tuple(value)
 
+    deviation = row_number(deviation, table="measurements", row=mid, column="deviation", campaign=cid,
+                           optional=True)
+    t = row_number(t, table="measurements", row=mid, column="t", campaign=cid)
     return Measurement(id=mid, campaign=cid, index=pose, role=role, q=vector(q, "q") or (),
                        p=vector(p, "p") or (), q_spread=vector(qs, "q_spread"),
                        p_spread=vector(ps, "p_spread"), samples=samples, deviation=deviation, t=t)
@@ -78,6 +81,11 @@ def summary(row: Sequence[Any]) -> CampaignSummary:
     ``interrupted``, which it is: resumable (the database itself is left as it is — a reader never
     writes)."""
     *head, passed, kind, boot_planned, boot_measured, started = row
+    cid = head[0]
+    for i, column, optional in ((1, "created", False), (2, "updated", False), (10, "models.rms", True),
+                                (11, "validations.rms", True)):
+        head[i] = row_number(head[i], table="campaigns", row=cid, column=column, campaign=cid,
+                             optional=optional)
     out = CampaignSummary(*head, passed=None if passed is None else bool(passed), kind=str(kind),
                           bootstrap_planned=int(boot_planned or 0),
                           bootstrap_measured=int(boot_measured or 0))

@@ -1364,6 +1364,15 @@ def _cases() -> list[Case]:
         ["robot", "20235500001", "--db", f"{d}/dmg.db", "--export-model", f"{d}/m-out.json"],
         ["table models", "id"],
         files={"dmg.db": damaged_store("UPDATE models SET doc = '{'")})
+    # class 5: a number column holding text (SQLite keeps what is written) was an internal error (exit 70)
+    for cmd, argv in (("show", ["show", "last"]), ("robots", ["robots"]), ("robot", ["robot", "20235500001"]),
+                      ("history", ["history"])):
+        add(cmd, "c5-r3-created-not-a-number", [*argv, "--db", f"{d}/dmg.db"],
+            ["table campaigns", "created", "not a number"],
+            files={"dmg.db": damaged_store("UPDATE campaigns SET created = 'abc'")})
+    add("show", "c5-r3-measurement-time-not-a-number", ["show", "last", "--db", f"{d}/dmg.db"],
+        ["table measurements", "t is not a number"],
+        files={"dmg.db": damaged_store("UPDATE measurements SET t = 'x' WHERE id = 3")})
     # class 6, failed: an empty input, whose kind nothing tells, was "compensated" with no targets, exit 0
     for name in ("poses", "empty.script"):
         add("compensate", f"c6-r2-empty-input-{name}", [*co, f"{d}/{name}", "--out", f"{d}/o.csv"],
