@@ -100,6 +100,22 @@ def check_store(db: str | None, config: object | None) -> None:
         store.close()
 
 
+def require_terminal() -> None:
+    """Refuse, in one line, to start the app without a terminal: with its input or output redirected
+    (a cron job, a pipe, an SSH command without -t) a full-screen app has no keyboard to be answered
+    from and would wait for ever, holding the station. Headless runs are `hil calibrate`'s."""
+    import sys
+
+    missing = [name for name, stream in (("standard input", sys.stdin), ("standard output", sys.stdout))
+               if stream is None or not stream.isatty()]
+    if missing:
+        from hil.errors import InputError
+
+        raise InputError(f"hil tui needs a terminal, and its {' and '.join(missing)} "
+                         f"{'is' if len(missing) == 1 else 'are'} not one: run it in a terminal (ssh -t), "
+                         "or use hil calibrate, the headless command")
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the app; once it has closed (arm stopped, campaign recorded, devices, store and simulator
     closed, terminal restored) the ``hil`` program ends at once (`end_process`), not after the
@@ -107,6 +123,8 @@ def run(args: argparse.Namespace) -> int:
     from hil.cli.support.process_end import end_process
     from hil.tui.app import create_app
 
+    if getattr(args, "as_program", False):
+        require_terminal()
     options = options_from(args)
     check_store(getattr(options, "db", None), getattr(options, "config", None))
     app = create_app(options)  # type: ignore[arg-type]

@@ -33,3 +33,19 @@ def test_no_warmup_is_parsed_as_hil_calibrates(tmp_path: Path, no_app: list) -> 
     assert main(["tui", "--config", str(config), "--no-warmup", "--db", db, "--out-dir", str(tmp_path)]) == 0
     assert [o.no_warmup for o in no_app] == [False, True, True]
     assert no_app[2].config is not None
+
+
+def test_the_app_without_a_terminal_is_refused_in_one_line(tmp_path: Path) -> None:
+    """Started with its input and output redirected, `hil tui` used to take the screen of no terminal
+    and wait for ever; it is refused before anything opens, exit 2."""
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "hil", "tui", "--sim", "--db", str(tmp_path / "s.db")],
+                          stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=60,
+                          cwd=Path(__file__).resolve().parents[3])
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        "hil: error: hil tui needs a terminal, and its standard input and standard output are not one: "
+        "run it in a terminal (ssh -t), or use hil calibrate, the headless command"]
+    assert not (tmp_path / "s.db").exists()  # nothing opened
