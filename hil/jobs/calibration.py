@@ -27,6 +27,7 @@ from hil.jobs.station import (
     StationSetup,
     StationSource,
     TakenStation,
+    open_existing_store,
     simulator_words,
     station_setup,
     store_location,
@@ -241,6 +242,18 @@ def _say_simulator(setup: StationSetup, say: Say) -> None:
         say(words, "information")
 
 
+def _check_store_file(location: Any) -> None:
+    """An SQLite store that exists is opened and closed again, so that a file that is not a hil
+    database (or a damaged or a newer one) is refused before a simulated station's seconds of start-up
+    rather than after them; a server's location waits for the configuration that may name it."""
+    from pathlib import Path
+
+    if isinstance(location, Path):
+        store = open_existing_store(location, None)
+        if store is not None:
+            store.close()
+
+
 def calibrate(request: CalibrationRequest, *, subscribers: Sequence[Callable[[Event], None]] = (),
               say: Say = quiet) -> CalibrationOutcome:
     """``hil calibrate``: the whole headless job (module docstring): the station set up from the
@@ -248,8 +261,8 @@ def calibrate(request: CalibrationRequest, *, subscribers: Sequence[Callable[[Ev
     raises InputError before anything moves; a device that cannot be reached is a fault (exit 3), said."""
     from hil.station.devices import HARDWARE_ERRORS
 
-    if request.db:  # --db needs no config: refused before a simulated station starts
-        store_location(request.db, request.source, None)
+    if request.db or request.source.sim is not None:  # needs no config: checked before a simulated
+        _check_store_file(store_location(request.db, request.source, None))  # station starts (seconds)
     with station_setup(request.source) as setup:
         if request.no_warmup:  # not part of what identifies the campaign (`hil.store.hashing`)
             setup = StationSetup(setup.config.with_overrides(warmup__enabled=False), setup.identity,
