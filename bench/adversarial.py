@@ -7,10 +7,10 @@
    tests/hil/cli/test_bad_input_sweep.py runs) in this process, each case with a time limit, and prints
    per subcommand: cases, how many meet the error contract (exit 2, one line naming the option/file/key,
    no traceback, nothing written, created or started), and the ids of those that fail; then per class
-   of issue 31 (case ids ``c1-`` … ``c6-``: inputs that never end, outputs that go nowhere, numbers that
-   are not physical, a config checked before any connection, a damaged store row, odd environments)
-   the cases, how many meet the
-   contract and the longest time one took to be refused (target: under 2 s).
+   of bad input and bad surroundings (case ids ``c1-`` … ``c6-``: inputs that never end, outputs that
+   go nowhere, numbers that are not physical, a config checked before any connection, a damaged store
+   row, odd environments) the cases, how many meet the contract and the longest time one took to be
+   refused (target: under 2 s).
 2. **Faults.** Runs ``hil calibrate --sim --speed 50`` (a small campaign) in a subprocess and interrupts
    it at seeded random moments — SIGKILL of the process (``kill -9``), SIGINT to its process group
    (Ctrl-C) or SIGTERM (``kill``), a random number of measured points into the run plus a random
@@ -54,7 +54,7 @@ sys.path.insert(0, str(ROOT))
 
 def sweep(only: set[str] | None, verbose: bool, classes_only: bool = False) -> tuple[int, int]:
     """Run the bad-input table; print the per-subcommand table; return (cases, meeting the contract).
-    `classes_only`: only the cases of issue 31's classes (`CLASSES`)."""
+    `classes_only`: only the cases of the classes (`CLASSES`)."""
     from tests.hil.cli.bad_input_cases import CASES, Outcome, build_fixtures, run_case, start_sim_station
 
     cases = [c for c in CASES if (only is None or c.cmd in only)
@@ -116,7 +116,7 @@ def sweep(only: set[str] | None, verbose: bool, classes_only: bool = False) -> t
     return len(results), len(results) - total_fail
 
 
-#: Issue 31's classes of bad input and bad surroundings (the table's case ids begin "c<n>-").
+#: The classes of bad input and bad surroundings (the table's case ids begin "c<n>-").
 CLASSES = {"c1": "inputs that never end", "c2": "outputs that go nowhere",
            "c3": "numbers that are not physical", "c4": "config before connection",
            "c5": "a damaged store row", "c6": "odd environments, ambiguous kinds"}
@@ -128,11 +128,11 @@ WARM: dict[str, float] = {}
 
 
 def by_class(results: list[Any]) -> None:
-    """Per class of issue 31: cases, meeting the contract, and the longest time a case took to be
+    """Per class: cases, meeting the contract, and the longest time a case took to be
     refused (or, for the cases that must succeed, to finish) — on its first run (cold: the command's
     imports included) and its second (warm: a failing second run counts as infinite); then the longest
     over the whole table."""
-    print("\nBy class (issue 31): cases, meeting the contract, longest time to refuse (cold / warm); "
+    print("\nBy class: cases, meeting the contract, longest time to refuse (cold / warm); "
           "r2: the cases of the second independent pass among them (ids c<n>-r2-...)")
     print(f"{'class':<40} {'cases':>5} {'meet':>5} {'r2':>4} {'r2 meet':>7} {'cold':>8} {'warm':>8}  "
           "slowest warm case")
@@ -432,7 +432,7 @@ def main() -> int:
     ap.add_argument("--only", help="comma list of subcommands of the bad-input table (default: all)")
     ap.add_argument("--no-sweep", action="store_true", help="skip the bad-input table")
     ap.add_argument("--classes", action="store_true",
-                    help="only the cases of issue 31's classes (ids c1-... to c6-...)")
+                    help="only the cases of the classes (ids c1-... to c6-...)")
     ap.add_argument("--no-faults", action="store_true", help="skip the fault injection")
     ap.add_argument("--verbose", action="store_true", help="print why each failing case fails")
     ap.add_argument("--keep", action="store_true", help="keep the fault trials' stores and logs")

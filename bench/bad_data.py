@@ -1,6 +1,6 @@
 """Does `hil identify` ever export a model that makes the arm worse? Bad data and good data, counted.
 
-Issue 30's promise: *a fit can never silently make the robot worse*. On bad data (few poses, a
+The promise: *a fit can never silently make the robot worse*. On bad data (few poses, a
 camera's noise on a tracker's job, an outlier or two) the MAP fit shrinks toward nominal and
 cross-validation must say whether what is left is better than the nominal model; a model it calls
 better is exported (`hil identify` exits 0, `hil export` takes it). This bench counts the cases where

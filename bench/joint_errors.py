@@ -14,8 +14,9 @@ Prints five tables:
    two-sided approach;
 5. `identify_with_joint_errors` run time for 40 poses (median of the seeds).
 
-The realistic blocks here are this bench's *assumption* until the simulator's realistic truth (issue 30
-§1) is on main: per joint, harmonics of orders 1 and 2 with coefficients N(0, 50 µrad) and N(0, 30 µrad),
+The realistic blocks here are this bench's *assumption* beside the simulator's realistic truth
+(`hil.arm.joint_physics`): per joint, harmonics of orders 1 and 2 with coefficients N(0, 50 µrad) and
+N(0, 30 µrad),
 a transmission-error ripple at 2·101 per turn (a strain-wave gear of ratio 101 — the Harmonic Drive
 catalog's ratios are 50–160) of 10 µrad, and lost motion of 10–40 µrad. These sizes were chosen so that
 the joint errors alone leave a calibrated UR5e at about a tenth of a millimetre, the order the real UR5

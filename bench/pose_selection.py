@@ -1,4 +1,4 @@
-"""Benchmark of the pose selector (issue 3). Not a test: it prints a table and asserts nothing.
+"""Benchmark of the pose selector. Not a test: it prints a table and asserts nothing.
 
     python bench/pose_selection.py [--quick]
 

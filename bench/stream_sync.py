@@ -1,4 +1,4 @@
-"""Figures for issue 33's foundations: the stream join's clock estimate against the truth, and what a
+"""Figures for the sweep mode's foundations: the stream join's clock estimate against the truth, and what a
 sync error costs at each tool speed.
 
 Run from the repository root: ``PYTHONPATH=. python bench/stream_sync.py`` (``--quick``: one seed, 10 s

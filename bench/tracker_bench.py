@@ -1,4 +1,4 @@
-"""Figures for issue 5: time per measurement vs baud and samples; simulator noise vs spec.
+"""Figures of the trackers: time per measurement vs baud and samples; simulator noise vs spec.
 
 Run from the repository root: ``PYTHONPATH=. python bench/tracker_bench.py``. Prints two tables.
 Timing goes through the real driver and a paced pty (the simulator waits each byte's time on the

@@ -1,4 +1,4 @@
-"""Poses selected vs random at equal count for arms read from their URDFs (issue 32): the held-out truth
+"""Poses selected vs random at equal count for arms read from their URDFs: the held-out truth
 error after identification. Not a test: it prints a table and asserts nothing.
 
     python bench/urdf_pose_selection.py [--trials 4] [--count 40] [--candidates 3000] [--seed 1] [--plain]

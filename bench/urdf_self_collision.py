@@ -1,4 +1,4 @@
-"""Self-collision of URDF arms (issue 32): the URDF's collision meshes against capsules, speed and
+"""Self-collision of URDF arms: the URDF's collision meshes against capsules, speed and
 agreement. Not a test: it prints a table and asserts nothing.
 
     python bench/urdf_self_collision.py [--count 5000] [--seed 0]

@@ -248,7 +248,7 @@ def start_station(robot: str = "ur5e", truth: str | None = None, speed: float = 
     Returns the running `mocks.ur.process.SimProcess`; ``.info["services"][0]`` holds the tracker's
     URL and pty and the hidden truth. The caller must `stop()` it. `rigid`: a random arm without
     compliance, payload and warm-up (the arm of the simulator before they existed); `ideal`: without
-    joint errors and lost motion (the arm before issue 30).
+    joint errors and lost motion (the ideal arm).
     """
     from mocks.ur.controller import SimConfig
     from mocks.ur.testing import start_sim

@@ -28,7 +28,7 @@ Two first stages, both with E[r_c] = k·N_c / N exactly:
   uniform start, k equally spaced points on the cumulated sizes; a cluster is drawn once per point that
   falls in it. A cluster smaller than the spacing N/k is drawn at most once, so clusters need only m
   candidates and can be small and compact: about half the travel time of the with-replacement form on
-  a UR5e's candidates (report of issue 17). There is no unbiased variance estimator for it; the
+  a UR5e's candidates (measured). There is no unbiased variance estimator for it; the
   with-replacement one above, applied to it, errs on the safe side (Särndal, Swensson & Wretman,
   *Model Assisted Survey Sampling*, §3.6: the random-order systematic πps design is close to one with
   replacement, which over-states the variance by a factor of about 1 / (1 − k/K)).

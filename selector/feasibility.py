@@ -40,7 +40,7 @@ def impossible(model: PoseModel, constraints: Settings, lo: np.ndarray, hi: np.n
 
     Sampling cannot prove emptiness: it gives up only after tens of thousands of draws (seconds of
     work, and tens of seconds on a loaded machine), which is how ``hil select --tracker 0,0,0`` took
-    15–35 s to be refused (issue 31). These bounds are sound for any configuration, so a refusal here
+    15–35 s to be refused. These bounds are sound for any configuration, so a refusal here
     is never wrong; a request they do not catch still falls back to sampling:
 
     * the SMR stays within R of the shoulder point (joint 2's origin, on joint 1's axis): R is the sum

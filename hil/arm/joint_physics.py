@@ -71,7 +71,7 @@ from hil.arm.physical import UNSEEN_WINDUP, gear_sizes
 
 #: Whether a simulated arm is the ideal one unless asked otherwise (`hil.calibration.synthetic.random_truth`'s
 #: `ideal`, the simulated station's, ``--ideal``/``--no-ideal``): the ideal arm is hil's arm before
-#: issue 30 (geometry, compliance, payload, warm-up), the other the realistic one with these joint
+#: the ideal arm (geometry, compliance, payload, warm-up), the other the realistic one with these joint
 #: errors and lost motion.
 IDEAL_BY_DEFAULT = False
 

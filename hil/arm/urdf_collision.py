@@ -1,7 +1,7 @@
 """Self-collision of an arm read from a URDF: its own collision geometry, or capsules where it has none.
 
 A pose selector draws thousands of candidate postures and must drop those that fold the arm onto
-itself. For a URDF arm (issue 32) the best description of its links is the file's own `<collision>`
+itself. For a URDF arm the best description of its links is the file's own `<collision>`
 geometry (meshes, boxes, cylinders), which pinocchio loads (`buildGeomFromUrdfString`, coal underneath)
 and checks in batches (`computeCollisionsInParallel` on a `GeometryPool`: one C++ call per batch, no
 Python loop per posture).

@@ -1,5 +1,5 @@
 """The calibrated URDF of an arm read from a URDF: its chain's calibrated placements written back into
-the user's own file as joint origins (`hil export --format urdf` for a `--urdf` model, issue 32).
+the user's own file as joint origins (`hil export --format urdf` for a `--urdf` model).
 
 The chain (`hil.arm.urdf_chain`) folds the fixed joints in front of each actuated joint into its
 placement and turns each axis onto z by a rotation A, so its placement i is

@@ -16,7 +16,7 @@ between the bias of few folds (each training set much smaller than the fit's) an
 (Kohavi, IJCAI 1995; Hastie, Tibshirani & Friedman, *The Elements of Statistical Learning*, §7.10); with
 ten poses or fewer it is leave-one-out.
 
-**Rejected poses are scored, never dropped** (issue 30: a fit must not silently make the arm worse).
+**Rejected poses are scored, never dropped** (a fit must not silently make the arm worse).
 The poses the fit rejected as outliers (an F test on its own residuals) are exactly those it explains
 worst; scoring only the kept ones flattered the calibrated model (the shared UR10e camera file: 3.25
 against 4.27 mm, "better", on 20 of 23 poses; 3.95 against 4.35 mm, not better, with every pose kept).

@@ -1,7 +1,7 @@
 """The robot's manufacturing tolerances as a Gaussian prior on the identified parameters (MAP fit).
 
 Why a prior: a least-squares fit of 27–31 parameters to a few noisy poses chases the noise and can
-predict unseen poses worse than the nominal arm (issue 30: a real UR10e measured by a camera, fit
+predict unseen poses worse than the nominal arm (a real UR10e measured by a camera, fit
 2.6 mm, held-out 4.8 mm against the nominal's 4.3 mm). A manufactured arm is not arbitrary: each
 joint origin and the flange sit within the maker's tolerances of the drawing. Treating those as a
 Gaussian prior θ ~ N(θ₀, τ²) and the measurements as r ~ N(0, σ²) gives the maximum-a-posteriori fit

@@ -159,7 +159,7 @@ CONSTRAINT_OPTIONS = {"range": "--range", "acceptance": "--half-angle", "wrist":
 def naming_the_option(exc: Exception, constraints: Constraints) -> str:
     """`exc`'s message, led by the option behind the constraint that left no candidates: ``--tracker
     0,0,0`` was refused as "no candidate configuration satisfies the constraints" without naming the
-    option that caused it (issue 31)."""
+    option that caused it."""
     worst = getattr(exc, "constraint", None)
     if worst in TRACKER_CONSTRAINTS and constraints.tracker is not None:
         where = ",".join(f"{v:g}" for v in constraints.tracker)
@@ -339,7 +339,7 @@ def _sight_model(robot: str, smr: tuple[float, ...], tracker: tuple[float, ...])
     """`hidden_reason`'s model, kept: a campaign asks about pose after pose with the same SMR and
     tracker (refitted only every few points, `hil.campaign.calibration_plan._SightCheck`), and building the
     model (its identifiable parameters: a Jacobian of 120 poses and a pivoted QR) took 10-35 ms against the
-    check's 3 ms, measured on the simulated station (issue 17; the check itself only reads it)."""
+    check's 3 ms, measured on the simulated station (the check itself only reads it)."""
     return SelectionModel(robot, smr, tracker)
 
 

@@ -11,7 +11,7 @@ are compliant (UR's typical strain-wave stiffness, `hil.arm.physical.typical_com
 0.8–1.2 times it), it carries the SMR, its nest and an adaptor plate (`smr_payload`), and it warms up
 as it runs (`Thermal` defaults). Its encoders read with a UR joint's noise (`ENCODER_SIGMA`).
 
-Unless asked for the *ideal* arm (hil's simulated arm before issue 30: geometry, compliance, payload
+Unless asked for the *ideal* arm (geometry, compliance, payload
 and warm-up only), its link angles also differ from its encoders by angle-dependent joint errors and
 lost motion of the sizes a UR joint's output encoder leaves (`hil.arm.joint_physics`, which cites
 them): what keeps a real, calibrated UR at tenths of a millimetre rather than the hundredths an ideal

@@ -1,6 +1,6 @@
 """A URDF with some joints' origins changed and every other byte kept: the calibrated-URDF writer.
 
-`hil export --format urdf` for an arm read from a URDF (issue 32) must give back the user's own file —
+`hil export --format urdf` for an arm read from a URDF must give back the user's own file —
 links, inertias, meshes, limits, comments, whitespace, attribute order, quoting, the XML declaration —
 with only the calibrated joint origins changed, so that whatever else reads that file (a simulator, a
 planner, a ROS launch) keeps working on it. Re-serialising a parsed tree cannot promise that (it drops

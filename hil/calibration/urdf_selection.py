@@ -1,4 +1,4 @@
-"""Pose selection for an arm read from its URDF: hil's chain as the selector's `PoseModel` (issue 32).
+"""Pose selection for an arm read from its URDF: hil's chain as the selector's `PoseModel`.
 
 `hil.calibration.selection.SelectionModel` is a UR's: its capsules follow a UR's physical layout, its
 singularity measures are a UR's, its parameters include compliance and joint errors. For any other

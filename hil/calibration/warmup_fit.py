@@ -19,7 +19,7 @@ A point estimate is not enough to stop on. On a noisy series (a realistic arm's 
 differs per visit by micrometres of repositioning; the tracker adds its own) the best τ jumps between
 visits, and a short one makes both "three time constants have passed" and "little is still to come"
 come true at once: a campaign on the realistic simulated UR5e stopped after 16 min with 0.2 µm "still to
-come" while a third of its growth was ahead (issue 30). So the fit also says what the data cannot rule
+come" while a third of its growth was ahead. So the fit also says what the data cannot rule
 out: every τ whose profile cost is within the F bound of the best (a likelihood-ratio confidence set,
 the residual variance estimated from the fit, so F rather than χ²), and for each the still-to-come
 drift at the upper confidence limit of its amplitude (the linear least squares' covariance).

@@ -27,7 +27,7 @@ from typing import Any
 from hil.arm.catalog import get_robot
 
 #: Held-out RMS a calibrated real UR5 (CB3, 0.85 m reach) reaches: 0.19–0.21 mm by 13-fold
-#: cross-validation of 39 Leica-tracker poses (issue 30's real data; docs/design.md, Facts: what real
+#: cross-validation of 39 Leica-tracker poses (the shared real data; docs/design.md, Facts: what real
 #: arms reach).
 REAL_UR5_CALIBRATED = 0.21e-3  # m
 REAL_UR5_REACH = 0.85  # m (UR5 datasheet)

@@ -91,7 +91,7 @@ def _is_program(path: str, text: str) -> bool:
     fields = [f.strip() for f in first.split(",")]
     if len(fields) >= 2 and all(re.fullmatch(r"[A-Za-z_][A-Za-z0-9_ ]*", f) for f in fields):
         # a header of names, but not the pose columns: a CSV with a typo, not a program (which was
-        # "compensated" with no targets, exit 0 — issue 31); neither kind is what the file says
+        # "compensated" with no targets, exit 0); neither kind is what the file says
         from hil.compensation.targets_csv import POSE_COLUMNS
         from hil.errors import InputError
 

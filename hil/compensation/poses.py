@@ -54,7 +54,7 @@ def check_pose(values: Sequence[float], where: str, distance: str = TARGET_DISTA
                origin: str = "the base") -> np.ndarray:
     """A UR pose vector (x, y, z m; rx, ry, rz a rotation vector, rad) whose numbers are physical: every
     one real (no NaN, inf or denormal), the position within `distance`'s range and the rotation angle
-    within a turn, so a pose written in millimetres or degrees is refused naming the unit (issue 31)."""
+    within a turn, so a pose written in millimetres or degrees is refused naming the unit."""
     v = [float(x) for x in values]
     check_vector(v[:3], distance, f"{where}: position (x, y, z) from {origin}", norm=True)
     check_vector(v[3:], ROTATION, f"{where}: rotation vector (rx, ry, rz)", norm=True)

@@ -25,7 +25,7 @@ MAX_INPUT_BYTES = 64 << 20
 
 #: The largest station TOML hil reads (bytes). The example config, every key documented, is about
 #: 8 KB; 1 MiB is an assumption (a hundred times that) under which tomllib, a pure-Python parser,
-#: reads any file in well under a second — 60 MB of TOML kept it busy for over a minute (issue 31).
+#: reads any file in well under a second — 60 MB of TOML kept it busy for over a minute.
 MAX_CONFIG_BYTES = 1 << 20
 
 #: The largest JSON document hil reads (a model, truth, controller calibration or result; bytes). The
@@ -128,13 +128,13 @@ def file_kind(mode: int) -> str:
 #: program, a station TOML). The longest such file hil is meant for is a URScript program of 100 000
 #: waypoints (see `MAX_INPUT_BYTES`); one million lines is an assumption — ten times that — which
 #: bounds what a file of nothing but newlines or comments costs: 60 MB of them fits under
-#: `MAX_INPUT_BYTES` yet took the CSV, MOVEB and TOML readers minutes to walk line by line (issue 31).
+#: `MAX_INPUT_BYTES` yet took the CSV, MOVEB and TOML readers minutes to walk line by line.
 MAX_TEXT_LINES = 1_000_000
 
 #: The longest line hil reads from such a file (characters). A measurements or pose row is a few
 #: hundred characters, a URScript list literal of a thousand poses about 60 000; 1 Mi is an assumption
 #: — sixteen times that — under which every reader splits a line in well under a second, while one
-#: 60 MB line of 20 million CSV fields took longer than a minute (issue 31).
+#: 60 MB line of 20 million CSV fields took longer than a minute.
 MAX_LINE_CHARS = 1 << 20
 
 
@@ -205,7 +205,7 @@ def parse_json(text: str, name: str) -> Any:
 #: most 1000 calibration and 1000 validation poses (`hil.cli.support.options.POSE_COUNT`), so 10 000 is
 #: five times the largest file hil itself writes; `hil identify` fits 10 000 rows in about a minute
 #: (docs/design.md, Measurements CSV: the figure and the command that measures it), while a 100 000-row
-#: file ran over 20 minutes (issue 31). A table beyond it is refused before its values are parsed.
+#: file ran over 20 minutes. A table beyond it is refused before its values are parsed.
 MAX_TABLE_ROWS = 10_000
 
 

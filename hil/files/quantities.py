@@ -7,7 +7,7 @@ same everywhere: one line naming the file/line/field or option, the value and th
 and, when the value would be in range in a unit people mix up with this one (degrees for radians,
 millimetres for metres), that unit. NaN, ±inf and denormal numbers (non-zero, smaller in magnitude than
 ``sys.float_info.min``: no instrument or person writes 1e-320, a tool that underflowed does) are
-refused for every quantity (issue 31, class 3).
+refused for every quantity .
 
 Ranges are wide on purpose: they catch unit mistakes and garbage, not unusual but real cells. Each
 row says its source (a datasheet, a standard, a driver's own limit) or, where there is none, that it

@@ -176,7 +176,7 @@ def simulator_words(simulator: Any) -> str | None:
     """After a fault on a simulated station, whether the simulator itself went silent: its longest
     wall-time pause between two controller cycles (each sends the RTDE package) against ur_rtde's
     2.5 s of patience, and its late cycles. A link lost under load is then the simulator's starving or
-    the client's own, told apart (issue 29). None for a real station, or a simulator that does not
+    the client's own, told apart. None for a real station, or a simulator that does not
     answer (it may be what failed)."""
     if simulator is None:
         return None

@@ -55,7 +55,7 @@ SIMULATED_IDENTITY = "sim:"
 def tracker_url_problem(url: str, protocol: str) -> str | None:
     """Why `url` cannot reach a `protocol` tracker, or None: checked with the rest of the config, so a
     URL hil does not speak (``http://``), a port out of range or a missing host is bad input naming
-    tracker.url, not a hardware fault after a connection was tried (issue 31)."""
+    tracker.url, not a hardware fault after a connection was tried."""
     if not url:
         return None  # required only where a campaign runs (`check_runnable`)
     if url.startswith(SIMULATED_IDENTITY):

@@ -47,7 +47,7 @@ def loads(text: str | None) -> Any:
 class DamagedRowError(CorruptStoreError):
     """One row of the store holds a JSON column that does not parse (a disk error, a hand edit, a
     tool that wrote into the database): bad input naming the row — campaign, table, id, column — so
-    it can be found and mended, not an internal error (issue 31)."""
+    it can be found and mended, not an internal error."""
 
 
 def row_json(text: str | None, *, table: str, row: Any, column: str, campaign: str | None = None) -> Any:

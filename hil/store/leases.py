@@ -1,6 +1,6 @@
 """Who may drive an arm: three guards, so one campaign runs in one process and one arm in one campaign.
 
-Issue 19 ("two campaigns, one arm"): a second ``hil calibrate`` of the same station resumed the
+Two campaigns, one arm: a second ``hil calibrate`` of the same station resumed the
 campaign the first one was still running — both measured the same poses and both would have driven
 the same arm. Three guards close that, each for a case the others cannot see:
 

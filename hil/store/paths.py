@@ -177,7 +177,7 @@ def resolve_path(path: str | os.PathLike[str] | None = None, config: Any = None,
 def check_creatable(path: Path, field: str) -> None:
     """InputError naming `field` when no database file can be created at `path` (a folder under
     ``/proc``, a file where a folder should be, a read-only place): found with the rest of the config,
-    before any connection, rather than after the arm was reached (issue 31). The nearest existing
+    before any connection, rather than after the arm was reached. The nearest existing
     folder is probed with a temporary file, removed at once: permission bits do not show a pseudo or
     read-only file system, and root passes every access() test."""
     import tempfile

@@ -34,7 +34,7 @@ _DAMAGED = frozenset({11, 26})
 
 #: What SQLite says (SQLITE_ERROR, 1) when a query names a table or column the file lacks. The schema
 #: is migrated to this hil's version at open, so in a store that opened it means a table was dropped
-#: or altered by hand: damage, which ``hil show`` reported as a failed job (exit 1; issue 31).
+#: or altered by hand: damage, which ``hil show`` reported as a failed job (exit 1).
 _MISSING_SCHEMA = ("no such table", "no such column")
 
 

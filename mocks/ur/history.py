@@ -4,7 +4,7 @@ A real tracker samples the SMR where it truly is at each sample's instant, and a
 moves the arm on a hard real-time cycle. The simulators are Python threads that a loaded machine can
 starve for tenths of a second: a tracker that looked at the arm's *current* joints whenever its
 thread happened to run would put the samples of a stall on a chord between two looks (a weld seam's
-corner cut by millimetres, issue 29), a measurement artefact of the simulator that no real
+corner cut by millimetres), a measurement artefact of the simulator that no real
 instrument has. So the arm records every controller cycle's true joints and joint directions here
 (sub-stepped through a stall by `SimArm.tick`), and an instrument asks `at` for the truth at its
 samples' own times.

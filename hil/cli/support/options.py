@@ -70,7 +70,7 @@ def input_file(expected: str, limit: int | None = None) -> Callable[[str], str]:
     bytes; else a one-line usage error naming the option and the file (exit 2). Checked while the
     command line is parsed, before a command loads the libraries it computes with (``hil report``'s
     matplotlib, ``hil verify``'s station), a FIFO or a folder given as a model is refused in a
-    fraction of a second rather than after seconds of imports (issue 31)."""
+    fraction of a second rather than after seconds of imports."""
     from hil.files import inputs
 
     def check(text: str) -> str:

@@ -49,7 +49,7 @@ codecs.register_error(ASCII_ERRORS, _to_ascii)
 def degrade_to_ascii(*streams: Any) -> None:
     """Let `streams` (default stdout and stderr) write what they cannot encode as ASCII instead of
     failing: an em dash in ``hil show`` under ``PYTHONIOENCODING=ascii`` or a C locale was exit 70
-    (issue 31). A stream that encodes UTF-8, or is not a text file, is left as it is."""
+   . A stream that encodes UTF-8, or is not a text file, is left as it is."""
     for stream in streams or (sys.stdout, sys.stderr):
         encoding = (getattr(stream, "encoding", None) or "").lower().replace("_", "-")
         if encoding in ("utf-8", "utf8", "utf-16", "utf-32") or not hasattr(stream, "reconfigure"):
@@ -176,7 +176,7 @@ def quiet_on_closed_stdout(func: Any) -> Any:
 
     A stdout that is missing or /dev/full is refused before `func` runs, for every subcommand: found
     only at the first write, it failed ``hil identify`` and ``hil fk --json`` after they had written
-    their files (issue 31), and a campaign after its hours of work."""
+    their files, and a campaign after its hours of work."""
 
     def run(args: Any) -> Any:
         stream = sys.stdout
