@@ -64,9 +64,7 @@ from functools import cache
 import numpy as np
 
 from hil.arm.catalog import get_robot
-from hil.arm.geometry import Geometry
 from hil.arm.joint_errors import Harmonic, JointErrors
-from hil.arm.kinematics import Kinematics
 from hil.arm.physical import UNSEEN_WINDUP, gear_sizes
 
 #: Whether a simulated arm is the ideal one unless asked otherwise (`hil.calibration.synthetic.random_truth`'s
@@ -151,6 +149,9 @@ LEVER_POSES, LEVER_SEED, LEVER_SMR = 200, 30, (0.0, 0.0, 0.045)
 def lever_per_axis(robot: str) -> float:
     """RMS over workspace poses (upper arm above the shoulder, any other angle) of how far the SMR
     moves per axis (m) for one radian of independent scatter on every joint: √(trace(J·Jᵀ)/3)."""
+    from hil.arm.geometry import Geometry  # pinocchio: loaded by the one caller that needs it, not by
+    from hil.arm.kinematics import Kinematics  # every help text that names the ideal arm's default
+
     spec = get_robot(robot)
     rng = np.random.default_rng(LEVER_SEED)
     q = rng.uniform(-np.pi, np.pi, (LEVER_POSES, 6))

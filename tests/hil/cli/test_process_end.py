@@ -47,6 +47,7 @@ def test_the_tui_command_ends_the_process_once_the_app_has_closed(monkeypatch: p
 
     monkeypatch.setattr(tui, "options_from", lambda args: object())
     monkeypatch.setattr(tui, "check_store", lambda db, config: None)
+    monkeypatch.setattr(tui, "require_terminal", lambda: None)  # a test has none; tested on its own
     monkeypatch.setattr("hil.tui.app.create_app", lambda options: App())
     monkeypatch.setattr("hil.cli.support.process_end.end_process", end)
     with pytest.raises(SystemExit):
