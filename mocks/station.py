@@ -153,7 +153,7 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
                              address=controller.config.address, port=tracker_port)
     # the instrument measures on the controller's clock, as the emScon simulator does: a fast-time
     # station shortens its measuring time with everything else
-    simulator = GeoComSimulator(world, config, sleep=controller.clock.sleep)
+    simulator = GeoComSimulator(world, config, sleep=controller.clock.sleep, now=controller.clock.now)
     emscon = EmsconSimulator(world, ServerConfig(instrument=EmsconConfig(seed=seed),
                                                  address=controller.config.address, port=0),
                              clock=controller.clock.now)
