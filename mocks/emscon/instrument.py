@@ -87,8 +87,10 @@ runs when the machine lets it, so a source that keeps a record of its past (`pos
 simulated station's `mocks.world.World`, from the arm's `mocks.ur.history`) is asked where the SMR was
 at each sample's simulated time (the source's clock reads ``source_epoch`` when ``now`` is 0), and
 samples later than the newest time it knows (`known_until()`) wait for the next tick; a stall of
-this thread then delays samples but never moves them. A source
-without a record (`StaticTarget`) is read linearly between the last two looks at it, which is exact
+this thread then delays samples but never moves them. Each reading is an instant (`READING_S`):
+the source is asked with ``reading_time=0``. A stationary result is due when its measuring time
+ends (`next_due`, which the server wakes for), so its answer does not wait for a polling period. A
+source without a record (`StaticTarget`) is read linearly between the last two looks at it, which is exact
 for a target that moves only between ticks.
 
 StopMeasurement answers AllOK (also when idle) and ends the stream; a stationary measurement it
