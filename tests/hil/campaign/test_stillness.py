@@ -49,7 +49,7 @@ def test_one_reading_far_off_is_not_still_though_the_deviation_is_within_the_lim
 
 def test_a_steady_fall_within_the_range_is_drift():
     window = np.zeros((5, 3))
-    window[:, 1] = np.array([40.0, 22.0, 12.0, 6.0, 3.0]) * 1e-6  # a ring's envelope read at its period
+    window[:, 1] = np.array([48.0, 30.0, 16.0, 8.0, 4.0]) * 1e-6  # a ring's envelope read at its period
     verdict = judge(window, STABILITY)
     assert verdict.range[1] <= STABILITY and not verdict.still
     assert abs(verdict.drift[1]) > DRIFT_FRACTION * STABILITY
@@ -58,8 +58,8 @@ def test_a_steady_fall_within_the_range_is_drift():
 def test_a_still_noisy_window_is_still():
     rng = np.random.default_rng(1)
     verdicts = [judge(rng.normal(0.0, SIGMA, (5, 3)), STABILITY).still for _ in range(1000)]
-    # noise alone costs one more reading now and then, never the point
-    assert np.mean(verdicts) > 0.7
+    # noise alone almost never costs a reading
+    assert np.mean(verdicts) > 0.99
 
 
 def test_a_window_needs_two_readings():
@@ -67,21 +67,23 @@ def test_a_window_needs_two_readings():
         judge(np.zeros((1, 3)), STABILITY)
 
 
-@pytest.mark.parametrize("integration", [0.1, 0.0])  # a GeoCOM reading's 0.1 s; an emScon 1 kHz instant
-def test_the_accepted_window_is_past_the_ring(integration):
-    """Readings of the simulated arm's ring (a 2 rad/s² stop, SMR 0.6 m from the lead joint) at the
-    spacings a fast or a slow client makes, from just after the stop: the first window the rule accepts
-    carries a third of the ring the standard-deviation rule let through, or less."""
+def test_the_accepted_window_is_past_the_ring():
+    """Readings of the simulated arm's ring (stops of 1-4 rad/s², the SMR 0.5-0.8 m from the lead joint;
+    a GeoCOM reading's 0.1 s integration or an emScon 1 kHz instant) at the spacings a fast or a slow
+    client makes, from just after the stop: the first window the rule accepts carries less than half
+    the ring the standard-deviation rule let through."""
     rng = np.random.default_rng(0)
     worst = {"old": 0.0, "new": 0.0}
-    for delay in (0.01, 0.05, 0.1, 0.2, 0.3):
-        for spacing in (0.02, 0.05, 0.1, 0.11, 0.15, 0.25, 0.5):
-            truth = ring_readings(2.0, 0.6, delay, spacing, 120, integration)
-            for _ in range(10):
-                noise = rng.normal(0, SIGMA, (len(truth), 3))
-                P = np.column_stack([truth, np.zeros((len(truth), 2))]) + noise
-                for name, rule in (("old", old_rule), ("new", new_rule)):
-                    k = first_window(P, rule)
-                    worst[name] = max(worst[name], abs(float(truth[k - 5:k].mean())))
-    assert worst["old"] > 15e-6  # what the standard deviation let through
-    assert worst["new"] < worst["old"] / 1.8 and worst["new"] < 25e-6
+    for integration in (0.1, 0.0):
+        for acceleration, lever in ((1.0, 0.5), (2.0, 0.6), (4.0, 0.8)):
+            for delay in (0.01, 0.05, 0.1, 0.2, 0.3):
+                for spacing in (0.02, 0.05, 0.1, 0.11, 0.15, 0.25, 0.5):
+                    truth = ring_readings(acceleration, lever, delay, spacing, 120, integration)
+                    for _ in range(5):
+                        noise = rng.normal(0, SIGMA, (len(truth), 3))
+                        P = np.column_stack([truth, np.zeros((len(truth), 2))]) + noise
+                        for name, rule in (("old", old_rule), ("new", new_rule)):
+                            k = first_window(P, rule)
+                            worst[name] = max(worst[name], abs(float(truth[k - 5:k].mean())))
+    assert worst["old"] > 50e-6  # what the standard deviation let through
+    assert worst["new"] < worst["old"] / 2 and worst["new"] < 27e-6
