@@ -539,9 +539,11 @@ class Engine:
                 spread = verdict.spread
                 if verdict.still:
                     break
-                # judged on a full window only: in fast time one slow reading (wall milliseconds times
-                # the speed) can pass max_wait before a window exists, and the arm may well be still
-                if (clock.monotonic() - t0) * speed > step.max_wait:
+                # given up only on a window begun after max_wait: when readings come seconds apart (a
+                # loaded fast-time station: wall milliseconds times the speed) the first window may end
+                # past max_wait holding the one reading taken while the arm still rang, and the next
+                # reading would have made a still window
+                if (stamps[-window] - t0) * speed > step.max_wait:
                     raise UnstablePoint(f"not steady within {step.max_wait:g} s: the last {window} readings' "
                                         f"{verdict.describe(step.stability)}",
                                         tuple(float(v) for v in verdict.spread))

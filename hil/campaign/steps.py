@@ -85,9 +85,10 @@ class SettleMeasure:
     the point is their mean and the joints are the mean of the same window's frames: the arm's ring
     (the links flex after a stop; the encoders do not see it) has died out, and nothing waits longer
     than it must. Two readings at least, because one reading has no spread to judge stillness by.
-    Nothing for `max_wait` seconds of station time (a ring that does not die out, a vibrating floor):
-    the tracker's `UnstablePoint`, as a fixed wait's measurement would raise. No minimum wait:
-    ``robot.settle_time`` is the fixed mode's wait only. Answered with `Settled`.
+    Nothing still among the windows begun within `max_wait` seconds of station time, nor in one begun
+    after it (a ring that does not die out, a vibrating floor): the tracker's `UnstablePoint`, as a
+    fixed wait's measurement would raise. No minimum wait: ``robot.settle_time`` is the fixed mode's
+    wait only. Answered with `Settled`.
     """
 
     samples: int

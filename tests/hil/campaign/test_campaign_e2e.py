@@ -192,10 +192,11 @@ class Station:
 
 @pytest.mark.parametrize("pose", [8])
 def test_beam_lost_mid_campaign_relocks_and_resumes(tmp_path, pose):
+    # the person leaves once the run has said it lost the SMR (test_emscon_faults_mid_campaign_...)
     st = Station(tmp_path)
-    st.on(PoseStarted, lambda e: e.index == pose, lambda e: (
-        st.sim.inject("block_beam", on=True, reason="a person walks through the beam"),
-        st.later(1.0, "block_beam", on=False)))
+    st.on(PoseStarted, lambda e: e.index == pose, lambda e: st.sim.inject(
+        "block_beam", on=True, reason="a person walks through the beam"))
+    st.on(Suspended, lambda e: e.kind == "beam_lost", lambda e: st.later(0.5, "block_beam", on=False))
     outcome = st.run()
     assert [e.kind for e in st.of(Suspended)] == ["beam_lost"]
     assert "line of sight" in st.of(Suspended)[0].message and len(st.of(Resumed)) == 1

@@ -200,3 +200,23 @@ def test_a_beam_lost_mid_window_suspends_and_reruns_the_whole_visit():
     # the point is from readings after the re-run move only
     assert all(t > arm.stopped_at for t, _ in tracker.log[-record.samples:])
     assert engine.stats.retries == 1
+
+
+class SlowTracker(RingingTracker):
+    """The first reading at once, each later one 2 s after the last: a loaded fast-time station."""
+
+    def sample(self):
+        if self.count:
+            self.arm.clock.sleep(1.9)
+        return super().sample()
+
+
+def test_readings_seconds_apart_are_not_given_up_for_one_ringing_reading():
+    clock = VirtualClock()
+    arm = RingingArm(clock)
+    tracker = SlowTracker(arm)
+    engine = Engine(arm, tracker, "c1", get_robot("ur5e"), bus=EventBus(), clock=clock)
+    record = visit(engine, acceleration=8.0)  # the first reading, 0.1 s after the stop, rings by ~0.5 mm
+    # the first window ends 8 s after the move, past settle_max (5 s), holding that reading; the next
+    # reading makes a still window
+    assert record.extra["readings"] == 6 and record.extra["settle_s"] > 0.0
