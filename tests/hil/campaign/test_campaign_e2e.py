@@ -149,10 +149,7 @@ class Station:
             robot__address=self.sim.address, tracker__protocol=protocol, tracker__url=url, robot__speed=1.0,
             robot__acceleration=2.0, campaign__calibration_poses=14, campaign__validation_poses=4,
             campaign__candidates=3000, timeouts__relock=20.0,
-            timeouts__suspend=90.0, warmup__enabled=False,  # faults, not warm-up, are tested here
-            # the drift watch's 2 s stand and 20 readings per reference visit are simulated time a cold
-            # arm spends warming between the fitted and the validation poses: read it as a pose instead
-            drift__settle=0.0, drift__samples=5)
+            timeouts__suspend=90.0, warmup__enabled=False)  # faults, not warm-up, are tested here
         self.store = Store.open(tmp_path / "hil.db")
         self.campaign = self.store.create_campaign(self.config, "ur5e")
         self.events: list = []
@@ -185,8 +182,7 @@ class Station:
         return [e for e in self.events if isinstance(e, kind)]
 
     def check_nothing_lost(self, outcome) -> None:
-        assert outcome.status == "accepted", outcome.error or (outcome.result is not None
-                                                               and outcome.result.verdict)
+        assert outcome.status == "accepted", outcome.error
         measured = self.of(PointMeasured)
         assert len({(e.role, e.index) for e in measured}) == len(measured)  # each pose once
         assert len(self.store.measured_poses(self.campaign)) == len(measured)
