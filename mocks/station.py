@@ -188,7 +188,7 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
                              address=controller.config.address, port=tracker_port)
     # the instrument measures on the controller's clock, as the emScon simulator does: a fast-time
     # station shortens its measuring time with everything else
-    simulator = GeoComSimulator(world, config, sleep=controller.clock.sleep)
+    simulator = GeoComSimulator(world, config, sleep=controller.clock.sleep, now=controller.clock.now)
     # the tracker's and the controller's clocks differ as two real instruments' do
     # (`hil.calibration.stream_clocks`: offset, drift, jitter, latency, each with its source)
     clocks = StationClocks.realistic()

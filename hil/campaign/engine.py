@@ -98,6 +98,7 @@ from hil.campaign.steps import (
     Skipped,
     Step,
 )
+from hil.campaign.stillness import judge
 from hil.errors import HilError
 
 log = logging.getLogger(__name__)
@@ -534,18 +535,18 @@ class Engine:
             joints.append(np.asarray(self.robot.read_joints(frames).q, float))
             if len(points) >= window:
                 P = np.array(points[-window:])
-                spread = P.std(axis=0, ddof=1)
-                if float(spread.max()) <= step.stability:
+                verdict = judge(P, step.stability)  # agree within stability, and no drift
+                spread = verdict.spread
+                if verdict.still:
                     break
-            # judged on a full window only: in fast time one slow reading (wall milliseconds times the
-            # speed) can pass max_wait before a window exists, and the arm may well be still
-            if len(points) >= window and (clock.monotonic() - t0) * speed > step.max_wait:
-                last = np.array(points[-window:])
-                worst = float(last.std(axis=0, ddof=1).max()) if len(last) > 1 else float("nan")
-                raise UnstablePoint(f"not steady within {step.max_wait:g} s: the last {len(last)} readings "
-                                    f"spread {worst * 1e6:.1f} µm > {step.stability * 1e6:.1f} µm",
-                                    tuple(float(v) for v in (last.std(axis=0, ddof=1) if len(last) > 1
-                                                             else np.zeros(3))))
+                # given up only on a window begun after max_wait: when readings come seconds apart (a
+                # loaded fast-time station: wall milliseconds times the speed) the first window may end
+                # past max_wait holding the one reading taken while the arm still rang, and the next
+                # reading would have made a still window
+                if (stamps[-window] - t0) * speed > step.max_wait:
+                    raise UnstablePoint(f"not steady within {step.max_wait:g} s: the last {window} readings' "
+                                        f"{verdict.describe(step.stability)}",
+                                        tuple(float(v) for v in verdict.spread))
         end = clock.monotonic()
         start = stamps[-window]
         self.stats.settle += start - t0

@@ -80,13 +80,15 @@ class SettleMeasure:
     Replaces `Settle` + `ReadJoints` + `Measure` (``robot.settle = "stable"``). After the move the
     tracker reads the SMR one reading at a time, and after each reading the joints are read (enough
     controller cycles that the window holds at least `joint_samples` of them). As soon as the last
-    ``max(samples, 2)`` readings have a per-axis spread (sample standard deviation) ≤ `stability` (m),
+    ``max(samples, 2)`` readings are still (`hil.campaign.stillness`: per axis they agree within
+    `stability` (m), largest minus smallest, and their older and newer halves do not drift apart),
     the point is their mean and the joints are the mean of the same window's frames: the arm's ring
     (the links flex after a stop; the encoders do not see it) has died out, and nothing waits longer
     than it must. Two readings at least, because one reading has no spread to judge stillness by.
-    Nothing for `max_wait` seconds of station time (a ring that does not die out, a vibrating floor):
-    the tracker's `UnstablePoint`, as a fixed wait's measurement would raise. No minimum wait:
-    ``robot.settle_time`` is the fixed mode's wait only. Answered with `Settled`.
+    Nothing still among the windows begun within `max_wait` seconds of station time, nor in one begun
+    after it (a ring that does not die out, a vibrating floor): the tracker's `UnstablePoint`, as a
+    fixed wait's measurement would raise. No minimum wait: ``robot.settle_time`` is the fixed mode's
+    wait only. Answered with `Settled`.
     """
 
     samples: int
