@@ -15,8 +15,10 @@ The arm is a real one unless ``rigid``: the random truth sags under gravity and 
 up as its joints work (`mocks.heating`: moving, and a little while holding the arm; the world evaluates
 ``truth.grown(ΔT)``), and the
 controller reports the warming in RTDE ``joint_temperatures`` (`joint_temperatures`). A truth file's
-``noise.encoder_sigma`` sets the controller's encoder noise. Every arm rings after its joint moves
-(`mocks.ringing`, seen by the trackers, not by the encoders), and the GeoCOM instrument takes
+``noise.encoder_sigma`` sets the controller's encoder noise and ``noise.standstill_sigma`` how far each
+joint stops off its target, differently at every stop (the arm's repeatability; a random realistic
+arm's is its datasheet figure, `hil.arm.joint_physics.standstill_sigma`). Every arm rings after its
+joint moves (`mocks.ringing`, seen by the trackers, not by the encoders), and the GeoCOM instrument takes
 `GEOCOM_MEASURE_S` of the controller's time per measurement.
 
 Unless ``ideal`` (or ``rigid``), the random arm's link angles also carry the joint errors and lost
@@ -45,7 +47,7 @@ from typing import Any
 
 import numpy as np
 
-from hil.arm.joint_physics import IDEAL_BY_DEFAULT
+from hil.arm.joint_physics import IDEAL_BY_DEFAULT, standstill_sigma
 from hil.arm.thermal import Thermal
 from hil.calibration.model_file import load_truth, read_json, truth_controller, truth_document
 from hil.calibration.stream_clocks import ClockMap, StationClocks
@@ -162,8 +164,12 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
         calibration = truth_controller(read_json(truth), str(truth))
         controller.arm.set_encoder_noise(noise.encoder_sigma)
     else:
-        geometry, noise = random_truth(controller.config.robot, rng, rigid=rigid, ideal=ideal), Noise()
-        calibration = None
+        robot = controller.config.robot
+        # the realistic arm stops off its targets by its datasheet repeatability; the ideal and the rigid
+        # arm stop exactly on them, as the simulator's arm did before
+        noise = Noise(standstill_sigma=0.0 if rigid or ideal else standstill_sigma(robot))
+        geometry, calibration = random_truth(robot, rng, rigid=rigid, ideal=ideal), None
+    controller.arm.set_standstill(noise.standstill_sigma)
     if calibration is None:
         calibration = factory_calibration(geometry, seed)
     controller.set_calibration(calibration)

@@ -203,16 +203,20 @@ class Skipped:
 def acquire(index: int, role: str, q: Iterable[float], *, settle: float, joint_samples: int,
             samples: int, speed: float | None = None, acceleration: float | None = None,
             mode: str = "fixed", stability: float = 50e-6, settle_max: float = 5.0,
-            approach: float = 0.0) -> Acquire:
+            approach: float = 0.0, dwell: float = 0.0) -> Acquire:
     """The standard pose visit: move (arriving from `approach` below in every joint, `Move`), then
     (``mode="fixed"``) wait `settle` s, read averaged joints, measure; or (``mode="stable"``) settle
-    and measure on the tracker's evidence (`SettleMeasure`)."""
+    and measure on the tracker's evidence (`SettleMeasure`). `dwell` s of standing still come first in
+    either mode: a visit that must see micrometres (the drift watch's reference) lets the arm's ring
+    die out before any reading, which a window's spread cannot tell from the tracker's noise."""
     move = Move(tuple(float(v) for v in q), speed, acceleration, approach=approach)
     if mode == "stable":
-        return Acquire(index, role, (move, SettleMeasure(samples, joint_samples, stability, settle_max)))
+        wait = (Settle(dwell),) if dwell > 0 else ()
+        measure = SettleMeasure(samples, joint_samples, stability, settle_max)
+        return Acquire(index, role, (move, *wait, measure))
     if mode != "fixed":
         raise ValueError(f"settle mode must be 'stable' or 'fixed', got {mode!r}")
-    return Acquire(index, role, (move, Settle(settle), ReadJoints(joint_samples), Measure(samples)))
+    return Acquire(index, role, (move, Settle(settle + dwell), ReadJoints(joint_samples), Measure(samples)))
 
 
 #: How far below each pose (rad, every joint) a campaign's visit starts its last leg (`Move.approach`;
