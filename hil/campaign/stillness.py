@@ -25,17 +25,47 @@ A window of readings is still when both hold, per axis:
   up to 64 µm through.
 
 Both are judged on the window alone, with no minimum wait: a still arm is measured at once.
+
+**The range limit scales with the window.** `stability` is the range allowed to a window of
+`REFERENCE_WINDOW` readings (``campaign.samples``' default, what the figures above were measured with).
+The range of n readings of one noise σ grows with n: its expectation is d₂(n)·σ (the control-chart
+constant of the range, d₂(5) = 2.326, d₂(20) = 3.735: e.g. Montgomery, *Introduction to Statistical
+Quality Control*, appendix table VI), so a window of n readings may spread by
+``stability · d₂(n)/d₂(5)``: the same chance of refusing a still window of noise alone whatever its
+length. A fixed range refused still windows of twenty readings (the drift watch's reference, 69–102 µm
+of GeoCOM noise against 50 µm) and so refused still arms for ever. The drift between the halves keeps
+its limit: their means get steadier as the window grows.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
 
 #: The drift allowed between the window's older and newer half, as a fraction of `stability` (module
 #: docstring).
 DRIFT_FRACTION = 0.5
+#: The window length `stability` is the range limit of (``campaign.samples``' default; module docstring).
+REFERENCE_WINDOW = 5
+
+
+@cache
+def range_factor(n: int) -> float:
+    """d₂(n): the expected range of `n` readings of unit σ, ∫ 1 − Φ(x)ⁿ − (1 − Φ(x))ⁿ dx over x."""
+    if n < 2:
+        raise ValueError("a stillness window needs at least two readings")
+    from scipy import integrate, stats  # on first use: the engine's importers need no scipy before it
+
+    value, _ = integrate.quad(lambda x: 1.0 - stats.norm.cdf(x) ** n - stats.norm.sf(x) ** n,
+                              -np.inf, np.inf)
+    return float(value)
+
+
+def range_limit(n: int, stability: float) -> float:
+    """The range (m, per axis) a still window of `n` readings may have (module docstring)."""
+    return float(stability) * range_factor(int(n)) / range_factor(REFERENCE_WINDOW)
 
 
 @dataclass(frozen=True)
@@ -44,13 +74,14 @@ class Stillness:
 
     still: bool
     range: np.ndarray  # largest minus smallest reading
+    range_limit: float  # the range allowed to this window's length (m, `range_limit`)
     drift: np.ndarray  # mean of the newer half minus mean of the older half
     spread: np.ndarray  # sample standard deviation (what a point reports as its spread)
 
     def describe(self, stability: float) -> str:
         """One line for an operator: the worst axis's range and drift against their limits."""
         drift_limit = DRIFT_FRACTION * stability
-        return (f"range {float(self.range.max()) * 1e6:.1f} µm (limit {stability * 1e6:.1f}), drift "
+        return (f"range {float(self.range.max()) * 1e6:.1f} µm (limit {self.range_limit * 1e6:.1f}), drift "
                 f"{float(np.abs(self.drift).max()) * 1e6:.1f} µm (limit {drift_limit * 1e6:.1f})")
 
 
@@ -63,5 +94,6 @@ def judge(window: np.ndarray, stability: float) -> Stillness:
     spread = P.std(axis=0, ddof=1)
     extent = np.ptp(P, axis=0)
     drift = P[-half:].mean(axis=0) - P[:half].mean(axis=0)
-    still = bool(np.all(extent <= stability) and np.all(np.abs(drift) <= DRIFT_FRACTION * stability))
-    return Stillness(still, extent, drift, spread)
+    limit = range_limit(len(P), stability)
+    still = bool(np.all(extent <= limit) and np.all(np.abs(drift) <= DRIFT_FRACTION * stability))
+    return Stillness(still, extent, limit, drift, spread)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hil.campaign.stillness import DRIFT_FRACTION, judge
+from hil.campaign.stillness import DRIFT_FRACTION, judge, range_factor, range_limit
 from mocks.ringing import Ringing
 
 STABILITY = 50e-6
@@ -87,3 +87,22 @@ def test_the_accepted_window_is_past_the_ring():
                             worst[name] = max(worst[name], abs(float(truth[k - 5:k].mean())))
     assert worst["old"] > 50e-6  # what the standard deviation let through
     assert worst["new"] < worst["old"] / 2 and worst["new"] < 27e-6
+
+
+def test_the_range_limit_grows_with_the_window_as_the_range_of_noise_does():
+    """d₂(n) against its tabulated values, and windows of 5 and 20 readings of noise alone almost never
+    refused."""
+    assert [round(range_factor(n), 3) for n in (2, 5, 10, 20)] == [1.128, 2.326, 3.078, 3.735]
+    assert range_limit(5, STABILITY) == pytest.approx(STABILITY)
+    assert range_limit(20, STABILITY) == pytest.approx(STABILITY * 3.735 / 2.326, rel=1e-3)
+    rng = np.random.default_rng(3)
+    sigma = SIGMA  # per axis (the simulated GeoCOM's 6-9 µm at 2-3 m)
+    refused = {n: np.mean([not judge(rng.normal(0.0, sigma, (n, 3)), STABILITY).still for _ in range(3000)])
+               for n in (5, 20)}
+    assert refused[5] < 0.01 and refused[20] < 0.01, refused
+
+
+def test_a_long_window_with_one_ringing_reading_is_not_still():
+    window = np.zeros((20, 3))
+    window[0, 2] = 1.1 * range_limit(20, STABILITY)
+    assert not judge(window, STABILITY).still
