@@ -567,7 +567,7 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
         precision = None
         yield Emit(Message(campaign=campaign, level="warning",
                            text=f"the validation RMS's standard error could not be estimated: {exc}"))
-    verdict = judge(after.rms, cv, robot, camp["acceptance"])
+    verdict = judge(after.rms, cv, robot, camp["acceptance"], validation_poses=after.count)
     iso = iso9283(val_records, fit.geometry)
     theirs = None
     if controller is not None:  # a comparison that cannot be made is said, never fails the campaign
