@@ -13,7 +13,8 @@ service reports carries it, so tests and benches know the model the controller m
 
 The arm is a real one unless ``rigid``: the random truth sags under gravity and its payload and warms
 up as its joints work (`mocks.heating`: by its seconds of motion, whatever the host's pace; the world
-evaluates ``truth.grown(ΔT)``), and the controller reports the warming in RTDE ``joint_temperatures`` (`joint_temperatures`). A truth file's
+evaluates ``truth.grown(ΔT)``), and the controller reports the warming in RTDE ``joint_temperatures``
+(`joint_temperatures`). A truth file's
 ``noise.encoder_sigma`` sets the controller's encoder noise and ``noise.standstill_sigma`` how far each
 joint stops off its target, differently at every stop (the arm's repeatability; a random realistic
 arm's is its datasheet figure, `hil.arm.joint_physics.standstill_sigma`). Every arm rings after its
