@@ -7,8 +7,8 @@ time constant (`mocks.heating`: dΔT/dm = (rise − ΔT)/τ; standing still it k
 its links grow by 1 + expansion·ΔT (`hil.arm.thermal`), so the truth knows, at each warm-up check, how
 much the reference will still move if the arm keeps cycling: |p(ΔT∞) − p(ΔT_now)|, with ΔT∞ the
 truth's rise, where any cycling heads. The bench replays hil's rule
-(`hil.calibration.warmup_decision.decide_warm`) on the stored series, check by check, and prints it beside that truth: when the rule stopped (or would stop) and when
-the drift still to come really fell under the warm-up's limit. It also says how far the reference
+(`hil.calibration.warmup_decision.decide_warm`) on the stored series, check by check, and prints it
+beside that truth: when the rule stopped (or would stop) and when the drift still to come really fell under the warm-up's limit. It also says how far the reference
 really moved while the arm was measured (from the drift watch's temperatures), the drift the warm-up is
 for.
 
