@@ -8,9 +8,9 @@ its links grow by 1 + expansion·ΔT (`hil.arm.thermal`), so the truth knows, at
 much the reference will still move if the arm keeps cycling: |p(ΔT∞) − p(ΔT_now)|, with ΔT∞ the
 truth's rise, where any cycling heads. The bench replays hil's rule
 (`hil.calibration.warmup_decision.decide_warm`) on the stored series, check by check, and prints it
-beside that truth: when the rule stopped (or would stop) and when the drift still to come really fell under the warm-up's limit. It also says how far the reference
-really moved while the arm was measured (from the drift watch's temperatures), the drift the warm-up is
-for.
+beside that truth: when the rule stopped (or would stop) and when the drift still to come really fell
+under the warm-up's limit. It also says how far the reference really moved while the arm was measured
+(from the drift watch's temperatures), the drift the warm-up is for.
 
 The replay takes the tracker's positions as measured (the campaign also takes out what the joint
 readings explain; every visit approaches the reference the same way, so that is micrometres' noise).
