@@ -45,10 +45,11 @@ class Heating:
     other. The response to m seconds of motion is exact whatever the queries' spacing.
     """
 
-    def __init__(self, thermal: Thermal, moved: Callable[[], float]) -> None:
+    def __init__(self, thermal: Thermal, moved: Callable[[], float], start: float = 0.0) -> None:
+        """`start`: ΔT (K) before any motion (0: a cold arm; ``thermal.rise``: one warmed up)."""
         self.thermal = thermal
         self._moved = moved
-        self._m, self._rise = float(moved()), 0.0
+        self._m, self._rise = float(moved()), float(start)
         self._lock = threading.Lock()
 
     def rise(self) -> float:

@@ -151,11 +151,12 @@ class StationService:
 def station_service(controller: Any, truth: str | None = None, seed: int = 0,
                     acceptance_angle: float = 30.0, baudrate: int | None = None,
                     tracker_port: int = 0, rigid: bool = False,
-                    ideal: bool = IDEAL_BY_DEFAULT) -> StationService:
+                    ideal: bool = IDEAL_BY_DEFAULT, warm: bool = False) -> StationService:
     """Build the world and the tracker simulator around a running `SimController`.
 
     `rigid` (without `truth`): the random arm without compliance, payload and warm-up; `ideal` (without
-    `truth`): without joint errors and lost motion.
+    `truth`): without joint errors and lost motion; `warm`: the arm starts at its warmed-up temperature
+    (ΔT = the truth's rise, where motion heads: what a warm-up leaves), so it does not drift.
     """
     rng = np.random.default_rng(seed)
     if truth:
@@ -175,7 +176,8 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
     # the joints warm while they move, by the simulated seconds of motion (standing still is host-paced
     # in fast time: `mocks.heating`)
     arm = controller.arm
-    heating = None if geometry.thermal is None else Heating(geometry.thermal, lambda: arm.motion_seconds)
+    heating = None if geometry.thermal is None else Heating(
+        geometry.thermal, lambda: arm.motion_seconds, start=geometry.thermal.rise if warm else 0.0)
     arm.set_temperatures(joint_temperatures(geometry.thermal, heating))
     # a GeoCOM reading integrates the SMR's position over its measuring time
     world = World(geometry, controller.true_joints, acceptance_angle, clock=controller.clock.now,
@@ -229,29 +231,29 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
 
 def station_spec(truth: str | None = None, seed: int = 0, acceptance_angle: float = 30.0,
                  baudrate: int | None = None, rigid: bool = False,
-                 ideal: bool = IDEAL_BY_DEFAULT) -> str:
+                 ideal: bool = IDEAL_BY_DEFAULT, warm: bool = False) -> str:
     """The service spec that puts the world and the tracker into the robot simulator's process."""
     import json
 
     options = {"truth": truth, "seed": seed, "acceptance_angle": acceptance_angle, "baudrate": baudrate,
-               "rigid": rigid, "ideal": ideal}
+               "rigid": rigid, "ideal": ideal, **({"warm": True} if warm else {})}
     return "mocks.station:station_service " + json.dumps(options)
 
 
 def start_station(robot: str = "ur5e", truth: str | None = None, speed: float = 1.0, seed: int = 0,
                   acceptance_angle: float = 30.0, baudrate: int | None = None, rigid: bool = False,
-                  ideal: bool = IDEAL_BY_DEFAULT) -> Any:
+                  ideal: bool = IDEAL_BY_DEFAULT, warm: bool = False) -> Any:
     """Start the whole simulated station in its own process on a free loopback address.
 
     Returns the running `mocks.ur.process.SimProcess`; ``.info["services"][0]`` holds the tracker's
     URL and pty and the hidden truth. The caller must `stop()` it. `rigid`: a random arm without
     compliance, payload and warm-up (the arm of the simulator before they existed); `ideal`: without
-    joint errors and lost motion (the ideal arm).
+    joint errors and lost motion (the ideal arm); `warm`: an arm already warmed up (`station_service`).
     """
     from mocks.ur.controller import SimConfig
     from mocks.ur.testing import start_sim
 
-    spec = station_spec(truth, seed, acceptance_angle, baudrate, rigid, ideal)
+    spec = station_spec(truth, seed, acceptance_angle, baudrate, rigid, ideal, warm)
     serial = simulated_serial(robot, seed, truth, rigid, ideal)
     return start_sim(SimConfig(robot=robot, speed=speed, seed=seed, serial=serial), services=[spec])
 

@@ -59,3 +59,11 @@ def test_the_temperature_depends_on_the_motion_done_not_on_the_pauses_between() 
                 h.rise()
         rises.append(h.rise())
     assert rises == pytest.approx([THERMAL.rise_at(1200.0)] * 4, rel=1e-12)
+
+
+def test_an_arm_that_starts_warm_stays_warm() -> None:
+    arm = Arm()
+    h = Heating(THERMAL, lambda: arm.moved, start=THERMAL.rise)
+    arm.advance(600.0, moving=True)
+    arm.advance(600.0, moving=False)
+    assert h.rise() == pytest.approx(THERMAL.rise, rel=1e-12)
