@@ -93,7 +93,9 @@ def test_hil_report_model_renders_a_panda(panda: Path, capsys: pytest.CaptureFix
     rms_mm = _rms(val.p - Kinematics(geometry).points(val.q)) * 1e3
     assert f"{rms_mm:.3f} mm" in text
     assert doc["urdf"]["sha256"] in text and "panda" in text
+    assert f"{doc['urdf']['base']} → {doc['urdf']['tip']}, 7 joints" in text  # which chain of the URDF
     assert len(re.findall(r"<img ", text)) >= 3  # the per-pose figures are drawn
+    assert "without interruption" not in text  # no campaign ran, none was suspended
 
 
 def _one_line_exit_2(argv: list[str], capsys: pytest.CaptureFixture[str], *words: str) -> None:
