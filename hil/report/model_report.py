@@ -51,7 +51,7 @@ def result_from_model(doc: Mapping[str, Any], source: str, *, calibration: Measu
         raise InputError(f"{source}: field 'format' is {doc.get('format')!r}, expected {MODEL_FORMAT}")
     check_geometry_block(dict(doc), source)
     geometry = Geometry.from_dict(dict(doc), source=source)
-    robot = geometry.chain if geometry.chain.urdf is not None else geometry.robot
+    robot = geometry.chain if geometry.chain is not None else geometry.robot  # a UR: its catalog name
     notes = [f"Built from the identification {source} (hil identify), not from a campaign: there is no "
              "station, warm-up, drift watch or event log to show."]
     per_pose: dict[str, Any] = {}

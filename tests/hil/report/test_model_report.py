@@ -127,3 +127,20 @@ def test_bad_requests_are_one_line_exit_2(panda: Path, tmp_path: Path,
                      "truth.json", "hil-model/1")
     with pytest.raises(InputError, match="format"):
         result_from_model({"format": "hil-truth/1"}, "t.json")
+
+
+def test_a_ur_model_renders_too(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A catalog UR's model (no URDF, no chain in its geometry) takes the same path."""
+    assert main(["synth", "--robot", "ur5e", "--rigid", "--ideal", "--poses", "30", "--validation", "20",
+                 "--seed", "2", "--out-dir", str(tmp_path)]) == 0
+    model = tmp_path / "model.json"
+    assert main(["identify", "--robot", "ur5e", "--joint-errors", "none", "--measurements",
+                 str(tmp_path / "measurements.csv"), "--out", str(model)]) == 0
+    geometry, doc = load_geometry(model)
+    val = read_measurements(tmp_path / "validation.csv")
+    result = result_from_model(doc, "model.json", validation=val)
+    np.testing.assert_allclose(result["per_pose"]["validation"]["after"],
+                               val.p - Kinematics(geometry).points(val.q), atol=1e-12)
+    assert main(["report", "--model", str(model), "--validation", str(tmp_path / "validation.csv"),
+                 "--out", str(tmp_path / "r.html")]) == 0
+    assert "UR5E" in (tmp_path / "r.html").read_text()
