@@ -135,10 +135,15 @@ def _segment_ratios(spline: CubicSpline, durations: np.ndarray, speed: np.ndarra
 
 
 def plan_sweep(waypoints: np.ndarray, start: np.ndarray, *, max_speed: np.ndarray | float,
-               max_acceleration: np.ndarray | float, rate_hz: float = 500.0) -> SweepTour:
+               max_acceleration: np.ndarray | float, rate_hz: float = 500.0,
+               spec: RobotSpec | None = None) -> SweepTour:
     """A smooth joint path from `start` (at rest) through `waypoints` (in a short order) to rest at the
     last one, within the per-joint `max_speed` (rad/s) and `max_acceleration` (rad/s²) on every sample
-    (module docstring). `SweepRefused` if no timing meets them (it never clamps)."""
+    (module docstring). `SweepRefused` if no timing meets them (it never clamps).
+
+    With `spec` every sample is also checked against the arm's joint limits: a spline passing through
+    a waypoint at a joint's limit overshoots it between samples (by ~10⁻⁴ rad), so waypoints must keep
+    a margin from the limits; a tour that does not is refused naming the sample and joint."""
     W = np.atleast_2d(np.asarray(waypoints, dtype=float))
     q0 = np.asarray(start, dtype=float).ravel()
     if W.ndim != 2 or W.shape[0] < 1 or W.shape[1] != q0.size or not np.isfinite(W).all() \
@@ -189,7 +194,7 @@ def plan_sweep(waypoints: np.ndarray, start: np.ndarray, *, max_speed: np.ndarra
         if not keep[k + 1]:
             passes[k] = passes[k - 1] if k else 0.0
     tour = SweepTour(t, q, W, float(rate_hz), passes)
-    check_sweep(tour, max_speed=speed, max_acceleration=accel)
+    check_sweep(tour, max_speed=speed, max_acceleration=accel, spec=spec)
     return tour
 
 

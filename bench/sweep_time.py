@@ -1,0 +1,167 @@
+"""Robot time of a calibration: the time-aware stop-and-go campaign against a sweep, at the same accuracy.
+
+Run from the repository root: ``PYTHONPATH=. python bench/sweep_time.py`` (``--quick``: one station per
+robot, two speeds). For each robot and station (a realistic truth, `hil.calibration.synthetic.random_truth`
+with joint errors and lost motion, its tracker 2–4 m away in a random direction):
+
+* **Validation poses** (both modes, measured statically and never fitted): `--validation` poses drawn
+  from the selector's feasible candidates for this station (`hil.calibration.selection.design_space`:
+  reach, the tracker's range, acceptance and line of sight, the keep-in box); the validation RMS is the
+  fitted model's error against the truth there (noise-free, each pose approached from below in every
+  joint as the campaign engine does).
+* **Stop-and-go** (today's time-aware campaign): `hil.calibration.timed_selection.select_timed` chooses
+  and orders the calibration poses for method 000's accuracy with `--poses` poses, the validation poses
+  in the same tour; its robot time is the selector's own time model (the movej trapezoid at the
+  station's default 0.5 rad/s and 1.0 rad/s², `hil.station.config`, plus the campaign's dwell: 5 readings
+  of emScon's 0.5 s stationary measuring time, `hil.campaign.chooser.pose_dwell`, the approach leg). The
+  poses are measured with the tracker's noise (`Noise()`) and fitted by `identify` with compliance and
+  joint-angle harmonics of orders 1–2 (the model class the sweep fits too).
+* **Sweep** at each tool speed: a static bootstrap (`--bootstrap` of the time-aware poses, measured as
+  stop-and-go measures them) and the validation poses, visited in one stop-and-go tour (the same time
+  model), then a swept tour through all the time-aware poses (`hil.calibration.sweep_path.plan_sweep`:
+  every joint's speed limit the tool speed over the arm's reach, its acceleration limit 0.9 × the
+  quasi-static limit of the deflection model at the waypoints, `DynamicsModel.acceleration_limit`, so
+  the fit can trust the samples). The tour is streamed by the simulator's clocks and noise
+  (`hil.calibration.synthetic_stream.sweep_streams` along the tour: the controller at 500 Hz, the
+  tracker at 1000 Hz, 35 ppm apart) and fitted by `hil.calibration.sweep_fit.fit_sweep` from the
+  bootstrap's registration (the bootstrap poses as static rows, compliance, the same harmonics and the
+  lost motion, which the static rows against the moving ones identify).
+
+The table: mode, speed, robot time, validation RMS, its ratio to stop-and-go's (target ≤ 1.05), the clock
+offset's error against the simulator's truth and its stated σ, the samples used per second of sweep,
+and the time ratio (target ≤ 1/3).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from hil.arm.catalog import get_robot
+from hil.arm.dynamics import DynamicsModel
+from hil.arm.kinematics import Kinematics
+from hil.arm.physical import typical_compliance
+from hil.calibration.identification import identify, register
+from hil.calibration.measurements import Measurements
+from hil.calibration.selection import design_space
+from hil.calibration.sweep_fit import fit_sweep
+from hil.calibration.sweep_path import plan_sweep
+from hil.calibration.synthetic import Noise, measure, random_truth, true_points
+from hil.calibration.synthetic_stream import SplinePath, sweep_streams
+from hil.calibration.timed_selection import select_timed
+from hil.campaign.chooser import DWELL_OVERHEAD
+from hil.campaign.steps import APPROACH, approach_seconds
+from selector.candidates import Constraints
+from selector.motion_time import Dwell, MotionProfile
+from selector.order import order_poses
+
+#: The station's default movej (`hil.station.config`: robot.speed 0.5 rad/s, robot.acceleration 1.0 rad/s²).
+SPEED, ACCELERATION = 0.5, 1.0
+#: The campaign's dwell per static pose (`hil.campaign.chooser.pose_dwell` with the defaults: "stable"
+#: settling adds nothing beyond the readings, 5 readings × emScon's 0.5 s measuring time, the overhead and
+#: the approach leg).
+DWELL = Dwell(settle=0.0, measure=5 * 0.5, overhead=DWELL_OVERHEAD + approach_seconds(APPROACH, SPEED,
+                                                                                     ACCELERATION))
+#: Joint-angle harmonics of orders 1 and 2 of every joint (57 + 6j + 0..3) and the lost motion (93..98).
+HARMONICS = [57 + 6 * j + k for j in range(6) for k in range(4)]
+LOST_MOTION = list(range(93, 99))
+UP = np.ones(6)
+
+
+def truth_rms(truth, geometry, q: np.ndarray) -> float:
+    d = np.tile(UP, (len(q), 1))
+    e = Kinematics(geometry).points(q, directions=d) - true_points(truth, q, directions=d)
+    return float(np.sqrt(np.mean(np.sum(e**2, axis=1))))
+
+
+def static_measurements(truth, q: np.ndarray, rng: np.random.Generator) -> Measurements:
+    q_read, p = measure(truth, q, Noise(), rng, directions=UP)
+    return Measurements.from_arrays(q_read, p, directions=np.tile(UP, (len(q), 1)))
+
+
+def station(robot: str, seed: int, args: argparse.Namespace) -> list[dict]:
+    rng = np.random.default_rng(1000 + seed)
+    truth = random_truth(robot, rng, ideal=False)
+    spec = get_robot(robot)
+    constraints = Constraints(tracker=tuple(map(float, truth.tracker.translation)))
+    common = dict(smr=tuple(map(float, truth.smr)), constraints=constraints, compliance=True,
+                  payload=truth.payload, gravity=None)
+    _, cands, _ = design_space(robot, args.poses, candidates=5000, seed=seed, scaling="expected",
+                               say=lambda *_: None, **common)
+    validation = cands.q[rng.choice(len(cands.q), args.validation, replace=False)]
+    t0 = time.perf_counter()
+    report = select_timed(robot, args.poses, speed=SPEED, acceleration=ACCELERATION, dwell=DWELL,
+                          fixed=validation, candidates=args.candidates, seed=seed,
+                          time_limit=args.search_time, **common)
+    chosen = np.array(report["poses"])
+    sg_time = report["predicted"]["robot_time"]
+    meas = static_measurements(truth, chosen, rng)
+    sg = identify(meas, robot, compliance=True, payload=truth.payload, joint_errors=HARMONICS,
+                  reject_outliers=False)
+    sg_rms = truth_rms(truth, sg.geometry, validation)
+    rows = [dict(robot=robot, seed=seed, mode="stop-and-go", speed=None, time=sg_time, rms=sg_rms,
+                 poses=len(chosen), took=time.perf_counter() - t0)]
+    profile = MotionProfile(SPEED, ACCELERATION, tuple(map(float, spec.max_joint_speed)))
+    boot_q = chosen[: args.bootstrap]
+    boot = Measurements.from_arrays(meas.q[: args.bootstrap], meas.p[: args.bootstrap],
+                                    directions=np.tile(UP, (args.bootstrap, 1)))
+    order, static_move = order_poses(np.vstack([boot_q, validation]), profile=profile)
+    static_time = static_move + DWELL.seconds * (len(boot_q) + len(validation))
+    start = register(boot, robot, smr_guess=truth.smr + 0.002)
+    start.payload, start.compliance = truth.payload, typical_compliance(robot)
+    limit = DynamicsModel(start).acceleration_limit(np.vstack([chosen, boot_q])).min(axis=0)
+    last = np.vstack([boot_q, validation])[order[-1]]
+    for v in args.speeds:
+        t0 = time.perf_counter()
+        joint_speed = np.minimum(v / spec.reach, spec.max_joint_speed)
+        tour = plan_sweep(chosen, last, max_speed=joint_speed, max_acceleration=0.9 * limit,
+                          rate_hz=spec.rate_hz)
+        s = sweep_streams(truth, seed=seed, path=SplinePath(tour.t, tour.q))
+        fit = fit_sweep(start, s.joints, s.tracker, static=boot, joint_errors=HARMONICS + LOST_MOTION)
+        want = s.clocks.controller_from_tracker()
+        c = fit.clock
+        rows.append(dict(robot=robot, seed=seed, mode="sweep", speed=v, time=static_time + tour.duration,
+                         rms=truth_rms(truth, fit.geometry, validation),
+                         clock_err=float(c.map(c.t_ref) - want(c.t_ref)), clock_sigma=c.sigma_at_ref_s,
+                         used_per_s=fit.trusted / tour.duration, tour=tour.duration,
+                         v_rms=s.tool_speed_rms, left=fit.left_out, took=time.perf_counter() - t0))
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--robots", default="ur5e,ur10e")
+    parser.add_argument("--stations", type=int, default=2)
+    parser.add_argument("--speeds", default="0.1,0.25,0.5", help="tool speeds (m/s) of the sweep")
+    parser.add_argument("--poses", type=int, default=30, help="method 000's pose count (the accuracy)")
+    parser.add_argument("--validation", type=int, default=20)
+    parser.add_argument("--bootstrap", type=int, default=8)
+    parser.add_argument("--candidates", type=int, default=20000)
+    parser.add_argument("--search-time", type=float, default=5.0)
+    parser.add_argument("--quick", action="store_true")
+    args = parser.parse_args()
+    args.speeds = [float(v) for v in args.speeds.split(",")]
+    if args.quick:
+        args.stations, args.speeds, args.candidates = 1, args.speeds[1:], 5000
+    print(f"{'robot':6} {'stn':>3} {'mode':11} {'v m/s':>5} {'robot s':>7} {'val µm':>6} {'val/SG':>6} "
+          f"{'clock err µs':>12} {'σ µs':>6} {'used/s':>6} {'time/SG':>7} {'tour s':>6} {'left out':>22} "
+          f"{'took s':>6}")
+    for robot in args.robots.split(","):
+        for seed in range(args.stations):
+            rows = station(robot, seed, args)
+            sg = rows[0]
+            for r in rows:
+                sweep = r["mode"] == "sweep"
+                left = "" if not sweep else ",".join(f"{k[:4]}{v}" for k, v in r["left"].items() if v)
+                print(f"{robot:6} {seed:3d} {r['mode']:11} {r['speed'] or 0:5.2f} {r['time']:7.1f} "
+                      f"{r['rms'] * 1e6:6.1f} {r['rms'] / sg['rms']:6.2f} "
+                      + (f"{r['clock_err'] * 1e6:12.2f} {r['clock_sigma'] * 1e6:6.2f} {r['used_per_s']:6.0f} "
+                         if sweep else f"{'':12} {'':6} {'':6} ")
+                      + f"{r['time'] / sg['time']:7.2f} " + (f"{r['tour']:6.1f} " if sweep else f"{'':6} ")
+                      + f"{left:>22} {r['took']:6.1f}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
