@@ -54,8 +54,7 @@ from hil.calibration.timed_selection import select_timed
 from hil.campaign.chooser import DWELL_OVERHEAD
 from hil.campaign.steps import APPROACH, approach_seconds
 from selector.candidates import Constraints
-from selector.motion_time import Dwell, MotionProfile
-from selector.order import order_poses
+from selector.motion_time import Dwell
 
 #: The station's default movej (`hil.station.config`: robot.speed 0.5 rad/s, robot.acceleration 1.0 rad/s²).
 SPEED, ACCELERATION = 0.5, 1.0
@@ -88,45 +87,67 @@ def station(robot: str, seed: int, args: argparse.Namespace) -> list[dict]:
     constraints = Constraints(tracker=tuple(map(float, truth.tracker.translation)))
     common = dict(smr=tuple(map(float, truth.smr)), constraints=constraints, compliance=True,
                   payload=truth.payload, gravity=None)
-    _, cands, _ = design_space(robot, args.poses, candidates=5000, seed=seed, scaling="expected",
+    _, cands, _ = design_space(robot, args.poses, candidates=args.candidates, seed=seed, scaling="expected",
                                say=lambda *_: None, **common)
-    validation = cands.q[rng.choice(len(cands.q), args.validation, replace=False)]
+    pick = rng.permutation(len(cands.q))
+    validation = cands.q[pick[: args.validation]]
+    held_out = cands.q[pick[args.validation: args.validation + args.held_out]]
+
+    def accuracy(geometry) -> tuple[float, float]:
+        return truth_rms(truth, geometry, validation), truth_rms(truth, geometry, held_out)
+
     t0 = time.perf_counter()
-    report = select_timed(robot, args.poses, speed=SPEED, acceleration=ACCELERATION, dwell=DWELL,
-                          fixed=validation, candidates=args.candidates, seed=seed,
-                          time_limit=args.search_time, **common)
+    timed = dict(speed=SPEED, acceleration=ACCELERATION, dwell=DWELL, fixed=validation,
+                 candidates=args.candidates, seed=seed, time_limit=args.search_time, **common)
+    report = select_timed(robot, args.poses, **timed)
     chosen = np.array(report["poses"])
-    sg_time = report["predicted"]["robot_time"]
     meas = static_measurements(truth, chosen, rng)
     sg = identify(meas, robot, compliance=True, payload=truth.payload, joint_errors=HARMONICS,
                   reject_outliers=False)
-    sg_rms = truth_rms(truth, sg.geometry, validation)
-    rows = [dict(robot=robot, seed=seed, mode="stop-and-go", speed=None, time=sg_time, rms=sg_rms,
-                 poses=len(chosen), took=time.perf_counter() - t0)]
-    profile = MotionProfile(SPEED, ACCELERATION, tuple(map(float, spec.max_joint_speed)))
-    boot_q = chosen[: args.bootstrap]
-    boot = Measurements.from_arrays(meas.q[: args.bootstrap], meas.p[: args.bootstrap],
-                                    directions=np.tile(UP, (args.bootstrap, 1)))
-    order, static_move = order_poses(np.vstack([boot_q, validation]), profile=profile)
-    static_time = static_move + DWELL.seconds * (len(boot_q) + len(validation))
-    start = register(boot, robot, smr_guess=truth.smr + 0.002)
-    start.payload, start.compliance = truth.payload, typical_compliance(robot)
-    limit = DynamicsModel(start).acceleration_limit(np.vstack([chosen, boot_q])).min(axis=0)
-    last = np.vstack([boot_q, validation])[order[-1]]
-    for v in args.speeds:
+    rows = [dict(mode="stop-and-go", speed=None, waypoints=len(chosen),
+                 time=report["predicted"]["robot_time"], rms=accuracy(sg.geometry),
+                 took=time.perf_counter() - t0)]
+    for count in args.waypoints:
+        # the sweep's waypoints: the time-aware poses themselves, or a time-aware choice of fewer
         t0 = time.perf_counter()
-        joint_speed = np.minimum(v / spec.reach, spec.max_joint_speed)
-        tour = plan_sweep(chosen, last, max_speed=joint_speed, max_acceleration=0.9 * limit,
-                          rate_hz=spec.rate_hz)
-        s = sweep_streams(truth, seed=seed, path=SplinePath(tour.t, tour.q))
-        fit = fit_sweep(start, s.joints, s.tracker, static=boot, joint_errors=HARMONICS + LOST_MOTION)
-        want = s.clocks.controller_from_tracker()
-        c = fit.clock
-        rows.append(dict(robot=robot, seed=seed, mode="sweep", speed=v, time=static_time + tour.duration,
-                         rms=truth_rms(truth, fit.geometry, validation),
-                         clock_err=float(c.map(c.t_ref) - want(c.t_ref)), clock_sigma=c.sigma_at_ref_s,
-                         used_per_s=fit.trusted / tour.duration, tour=tour.duration,
-                         v_rms=s.tool_speed_rms, left=fit.left_out, took=time.perf_counter() - t0))
+        ways = chosen if count >= len(chosen) else np.array(select_timed(robot, count, **timed)["poses"])
+        boot_q = ways[: args.bootstrap]
+        # the bootstrap's first registration, as the campaign's bootstrap gives it before the sweep
+        first = register(static_measurements(truth, boot_q, np.random.default_rng(seed)), robot,
+                         smr_guess=truth.smr + 0.002)
+        first.payload, first.compliance = truth.payload, typical_compliance(robot)
+        limit = DynamicsModel(first).acceleration_limit(ways).min(axis=0)
+        chose = time.perf_counter() - t0
+        for v in args.speeds:
+            t0 = time.perf_counter()
+            joint_speed = np.minimum(v / spec.reach, spec.max_joint_speed)
+            # one tour: the bootstrap and validation poses are its rests (each held for the campaign's
+            # dwell and measured statically, from the side the tour arrives from), the waypoints swept
+            tour = plan_sweep(ways, boot_q[0], max_speed=joint_speed, max_acceleration=0.9 * limit,
+                              rate_hz=spec.rate_hz, spec=spec, stops=np.vstack([boot_q, validation]),
+                              dwell_s=DWELL.seconds)
+            directions = tour.approach_directions()
+            is_boot = np.array([any(np.allclose(p, b) for b in boot_q) for p in tour.stops])
+            q_read, p = measure(truth, tour.stops[is_boot], Noise(), rng, directions=directions[is_boot])
+            boot = Measurements.from_arrays(q_read, p, directions=directions[is_boot])
+            start = register(boot, robot, smr_guess=truth.smr + 0.002)
+            start.payload, start.compliance = truth.payload, typical_compliance(robot)
+            s = sweep_streams(truth, seed=seed, path=SplinePath(tour.t, tour.q))
+            fit = fit_sweep(start, s.joints, s.tracker, static=boot, joint_errors=HARMONICS + LOST_MOTION)
+            want = s.clocks.controller_from_tracker()
+            c = fit.clock
+            # the campaign's validation at its rests, each from the side the tour came from
+            vq, vd = tour.stops[~is_boot], directions[~is_boot]
+            e = Kinematics(fit.geometry).points(vq, directions=vd) - true_points(truth, vq, directions=vd)
+            val = float(np.sqrt(np.mean(np.sum(e**2, axis=1))))
+            moving = tour.duration - DWELL.seconds * len(tour.stops)
+            rows.append(dict(mode="sweep", speed=v, waypoints=len(ways), time=tour.duration,
+                             rms=(val, truth_rms(truth, fit.geometry, held_out)),
+                             clock_err=float(c.map(c.t_ref) - want(c.t_ref)),
+                             clock_sigma=c.sigma_at_ref_s, used_per_s=fit.trusted / tour.duration,
+                             tour=moving, static=DWELL.seconds * len(tour.stops), v_rms=s.tool_speed_rms,
+                             left=fit.left_out, took=chose + time.perf_counter() - t0))
+            chose = 0.0
     return rows
 
 
@@ -134,20 +155,24 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--robots", default="ur5e,ur10e")
     parser.add_argument("--stations", type=int, default=2)
-    parser.add_argument("--speeds", default="0.1,0.25,0.5", help="tool speeds (m/s) of the sweep")
+    parser.add_argument("--speeds", default="0.25,0.5,1.0", help="tool speeds (m/s) of the sweep")
     parser.add_argument("--poses", type=int, default=30, help="method 000's pose count (the accuracy)")
+    parser.add_argument("--waypoints", default="12,99",
+                        help="waypoint counts of the sweep (≥ the time-aware pose count: all of them)")
     parser.add_argument("--validation", type=int, default=20)
+    parser.add_argument("--held-out", type=int, default=300)
     parser.add_argument("--bootstrap", type=int, default=8)
-    parser.add_argument("--candidates", type=int, default=20000)
+    parser.add_argument("--candidates", type=int, default=5000)
     parser.add_argument("--search-time", type=float, default=5.0)
     parser.add_argument("--quick", action="store_true")
     args = parser.parse_args()
     args.speeds = [float(v) for v in args.speeds.split(",")]
+    args.waypoints = [int(v) for v in args.waypoints.split(",")]
     if args.quick:
-        args.stations, args.speeds, args.candidates = 1, args.speeds[1:], 5000
-    print(f"{'robot':6} {'stn':>3} {'mode':11} {'v m/s':>5} {'robot s':>7} {'val µm':>6} {'val/SG':>6} "
-          f"{'clock err µs':>12} {'σ µs':>6} {'used/s':>6} {'time/SG':>7} {'tour s':>6} {'left out':>22} "
-          f"{'took s':>6}")
+        args.stations, args.speeds, args.waypoints = 1, args.speeds[1:2], args.waypoints[:1]
+    print(f"{'robot':6} {'stn':>3} {'mode':11} {'ways':>4} {'v m/s':>5} {'robot s':>7} {'dwell s':>8} "
+          f"{'move s':>6} {'time/SG':>7} {'val µm':>6} {'held µm':>7} {'held/SG':>7} {'clock err µs':>12} "
+          f"{'σ µs':>5} {'used/s':>6} {'v_rms':>5} {'left out':>18} {'took s':>6}")
     for robot in args.robots.split(","):
         for seed in range(args.stations):
             rows = station(robot, seed, args)
@@ -155,12 +180,18 @@ def main() -> None:
             for r in rows:
                 sweep = r["mode"] == "sweep"
                 left = "" if not sweep else ",".join(f"{k[:4]}{v}" for k, v in r["left"].items() if v)
-                print(f"{robot:6} {seed:3d} {r['mode']:11} {r['speed'] or 0:5.2f} {r['time']:7.1f} "
-                      f"{r['rms'] * 1e6:6.1f} {r['rms'] / sg['rms']:6.2f} "
-                      + (f"{r['clock_err'] * 1e6:12.2f} {r['clock_sigma'] * 1e6:6.2f} {r['used_per_s']:6.0f} "
-                         if sweep else f"{'':12} {'':6} {'':6} ")
-                      + f"{r['time'] / sg['time']:7.2f} " + (f"{r['tour']:6.1f} " if sweep else f"{'':6} ")
-                      + f"{left:>22} {r['took']:6.1f}", flush=True)
+                cells = [f"{robot:6}", f"{seed:3d}", f"{r['mode']:11}", f"{r['waypoints']:4d}",
+                         f"{r['speed'] or 0:5.2f}", f"{r['time']:7.1f}",
+                         f"{r['static']:8.1f}" if sweep else f"{'':8}",
+                         f"{r['tour']:6.1f}" if sweep else f"{'':6}",
+                         f"{r['time'] / sg['time']:7.2f}", f"{r['rms'][0] * 1e6:6.1f}",
+                         f"{r['rms'][1] * 1e6:7.1f}", f"{r['rms'][1] / sg['rms'][1]:7.2f}"]
+                if sweep:
+                    cells += [f"{r['clock_err'] * 1e6:12.2f}", f"{r['clock_sigma'] * 1e6:5.2f}",
+                              f"{r['used_per_s']:6.0f}", f"{r['v_rms']:5.2f}", f"{left:>18}"]
+                else:
+                    cells += [f"{'':12}", f"{'':5}", f"{'':6}", f"{'':5}", f"{'':18}"]
+                print(" ".join([*cells, f"{r['took']:6.1f}"]), flush=True)
 
 
 if __name__ == "__main__":

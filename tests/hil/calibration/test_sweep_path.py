@@ -48,6 +48,25 @@ def test_the_acceleration_is_continuous(tour):
     assert jump.max() < 0.05 * ACCEL.min()
 
 
+def test_stops_are_rests_held_for_the_dwell():
+    rng = np.random.default_rng(6)
+    waypoints, stops = rng.uniform(-1.0, 1.0, (5, 6)), rng.uniform(-1.0, 1.0, (3, 6))
+    tour = plan_sweep(waypoints, np.zeros(6), max_speed=SPEED, max_acceleration=ACCEL, stops=stops,
+                      dwell_s=0.5)
+    assert sorted(map(tuple, tour.stops)) == sorted(map(tuple, stops))
+    v = tour.velocities()
+    for pose, ts in zip(tour.stops, tour.stop_times, strict=True):
+        i = round(ts * tour.rate_hz)
+        np.testing.assert_allclose(tour.q[i: i + 250], np.broadcast_to(pose, (250, 6)), atol=1e-12)
+        assert np.abs(v[i - 1]).max() < 0.01 * SPEED.min()  # it arrives at rest
+    nearest = np.round(tour.waypoint_times * tour.rate_hz).astype(int)
+    assert np.all(np.abs(tour.q[nearest] - tour.waypoints) <= SPEED / tour.rate_hz)
+    assert np.all(np.abs(np.diff(tour.q, axis=0)) * tour.rate_hz <= SPEED)
+    assert np.all(np.abs(tour.accelerations()) <= ACCEL)
+    d = tour.approach_directions()
+    assert d.shape == (3, 6) and set(np.unique(d)) <= {-1.0, 0.0, 1.0}
+
+
 def test_the_order_is_short():
     # poses on a line, shuffled: the shortest tour from one end visits them in order
     line = np.outer(np.arange(1, 9), np.full(6, 0.1))
