@@ -1,35 +1,40 @@
 """Robot time of a calibration: the time-aware stop-and-go campaign against a sweep, at the same accuracy.
 
-Run from the repository root: ``PYTHONPATH=. python bench/sweep_time.py`` (``--quick``: one station per
-robot, two speeds). For each robot and station (a realistic truth, `hil.calibration.synthetic.random_truth`
-with joint errors and lost motion, its tracker 2–4 m away in a random direction):
+Run from the repository root: ``PYTHONPATH=. python bench/sweep_time.py`` (``--quick``: one UR5e-or-UR10e
+station per robot, one speed, one waypoint count). For each robot and station (a realistic truth,
+`hil.calibration.synthetic.random_truth` with joint errors and lost motion, its tracker 2–4 m away):
 
-* **Validation poses** (both modes, measured statically and never fitted): `--validation` poses drawn
-  from the selector's feasible candidates for this station (`hil.calibration.selection.design_space`:
-  reach, the tracker's range, acceptance and line of sight, the keep-in box); the validation RMS is the
-  fitted model's error against the truth there (noise-free, each pose approached from below in every
-  joint as the campaign engine does).
+* **Accuracy** is judged twice, as the truth error of the fitted model (noise-free): at the
+  `--validation` poses both modes visit and measure statically (what a campaign reports; 20 poses are a
+  noisy sample of it), and at `--held-out` further poses no mode visits (300: the model's accuracy
+  over the workspace, the figure the 5 % criterion is read on). Both are drawn from the selector's
+  feasible candidates for the station (`hil.calibration.selection.design_space`: reach, the tracker's
+  range, acceptance and line of sight, the keep-in box). Held-out poses are approached from below in
+  every joint, as the campaign engine approaches its poses.
 * **Stop-and-go** (today's time-aware campaign): `hil.calibration.timed_selection.select_timed` chooses
   and orders the calibration poses for method 000's accuracy with `--poses` poses, the validation poses
   in the same tour; its robot time is the selector's own time model (the movej trapezoid at the
-  station's default 0.5 rad/s and 1.0 rad/s², `hil.station.config`, plus the campaign's dwell: 5 readings
-  of emScon's 0.5 s stationary measuring time, `hil.campaign.chooser.pose_dwell`, the approach leg). The
-  poses are measured with the tracker's noise (`Noise()`) and fitted by `identify` with compliance and
-  joint-angle harmonics of orders 1–2 (the model class the sweep fits too).
-* **Sweep** at each tool speed: a static bootstrap (`--bootstrap` of the time-aware poses, measured as
-  stop-and-go measures them) and the validation poses, visited in one stop-and-go tour (the same time
-  model), then a swept tour through all the time-aware poses (`hil.calibration.sweep_path.plan_sweep`:
-  every joint's speed limit the tool speed over the arm's reach, its acceleration limit 0.9 × the
-  quasi-static limit of the deflection model at the waypoints, `DynamicsModel.acceleration_limit`, so
-  the fit can trust the samples). The tour is streamed by the simulator's clocks and noise
+  station's default 0.5 rad/s and 1.0 rad/s², `hil.station.config`, plus the campaign's dwell per pose:
+  5 readings of emScon's 0.5 s stationary measuring time, the overhead and the approach leg,
+  `hil.campaign.chooser.pose_dwell`). The poses are measured with the tracker's noise (`Noise()`), each
+  approached from below, and fitted by `identify` with compliance and the joint-angle harmonics of orders
+  1–2 (the model class the sweep fits too, lost motion absorbed as the constant it is then).
+* **Sweep** at each tool speed (`--speeds`) through `--waypoints` time-aware poses (a time-aware choice
+  for that count — it may take a few more — or all of stop-and-go's): one tour
+  (`hil.calibration.sweep_path.plan_sweep`) whose rests are the `--bootstrap` first waypoints and the
+  validation poses, each held for the same dwell and measured statically from the side the tour
+  arrives from; every joint's speed limit the tool speed over the arm's reach, its acceleration limit
+  0.9 × the deflection model's quasi-static limit at the waypoints (`DynamicsModel.acceleration_limit`),
+  so the fit can trust the samples. The tour is streamed by the simulator's clocks and noise
   (`hil.calibration.synthetic_stream.sweep_streams` along the tour: the controller at 500 Hz, the
   tracker at 1000 Hz, 35 ppm apart) and fitted by `hil.calibration.sweep_fit.fit_sweep` from the
-  bootstrap's registration (the bootstrap poses as static rows, compliance, the same harmonics and the
-  lost motion, which the static rows against the moving ones identify).
+  bootstrap's registration (its poses as static rows, compliance, the same harmonics and the lost
+  motion, which the static rows against the moving ones identify). Robot time is the tour's duration.
 
-The table: mode, speed, robot time, validation RMS, its ratio to stop-and-go's (target ≤ 1.05), the clock
-offset's error against the simulator's truth and its stated σ, the samples used per second of sweep,
-and the time ratio (target ≤ 1/3).
+Columns: mode, waypoints, tool speed, robot time, of which dwelling at rests and moving, the time ratio
+to stop-and-go (target ≤ 1/3), validation and held-out RMS (µm) and the held-out ratio (target ≤ 1.05),
+the clock offset's error against the simulator's truth and its stated σ, the trusted samples per second
+of tour, the tour's RMS tool speed, the samples left out by reason, and the bench's own seconds.
 """
 
 from __future__ import annotations

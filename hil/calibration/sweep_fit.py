@@ -296,10 +296,9 @@ def fit_sweep(start: Geometry, joints: JointStream, tracker: TrackerStream, *,
         limit_model.compliance = typical_compliance(robot)  # the limit needs a compliance's order
     points = (MovingArm(geometry).points if dynamics
               else (lambda q, qd, qdd: MovingArm(geometry).points(q)))
-    limits = DynamicsModel(limit_model)
-    tolerance = acceleration_tolerance_rad
+    limits, ring = DynamicsModel(limit_model), acceleration_tolerance_rad
     join = StreamJoin(joints, tracker, points,
-                      None if tolerance is None else (lambda q: limits.acceleration_limit(q, tolerance)))
+                      None if ring is None else (lambda q: limits.acceleration_limit(q, ring)))
     first = join.fit(initial_offset_s, initial_drift=initial_drift)
     path = _JointPath(joints)
     clock_map = first.map
