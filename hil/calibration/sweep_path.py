@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from drivers.robot.trajectory import keep_in_checkpoints
 from hil.arm.catalog import RobotSpec
 from hil.arm.geometry import Geometry
 from hil.arm.kinematics_cache import kinematics_of
@@ -303,7 +304,7 @@ def check_sweep(tour: SweepTour, *, max_speed: np.ndarray | float | None = None,
                                f"{acc[i, j]:.4f} rad/s², over its {a_max[j]:.4f} rad/s²")
     if model is None or (keep_in is None and acceptance_angle is None):
         return
-    checked = _checkpoints(Q, spacing)
+    checked = keep_in_checkpoints(Q, spacing)
     if keep_in is not None:
         lo, hi = (np.asarray(b, dtype=float) for b in keep_in)
         pts = kinematics_of(model).points(Q[checked], frame="base")
@@ -322,16 +323,3 @@ def check_sweep(tour: SweepTour, *, max_speed: np.ndarray | float | None = None,
             if why is not None:
                 raise SweepRefused(f"sweep sample {i} (t = {tour.t[i]:.3f} s): the tracker would not see "
                                    f"the SMR ({why}; nothing moved)")
-
-
-def _checkpoints(Q: np.ndarray, spacing: float) -> list[int]:
-    """The first and last samples and every one at least `spacing` rad (largest joint change) from the
-    previous checked one (the driver's `keep_in_checkpoints` rule)."""
-    idx, last = [0], Q[0]
-    for i in range(1, len(Q)):
-        if float(np.max(np.abs(Q[i] - last))) >= spacing:
-            idx.append(i)
-            last = Q[i]
-    if idx[-1] != len(Q) - 1:
-        idx.append(len(Q) - 1)
-    return idx
