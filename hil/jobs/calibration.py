@@ -242,16 +242,26 @@ def _say_simulator(setup: StationSetup, say: Say) -> None:
         say(words, "information")
 
 
-def _check_store_file(location: Any) -> None:
+def _check_store_file(location: Any, resume: Resume = "find") -> None:
     """An SQLite store that exists is opened and closed again, so that a file that is not a hil
     database (or a damaged or a newer one) is refused before a simulated station's seconds of start-up
-    rather than after them; a server's location waits for the configuration that may name it."""
+    rather than after them; a server's location waits for the configuration that may name it. With
+    ``--resume`` (`resume` "only"), a store with nothing unfinished, or whose unfinished campaigns'
+    rows are damaged, is refused then too: no station could change that."""
     from pathlib import Path
 
-    if isinstance(location, Path):
-        store = open_existing_store(location, None)
-        if store is not None:
-            store.close()
+    if not isinstance(location, Path):
+        return
+    store = open_existing_store(location, None)
+    if store is None:
+        if resume == "only":
+            raise InputError(f"--resume: {location} holds no campaign yet (no such file)")
+        return
+    try:
+        if resume == "only" and not store.unfinished_campaigns():
+            raise InputError(f"--resume: {location} holds no unfinished campaign")
+    finally:
+        store.close()
 
 
 def calibrate(request: CalibrationRequest, *, subscribers: Sequence[Callable[[Event], None]] = (),
@@ -262,7 +272,7 @@ def calibrate(request: CalibrationRequest, *, subscribers: Sequence[Callable[[Ev
     from hil.station.devices import HARDWARE_ERRORS
 
     if request.db or request.source.sim is not None:  # needs no config: checked before a simulated
-        _check_store_file(store_location(request.db, request.source, None))  # station starts (seconds)
+        _check_store_file(store_location(request.db, request.source, None), request.resume)  # seconds
     with station_setup(request.source) as setup:
         if request.no_warmup:  # not part of what identifies the campaign (`hil.store.hashing`)
             setup = StationSetup(setup.config.with_overrides(warmup__enabled=False), setup.identity,

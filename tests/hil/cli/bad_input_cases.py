@@ -1222,6 +1222,15 @@ def _cases() -> list[Case]:
             files=files, expect=0)
         add("robots", f"c5-damaged-{label}-lists-the-rest", ["robots", "--db", f"{d}/dmg.db"], [],
             files=files, expect=0)
+    # --resume on a store that cannot give one: refused before a simulated station starts (seconds)
+    add("calibrate", "c5-r3-resume-damaged-unfinished-config",
+        ["calibrate", "--sim", "--resume", "--db", f"{d}/dmg.db"], ["table campaigns"],
+        files={"dmg.db": damaged_store("UPDATE campaigns SET config = '{broken', status = 'interrupted'")})
+    add("calibrate", "c5-r3-resume-nothing-unfinished",
+        ["calibrate", "--sim", "--resume", "--db", f"{d}/fin.db"], ["--resume", "fin.db", "unfinished"],
+        files={"fin.db": damaged_store("UPDATE campaigns SET status = 'accepted'")})
+    add("calibrate", "c5-r3-resume-no-store", ["calibrate", "--sim", "--resume", "--db", f"{d}/none.db"],
+        ["--resume", "none.db"])
     add("show", "c5-damaged-joints-export", ["show", "last", "--db", f"{d}/dmg.db", "--export-measurements",
                                              f"{d}/m-out.csv"], ["table measurements"],
         files={"dmg.db": damaged_store(damaged["joints"][0])})
