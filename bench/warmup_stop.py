@@ -2,15 +2,16 @@
 
 A `hil calibrate --sim ... --out result.json` result carries the hidden truth (``truth``) and every
 reference measurement with the joint temperatures the controller reported (``drift.series``). The
-simulated arm's temperature rise is one first-order response to its seconds of motion with the truth's
-time constant (`mocks.heating`: dΔT/dm = (rise − ΔT)/τ; standing still it keeps its temperature), and
-its links grow by 1 + expansion·ΔT (`hil.arm.thermal`), so the truth knows, at each warm-up check, how
-much the reference will still move if the arm keeps cycling: |p(ΔT∞) − p(ΔT_now)|, with ΔT∞ the
-truth's rise, where any cycling heads. The bench replays hil's rule
-(`hil.calibration.warmup_decision.decide_warm`) on the stored series, check by check, and prints it
-beside that truth: when the rule stopped (or would stop) and when the drift still to come really fell
-under the warm-up's limit. It also says how far the reference really moved while the arm was measured
-(from the drift watch's temperatures), the drift the warm-up is for.
+simulated arm's temperature rise is one first-order response with the truth's time constant
+(`mocks.heating`: dΔT/dt = (rise·u − ΔT)/τ), and its links grow by 1 + expansion·ΔT (`hil.arm.thermal`),
+so the truth knows, at each warm-up check, how much the reference will still move if the arm keeps
+cycling: |p(ΔT∞) − p(ΔT_now)|, with ΔT∞ the steady state of the warm-up's cycling, fitted to the
+reported temperatures with the truth's own τ (a linear fit: the only unknown is how hard the cycle works
+the joints). The bench replays hil's rule (`hil.calibration.warmup_decision.decide_warm`) on the stored
+series, check by check, and prints it beside that truth: when the rule stopped (or would stop) and when
+the drift still to come really fell under the warm-up's limit. It also says how far the reference
+really moved while the arm was measured (from the drift watch's temperatures), the drift the warm-up is
+for.
 
 The replay takes the tracker's positions as measured (the campaign also takes out what the joint
 readings explain; every visit approaches the reference the same way, so that is micrometres' noise).
@@ -29,6 +30,14 @@ from hil.arm.geometry import Geometry
 from hil.arm.kinematics import Kinematics
 from hil.calibration.warmup_decision import decide_warm
 from mocks.ur.arm import AMBIENT_TEMPERATURE
+
+
+def true_steady_rise(times: np.ndarray, rise: np.ndarray, tau: float) -> float:
+    """ΔT∞ of a first-order response with the known `tau` through the series (least squares on
+    a + b·exp(−t/τ); a is ΔT∞)."""
+    A = np.column_stack([np.ones_like(times), np.exp(-(times - times[0]) / tau)])
+    coef, *_ = np.linalg.lstsq(A, rise, rcond=None)
+    return float(coef[0])
 
 
 def main() -> None:
@@ -50,7 +59,7 @@ def main() -> None:
     temps = np.array([s["temperatures"] for s in series], dtype=float)
     rise = temps.mean(axis=1) - AMBIENT_TEMPERATURE
     tau = truth.thermal.time_constant
-    steady = truth.thermal.rise  # heat follows motion: any cycling heads for the full rise
+    steady = true_steady_rise(t, rise, tau)
     q = np.array(series[-1]["q"], dtype=float)
 
     def point(dT: float) -> np.ndarray:
@@ -58,8 +67,8 @@ def main() -> None:
 
     per_kelvin = float(np.linalg.norm(point(1.0) - point(0.0)))
     left = np.array([np.linalg.norm(point(steady) - point(r)) for r in rise])
-    print(f"truth: τ {tau:.0f} s of motion, rise {truth.thermal.rise:g} K, where the warm-up's cycling "
-          f"heads (ΔT∞ {steady:.2f} K); the reference "
+    print(f"truth: τ {tau:.0f} s, rise {truth.thermal.rise:g} K for an arm moving all the time; the "
+          f"warm-up's cycling heads for ΔT∞ {steady:.2f} K (fitted with the truth's τ); the reference "
           f"moves {per_kelvin * 1e6:.1f} µm/K; limit {limit * 1e6:.1f} µm")
     print(" k  min    ΔT/K  true left/µm  fit τ/s (upper, from)   left/µm (upper)  span/min  flat  verdict")
     stop_rule = stop_truth = None
