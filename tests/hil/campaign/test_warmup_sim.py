@@ -47,7 +47,11 @@ def test_a_simulated_campaign_warms_the_arm_up_and_watches_the_reference(tmp_pat
             robot__address=sim.address, tracker__url=svc["tracker_url"], robot__speed=1.0,
             robot__acceleration=2.0, campaign__calibration_poses=14, campaign__validation_poses=4,
             campaign__candidates=2000, tracker__position=tuple(truth.tracker.translation + 0.05),
-            drift__every=5, warmup__max_time=900.0)  # that it runs is shown; when it ends: test_warmup.py
+            drift__every=5, warmup__max_time=900.0,  # that it runs is shown; when it ends: test_warmup.py
+            # at 200x each GeoCOM reading's host time is simulated time the arm stands holding itself
+            # (a quarter of a moving arm's heat, mocks.heating): 20 readings a reference visit on a
+            # loaded machine held the warming arm long enough to cool it by thousandths of a kelvin
+            drift__samples=5)
         store = Store.open(tmp_path / "hil.db", synchronous="NORMAL")
         campaign = store.create_campaign(config, "ur5e")
         events: list = []
@@ -68,12 +72,10 @@ def test_a_simulated_campaign_warms_the_arm_up_and_watches_the_reference(tmp_pat
     assert events.index(done) < first_point
     assert done.seconds >= 3 * config.warmup["interval"]
     # the joint temperatures, read through ur_rtde's getJointTemperatures, rise while the warm-up cycles
-    # the arm and never fall: the joints heat by their motion and keep their temperature standing still
-    # (mocks.heating), however long the host makes a reference visit's 20 readings last
+    # the arm (measuring, it stands still more and may cool by hundredths of a kelvin: mocks.heating)
     temps = np.array([e.temperatures for e in refs])
     cycled = np.array([e.temperatures for e in warm])
-    assert temps.shape == (len(refs), 6) and np.all(np.diff(temps[:, 0]) >= 0) and temps[-1, 0] > temps[0, 0]
-    assert cycled[-1, 0] > cycled[0, 0]
+    assert temps.shape == (len(refs), 6) and np.all(np.diff(cycled[:, 0]) >= 0) and temps[-1, 0] > temps[0, 0]
     assert np.all(np.diff([e.elapsed for e in refs]) > 0)
     # the drift watch measured the reference while measuring; none of it is a campaign point
     assert [e for e in refs if e.phase == "drift"]
