@@ -1,31 +1,19 @@
-"""How warm the simulated arm is: its joints heat while they move, not while the controller is on.
+"""How warm the simulated arm is: its joints heat while they work, not while the controller is on.
 
 A UR joint is a permanent-magnet servo motor behind a strain-wave gear; what warms it is the motor's
 copper loss I²R (Joule heating, with the current I proportional to the torque the joint delivers: a
 servo motor's torque constant, e.g. Hughes & Drury, *Electric Motors and Drives*, 5th ed., ch. 9 and
-10) and the gear's friction, both while the joint moves. UR's own guidance warms a cold arm by
-*running* a program, not by leaving it switched on ("Robot start-up in cold environments",
-universal-robots.com, Robot care & maintenance). So the simulated arm's temperature rise is a
-first-order response to its *motion*: over m seconds of joint motion
+10) and the gear's friction, both while the joint moves. Standing still with its brakes released it
+only holds the arm against gravity (a current, so some heat); with the brakes on (robot mode IDLE,
+powered off) its motor carries no current at all. UR's own guidance warms a cold arm by *running* a
+program, not by leaving it switched on ("Robot start-up in cold environments", universal-robots.com,
+Robot care & maintenance). So the simulated arm's temperature rise follows a first-order model driven
+by what the arm does,
 
-    dΔT/dm = (rise − ΔT) / time_constant,
+    dΔT/dt = (rise·u − ΔT) / time_constant,   u = 1 moving, `IDLE_HEAT` holding, 0 braked,
 
 which is the truth's `hil.arm.thermal.Thermal` warm-up (ΔT = rise·(1 − exp(−t/τ))) for an arm that
-moves all the time. Standing still, the arm keeps its temperature.
-
-Why standing still counts for nothing, where a joint holding the arm with its brakes released does
-draw a current (about a quarter of a moving joint's heat, half its torque squared; before, the
-simulator warmed a holding arm by that share and cooled a braked one): in fast time every standstill
-lasts as long as the *host* takes. A campaign's client computes while the arm waits (selecting its
-poses: 17–80 wall seconds, 700–3200 simulated seconds at 40x, the more the busier the machine), and
-the simulated arm warmed or cooled through all of it, so what the tracker saw depended on the host:
-at a load average of 16 a warm-up whose temperatures dipped with every slow stretch never converged,
-and the beam-lost campaign's validation poses, measured on an arm 0.25 K warmer than its calibration
-poses, were rejected. On a real station those waits are seconds against the warm-up's quarter of an
-hour: over them a joint's temperature changes by a fraction of a percent of what it has still to
-go. Motion durations are exact in simulated time (the controller's profiles), so heat that follows
-motion is the same whatever the host's pace. The cost, an assumption: a long real pause (an operator
-away for many minutes, a robot left powered overnight) does not cool the simulated arm.
+moves all the time, and keeps an arm that waits (while hil selects its poses, say) at a fraction of it.
 """
 
 from __future__ import annotations
@@ -36,29 +24,40 @@ from collections.abc import Callable
 
 from hil.arm.thermal import Thermal
 
+#: The heat input of a joint holding its pose with the brakes released, as a fraction of a moving
+#: joint's. An assumption, no published figure found: the holding torque (gravity only) is about half a
+#: campaign cycle's RMS torque (gravity plus acceleration and the gears' friction), and the copper loss
+#: goes with its square: ½² = ¼.
+IDLE_HEAT = 0.25
+
 
 class Heating:
-    """The arm's temperature rise ΔT (K) now, integrated over the joint motion since the last query.
+    """The arm's temperature rise ΔT (K) now, integrated from what the arm did since the last query.
 
-    `moved()`: the arm's accumulated seconds of joint motion (`SimArm.motion_seconds`), read without
-    the arm's lock (a plain attribute read), so the trackers' threads and the arm's never wait on each
-    other. The response to m seconds of motion is exact whatever the queries' spacing.
+    `clock()`: the controller's seconds; `moved()`: the arm's accumulated seconds of joint motion
+    (`SimArm.motion_seconds`); `holding()`: whether its brakes are released (robot mode RUNNING). Read
+    without the arm's lock (plain attribute reads), so the trackers' threads and the arm's never wait
+    on each other. Between two queries the heat input is the fraction of the time the arm moved; the
+    queries come many times a second, far inside the minutes of the time constant.
     """
 
-    def __init__(self, thermal: Thermal, moved: Callable[[], float], start: float = 0.0) -> None:
-        """`start`: ΔT (K) before any motion (0: a cold arm; ``thermal.rise``: one warmed up)."""
-        self.thermal = thermal
-        self._moved = moved
-        self._m, self._rise = float(moved()), float(start)
+    def __init__(self, thermal: Thermal, clock: Callable[[], float], moved: Callable[[], float],
+                 holding: Callable[[], bool], idle: float = IDLE_HEAT, start: float = 0.0) -> None:
+        """`start`: ΔT (K) at the start (0: a cold arm; ``thermal.rise``: one that has been working)."""
+        self.thermal, self.idle = thermal, float(idle)
+        self._clock, self._moved, self._holding = clock, moved, holding
+        self._t, self._m, self._rise = float(clock()), float(moved()), float(start)
         self._lock = threading.Lock()
 
     def rise(self) -> float:
         """ΔT (K) now."""
         with self._lock:
-            m = float(self._moved())
-            dm = m - self._m
-            if dm > 0:
-                target = self.thermal.rise
-                self._rise = target + (self._rise - target) * math.exp(-dm / self.thermal.time_constant)
-                self._m = m
+            t, m = float(self._clock()), float(self._moved())
+            dt, dm = t - self._t, m - self._m
+            if dt > 0:
+                moving = min(max(dm / dt, 0.0), 1.0)
+                u = moving + (self.idle * (1.0 - moving) if self._holding() else 0.0)
+                target = self.thermal.rise * u
+                self._rise = target + (self._rise - target) * math.exp(-dt / self.thermal.time_constant)
+            self._t, self._m = max(t, self._t), m
             return self._rise

@@ -12,8 +12,8 @@ else one fitted to this truth by seed (`mocks.ur.factory_calibration`), and the 
 service reports carries it, so tests and benches know the model the controller moves with.
 
 The arm is a real one unless ``rigid``: the random truth sags under gravity and its payload and warms
-up as its joints work (`mocks.heating`: by its seconds of motion, whatever the host's pace; the world
-evaluates ``truth.grown(ΔT)``), and the controller reports the warming in RTDE ``joint_temperatures``
+up as its joints work (`mocks.heating`: moving, and a little while holding the arm; the world evaluates
+``truth.grown(ΔT)``), and the controller reports the warming in RTDE ``joint_temperatures``
 (`joint_temperatures`). A truth file's
 ``noise.encoder_sigma`` sets the controller's encoder noise and ``noise.standstill_sigma`` how far each
 joint stops off its target, differently at every stop (the arm's repeatability; a random realistic
@@ -60,6 +60,7 @@ from mocks.heating import Heating
 from mocks.ringing import Ringing
 from mocks.ur.arm import AMBIENT_TEMPERATURE, TemperatureFn
 from mocks.ur.factory_calibration import factory_calibration
+from mocks.ur.status import RobotMode
 from mocks.world import World
 
 #: Seconds one GeoCOM measuring RPC (TMC_GetSimpleMea in tracking mode) takes inside the simulated
@@ -156,7 +157,8 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
 
     `rigid` (without `truth`): the random arm without compliance, payload and warm-up; `ideal` (without
     `truth`): without joint errors and lost motion; `warm`: the arm starts at its warmed-up temperature
-    (ΔT = the truth's rise, where motion heads: what a warm-up leaves), so it does not drift.
+    (ΔT = the truth's rise, where continuous motion heads: an arm that has been working), so a fault
+    test's campaign with its warm-up off is not measuring the arm's first warming.
     """
     rng = np.random.default_rng(seed)
     if truth:
@@ -173,11 +175,11 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
     if calibration is None:
         calibration = factory_calibration(geometry, seed)
     controller.set_calibration(calibration)
-    # the joints warm while they move, by the simulated seconds of motion (standing still is host-paced
-    # in fast time: `mocks.heating`)
+    # the joints warm while they move (and a little while they hold the arm), on the controller's clock
     arm = controller.arm
     heating = None if geometry.thermal is None else Heating(
-        geometry.thermal, lambda: arm.motion_seconds, start=geometry.thermal.rise if warm else 0.0)
+        geometry.thermal, controller.clock.now, lambda: arm.motion_seconds,
+        lambda: arm.robot_mode == RobotMode.RUNNING, start=geometry.thermal.rise if warm else 0.0)
     arm.set_temperatures(joint_temperatures(geometry.thermal, heating))
     # a GeoCOM reading integrates the SMR's position over its measuring time
     world = World(geometry, controller.true_joints, acceptance_angle, clock=controller.clock.now,

@@ -10,16 +10,19 @@ import rtde_receive
 
 from hil.arm.thermal import Thermal
 from hil.calibration.synthetic import ENCODER_SIGMA
+from mocks.heating import IDLE_HEAT
 from mocks.station import joint_temperatures, start_station
 from mocks.ur.arm import AMBIENT_TEMPERATURE
 
 
-def test_an_arm_that_stands_still_keeps_its_temperature_however_long_the_host_takes() -> None:
-    """The joints heat by moving (`mocks.heating`): over a quarter of an hour of standing powered (one
-    wall second at 1000x, as a slow host's pause would be) the temperatures the real ur_rtde client
-    reads do not change."""
+def test_an_arm_that_stands_still_warms_only_by_holding_itself() -> None:
+    """The joints heat by working (`mocks.heating`): a quarter of an hour standing powered warms them by
+    at most the holding share of a moving arm's warm-up (before this, the simulator warmed an idle arm
+    as fast as a moving one)."""
     sim = start_station(speed=10.0, seed=3, ideal=True)
     try:
+        truth = sim.info["services"][0]["truth"]
+        thermal = Thermal.from_dict(truth["thermal"])
         r = rtde_receive.RTDEReceiveInterface(sim.address)
         try:
             t0 = sim.state()["time"]
@@ -36,7 +39,12 @@ def test_an_arm_that_stands_still_keeps_its_temperature_however_long_the_host_ta
         sim.stop()
     assert t1 - t0 > 600.0
     assert np.all(before >= AMBIENT_TEMPERATURE)
-    assert after == pytest.approx(before, abs=1e-9)
+    assert np.all(before <= AMBIENT_TEMPERATURE + IDLE_HEAT * thermal.rise_at(t0) + 1e-9)
+    # holding, it warms (a little) ...
+    assert np.all(after > before + 0.5 * IDLE_HEAT * thermal.rise_at(600.0))
+    # ... and never more than the holding share of a moving arm's warm-up over the same time
+    assert np.all(after <= AMBIENT_TEMPERATURE + IDLE_HEAT * thermal.rise_at(t1) + 1e-9)
+    assert np.all(after < AMBIENT_TEMPERATURE + 0.5 * thermal.rise_at(t1))
 
 
 def test_a_rigid_arm_and_a_cold_one_report_the_ambient_temperature() -> None:
