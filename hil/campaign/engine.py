@@ -156,6 +156,14 @@ class PoseSkippedError(HilError):
 
 
 class Clock(Protocol):
+    """The engine's clock: `monotonic` (its statistics' seconds) and `sleep` (station seconds).
+
+    A clock may also have ``station()`` (seconds on the station's clock; else ``monotonic() · speed``)
+    and ``busy()``, a context the engine holds while a step waits on the station: a fast-time
+    simulated station's clock (`hil.station.paced_clock.PacedClock`) runs the simulator fast only
+    then, and at the wall's rate while the plan computes between steps.
+    """
+
     def monotonic(self) -> float: ...
 
     def sleep(self, seconds: float) -> None: ...
@@ -170,9 +178,17 @@ class RealClock:
     def monotonic(self) -> float:
         return time.monotonic()
 
+    def station(self) -> float:
+        """Station seconds: the wall's, times the fast-time factor."""
+        return time.monotonic() * self.speed
+
     def sleep(self, seconds: float) -> None:
         if seconds > 0:
             time.sleep(seconds / self.speed)
+
+
+#: Steps that only tell the plan's progress: the station is not waited on while they run.
+_BOOKKEEPING = (Phase, Emit, Checkpoint)
 
 
 @dataclass
@@ -264,7 +280,8 @@ class Engine:
         self._extend = 0  # request_extend: pending "wait longer" requests for the current suspension
         self._poke = threading.Event()  # wakes a suspension's wait for any request
         self._last_q: np.ndarray | None = None
-        self._t0: float | None = None  # the clock when the run started (`ReadConditions`)
+        self._t0: float | None = None  # the clock when the run started
+        self._s0: float | None = None  # the station's clock then (`ReadConditions`)
         self.current: Acquire | None = None
         self.records: list[PoseRecord] = []
         # events held back for delivery during the next move, each with the record it commits
@@ -395,6 +412,7 @@ class Engine:
     def run(self, plan: Plan) -> Any:
         """Execute `plan` to its end; returns the plan's return value."""
         t0 = self._t0 = self.clock.monotonic()
+        self._s0 = self._station_now()
         self._set_state(RUNNING)
         if self.home is not None:
             self._last_q = np.asarray(self.home, dtype=float)
@@ -435,7 +453,12 @@ class Engine:
         """Run one step of the plan by its handler (`_plan_handlers`); returns the plan's reply."""
         if not isinstance(step, Acquire | Move):  # only a move overlaps a held point's commit
             self._flush()
-        return _handler(self._plan_handlers, step)(step)
+        handler = _handler(self._plan_handlers, step)
+        busy = getattr(self.clock, "busy", None)
+        if busy is None or isinstance(step, _BOOKKEEPING):
+            return handler(step)
+        with busy():  # the station works (and a fast-time one runs fast) while the step waits on it
+            return handler(step)
 
     def _phase(self, step: Phase) -> None:
         self.emit(PhaseChanged(campaign=self.campaign, phase=step.name, detail=step.detail))
@@ -465,9 +488,15 @@ class Engine:
     def station_time(self) -> float:
         """Seconds since the run started, on the station's clock: the engine's clock scaled by its
         ``speed`` (`RealClock` of a fast-time simulation: the simulators' seconds; 1 on a station)."""
-        if self._t0 is None:
+        if self._s0 is None:
             return 0.0
-        return (self.clock.monotonic() - self._t0) * float(getattr(self.clock, "speed", 1.0))
+        return self._station_now() - self._s0
+
+    def _station_now(self) -> float:
+        station = getattr(self.clock, "station", None)
+        if station is not None:
+            return float(station())
+        return self.clock.monotonic() * float(getattr(self.clock, "speed", 1.0))
 
     def _conditions(self, temperatures: bool) -> Conditions:
         """`ReadConditions`: the station time and, when asked and the arm has ``joint_temperatures()``

@@ -168,7 +168,6 @@ def run_calibration(request: CalibrationRequest, setup: StationSetup, taken: Tak
     before motion raises InputError; a store that refuses the result is a fault (exit 3), said.
     """
     from hil.campaign.chooser import campaign_chooser
-    from hil.campaign.engine import RealClock
     from hil.campaign.runner import plan_saver, run_campaign, store_recorder
     from hil.report.result import result_document
     from hil.store import StoreError
@@ -195,10 +194,11 @@ def run_calibration(request: CalibrationRequest, setup: StationSetup, taken: Tak
         # devices go on, and the station closes them after
         close = verify is None
         try:
-            run = run_campaign(config, campaign_chooser(config), bus=bus, campaign=campaign, resume=resume,
-                               devices=taken.devices, clock=RealClock(request.speed),
-                               validation_cycles=request.validation_cycles, lease=lease,
-                               engine_ready=engine_ready, close_devices=close)
+            with setup.clock(request.speed) as clock:
+                run = run_campaign(config, campaign_chooser(config), bus=bus, campaign=campaign,
+                                   resume=resume, devices=taken.devices, clock=clock,
+                                   validation_cycles=request.validation_cycles, lease=lease,
+                                   engine_ready=engine_ready, close_devices=close)
         finally:
             taken.devices_closed = taken.devices_closed or close
         status, detail = status_of(run, events) if status_of is not None else (run.status, "")
@@ -222,7 +222,8 @@ def run_calibration(request: CalibrationRequest, setup: StationSetup, taken: Tak
         from hil.jobs.verification import verify_after
 
         lease.release()  # the verification is a campaign of its own and takes the arm's lease itself
-        result["verification"], verified = verify_after(verify, run, taken, identity, setup.truth, say=say)
+        result["verification"], verified = verify_after(verify, run, taken, identity, setup.truth, say=say,
+                                                          setup=setup)
         try:
             gate.write(lambda: store.set_status(campaign, status, detail=detail or None, result=result))
         except StoreError as exc:

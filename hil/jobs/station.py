@@ -36,6 +36,7 @@ from hil.station.config import StationConfig, check_runnable, load_config
 from hil.station.robot_type import Claim, agreed_robot, check_controller, config_claim, option_claim
 
 if TYPE_CHECKING:
+    from hil.campaign.engine import Clock
     from hil.station.devices import Devices
     from hil.store import Store
 
@@ -114,6 +115,25 @@ class StationSetup:
     identity: dict[str, Any]  # the configuration that identifies a campaign (no addresses of a sim)
     truth: dict[str, Any] | None  # the simulated arm's hidden truth (None: a real station)
     simulator: Any = None  # the running simulator (fault injection), None for a real station
+
+    @contextlib.contextmanager
+    def clock(self, speed: float) -> Iterator[Clock]:
+        """The engine's clock for a run on this station: the wall clock on a real one; on a simulated
+        one in fast time a `PacedClock`, so that the host's computing between steps is not multiplied
+        into simulated standstill (`hil.station.paced_clock`). The simulator gets its full speed back
+        when the run ends."""
+        from hil.campaign.engine import RealClock
+
+        if self.simulator is None or speed == 1.0:
+            yield RealClock(speed)
+            return
+        from hil.station.paced_clock import PacedClock, simulator_pace
+
+        paced = PacedClock(speed, simulator_pace(self.simulator))
+        try:
+            yield paced
+        finally:
+            paced.close()
 
 
 @contextlib.contextmanager

@@ -16,7 +16,14 @@ from typing import TYPE_CHECKING, Any
 
 from hil.errors import InputError
 from hil.jobs.outcome import EXIT_BAD_INPUT, EXIT_FAULT, JobOutcome
-from hil.jobs.station import StationSource, TakenStation, station_setup, store_location, take_station
+from hil.jobs.station import (
+    StationSetup,
+    StationSource,
+    TakenStation,
+    station_setup,
+    store_location,
+    take_station,
+)
 from hil.jobs.words import Say, outage_words, quiet
 
 if TYPE_CHECKING:
@@ -67,7 +74,8 @@ class VerifyAfter:
 
 
 def verify_after(after: VerifyAfter, run: RunOutcome, taken: TakenStation, identity: Mapping[str, Any],
-                 truth: Mapping[str, Any] | None, *, say: Say = quiet) -> tuple[dict[str, Any], int]:
+                 truth: Mapping[str, Any] | None, *, say: Say = quiet, setup: StationSetup | None = None
+                 ) -> tuple[dict[str, Any], int]:
     """``--verify``: the ISO 9283 pose test with the model just accepted, on the same devices.
 
     Returns the result's ``verification`` block and the exit code it asks for (0: done; the test's own
@@ -86,9 +94,11 @@ def verify_after(after: VerifyAfter, run: RunOutcome, taken: TakenStation, ident
                           f"campaign {run.campaign}")
     say("verifying the calibrated model (ISO 9283 pose test)", "information")
     try:
-        done = verify(taken.store, taken.devices, taken.config, identity, taken.robot.as_dict(), model=model,
-                      cube=after.cube, cycles=after.cycles, clock=RealClock(after.speed),
-                      subscribers=after.options.subscribers(), truth=truth)
+        with (setup.clock(after.speed) if setup is not None
+              else contextlib.nullcontext(RealClock(after.speed))) as clock:
+            done = verify(taken.store, taken.devices, taken.config, identity, taken.robot.as_dict(),
+                          model=model, cube=after.cube, cycles=after.cycles, clock=clock,
+                          subscribers=after.options.subscribers(), truth=truth)
     except InputError as exc:  # no configuration serves the cube: the calibration stands, said so
         say(f"error: --verify: {exc}", "error")
         return {"status": "not run", "reason": str(exc)}, EXIT_BAD_INPUT
@@ -121,7 +131,6 @@ def run_verification(request: VerificationRequest, *, subscribers: Sequence[Call
                      say: Say = quiet) -> JobOutcome:
     """Run (or resume) the pose test (module docstring); the outcome's document is its
     ``hil-verification/1``, None unless it finished."""
-    from hil.campaign.engine import RealClock
     from hil.station.devices import HARDWARE_ERRORS
     from hil.store import FINISHED, StoreError
     from hil.verify.session import verify
@@ -154,10 +163,11 @@ def run_verification(request: VerificationRequest, *, subscribers: Sequence[Call
                         "controller's own model)", "information")
 
             try:
-                done = verify(taken.store, taken.devices, config, setup.identity, taken.robot.as_dict(),
-                              model=model, cube=cube, cycles=cycles, clock=RealClock(request.source.speed),
-                              subscribers=subscribers, new=request.new, resume_only=request.resume_only,
-                              truth=setup.truth, on_campaign=started)
+                with setup.clock(request.source.speed) as clock:
+                    done = verify(taken.store, taken.devices, config, setup.identity, taken.robot.as_dict(),
+                                  model=model, cube=cube, cycles=cycles, clock=clock,
+                                  subscribers=subscribers, new=request.new, resume_only=request.resume_only,
+                                  truth=setup.truth, on_campaign=started)
             except StoreError as exc:  # the result could not be recorded (a full disk): a fault
                 say(f"fault: could not record the verification: {exc.__cause__ or exc}", "error")
                 return JobOutcome(EXIT_FAULT, "failed")
