@@ -23,11 +23,11 @@ from hil.calibration.model_file import truth_document, write_json
 from hil.calibration.synthetic import Noise, random_truth
 from hil.campaign.calibration_plan import CALIBRATION
 from hil.campaign.chooser import campaign_chooser
-from hil.campaign.engine import RealClock
 from hil.campaign.events import EventBus, PointMeasured, PoseStarted, Resumed, RunFinished, Suspended
 from hil.campaign.runner import run_campaign
 from hil.station.config import default_config
 from hil.station.devices import open_devices
+from hil.station.paced_clock import PacedClock, simulator_pace
 from hil.store import Store
 from mocks.station import start_station
 from mocks.world import World
@@ -174,9 +174,11 @@ class Station:
 
     def run(self):
         try:
+            # the station's own clock: fast while the engine waits on it, the wall's rate while the
+            # host computes (`hil.station.paced_clock`), as `hil calibrate --sim` runs
+            clock = PacedClock(SPEED, simulator_pace(self.sim))
             return run_campaign(self.config, campaign_chooser(self.config), bus=self.bus,
-                                campaign=self.campaign, clock=RealClock(SPEED),
-                                devices=open_devices(self.config))
+                                campaign=self.campaign, clock=clock, devices=open_devices(self.config))
         finally:
             self.sim.stop()
 
