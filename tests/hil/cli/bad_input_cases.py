@@ -1608,6 +1608,7 @@ def _tripwires(case: Case, station: SimStation | None) -> Iterator[list[Any]]:
 
     opened: list[Any] = []
     saved = [(devices_mod, "open_devices", devices_mod.open_devices),
+             (devices_mod, "ask_controller", devices_mod.ask_controller),
              (station_mod, "start_station", station_mod.start_station),
              (process_mod, "serve", process_mod.serve)]
     real_open = devices_mod.open_devices
@@ -1628,6 +1629,7 @@ def _tripwires(case: Case, station: SimStation | None) -> Iterator[list[Any]]:
         devices_mod.open_devices = open_without_motion
     else:
         devices_mod.open_devices = trip("connected to the robot/tracker before refusing")
+        devices_mod.ask_controller = trip("asked the controller (connected to it) before refusing")
         station_mod.start_station = trip("started the simulated station before refusing")
     process_mod.serve = trip("started serving (hil sim) before refusing")
     tui_saved = None
