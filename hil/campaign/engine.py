@@ -111,8 +111,6 @@ class RunAborted(HilError):
     """The operator (or the caller) aborted the run."""
 
 
-
-
 class StopRequested(RunInterrupted):
     """`Engine.request_interrupt`: the operator stopped the run to continue it later (a UI's quit).
 
