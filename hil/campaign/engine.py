@@ -79,6 +79,7 @@ from hil.campaign.events import (
     Suspended,
     SuspendExtended,
 )
+from hil.campaign.interruption import RunInterrupted  # defined apart: imported by signal handlers
 from hil.campaign.steps import (
     REFERENCE,
     Acquire,
@@ -109,24 +110,6 @@ IDLE, RUNNING, PAUSED, SUSPENDED, STOPPING, ABORTED, INTERRUPTED, DONE, FAILED =
 
 class RunAborted(HilError):
     """The operator (or the caller) aborted the run."""
-
-
-_SIGNAL_NAMES = {2: "Ctrl-C (SIGINT)", 15: "SIGTERM", 1: "a closed terminal (SIGHUP)"}
-
-
-class RunInterrupted(KeyboardInterrupt):
-    """The process was told to stop by signal `signum` (SIGINT, SIGTERM, SIGHUP).
-
-    A KeyboardInterrupt, so no ``except Exception`` on the way swallows it. Unlike `RunAborted`
-    (final), an interrupted campaign stays resumable, as after ``kill -9``.
-    """
-
-    def __init__(self, signum: int = 2) -> None:
-        super().__init__(signum)
-        self.signum = int(signum)
-
-    def __str__(self) -> str:
-        return f"stopped by {_SIGNAL_NAMES.get(self.signum, f'signal {self.signum}')}"
 
 
 class StopRequested(RunInterrupted):

@@ -31,7 +31,7 @@ if TYPE_CHECKING:
     from hil.campaign.runner import RunOutcome
     from hil.station.config import StationConfig
     from hil.verify.cube import Cube
-    from hil.verify.session import ModelInput
+    from hil.verify.inputs import ModelInput
 
 
 def checked_cube(config: StationConfig, sim: bool, tool: Any = None) -> Cube | None:
@@ -39,7 +39,7 @@ def checked_cube(config: StationConfig, sim: bool, tool: Any = None) -> Cube | N
     and the keep-in box for the SMR at `tool` (default: the configured offset) before anything
     connects."""
     from hil.verify.design import check_cube
-    from hil.verify.session import cube_where, requested_cube
+    from hil.verify.inputs import cube_where, requested_cube
 
     cube = requested_cube(config, sim=sim)
     if cube is not None:
@@ -87,7 +87,8 @@ def verify_after(after: VerifyAfter, run: RunOutcome, taken: TakenStation, ident
         return {"status": "not run", "reason": f"the calibration ended {run.status}"}, 0
     from hil.arm.geometry import Geometry
     from hil.campaign.engine import RealClock
-    from hil.verify.session import ModelInput, verify
+    from hil.verify.inputs import ModelInput
+    from hil.verify.session import verify
 
     doc = run.result.model
     model = ModelInput.of(doc, Geometry.from_dict(doc, source="the calibrated model"),
@@ -132,8 +133,6 @@ def run_verification(request: VerificationRequest, *, subscribers: Sequence[Call
     """Run (or resume) the pose test (module docstring); the outcome's document is its
     ``hil-verification/1``, None unless it finished."""
     from hil.station.devices import HARDWARE_ERRORS
-    from hil.store import FINISHED, StoreError
-    from hil.verify.session import verify
 
     model = request.model
     if request.db:  # --db needs no config: refused before a simulated station starts
@@ -153,6 +152,10 @@ def run_verification(request: VerificationRequest, *, subscribers: Sequence[Call
                 return JobOutcome(EXIT_FAULT, "failed")
             assert taken.store is not None
             taken.store.on_outage = outage_words(say)
+            # the run's modules once the station is taken: a refusal before it does not load them
+            from hil.campaign.engine import RealClock
+            from hil.store import FINISHED, StoreError
+            from hil.verify.session import verify
 
             def started(campaign: str, resumed: bool) -> None:
                 # the run's start itself ("starting verification …", its visits, cycles and modes) is
