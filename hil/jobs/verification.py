@@ -153,7 +153,6 @@ def run_verification(request: VerificationRequest, *, subscribers: Sequence[Call
             assert taken.store is not None
             taken.store.on_outage = outage_words(say)
             # the run's modules once the station is taken: a refusal before it does not load them
-            from hil.campaign.engine import RealClock
             from hil.store import FINISHED, StoreError
             from hil.verify.session import verify
 
