@@ -55,6 +55,22 @@ def test_the_automatic_verdict() -> None:
     assert not bad_arm.passed and "class bound" in bad_arm.reason
 
 
+def test_a_campaign_the_stopping_rule_ended_is_judged_against_the_prediction_it_stopped_on() -> None:
+    # the simulated run stopped at 14 poses: cross-validated 0.021 mm, predicted 0.0755 mm, validation
+    # 0.0656 mm — what the campaign said it would measure; rejected against 2 x 0.021 mm before
+    stopped = judge(0.0656e-3, cv(0.021e-3), "ur5e", predicted=0.0755e-3)
+    assert stopped.passed and stopped.threshold == pytest.approx(FLOOR_FACTOR * 0.0755e-3)
+    assert "predicted 0.0755 mm" in stopped.reason and "cross-validated 0.0210 mm" in stopped.reason
+    assert not judge(0.0656e-3, cv(0.021e-3), "ur5e").passed  # not stopped early: the floor is the CV's
+    # a validation far beyond the prediction is still rejected; a prediction below the CV changes nothing
+    assert not judge(0.2e-3, cv(0.021e-3), "ur5e", predicted=0.0755e-3).passed
+    low = judge(0.03e-3, cv(0.021e-3), "ur5e", predicted=0.01e-3)
+    assert low.threshold == pytest.approx(FLOOR_FACTOR * 0.021e-3) and "predicted" not in low.reason
+    # neither lifts the class bound, nor rescues a model worse than nominal
+    assert not judge(0.6e-3, cv(0.3e-3), "ur5e", predicted=0.4e-3).passed
+    assert not judge(0.01e-3, cv(0.01e-3, better=False), "ur5e", predicted=0.05e-3).passed
+
+
 def test_not_better_than_nominal_is_rejected_whatever_the_threshold() -> None:
     for acceptance in (None, 5e-3):
         verdict = judge(0.01e-3, cv(0.01e-3, better=False), "ur5e", acceptance)
