@@ -41,6 +41,7 @@ simulated seconds with a cold laser).
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 from pathlib import Path
 from typing import Any
@@ -152,13 +153,15 @@ class StationService:
 def station_service(controller: Any, truth: str | None = None, seed: int = 0,
                     acceptance_angle: float = 30.0, baudrate: int | None = None,
                     tracker_port: int = 0, rigid: bool = False,
-                    ideal: bool = IDEAL_BY_DEFAULT, warm: bool = False) -> StationService:
+                    ideal: bool = IDEAL_BY_DEFAULT, thermal: bool = True) -> StationService:
     """Build the world and the tracker simulator around a running `SimController`.
 
     `rigid` (without `truth`): the random arm without compliance, payload and warm-up; `ideal` (without
-    `truth`): without joint errors and lost motion; `warm`: the arm starts at its warmed-up temperature
-    (ΔT = the truth's rise, where continuous motion heads: an arm that has been working), so a fault
-    test's campaign with its warm-up off is not measuring the arm's first warming.
+    `truth`): without joint errors and lost motion; `thermal` False (without `truth`): without thermal
+    growth, for tests of something else whose warm-up is off (a warm-up test's arm warms; an arm of
+    fixed temperature is no real arm's, but with its warm-up off a campaign rightly reads any warming or
+    cooling as drift: a fault campaign's arm started at the full rise cooled by 3.4 K toward its
+    campaign's duty, `mocks.heating`).
     """
     rng = np.random.default_rng(seed)
     if truth:
@@ -171,6 +174,8 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
         # arm stop exactly on them, as the simulator's arm did before
         noise = Noise(standstill_sigma=0.0 if rigid or ideal else standstill_sigma(robot))
         geometry, calibration = random_truth(robot, rng, rigid=rigid, ideal=ideal), None
+        if not thermal:
+            geometry = dataclasses.replace(geometry, thermal=None)
     controller.arm.set_standstill(noise.standstill_sigma)
     if calibration is None:
         calibration = factory_calibration(geometry, seed)
@@ -179,7 +184,7 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
     arm = controller.arm
     heating = None if geometry.thermal is None else Heating(
         geometry.thermal, controller.clock.now, lambda: arm.motion_seconds,
-        lambda: arm.robot_mode == RobotMode.RUNNING, start=geometry.thermal.rise if warm else 0.0)
+        lambda: arm.robot_mode == RobotMode.RUNNING)
     arm.set_temperatures(joint_temperatures(geometry.thermal, heating))
     # a GeoCOM reading integrates the SMR's position over its measuring time
     world = World(geometry, controller.true_joints, acceptance_angle, clock=controller.clock.now,
@@ -226,6 +231,8 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
         "clock_pair": clock_pair,
         "tracker_measurements": lambda: simulator.instrument.measurements,
         "tracker_measuring_seconds": lambda: simulator.instrument.measuring_seconds,
+        # the arm's temperature rise now (K), for tests and benches that check what the arm went through
+        "thermal_rise": lambda: 0.0 if heating is None else heating.rise(),
     })
     return StationService(simulator, world, truth_document(geometry, noise, calibration), home, emscon,
                           clocks, controller)
@@ -233,41 +240,41 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
 
 def station_spec(truth: str | None = None, seed: int = 0, acceptance_angle: float = 30.0,
                  baudrate: int | None = None, rigid: bool = False,
-                 ideal: bool = IDEAL_BY_DEFAULT, warm: bool = False) -> str:
+                 ideal: bool = IDEAL_BY_DEFAULT, thermal: bool = True) -> str:
     """The service spec that puts the world and the tracker into the robot simulator's process."""
     import json
 
     options = {"truth": truth, "seed": seed, "acceptance_angle": acceptance_angle, "baudrate": baudrate,
-               "rigid": rigid, "ideal": ideal, **({"warm": True} if warm else {})}
+               "rigid": rigid, "ideal": ideal, **({} if thermal else {"thermal": False})}
     return "mocks.station:station_service " + json.dumps(options)
 
 
 def start_station(robot: str = "ur5e", truth: str | None = None, speed: float = 1.0, seed: int = 0,
                   acceptance_angle: float = 30.0, baudrate: int | None = None, rigid: bool = False,
-                  ideal: bool = IDEAL_BY_DEFAULT, warm: bool = False) -> Any:
+                  ideal: bool = IDEAL_BY_DEFAULT, thermal: bool = True) -> Any:
     """Start the whole simulated station in its own process on a free loopback address.
 
     Returns the running `mocks.ur.process.SimProcess`; ``.info["services"][0]`` holds the tracker's
     URL and pty and the hidden truth. The caller must `stop()` it. `rigid`: a random arm without
     compliance, payload and warm-up (the arm of the simulator before they existed); `ideal`: without
-    joint errors and lost motion (the ideal arm); `warm`: an arm already warmed up (`station_service`).
+    joint errors and lost motion (the ideal arm); `thermal` False: without thermal growth (`station_service`).
     """
     from mocks.ur.controller import SimConfig
     from mocks.ur.testing import start_sim
 
-    spec = station_spec(truth, seed, acceptance_angle, baudrate, rigid, ideal, warm)
-    serial = simulated_serial(robot, seed, truth, rigid, ideal)
+    spec = station_spec(truth, seed, acceptance_angle, baudrate, rigid, ideal, thermal)
+    serial = simulated_serial(robot, seed, truth, rigid, ideal, thermal)
     return start_sim(SimConfig(robot=robot, speed=speed, seed=seed, serial=serial), services=[spec])
 
 
 def simulated_serial(robot: str, seed: int, truth: str | None = None, rigid: bool = False,
-                     ideal: bool = IDEAL_BY_DEFAULT) -> str:
+                     ideal: bool = IDEAL_BY_DEFAULT, thermal: bool = True) -> str:
     """The serial number a simulated arm's controller reports (dashboard ``get serial number``).
 
     Each simulated arm is a robot of its own, as each arm of a plant is: the serial is derived from
     what makes the arm — its type, the seed of its random truth, noise and start pose, the truth file's
-    bytes (sha256), whether it is rigid and whether ideal (a truth file's arm is what the file says,
-    so these two count only without one) — so the same simulated arm always has the same serial (a
+    bytes (sha256), whether it is rigid, ideal or without thermal growth (a truth file's arm is what
+    the file says, so these count only without one) — so the same simulated arm always has the same serial (a
     re-run resumes its campaign, which is found by serial) and two different ones never share one (on
     one machine they would refuse each other as one robot driven twice; the seed alone once made every
     UR5e and UR10e of seed 1 serial 20235500001). 11 digits like a UR serial (ur_rtde refuses a serial
@@ -278,4 +285,6 @@ def simulated_serial(robot: str, seed: int, truth: str | None = None, rigid: boo
     key = f"{robot.lower()}|seed={int(seed)}|truth={truth_sha}|rigid={bool(rigid)}"
     if not truth and not rigid and not ideal:  # the ideal arm keeps the serial it always had
         key += "|realistic"
+    if not truth and not thermal:
+        key += "|no-thermal"
     return f"9999{int(hashlib.sha256(key.encode()).hexdigest(), 16) % 10**7:07d}"
