@@ -22,8 +22,11 @@ How the path is built, and why:
   feasible timing found is kept). The limits are *checked on the sampled path* and a path that cannot
   be brought within them is refused (`SweepRefused`), never clamped.
 * **Stops.** The static poses a sweep campaign still measures (its bootstrap and its validation poses)
-  can be rests of the same tour (`stops`, held `dwell_s`): ordered with the waypoints, each stretch
-  between two rests one rest-to-rest spline — no separate stop-and-go tour to travel.
+  can be rests of the same tour (`stops`, each held its `dwell_s`: one for all or one per stop, since a
+  validation pose is read as a stop-and-go campaign reads it while a bootstrap rest may need fewer
+  readings): ordered with the waypoints, each stretch between two rests one rest-to-rest spline — no
+  separate stop-and-go tour to travel. A tour of rests alone (no waypoints) is allowed: its legs
+  between the rests are the sweep.
 * **Sampling.** One sample per controller period (1/rate_hz; 500 Hz on e-series, UR's RTDE guide): the
   whole timing is stretched by less than one period so the last sample is the end at rest.
 """
@@ -185,7 +188,7 @@ def _leg(knots: np.ndarray, speed: np.ndarray, accel: np.ndarray, rate_hz: float
 def plan_sweep(waypoints: np.ndarray, start: np.ndarray, *, max_speed: np.ndarray | float,
                max_acceleration: np.ndarray | float, rate_hz: float = 500.0,
                spec: RobotSpec | None = None, stops: np.ndarray | None = None,
-               dwell_s: float = 0.0) -> SweepTour:
+               dwell_s: float | Sequence[float] | np.ndarray = 0.0) -> SweepTour:
     """A smooth joint path from `start` (at rest) through `waypoints` (in a short order) to rest at the
     last one, within the per-joint `max_speed` (rad/s) and `max_acceleration` (rad/s²) on every sample
     (module docstring). `SweepRefused` if no timing meets them (it never clamps).
@@ -193,27 +196,36 @@ def plan_sweep(waypoints: np.ndarray, start: np.ndarray, *, max_speed: np.ndarra
     `stops` are poses the tour comes to rest at and holds for `dwell_s` (the static poses a sweep
     campaign still measures — its bootstrap and validation poses — visited in the same tour instead of
     a separate stop-and-go one); they are ordered with the waypoints, and the path between two stops
-    is one rest-to-rest spline. With `spec` every sample is also checked against the arm's joint
+    is one rest-to-rest spline. `dwell_s` is one hold for every stop or one per stop (in `stops`'
+    order). `waypoints` may be empty when there are stops: the tour is then its rests and the legs
+    between them. With `spec` every sample is also checked against the arm's joint
     limits: a spline passing through a waypoint at a joint's limit overshoots it between samples (by
     ~10⁻⁴ rad), so waypoints must keep a margin from the limits; a tour that does not is refused naming
     the sample and joint."""
-    W = np.atleast_2d(np.asarray(waypoints, dtype=float))
     q0 = np.asarray(start, dtype=float).ravel()
-    S = np.zeros((0, q0.size)) if stops is None else np.atleast_2d(np.asarray(stops, dtype=float))
-    if W.ndim != 2 or W.shape[0] < 1 or W.shape[1] != q0.size or S.shape[1:] != (q0.size,) \
+    W = np.asarray(waypoints, dtype=float)
+    W = W.reshape(0, q0.size) if W.size == 0 else np.atleast_2d(W)
+    S = np.zeros((0, q0.size)) if stops is None else np.asarray(stops, dtype=float)
+    S = S.reshape(0, q0.size) if S.size == 0 else np.atleast_2d(S)
+    if W.ndim != 2 or W.shape[0] + S.shape[0] < 1 or W.shape[1] != q0.size or S.shape[1:] != (q0.size,) \
             or not (np.isfinite(W).all() and np.isfinite(q0).all() and np.isfinite(S).all()):
-        raise InputError(f"sweep: waypoints and stops must be (m, {q0.size}) finite joint angles (m ≥ 1 "
-                         f"waypoints) and start {q0.size} finite angles, got {W.shape}, {S.shape} and "
+        raise InputError(f"sweep: waypoints and stops must be (m, {q0.size}) finite joint angles (at least "
+                         f"one of either) and start {q0.size} finite angles, got {W.shape}, {S.shape} and "
                          f"{q0.shape}")
-    if not (np.isfinite(rate_hz) and rate_hz > 0) or not (np.isfinite(dwell_s) and dwell_s >= 0):
-        raise InputError(f"sweep: rate_hz must be positive and dwell_s ≥ 0, got {rate_hz} and {dwell_s}")
+    dwell = np.asarray(dwell_s, dtype=float)
+    if dwell.ndim == 0:
+        dwell = np.full(len(S), float(dwell))
+    if not (np.isfinite(rate_hz) and rate_hz > 0) or dwell.shape != (len(S),) \
+            or not (np.isfinite(dwell).all() and np.all(dwell >= 0)):
+        raise InputError(f"sweep: rate_hz must be positive and dwell_s ≥ 0 (one for all stops or one per "
+                         f"stop, {len(S)}), got {rate_hz} and {np.round(dwell_s, 4).tolist()}")
     n = q0.size
     speed = _limits(max_speed, n, "max_speed")
     accel = _limits(max_acceleration, n, "max_acceleration")
     points = np.vstack([W, S])
     order = tour_order(q0, points, speed)
     is_stop = np.arange(len(points)) >= len(W)
-    hold = round(dwell_s * rate_hz)
+    hold = np.round(np.r_[np.zeros(len(W)), dwell] * rate_hz).astype(int)  # periods held, per point
     pieces: list[np.ndarray] = [q0[None]]
     passes = np.zeros(len(points))
     clock = 0.0  # s at the end of the samples so far
@@ -233,9 +245,9 @@ def plan_sweep(waypoints: np.ndarray, start: np.ndarray, *, max_speed: np.ndarra
         else:
             for m, _ in members:
                 passes[m] = clock
-        if is_stop[k] and hold:
-            pieces.append(np.repeat(knots[-1][None], hold, axis=0))
-            clock += hold / rate_hz
+        if is_stop[k] and hold[k]:
+            pieces.append(np.repeat(knots[-1][None], hold[k], axis=0))
+            clock += hold[k] / rate_hz
         knots, members = [knots[-1]], []
     q = np.vstack(pieces)
     if len(q) < 2:

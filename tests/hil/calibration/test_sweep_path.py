@@ -67,6 +67,34 @@ def test_stops_are_rests_held_for_the_dwell():
     assert d.shape == (3, 6) and set(np.unique(d)) <= {-1.0, 0.0, 1.0}
 
 
+def test_each_stop_holds_its_own_dwell_and_a_tour_of_rests_alone_is_allowed():
+    # a sweep campaign holds its validation rests for the stop-and-go dwell and its bootstrap rests for
+    # fewer readings; with no waypoints the tour is its rests and the legs between them
+    rng = np.random.default_rng(8)
+    stops = rng.uniform(-1.0, 1.0, (4, 6))
+    dwell = np.array([0.1, 0.6, 0.3, 1.2])
+    tour = plan_sweep(np.zeros((0, 6)), np.zeros(6), max_speed=SPEED, max_acceleration=ACCEL, stops=stops,
+                      dwell_s=dwell)
+    assert tour.waypoints.shape == (0, 6) and len(tour.stops) == 4
+    for pose, ts in zip(tour.stops, tour.stop_times, strict=True):
+        k = int(np.flatnonzero(np.all(stops == pose, axis=1))[0])
+        i, hold = round(ts * tour.rate_hz), round(dwell[k] * tour.rate_hz)
+        np.testing.assert_allclose(tour.q[i: i + hold + 1], np.broadcast_to(pose, (hold + 1, 6)), atol=1e-12)
+        if i + hold + 1 < len(tour.q):  # and no longer: the next leg's first sample moves
+            assert np.abs(tour.q[i + hold + 1] - pose).max() > 0
+    moving = np.abs(np.diff(tour.q, axis=0)).max(axis=1) > 0
+    # the whole tour is its legs plus the holds: the dwell is each stop's own, not one for all
+    assert tour.duration == pytest.approx(moving.sum() / tour.rate_hz + dwell.sum(), abs=5 / tour.rate_hz)
+    same = plan_sweep(np.zeros((0, 6)), np.zeros(6), max_speed=SPEED, max_acceleration=ACCEL, stops=stops,
+                      dwell_s=1.2)
+    assert same.duration == pytest.approx(tour.duration + (4 * 1.2 - dwell.sum()), abs=2 / tour.rate_hz)
+    with pytest.raises(InputError, match="one per stop"):
+        plan_sweep(np.zeros((0, 6)), np.zeros(6), max_speed=SPEED, max_acceleration=ACCEL, stops=stops,
+                   dwell_s=[0.1, 0.2])
+    with pytest.raises(InputError, match="at least one"):
+        plan_sweep(np.zeros((0, 6)), np.zeros(6), max_speed=SPEED, max_acceleration=ACCEL)
+
+
 def test_the_order_is_short():
     # poses on a line, shuffled: the shortest tour from one end visits them in order
     line = np.outer(np.arange(1, 9), np.full(6, 0.1))
