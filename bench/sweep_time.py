@@ -51,7 +51,7 @@ from hil.arm.physical import typical_compliance
 from hil.calibration.identification import identify, register
 from hil.calibration.measurements import Measurements
 from hil.calibration.selection import design_space
-from hil.calibration.sweep_fit import fit_sweep
+from hil.calibration.sweep_fit import fit_sweep, without_intervals
 from hil.calibration.sweep_path import plan_sweep
 from hil.calibration.synthetic import Noise, measure, random_truth, true_points
 from hil.calibration.synthetic_stream import SplinePath, sweep_streams
@@ -59,15 +59,23 @@ from hil.calibration.timed_selection import select_timed
 from hil.campaign.chooser import DWELL_OVERHEAD
 from hil.campaign.steps import APPROACH, approach_seconds
 from selector.candidates import Constraints
-from selector.motion_time import Dwell
+from selector.motion_time import Dwell, MotionProfile
+from selector.order import order_poses
 
 #: The station's default movej (`hil.station.config`: robot.speed 0.5 rad/s, robot.acceleration 1.0 rad/s²).
 SPEED, ACCELERATION = 0.5, 1.0
 #: The campaign's dwell per static pose (`hil.campaign.chooser.pose_dwell` with the defaults: "stable"
 #: settling adds nothing beyond the readings, 5 readings × emScon's 0.5 s measuring time, the overhead and
 #: the approach leg).
-DWELL = Dwell(settle=0.0, measure=5 * 0.5, overhead=DWELL_OVERHEAD + approach_seconds(APPROACH, SPEED,
-                                                                                     ACCELERATION))
+READINGS, READING_S = 5, 0.5
+DWELL = Dwell(settle=0.0, measure=READINGS * READING_S,
+              overhead=DWELL_OVERHEAD + approach_seconds(APPROACH, SPEED, ACCELERATION))
+#: Seconds either side of a validation rest whose tracker samples the fit does not get (`without_rests`):
+#: hil's choice, 50 × the join's worst first-map error seen (~1 ms) and a negligible share of a tour.
+REST_MARGIN_S = 0.05
+#: The fewest poses `select_timed` chooses (the 31 parameters of the fitted class, 3 coordinates a pose);
+#: a sweep through fewer waypoints takes the first of those in the tour's order.
+FEWEST = 12
 #: Joint-angle harmonics of orders 1 and 2 of every joint (57 + 6j + 0..3) and the lost motion (93..98).
 HARMONICS = [57 + 6 * j + k for j in range(6) for k in range(4)]
 LOST_MOTION = list(range(93, 99))
@@ -85,6 +93,32 @@ def static_measurements(truth, q: np.ndarray, rng: np.random.Generator) -> Measu
     return Measurements.from_arrays(q_read, p, directions=np.tile(UP, (len(q), 1)))
 
 
+def boot_dwell(readings: int) -> float:
+    """Seconds a bootstrap rest of the sweep holds: `readings` emScon stationary readings (0.5 s each,
+    as the campaign's) and the campaign's overhead, no approach leg — the fit takes a bootstrap pose
+    from the side the tour arrives from (its lost motion's sign is known), so no move from below."""
+    return readings * READING_S + DWELL_OVERHEAD
+
+
+def boot_noise(readings: int) -> Noise:
+    """The static rows' noise for `readings` readings: this bench's static poses (5 readings) are drawn
+    with one reading's σ (`Noise()`, both modes alike: pessimistic by √5 for both), so n readings get
+    √(5/n) of it — fewer readings cost the bootstrap rows exactly the averaging they lose."""
+    k = np.sqrt(READINGS / readings)
+    return Noise(distance_sigma=Noise().distance_sigma * k, angle_sigma=Noise().angle_sigma * k)
+
+
+def rest_intervals(clocks, tour, rests: np.ndarray, dwell: float) -> list[tuple[float, float]]:
+    """The tracker-clock stretches while the arm rests at the validation poses (± `REST_MARGIN_S`), for
+    `without_intervals`: the fit must never see a validation pose. A campaign marks them by the
+    controller's timestamps and the join's first clock map (good to milliseconds); the bench maps the
+    tour's times through the simulator's tracker clock, and the margin covers far more than the
+    difference."""
+    return [tuple(map(float, clocks.tracker.reading(np.array([ts - REST_MARGIN_S,
+                                                               ts + dwell + REST_MARGIN_S]))))
+            for ts in tour.stop_times[rests]]
+
+
 def station(robot: str, seed: int, args: argparse.Namespace) -> list[dict]:
     rng = np.random.default_rng(1000 + seed)
     truth = random_truth(robot, rng, ideal=False)
@@ -97,6 +131,7 @@ def station(robot: str, seed: int, args: argparse.Namespace) -> list[dict]:
     pick = rng.permutation(len(cands.q))
     validation = cands.q[pick[: args.validation]]
     held_out = cands.q[pick[args.validation: args.validation + args.held_out]]
+    movej = MotionProfile(SPEED, ACCELERATION, tuple(map(float, spec.max_joint_speed)))
 
     def accuracy(geometry) -> tuple[float, float]:
         return truth_rms(truth, geometry, validation), truth_rms(truth, geometry, held_out)
@@ -109,48 +144,69 @@ def station(robot: str, seed: int, args: argparse.Namespace) -> list[dict]:
     meas = static_measurements(truth, chosen, rng)
     sg = identify(meas, robot, compliance=True, payload=truth.payload, joint_errors=HARMONICS,
                   reject_outliers=False)
-    rows = [dict(mode="stop-and-go", speed=None, waypoints=len(chosen),
-                 time=report["predicted"]["robot_time"], rms=accuracy(sg.geometry),
+    # the calibration part alone: the same poses' own best tour at the station's movej, with their dwell
+    calibration = order_poses(chosen, profile=movej)[1] + DWELL.seconds * len(chosen)
+    validation_only = order_poses(validation, profile=movej)[1] + DWELL.seconds * len(validation)
+    rows = [dict(mode="stop-and-go", speed=None, waypoints=len(chosen), boot=0,
+                 time=report["predicted"]["robot_time"], calibration=calibration, rms=accuracy(sg.geometry),
+                 static=DWELL.seconds * (len(chosen) + len(validation)), validation_only=validation_only,
                  took=time.perf_counter() - t0)]
+    rows[0]["tour"] = rows[0]["time"] - rows[0]["static"]
     for count in args.waypoints:
-        # the sweep's waypoints: the time-aware poses themselves, or a time-aware choice of fewer
+        # the sweep's waypoints: the time-aware poses themselves, or a time-aware choice of fewer (the
+        # bootstrap poses among them), or none: the tour is then its rests and the legs between them
         t0 = time.perf_counter()
-        ways = chosen if count >= len(chosen) else np.array(select_timed(robot, count, **timed)["poses"])
-        boot_q = ways[: args.bootstrap]
+        pool = chosen if count >= len(chosen) else np.array(
+            select_timed(robot, max(count, args.bootstrap, FEWEST), **timed)["poses"])
+        # the bootstrap: poses spread along the tour (its visiting order), so spread in the workspace
+        pick_boot = np.zeros(len(pool), dtype=bool)
+        pick_boot[np.unique(np.linspace(0, len(pool) - 1, args.bootstrap).round().astype(int))] = True
+        boot_q = pool[pick_boot]
+        # the sweep's waypoints: the rest of the first `count`, less the bootstrap (the tour rests at those)
+        ways = pool[: count][~pick_boot[: count]]
         # the bootstrap's first registration, as the campaign's bootstrap gives it before the sweep
         first = register(static_measurements(truth, boot_q, np.random.default_rng(seed)), robot,
                          smr_guess=truth.smr + 0.002)
         first.payload, first.compliance = truth.payload, typical_compliance(robot)
-        limit = DynamicsModel(first).acceleration_limit(ways).min(axis=0)
+        limit = DynamicsModel(first).acceleration_limit(np.vstack([pool, validation])).min(axis=0)
         chose = time.perf_counter() - t0
+        boot_s = boot_dwell(args.boot_readings)
         for v in args.speeds:
             t0 = time.perf_counter()
             joint_speed = np.minimum(v / spec.reach, spec.max_joint_speed)
-            # one tour: the bootstrap and validation poses are its rests (each held for the campaign's
-            # dwell and measured statically, from the side the tour arrives from), the waypoints swept
-            tour = plan_sweep(ways, boot_q[0], max_speed=joint_speed, max_acceleration=0.9 * limit,
-                              rate_hz=spec.rate_hz, spec=spec, stops=np.vstack([boot_q, validation]),
-                              dwell_s=DWELL.seconds)
+            plan = dict(max_speed=joint_speed, max_acceleration=args.acceleration * limit,
+                        rate_hz=spec.rate_hz, spec=spec)
+            # one tour: the bootstrap and validation poses are its rests (the validation held for the
+            # campaign's dwell, the bootstrap for its readings; each measured statically from the side
+            # the tour arrives from), the waypoints swept
+            stops = np.vstack([boot_q, validation])
+            dwell = np.r_[np.full(len(boot_q), boot_s), np.full(len(validation), DWELL.seconds)]
+            tour = plan_sweep(ways, boot_q[0], stops=stops, dwell_s=dwell, **plan)
+            # the calibration part alone: the same sweep without the validation rests
+            cal_tour = plan_sweep(ways, boot_q[0], stops=boot_q, dwell_s=boot_s, **plan)
             directions = tour.approach_directions()
             is_boot = np.array([any(np.allclose(p, b) for b in boot_q) for p in tour.stops])
-            q_read, p = measure(truth, tour.stops[is_boot], Noise(), rng, directions=directions[is_boot])
+            q_read, p = measure(truth, tour.stops[is_boot], boot_noise(args.boot_readings), rng,
+                                directions=directions[is_boot])
             boot = Measurements.from_arrays(q_read, p, directions=directions[is_boot])
             start = register(boot, robot, smr_guess=truth.smr + 0.002)
             start.payload, start.compliance = truth.payload, typical_compliance(robot)
             s = sweep_streams(truth, seed=seed, path=SplinePath(tour.t, tour.q))
-            fit = fit_sweep(start, s.joints, s.tracker, static=boot, joint_errors=HARMONICS + LOST_MOTION)
+            tracker = without_intervals(s.tracker, rest_intervals(s.clocks, tour, ~is_boot, DWELL.seconds))
+            fit = fit_sweep(start, s.joints, tracker, static=boot, joint_errors=HARMONICS + LOST_MOTION)
             want = s.clocks.controller_from_tracker()
             c = fit.clock
             # the campaign's validation at its rests, each from the side the tour came from
             vq, vd = tour.stops[~is_boot], directions[~is_boot]
             e = Kinematics(fit.geometry).points(vq, directions=vd) - true_points(truth, vq, directions=vd)
             val = float(np.sqrt(np.mean(np.sum(e**2, axis=1))))
-            moving = tour.duration - DWELL.seconds * len(tour.stops)
-            rows.append(dict(mode="sweep", speed=v, waypoints=len(ways), time=tour.duration,
+            static = float(dwell.sum())
+            rows.append(dict(mode="sweep", speed=v, waypoints=len(ways) + len(boot_q), boot=len(boot_q),
+                             time=tour.duration, calibration=cal_tour.duration,
                              rms=(val, truth_rms(truth, fit.geometry, held_out)),
                              clock_err=float(c.map(c.t_ref) - want(c.t_ref)),
                              clock_sigma=c.sigma_at_ref_s, used_per_s=fit.trusted / tour.duration,
-                             tour=moving, static=DWELL.seconds * len(tour.stops), v_rms=s.tool_speed_rms,
+                             tour=tour.duration - static, static=static, v_rms=s.tool_speed_rms,
                              left=fit.left_out, took=chose + time.perf_counter() - t0))
             chose = 0.0
     return rows
@@ -166,7 +222,11 @@ def main() -> None:
                         help="waypoint counts of the sweep (≥ the time-aware pose count: all of them)")
     parser.add_argument("--validation", type=int, default=20)
     parser.add_argument("--held-out", type=int, default=300)
-    parser.add_argument("--bootstrap", type=int, default=8)
+    parser.add_argument("--bootstrap", type=int, default=8, help="static rests the sweep's fit registers on")
+    parser.add_argument("--boot-readings", type=int, default=READINGS,
+                        help="emScon stationary readings at each bootstrap rest (validation rests: always 5)")
+    parser.add_argument("--acceleration", type=float, default=0.9,
+                        help="the sweep's joint acceleration limit × the deflection model's quasi-static one")
     parser.add_argument("--candidates", type=int, default=5000)
     parser.add_argument("--search-time", type=float, default=5.0)
     parser.add_argument("--quick", action="store_true")
@@ -175,28 +235,34 @@ def main() -> None:
     args.waypoints = [int(v) for v in args.waypoints.split(",")]
     if args.quick:
         args.stations, args.speeds, args.waypoints = 1, args.speeds[1:2], args.waypoints[:1]
-    print(f"{'robot':6} {'stn':>3} {'mode':11} {'ways':>4} {'v m/s':>5} {'robot s':>7} {'dwell s':>8} "
-          f"{'move s':>6} {'time/SG':>7} {'val µm':>6} {'held µm':>7} {'held/SG':>7} {'clock err µs':>12} "
-          f"{'σ µs':>5} {'used/s':>6} {'v_rms':>5} {'left out':>18} {'took s':>6}")
+    print(f"{'robot':6} {'stn':>3} {'mode':11} {'ways':>4} {'boot':>4} {'v m/s':>5} {'robot s':>7} "
+          f"{'dwell s':>7} {'move s':>6} {'time/SG':>7} {'cal s':>6} {'cal/SG':>6} {'val µm':>6} "
+          f"{'held µm':>7} {'held/SG':>7} {'clock err µs':>12} {'σ µs':>5} {'used/s':>6} {'v_rms':>5} "
+          f"{'left out':>18} {'took s':>6}")
+    floors = []
     for robot in args.robots.split(","):
         for seed in range(args.stations):
             rows = station(robot, seed, args)
             sg = rows[0]
+            floors.append((robot, seed, sg["validation_only"], sg["validation_only"] / sg["time"]))
             for r in rows:
                 sweep = r["mode"] == "sweep"
                 left = "" if not sweep else ",".join(f"{k[:4]}{v}" for k, v in r["left"].items() if v)
                 cells = [f"{robot:6}", f"{seed:3d}", f"{r['mode']:11}", f"{r['waypoints']:4d}",
-                         f"{r['speed'] or 0:5.2f}", f"{r['time']:7.1f}",
-                         f"{r['static']:8.1f}" if sweep else f"{'':8}",
-                         f"{r['tour']:6.1f}" if sweep else f"{'':6}",
-                         f"{r['time'] / sg['time']:7.2f}", f"{r['rms'][0] * 1e6:6.1f}",
-                         f"{r['rms'][1] * 1e6:7.1f}", f"{r['rms'][1] / sg['rms'][1]:7.2f}"]
+                         f"{r['boot']:4d}", f"{r['speed'] or 0:5.2f}", f"{r['time']:7.1f}",
+                         f"{r['static']:7.1f}", f"{r['tour']:6.1f}", f"{r['time'] / sg['time']:7.2f}",
+                         f"{r['calibration']:6.1f}", f"{r['calibration'] / sg['calibration']:6.2f}",
+                         f"{r['rms'][0] * 1e6:6.1f}", f"{r['rms'][1] * 1e6:7.1f}",
+                         f"{r['rms'][1] / sg['rms'][1]:7.2f}"]
                 if sweep:
                     cells += [f"{r['clock_err'] * 1e6:12.2f}", f"{r['clock_sigma'] * 1e6:5.2f}",
                               f"{r['used_per_s']:6.0f}", f"{r['v_rms']:5.2f}", f"{left:>18}"]
                 else:
                     cells += [f"{'':12}", f"{'':5}", f"{'':6}", f"{'':5}", f"{'':18}"]
                 print(" ".join([*cells, f"{r['took']:6.1f}"]), flush=True)
+    print("\nthe validation alone (its static poses in their own best movej tour, each with its dwell):")
+    for robot, seed, t, ratio in floors:
+        print(f"  {robot} station {seed}: {t:.1f} s = {ratio:.2f} × stop-and-go's robot time")
 
 
 if __name__ == "__main__":
