@@ -184,6 +184,9 @@ def station(robot: str, seed: int, args: argparse.Namespace) -> list[dict]:
             tour = plan_sweep(ways, boot_q[0], stops=stops, dwell_s=dwell, **plan)
             # the calibration part alone: the same sweep without the validation rests
             cal_tour = plan_sweep(ways, boot_q[0], stops=boot_q, dwell_s=boot_s, **plan)
+            # and the validation alone at the sweep's limits: what any tour measuring it costs at least
+            val_tour = plan_sweep(np.zeros((0, 6)), validation[0], stops=validation, dwell_s=DWELL.seconds,
+                                  **plan)
             directions = tour.approach_directions()
             is_boot = np.array([any(np.allclose(p, b) for b in boot_q) for p in tour.stops])
             q_read, p = measure(truth, tour.stops[is_boot], boot_noise(args.boot_readings), rng,
@@ -203,6 +206,7 @@ def station(robot: str, seed: int, args: argparse.Namespace) -> list[dict]:
             static = float(dwell.sum())
             rows.append(dict(mode="sweep", speed=v, waypoints=len(ways) + len(boot_q), boot=len(boot_q),
                              time=tour.duration, calibration=cal_tour.duration,
+                             validation_only=val_tour.duration,
                              rms=(val, truth_rms(truth, fit.geometry, held_out)),
                              clock_err=float(c.map(c.t_ref) - want(c.t_ref)),
                              clock_sigma=c.sigma_at_ref_s, used_per_s=fit.trusted / tour.duration,
@@ -235,7 +239,7 @@ def main() -> None:
     args.waypoints = [int(v) for v in args.waypoints.split(",")]
     if args.quick:
         args.stations, args.speeds, args.waypoints = 1, args.speeds[1:2], args.waypoints[:1]
-    print(f"{'robot':6} {'stn':>3} {'mode':11} {'ways':>4} {'boot':>4} {'v m/s':>5} {'robot s':>7} "
+    print(f"{'robot':6} {'stn':>3} {'mode':11} {'pose':>4} {'boot':>4} {'v m/s':>5} {'robot s':>7} "
           f"{'dwell s':>7} {'move s':>6} {'time/SG':>7} {'cal s':>6} {'cal/SG':>6} {'val µm':>6} "
           f"{'held µm':>7} {'held/SG':>7} {'clock err µs':>12} {'σ µs':>5} {'used/s':>6} {'v_rms':>5} "
           f"{'left out':>18} {'took s':>6}")
@@ -252,6 +256,7 @@ def main() -> None:
                          f"{r['boot']:4d}", f"{r['speed'] or 0:5.2f}", f"{r['time']:7.1f}",
                          f"{r['static']:7.1f}", f"{r['tour']:6.1f}", f"{r['time'] / sg['time']:7.2f}",
                          f"{r['calibration']:6.1f}", f"{r['calibration'] / sg['calibration']:6.2f}",
+                         f"{r['validation_only']:6.1f}",
                          f"{r['rms'][0] * 1e6:6.1f}", f"{r['rms'][1] * 1e6:7.1f}",
                          f"{r['rms'][1] / sg['rms'][1]:7.2f}"]
                 if sweep:
@@ -260,9 +265,10 @@ def main() -> None:
                 else:
                     cells += [f"{'':12}", f"{'':5}", f"{'':6}", f"{'':5}", f"{'':18}"]
                 print(" ".join([*cells, f"{r['took']:6.1f}"]), flush=True)
-    print("\nthe validation alone (its static poses in their own best movej tour, each with its dwell):")
+    print("\nval s: the validation alone (its static poses in their own best tour, each with the campaign's "
+          "dwell;\nstop-and-go at the station's movej, a sweep at its own limits):")
     for robot, seed, t, ratio in floors:
-        print(f"  {robot} station {seed}: {t:.1f} s = {ratio:.2f} × stop-and-go's robot time")
+        print(f"  {robot} station {seed}: at movej {t:.1f} s = {ratio:.2f} × stop-and-go's robot time")
 
 
 if __name__ == "__main__":

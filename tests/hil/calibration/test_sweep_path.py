@@ -6,7 +6,14 @@ import pytest
 
 from hil.arm.catalog import get_robot
 from hil.calibration.selection import hidden_reason
-from hil.calibration.sweep_path import SweepRefused, SweepTour, check_sweep, plan_sweep, tour_order
+from hil.calibration.sweep_path import (
+    SweepRefused,
+    SweepTour,
+    check_sweep,
+    leg_seconds,
+    plan_sweep,
+    tour_order,
+)
 from hil.calibration.synthetic import random_configurations, random_truth
 from hil.errors import InputError
 
@@ -93,6 +100,18 @@ def test_each_stop_holds_its_own_dwell_and_a_tour_of_rests_alone_is_allowed():
                    dwell_s=[0.1, 0.2])
     with pytest.raises(InputError, match="at least one"):
         plan_sweep(np.zeros((0, 6)), np.zeros(6), max_speed=SPEED, max_acceleration=ACCEL)
+
+
+def test_the_order_distance_is_a_rest_to_rest_leg_time():
+    # the ordering's distance is what one rest-to-rest leg of the tour takes (its first timing, exact
+    # for one cubic segment), so a tour of rests is ordered by the time it costs
+    rng = np.random.default_rng(9)
+    for _ in range(5):
+        a, b = rng.uniform(-1.0, 1.0, (2, 6))
+        b[rng.integers(6)] = a[rng.integers(6)]  # any joint may stand
+        leg = plan_sweep(np.zeros((0, 6)), a, max_speed=SPEED, max_acceleration=ACCEL, stops=b[None])
+        assert leg.duration == pytest.approx(float(leg_seconds(a, b, SPEED, ACCEL)), rel=0.02, abs=0.004)
+    assert float(leg_seconds(a, b, SPEED)) == pytest.approx(np.max(np.abs(b - a) / SPEED))
 
 
 def test_the_order_is_short():
