@@ -19,22 +19,38 @@ station per robot, one speed, one waypoint count). For each robot and station (a
   `hil.campaign.chooser.pose_dwell`). The poses are measured with the tracker's noise (`Noise()`), each
   approached from below, and fitted by `identify` with compliance and the joint-angle harmonics of orders
   1–2 (the model class the sweep fits too, lost motion absorbed as the constant it is then).
-* **Sweep** at each tool speed (`--speeds`) through `--waypoints` time-aware poses (a time-aware choice
-  for that count — it may take a few more — or all of stop-and-go's): one tour
-  (`hil.calibration.sweep_path.plan_sweep`) whose rests are the `--bootstrap` first waypoints and the
-  validation poses, each held for the same dwell and measured statically from the side the tour
-  arrives from; every joint's speed limit the tool speed over the arm's reach, its acceleration limit
-  0.9 × the deflection model's quasi-static limit at the waypoints (`DynamicsModel.acceleration_limit`),
-  so the fit can trust the samples. The tour is streamed by the simulator's clocks and noise
+* **Sweep** at each tool speed (`--speeds`) for each `--waypoints` count and each `--bootstrap` count:
+  one tour (`hil.calibration.sweep_path.plan_sweep`, ordered by the rest-to-rest leg time) whose rests
+  are the bootstrap poses (spread along a time-aware choice of at least 12 poses) and the validation
+  poses, and whose waypoints are the rest of that choice's first `--waypoints` poses (0: none, the tour
+  is its rests and the legs between them, all of it streamed). A validation rest is stop-and-go's pose:
+  held for the campaign's dwell (approach leg included, so approached from below in every joint as the
+  engine does). A bootstrap rest is held for `--boot-readings` emScon readings and the overhead (no
+  approach leg: the fit takes it from the side the tour arrives from); its static rows' noise is
+  scaled by √(5/readings) against the bench's 5-reading poses. Every joint's speed limit is the tool
+  speed over the arm's reach, its acceleration limit `--acceleration` × the deflection model's
+  quasi-static limit at the tour's poses (`DynamicsModel.acceleration_limit`), so the fit can trust the
+  samples. The tour is streamed by the simulator's clocks and noise
   (`hil.calibration.synthetic_stream.sweep_streams` along the tour: the controller at 500 Hz, the
-  tracker at 1000 Hz, 35 ppm apart) and fitted by `hil.calibration.sweep_fit.fit_sweep` from the
-  bootstrap's registration (its poses as static rows, compliance, the same harmonics and the lost
-  motion, which the static rows against the moving ones identify). Robot time is the tour's duration.
+  tracker at 1000 Hz, 35 ppm apart), the validation rests' stretches are cut out of the tracker
+  stream (`sweep_fit.without_intervals`, ± 50 ms: the fit never sees a validation pose), and it is
+  fitted by `hil.calibration.sweep_fit.fit_sweep` from the bootstrap's registration (its poses as
+  static rows, compliance, the same harmonics and the lost motion, which the static rows against the
+  moving ones identify). Robot time is the tour's duration.
 
-Columns: mode, waypoints, tool speed, robot time, of which dwelling at rests and moving, the time ratio
-to stop-and-go (target ≤ 1/3), validation and held-out RMS (µm) and the held-out ratio (target ≤ 1.05),
-the clock offset's error against the simulator's truth and its stated σ, the trusted samples per second
-of tour, the tour's RMS tool speed, the samples left out by reason, and the bench's own seconds.
+Columns: mode; pose: calibration poses visited (stop-and-go's measured poses; a sweep's rests and
+waypoints); boot: the sweep's bootstrap rests; tool speed; robot time, of which dwelling at rests and
+moving; the time ratio to stop-and-go (target ≤ 1/3); **cal s, cal/SG: the calibration part alone**
+— the robot time of a tour acquiring the calibration data without the validation (stop-and-go: its
+chosen poses' own best movej tour with their dwell; sweep: the same sweep without the validation
+rests) and its ratio, a separate figure beside the whole campaign's, never instead of it; val s: the
+validation alone, its poses in their own best tour with the campaign's dwell (stop-and-go's movej;
+the sweep's limits), the least any tour measuring it takes; validation and held-out RMS (µm) and
+the held-out ratio (target ≤ 1.05); the clock offset's error against the simulator's truth and its
+stated σ; the trusted samples per second of tour; the tour's RMS tool speed; the samples left out by
+reason (the validation rests cut out are not counted; the 50 ms after each is, as "after a gap"); and
+the bench's own seconds. Stop-and-go's tour comes from a search of `--search-time` wall seconds, so
+a loaded host may find a slightly different tour (±1 pose, ±2 s).
 """
 
 from __future__ import annotations
@@ -152,15 +168,19 @@ def station(robot: str, seed: int, args: argparse.Namespace) -> list[dict]:
                  static=DWELL.seconds * (len(chosen) + len(validation)), validation_only=validation_only,
                  took=time.perf_counter() - t0)]
     rows[0]["tour"] = rows[0]["time"] - rows[0]["static"]
-    for count in args.waypoints:
+    pools: dict[int, np.ndarray] = {}
+    for count, n_boot in [(c, b) for c in args.waypoints for b in args.bootstrap]:
         # the sweep's waypoints: the time-aware poses themselves, or a time-aware choice of fewer (the
         # bootstrap poses among them), or none: the tour is then its rests and the legs between them
         t0 = time.perf_counter()
-        pool = chosen if count >= len(chosen) else np.array(
-            select_timed(robot, max(count, args.bootstrap, FEWEST), **timed)["poses"])
+        size = max(count, n_boot, FEWEST)
+        if size not in pools:
+            pools[size] = (chosen if count >= len(chosen)
+                           else np.array(select_timed(robot, size, **timed)["poses"]))
+        pool = pools[size]
         # the bootstrap: poses spread along the tour (its visiting order), so spread in the workspace
         pick_boot = np.zeros(len(pool), dtype=bool)
-        pick_boot[np.unique(np.linspace(0, len(pool) - 1, args.bootstrap).round().astype(int))] = True
+        pick_boot[np.unique(np.linspace(0, len(pool) - 1, n_boot).round().astype(int))] = True
         boot_q = pool[pick_boot]
         # the sweep's waypoints: the rest of the first `count`, less the bootstrap (the tour rests at those)
         ways = pool[: count][~pick_boot[: count]]
@@ -176,9 +196,10 @@ def station(robot: str, seed: int, args: argparse.Namespace) -> list[dict]:
             joint_speed = np.minimum(v / spec.reach, spec.max_joint_speed)
             plan = dict(max_speed=joint_speed, max_acceleration=args.acceleration * limit,
                         rate_hz=spec.rate_hz, spec=spec)
-            # one tour: the bootstrap and validation poses are its rests (the validation held for the
-            # campaign's dwell, the bootstrap for its readings; each measured statically from the side
-            # the tour arrives from), the waypoints swept
+            # one tour: the bootstrap and validation poses are its rests, the waypoints swept. A validation
+            # rest is stop-and-go's: held for the campaign's dwell, approach leg included, so approached
+            # from below in every joint as the engine does; a bootstrap rest is held for its readings and
+            # measured from the side the tour arrives from (the fit is told which)
             stops = np.vstack([boot_q, validation])
             dwell = np.r_[np.full(len(boot_q), boot_s), np.full(len(validation), DWELL.seconds)]
             tour = plan_sweep(ways, boot_q[0], stops=stops, dwell_s=dwell, **plan)
@@ -199,15 +220,11 @@ def station(robot: str, seed: int, args: argparse.Namespace) -> list[dict]:
             fit = fit_sweep(start, s.joints, tracker, static=boot, joint_errors=HARMONICS + LOST_MOTION)
             want = s.clocks.controller_from_tracker()
             c = fit.clock
-            # the campaign's validation at its rests, each from the side the tour came from
-            vq, vd = tour.stops[~is_boot], directions[~is_boot]
-            e = Kinematics(fit.geometry).points(vq, directions=vd) - true_points(truth, vq, directions=vd)
-            val = float(np.sqrt(np.mean(np.sum(e**2, axis=1))))
             static = float(dwell.sum())
             rows.append(dict(mode="sweep", speed=v, waypoints=len(ways) + len(boot_q), boot=len(boot_q),
                              time=tour.duration, calibration=cal_tour.duration,
                              validation_only=val_tour.duration,
-                             rms=(val, truth_rms(truth, fit.geometry, held_out)),
+                             rms=accuracy(fit.geometry),
                              clock_err=float(c.map(c.t_ref) - want(c.t_ref)),
                              clock_sigma=c.sigma_at_ref_s, used_per_s=fit.trusted / tour.duration,
                              tour=tour.duration - static, static=static, v_rms=s.tool_speed_rms,
@@ -226,7 +243,8 @@ def main() -> None:
                         help="waypoint counts of the sweep (≥ the time-aware pose count: all of them)")
     parser.add_argument("--validation", type=int, default=20)
     parser.add_argument("--held-out", type=int, default=300)
-    parser.add_argument("--bootstrap", type=int, default=8, help="static rests the sweep's fit registers on")
+    parser.add_argument("--bootstrap", default="8",
+                        help="static rests the sweep's fit registers on (a comma list: one sweep each)")
     parser.add_argument("--boot-readings", type=int, default=READINGS,
                         help="emScon stationary readings at each bootstrap rest (validation rests: always 5)")
     parser.add_argument("--acceleration", type=float, default=0.9,
@@ -237,6 +255,7 @@ def main() -> None:
     args = parser.parse_args()
     args.speeds = [float(v) for v in args.speeds.split(",")]
     args.waypoints = [int(v) for v in args.waypoints.split(",")]
+    args.bootstrap = [int(v) for v in args.bootstrap.split(",")]
     if args.quick:
         args.stations, args.speeds, args.waypoints = 1, args.speeds[1:2], args.waypoints[:1]
     print(f"{'robot':6} {'stn':>3} {'mode':11} {'pose':>4} {'boot':>4} {'v m/s':>5} {'robot s':>7} "
