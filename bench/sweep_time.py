@@ -8,7 +8,8 @@ robot, 1 m/s, one waypoint count, a 2 s pose search). For each robot and station
   `--validation` poses both modes visit and measure statically (what a campaign reports; 20 poses are a
   noisy sample of it), and at `--held-out` further poses no mode visits (300: the model's accuracy
   over the workspace, the figure the 5 % criterion is read on). Both are drawn from the selector's
-  feasible candidates for the station (`hil.calibration.selection.design_space`: reach, the tracker's
+  feasible candidates for the station, in a draw of their own (not the candidates the selectors choose
+  from, so no fit ever sees them) (`hil.calibration.selection.design_space`: reach, the tracker's
   range, acceptance and line of sight, the keep-in box). Held-out poses are approached from below in
   every joint, as the campaign engine approaches its poses.
 * **Stop-and-go** (today's time-aware campaign): `hil.calibration.timed_selection.select_timed` chooses
@@ -89,6 +90,9 @@ DWELL = Dwell(settle=0.0, measure=READINGS * READING_S,
 #: Seconds either side of a validation rest whose tracker samples the fit does not get (`without_rests`):
 #: hil's choice, 50 × the join's worst first-map error seen (~1 ms) and a negligible share of a tour.
 REST_MARGIN_S = 0.05
+#: Seed offset of the validation and held-out poses' candidate draw (`station`): any other than the
+#: selectors' own seeds.
+UNSEEN = 7919
 #: The fewest poses `select_timed` chooses (the 31 parameters of the fitted class, 3 coordinates a pose);
 #: a sweep through fewer waypoints takes the first of those in the tour's order.
 FEWEST = 12
@@ -145,8 +149,11 @@ def station(robot: str, seed: int, args: argparse.Namespace) -> list[dict]:
     constraints = Constraints(tracker=tuple(map(float, truth.tracker.translation)))
     common = dict(smr=tuple(map(float, truth.smr)), constraints=constraints, compliance=True,
                   payload=truth.payload, gravity=None)
-    _, cands, _ = design_space(robot, args.poses, candidates=args.candidates, seed=seed, scaling="expected",
-                               say=lambda *_: None, **common)
+    # validation and held-out poses from a draw of their own: the selectors draw their candidates with
+    # `seed`, and a validation pose among them is one they may choose (a free pose to a time-aware
+    # tour) — then a fit would see it
+    _, cands, _ = design_space(robot, args.poses, candidates=args.candidates, seed=UNSEEN + seed,
+                               scaling="expected", say=lambda *_: None, **common)
     pick = rng.permutation(len(cands.q))
     validation = cands.q[pick[: args.validation]]
     held_out = cands.q[pick[args.validation: args.validation + args.held_out]]
