@@ -1,7 +1,7 @@
 """Robot time of a calibration: the time-aware stop-and-go campaign against a sweep, at the same accuracy.
 
 Run from the repository root: ``PYTHONPATH=. python bench/sweep_time.py`` (``--quick``: one station per
-robot, 1 m/s, one waypoint count, a 2 s pose search). For each robot and station (a realistic truth,
+robot, 1 m/s, the last waypoint count, a 2 s pose search). For each robot and station (a realistic truth,
 `hil.calibration.synthetic.random_truth` with joint errors and lost motion, its tracker 2–4 m away):
 
 * **Accuracy** is judged twice, as the truth error of the fitted model (noise-free): at the
@@ -268,7 +268,7 @@ def main() -> None:
     args.waypoints = [int(v) for v in args.waypoints.split(",")]
     args.bootstrap = [int(v) for v in args.bootstrap.split(",")]
     if args.quick:
-        args.stations, args.speeds, args.waypoints = 1, [1.0], args.waypoints[:1]
+        args.stations, args.speeds, args.waypoints = 1, [1.0], args.waypoints[-1:]
         args.search_time = 2.0
     print(f"{'robot':6} {'stn':>3} {'mode':11} {'pose':>4} {'boot':>4} {'v m/s':>5} {'robot s':>7} "
           f"{'dwell s':>7} {'move s':>6} {'time/SG':>7} {'cal s':>6} {'cal/SG':>6} {'val µm':>6} "
