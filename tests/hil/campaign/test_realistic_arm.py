@@ -48,7 +48,10 @@ def test_the_realistic_arm_is_calibrated_and_its_error_is_what_the_covariance_sa
     result = json.loads(out.read_text())
     assert result["status"] == "accepted"
     drift = result["drift"]
-    assert drift["warmup"]["converged"] and not drift["flagged"]
+    assert drift["warmup"]["converged"] and not drift["flagged"], (
+        f"warm-up converged {drift['warmup']['converged']} after {drift['warmup'].get('seconds')} s "
+        f"({drift['warmup'].get('decision')}); drift flagged {drift['flagged']}: max {drift['max']} m, "
+        f"limit {drift['limit']} m")
     model_doc = result["model"]
     names = model_doc["covariance"]["parameters"]
     assert any(n.startswith("compliance.") for n in names)
