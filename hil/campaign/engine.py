@@ -263,7 +263,6 @@ class Engine:
         self._extend = 0  # request_extend: pending "wait longer" requests for the current suspension
         self._poke = threading.Event()  # wakes a suspension's wait for any request
         self._last_q: np.ndarray | None = None
-        self._t0: float | None = None  # the clock when the run started
         self._s0: float | None = None  # the station's clock then (`ReadConditions`)
         self.current: Acquire | None = None
         self.records: list[PoseRecord] = []
@@ -394,7 +393,7 @@ class Engine:
     # --- execution --------------------------------------------------------------------------------
     def run(self, plan: Plan) -> Any:
         """Execute `plan` to its end; returns the plan's return value."""
-        t0 = self._t0 = self.clock.monotonic()
+        t0 = self.clock.monotonic()
         self._s0 = self._station_now()
         self._set_state(RUNNING)
         if self.home is not None:
