@@ -498,15 +498,18 @@ class URRobot:
                                               "the keep-in zone (trajectory refused, nothing moved)")
         times = np.empty(len(Qa))
         with self._servo_session(lookahead, gain) as stream:
+            stream.record = True  # actual_q and the controller's timestamp, every cycle
             for i, q in enumerate(Qa):
                 times[i] = stream.send(q)
             for _ in range(round(settle / stream.dt)):
                 stream.send(Qa[-1])
             hold_end = time.monotonic()
         periods = np.asarray(stream.periods)
+        stamps, joints = stream.recorded()
         return FollowResult(times=times, hold_end=hold_end, period_count=int(periods.size),
                             period_mean=float(periods.mean()) if periods.size else 0.0,
-                            period_max=float(periods.max()) if periods.size else 0.0)
+                            period_max=float(periods.max()) if periods.size else 0.0,
+                            controller_t=stamps, actual_q=joints)
 
     @contextmanager
     def servo(self, *, lookahead: float = 0.1, gain: float = 300.0) -> Iterator[ServoStream]:
@@ -544,6 +547,11 @@ class ServoStream:
         self.periods: list[float] = []  # seconds between successive sends (time.monotonic)
         self._t_last: float | None = None
         self._n = 0
+        # `follow` turns this on: each cycle's RTDE timestamp and actual_q, read after waitPeriod
+        # (ur_rtde's RTDEReceiveInterface getTimestamp / getActualQ: the latest controller frame)
+        self.record = False
+        self._stamps: list[float] = []
+        self._joints: list[list[float]] = []
 
     def step(self, q: Sequence[float], *, pose: bool = False) -> float:
         """Validate and send one target (joints, or a TCP pose with ``pose=True``); see `send`."""
@@ -579,7 +587,16 @@ class ServoStream:
         if self._n % 10 == 0:
             robot.check_status()
         c.waitPeriod(t_start)
+        if self.record:
+            stamp = float(self._r.getTimestamp())
+            if not self._stamps or stamp > self._stamps[-1]:  # a new controller frame
+                self._stamps.append(stamp)
+                self._joints.append(list(self._r.getActualQ()))
         return now
+
+    def recorded(self) -> tuple[np.ndarray, np.ndarray]:
+        """The controller frames read during the session: timestamps (K,) s and actual_q (K, 6) rad."""
+        return np.asarray(self._stamps, dtype=float), np.asarray(self._joints, dtype=float).reshape(-1, 6)
 
     def actual_q(self) -> np.ndarray:
         return np.asarray(self._r.getActualQ(), dtype=float)
