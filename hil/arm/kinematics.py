@@ -274,7 +274,8 @@ class Kinematics:
     # --- identification Jacobian ---------------------------------------------------------------
     def point_and_jacobian(self, q: np.ndarray, compliance: bool = False,
                            directions: np.ndarray | None = None,
-                           joint_errors: bool = False) -> tuple[np.ndarray, np.ndarray]:
+                           joint_errors: bool = False,
+                           torques: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """SMR positions in the tracker frame (N, 3) and their Jacobian (N, 3, 51), or (N, 3, 57)
         with the compliance columns when `compliance` is set, or (N, 3, 99) with the joint-error and
         lost-motion columns too when `joint_errors` is set (the compliance ones then zero unless
@@ -286,6 +287,9 @@ class Kinematics:
         g with the small geometric errors is second order and left out). The joint-error columns are
         ∂p/∂q_j times cos(k·q_j), sin(k·q_j) at the encoder angle, the lost-motion ones times −d_j
         (`directions`; zero without them).
+
+        `torques` ((N, 6) Nm) replaces the gravity torque g(q) in the deflection and in the compliance
+        columns: a moving arm's deflects under τ(q, q̇, q̈) (`hil.arm.dynamics`, used by the sweep fit).
         """
         Q = as_configurations(q, self.dof)
         n, dof, lay = len(Q), self.dof, self.layout
@@ -293,7 +297,12 @@ class Kinematics:
             refuse_non_ur(self.chain, "joint compliance")
         if joint_errors:
             refuse_non_ur(self.chain, "angle-dependent joint errors and lost motion")
-        torques = self.gravity.torques(Q) if (compliance or self.geometry.compliant) else None
+        if torques is not None:
+            torques = np.asarray(torques, dtype=float)
+            if torques.shape != Q.shape:
+                raise ValueError(f"torques must have the shape of q {Q.shape}, got {torques.shape}")
+        elif compliance or self.geometry.compliant:
+            torques = self.gravity.torques(Q)
         Q_link = self._link_angles(Q, directions, torques)
         J_joint = np.empty((n, 3, 6 * dof))
         R6 = np.empty((n, 3, 3))

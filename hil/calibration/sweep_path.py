@@ -1,0 +1,282 @@
+"""A swept tour: one smooth joint path through the informative poses, sampled for servoJ.
+
+The sweep mode (docs/design.md, the calibration campaign: the sweep mode) measures while the arm moves
+instead of stopping at poses. `plan_sweep` turns the poses a selector chose into a path the controller
+can stream, and `check_sweep` refuses a bad one before anything moves.
+
+How the path is built, and why:
+
+* **Order.** The waypoints are visited in the order that keeps the tour short: nearest neighbour from
+  the start, then 2-opt (reversing any stretch of the tour that shortens it), on the time-like joint
+  distance max_j |Δq_j| / v_j — how long a joint-space move between two poses takes at the speed limits
+  (the joint that has farthest to go, for its speed, sets the time).
+* **Shape.** A cubic spline through the start, the waypoints and back to rest at the last one
+  (``scipy.interpolate.CubicSpline`` with clamped ends: zero velocity at both ends). A cubic spline is
+  C²: the acceleration is continuous and the jerk piecewise constant, so the arm's structural modes
+  (7–12 Hz, `hil.arm.dynamics`' caveat) see no step of acceleration, and the quasi-static deflection
+  model the fit uses holds along it. The arm does not stop at the waypoints; it passes through them.
+* **Timing.** Each segment starts at the rest-to-rest duration of a cubic (peak speed 1.5·Δ/T, peak
+  acceleration 6·Δ/T², Δ the joint's distance) and is then stretched where the sampled path exceeds a
+  limit and shrunk where it is far below, until every sample is within the per-joint speed and
+  acceleration limits (the spline couples neighbouring segments, so this iterates; the shortest
+  feasible timing found is kept). The limits are *checked on the sampled path* and a path that cannot
+  be brought within them is refused (`SweepRefused`), never clamped.
+* **Sampling.** One sample per controller period (1/rate_hz; 500 Hz on e-series, UR's RTDE guide): the
+  whole timing is stretched by less than one period so the last sample is the end at rest.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from hil.arm.catalog import RobotSpec
+from hil.arm.geometry import Geometry
+from hil.arm.kinematics_cache import kinematics_of
+from hil.errors import InputError
+
+#: Largest joint change (rad) between the samples whose SMR is checked against the keep-in box and the
+#: tracker's line of sight: 0.05 rad moves the SMR of a 1 m arm by at most 5 cm, the order of the
+#: line-of-sight check's beam clearance (3 cm, `selector.candidates.Constraints`) and far below a
+#: keep-in box's size. hil's choice, as the driver's `keep_in_spacing` is the station's.
+CHECK_SPACING_RAD = 0.05
+#: Iterations of the segment timing (each one a spline fit and a sampling, milliseconds).
+TIMING_ITERATIONS = 80
+
+
+class SweepRefused(InputError):
+    """A swept tour the arm must not follow: the first offending sample (and joint) is named."""
+
+
+@dataclass(frozen=True)
+class SweepTour:
+    """A swept tour, sampled once per controller period (the targets to stream with servoJ)."""
+
+    t: np.ndarray  # (n,) s from the tour's start
+    q: np.ndarray  # (n, N) rad, encoder targets
+    waypoints: np.ndarray  # (m, N) the informative poses it passes through, in order
+    rate_hz: float
+    #: (m,) s: when the tour passes each waypoint (the last one: the end, at rest)
+    waypoint_times: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def duration(self) -> float:
+        """Seconds from the first sample to the last (the arm at rest at both)."""
+        return float(self.t[-1] - self.t[0])
+
+    def velocities(self) -> np.ndarray:
+        """(n, N) rad/s of the sampled path, by central differences (one-sided at the ends)."""
+        return np.gradient(self.q, 1.0 / self.rate_hz, axis=0)
+
+    def accelerations(self) -> np.ndarray:
+        """(n, N) rad/s² of the sampled path, by second differences (zero at the ends: at rest)."""
+        a = np.zeros_like(self.q)
+        if len(self.q) > 2:
+            a[1:-1] = (self.q[2:] - 2 * self.q[1:-1] + self.q[:-2]) * self.rate_hz**2
+        return a
+
+
+def _limits(value: np.ndarray | float, n: int, name: str) -> np.ndarray:
+    v = np.broadcast_to(np.asarray(value, dtype=float), (n,)).copy()
+    if not np.all(np.isfinite(v) & (v > 0)):
+        raise InputError(f"sweep: {name} must be positive and finite per joint, got {v.tolist()}")
+    return v
+
+
+def _tour_cost(points: np.ndarray, order: Sequence[int], speed: np.ndarray) -> float:
+    path = points[[0, *order]]
+    return float(np.sum(np.max(np.abs(np.diff(path, axis=0)) / speed, axis=1)))
+
+
+def tour_order(start: np.ndarray, waypoints: np.ndarray, speed: np.ndarray) -> list[int]:
+    """Indices of `waypoints` in a short visiting order from `start` (nearest neighbour, then 2-opt),
+    on the time-like distance max_j |Δq_j| / speed_j; the tour ends at its last waypoint."""
+    pts = np.vstack([start[None], waypoints])
+    D = np.max(np.abs(pts[:, None, :] - pts[None, :, :]) / speed, axis=2)
+    left = set(range(1, len(pts)))
+    order, here = [], 0
+    while left:
+        here = min(left, key=lambda k: (D[here, k], k))
+        order.append(here)
+        left.remove(here)
+    improved = True
+    while improved:  # 2-opt on the open path with a fixed start: reverse order[i..j]
+        improved = False
+        for i in range(len(order) - 1):
+            before = order[i - 1] if i else 0
+            for j in range(i + 1, len(order)):
+                after = order[j + 1] if j + 1 < len(order) else None
+                old = D[before, order[i]] + (D[order[j], after] if after is not None else 0.0)
+                new = D[before, order[j]] + (D[order[i], after] if after is not None else 0.0)
+                if new < old - 1e-12:
+                    order[i:j + 1] = order[i:j + 1][::-1]
+                    improved = True
+    return [k - 1 for k in order]
+
+
+def _spline(knots: np.ndarray, durations: np.ndarray) -> CubicSpline:
+    return CubicSpline(np.r_[0.0, np.cumsum(durations)], knots, bc_type="clamped", axis=0)
+
+
+def _segment_ratios(spline: CubicSpline, durations: np.ndarray, speed: np.ndarray, accel: np.ndarray,
+                    per_segment: int = 24) -> np.ndarray:
+    """Per segment, the largest of |q̇|/v and √(|q̈|/a) over its samples (> 1: over a limit). The
+    square root makes it the factor by which stretching that segment's time alone would fix it."""
+    edges = np.r_[0.0, np.cumsum(durations)]
+    s = np.linspace(0.0, 1.0, per_segment)
+    t = (edges[:-1, None] + durations[:, None] * s[None, :]).ravel()
+    v = np.abs(spline(t, 1)) / speed
+    a = np.abs(spline(t, 2)) / accel
+    r = np.maximum(v.max(axis=1), np.sqrt(a.max(axis=1)))
+    return r.reshape(len(durations), per_segment).max(axis=1)
+
+
+def plan_sweep(waypoints: np.ndarray, start: np.ndarray, *, max_speed: np.ndarray | float,
+               max_acceleration: np.ndarray | float, rate_hz: float = 500.0) -> SweepTour:
+    """A smooth joint path from `start` (at rest) through `waypoints` (in a short order) to rest at the
+    last one, within the per-joint `max_speed` (rad/s) and `max_acceleration` (rad/s²) on every sample
+    (module docstring). `SweepRefused` if no timing meets them (it never clamps)."""
+    W = np.atleast_2d(np.asarray(waypoints, dtype=float))
+    q0 = np.asarray(start, dtype=float).ravel()
+    if W.ndim != 2 or W.shape[0] < 1 or W.shape[1] != q0.size or not np.isfinite(W).all() \
+            or not np.isfinite(q0).all():
+        raise InputError(f"sweep: waypoints must be (m ≥ 1, {q0.size}) finite joint angles and start "
+                         f"{q0.size} finite angles, got {W.shape} and {q0.shape}")
+    if not (np.isfinite(rate_hz) and rate_hz > 0):
+        raise InputError(f"sweep: rate_hz must be positive, got {rate_hz}")
+    n = q0.size
+    speed = _limits(max_speed, n, "max_speed")
+    accel = _limits(max_acceleration, n, "max_acceleration")
+    order = tour_order(q0, W, speed)
+    W = W[order]
+    knots = np.vstack([q0[None], W])
+    # drop a waypoint repeating the previous knot: a spline cannot have two knots at one time
+    keep = np.r_[True, np.max(np.abs(np.diff(knots, axis=0)), axis=1) > 1e-9]
+    knots = knots[keep]
+    if len(knots) < 2:
+        raise InputError("sweep: every waypoint is the start; nothing to sweep")
+    delta = np.abs(np.diff(knots, axis=0))
+    durations = np.max(np.maximum(1.5 * delta / speed, np.sqrt(6.0 * delta / accel)), axis=1)
+    durations = np.maximum(durations, 2.0 / rate_hz)
+    best: np.ndarray | None = None
+    for _ in range(TIMING_ITERATIONS):
+        r = _segment_ratios(_spline(knots, durations), durations, speed, accel)
+        if r.max() <= 0.995 and (best is None or durations.sum() < best.sum()):
+            best = durations.copy()
+        # stretch what is over (with a little margin), shrink what is well under, gently
+        factor = np.where(r > 0.99, r / 0.985, np.clip(r / 0.97, 0.8, 1.0))
+        if np.allclose(factor, 1.0, atol=2e-3):
+            break
+        durations = np.maximum(durations * factor, 2.0 / rate_hz)
+    if best is None:
+        raise SweepRefused(f"sweep: no timing of the {len(knots) - 1} segments keeps every joint within "
+                           f"max_speed {speed.round(4).tolist()} rad/s and max_acceleration "
+                           f"{accel.round(4).tolist()} rad/s²")
+    total = float(best.sum())
+    periods = int(np.ceil(total * rate_hz - 1e-9))
+    best = best * (periods / rate_hz) / total  # stretched (< 1 period): the end falls on a sample
+    spline = _spline(knots, best)
+    t = np.arange(periods + 1) / rate_hz
+    q = spline(t)
+    q[0], q[-1] = knots[0], knots[-1]
+    times = np.cumsum(best)
+    passes = np.empty(len(order))
+    passes[np.flatnonzero(keep[1:])] = times
+    for k in range(len(passes)):  # a dropped duplicate passes when the knot it repeats does
+        if not keep[k + 1]:
+            passes[k] = passes[k - 1] if k else 0.0
+    tour = SweepTour(t, q, W, float(rate_hz), passes)
+    check_sweep(tour, max_speed=speed, max_acceleration=accel)
+    return tour
+
+
+def check_sweep(tour: SweepTour, *, max_speed: np.ndarray | float | None = None,
+                max_acceleration: np.ndarray | float | None = None, spec: RobotSpec | None = None,
+                keep_in: tuple[np.ndarray, np.ndarray] | None = None, model: Geometry | None = None,
+                acceptance_angle: float | None = None, spacing: float = CHECK_SPACING_RAD) -> None:
+    """Raise `SweepRefused` naming the first offending sample (and joint) of `tour`, before anything
+    moves; return None if it passes. What is checked, each only when its arguments are given:
+
+    * every sample finite and, with `spec`, inside the joint limits;
+    * each step's speed (|Δq|·rate, the driver's per-step check in `drivers.robot.trajectory`) within
+      `max_speed` (default: `spec`'s joint speed maxima), each sample's second difference within
+      `max_acceleration` (the driver checks no acceleration; the plan's promise is checked here);
+    * with `keep_in` (lower, upper corners in the base frame, m) and `model`, the SMR inside the box at
+      samples at most `spacing` rad apart (as the driver's `keep_in_checkpoints`), and the first and last;
+    * with `model` and `acceptance_angle` (degrees), the SMR in the tracker's view at those samples:
+      facing the tracker within the angle less the campaign's re-check margin and the beam clear of the
+      arm (`hil.calibration.selection.hidden_reason`, the static selection's own check), the tracker
+      where `model`'s registration puts it.
+    """
+    Q = np.asarray(tour.q, dtype=float)
+    rate = float(tour.rate_hz)
+    if Q.ndim != 2 or len(Q) < 2 or len(tour.t) != len(Q):
+        raise SweepRefused(f"sweep: expected (n ≥ 2, N) samples with one stamp each, got {Q.shape} and "
+                           f"{np.shape(tour.t)}")
+    bad = np.argwhere(~np.isfinite(Q))
+    if bad.size:
+        i, j = (int(v) for v in bad[0])
+        raise SweepRefused(f"sweep sample {i}: joint {j + 1} is not finite")
+    if spec is not None:
+        lo, hi = np.asarray(spec.lower, dtype=float), np.asarray(spec.upper, dtype=float)
+        out = np.argwhere(np.less(Q, lo) | np.greater(Q, hi))
+        if out.size:
+            i, j = (int(v) for v in out[0])
+            raise SweepRefused(f"sweep sample {i} (t = {tour.t[i]:.3f} s): joint {j + 1} at {Q[i, j]:.4f} "
+                               f"rad is outside [{spec.lower[j]:.4f}, {spec.upper[j]:.4f}]")
+        if max_speed is None:
+            max_speed = spec.max_joint_speed
+    n = Q.shape[1]
+    if max_speed is not None:
+        v = _limits(max_speed, n, "max_speed")
+        step = np.abs(np.diff(Q, axis=0)) * rate
+        over = np.argwhere(step > v * (1 + 1e-9))
+        if over.size:
+            i, j = (int(x) for x in over[0])
+            raise SweepRefused(f"sweep sample {i + 1} (t = {tour.t[i + 1]:.3f} s): joint {j + 1} steps at "
+                               f"{step[i, j]:.4f} rad/s, over its {v[j]:.4f} rad/s")
+    if max_acceleration is not None:
+        a_max = _limits(max_acceleration, n, "max_acceleration")
+        acc = np.abs(tour.accelerations())
+        over = np.argwhere(acc > a_max * (1 + 1e-9))
+        if over.size:
+            i, j = (int(x) for x in over[0])
+            raise SweepRefused(f"sweep sample {i} (t = {tour.t[i]:.3f} s): joint {j + 1} accelerates at "
+                               f"{acc[i, j]:.4f} rad/s², over its {a_max[j]:.4f} rad/s²")
+    if model is None or (keep_in is None and acceptance_angle is None):
+        return
+    checked = _checkpoints(Q, spacing)
+    if keep_in is not None:
+        lo, hi = (np.asarray(b, dtype=float) for b in keep_in)
+        pts = kinematics_of(model).points(Q[checked], frame="base")
+        outside = np.flatnonzero(np.any((pts < lo) | (pts > hi), axis=1))
+        if outside.size:
+            i = checked[int(outside[0])]
+            raise SweepRefused(f"sweep sample {i} (t = {tour.t[i]:.3f} s) puts the SMR at "
+                               f"{np.round(pts[outside[0]], 4).tolist()} m, outside the keep-in box "
+                               f"{lo.tolist()}..{hi.tolist()} (nothing moved)")
+    if acceptance_angle is not None:
+        from hil.calibration.selection import hidden_reason
+
+        tracker = np.asarray(model.tracker.translation, dtype=float)
+        for i in checked:
+            why = hidden_reason(model.robot, model.smr, tracker, Q[i], acceptance_angle)
+            if why is not None:
+                raise SweepRefused(f"sweep sample {i} (t = {tour.t[i]:.3f} s): the tracker would not see "
+                                   f"the SMR ({why}; nothing moved)")
+
+
+def _checkpoints(Q: np.ndarray, spacing: float) -> list[int]:
+    """The first and last samples and every one at least `spacing` rad (largest joint change) from the
+    previous checked one (the driver's `keep_in_checkpoints` rule)."""
+    idx, last = [0], Q[0]
+    for i in range(1, len(Q)):
+        if float(np.max(np.abs(Q[i] - last))) >= spacing:
+            idx.append(i)
+            last = Q[i]
+    if idx[-1] != len(Q) - 1:
+        idx.append(len(Q) - 1)
+    return idx
