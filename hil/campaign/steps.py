@@ -168,6 +168,7 @@ class SweepSegment:
 
     index: int
     q: np.ndarray
+    rate_hz: float = 500.0  # samples per second of station time
 
     @property
     def start(self) -> tuple[float, ...]:

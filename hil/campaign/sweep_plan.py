@@ -24,8 +24,8 @@ import numpy as np
 
 from hil.arm.catalog import RobotSpec
 from hil.arm.geometry import Geometry
-from hil.arm.kinematics_cache import kinematics_of
 from hil.calibration.stream_join import JointStream, TrackerStream
+from hil.campaign.acceptance import Verdict, class_bound
 from hil.campaign.steps import SegmentRecord, SweepSegment
 from hil.errors import InputError
 
@@ -44,38 +44,46 @@ CONTROLLER_RATE_HZ = 500.0
 def sweep_tour(waypoints: np.ndarray, config: Any, spec: RobotSpec, check_model: Geometry,
                rate_hz: float = CONTROLLER_RATE_HZ) -> list[SweepSegment]:
     """The tour through `waypoints` (m, 6) as segments between consecutive waypoints, each planned
-    rest to rest within the station's joint speed and acceleration and checked before anything moves
-    (module docstring). InputError naming the segment and the first offending sample."""
+    rest to rest within the station's joint speed and acceleration (and the arm's joint speed maxima)
+    and checked before anything moves (module docstring): joint limits, speed, acceleration and the
+    keep-in box (`check_sweep`, with `check_model`, the arm the engine checks moves with). InputError
+    naming the segment and the first offending sample."""
     from hil.calibration.sweep_path import check_sweep, plan_sweep
 
     keep_in = (np.asarray(config.keep_in["min"], float), np.asarray(config.keep_in["max"], float))
+    speed = np.minimum(float(config.robot["speed"]), np.asarray(spec.max_joint_speed, float))
+    accel = float(config.robot["acceleration"])
     segments: list[SweepSegment] = []
     for k in range(len(waypoints) - 1):
         a, b = np.asarray(waypoints[k], float), np.asarray(waypoints[k + 1], float)
-        tour = plan_sweep(b[None, :], a, max_speed=float(config.robot["speed"]),
-                          max_acceleration=float(config.robot["acceleration"]), rate_hz=rate_hz)
         try:
-            check_sweep(tour, spec=spec, keep_in=keep_in, model=check_model)
-        except (InputError, ValueError) as exc:
-            raise InputError(f"sweep segment {k + 1} of {len(waypoints) - 1} refused before anything "
+            tour = plan_sweep(b[None, :], a, max_speed=speed, max_acceleration=accel, rate_hz=rate_hz)
+            check_sweep(tour, max_speed=speed, max_acceleration=accel, spec=spec, keep_in=keep_in,
+                        model=check_model)
+        except InputError as exc:
+            raise InputError(f"sweep segment {k + 1} of {len(waypoints) - 1} refused before the sweep "
                              f"moved: {exc}") from None
-        outside = _outside_box(tour.q, keep_in, check_model)
-        if outside is not None:
-            i, p = outside
-            raise InputError(f"sweep segment {k + 1} of {len(waypoints) - 1} refused before anything moved: "
-                             f"sample {i} puts the SMR at {np.round(p, 4).tolist()} m, outside the keep-in "
-                             "box (campaign.keep_in)")
-        segments.append(SweepSegment(k, np.asarray(tour.q, float)))
+        segments.append(SweepSegment(k, np.asarray(tour.q, float), float(tour.rate_hz)))
     return segments
 
 
-def _outside_box(q: np.ndarray, keep_in: tuple[np.ndarray, np.ndarray], model: Geometry
-                 ) -> tuple[int, np.ndarray] | None:
-    """The first sample of `q` whose SMR (base frame, `model`) leaves the box, or None. Every sample is
-    checked: a tour is a few thousand, one batched forward kinematics."""
-    pts = kinematics_of(model).points(np.asarray(q, float), frame="base")
-    bad = np.flatnonzero(~np.all((pts >= keep_in[0]) & (pts <= keep_in[1]), axis=1))
-    return None if bad.size == 0 else (int(bad[0]), pts[bad[0]])
+def sweep_verdict(after: float, before: float, robot: str, acceptance: float | None) -> Verdict:
+    """The sweep's verdict on its held-out still poses. Stop-and-go's automatic rule needs a
+    cross-validated RMS, and a sweep's fit is not cross-validated (refitting the streams fold by fold
+    costs a fit each): the sweep's model must predict the held-out poses better than the nominal arm
+    (located by the same bootstrap) does, and then their RMS must be within `acceptance` or, unset,
+    the robot class's bound (`hil.campaign.acceptance.class_bound`)."""
+    rms = f"validation RMS {after * 1e3:.4f} mm"
+    if acceptance is not None:
+        limit, rule, said = float(acceptance), "threshold", f"acceptance {float(acceptance) * 1e3:.4f} mm"
+    else:
+        limit, rule = class_bound(robot), "auto"
+        said = f"the {robot} class bound {limit * 1e3:.4f} mm"
+    if not after < before:
+        return Verdict(False, limit, f"{rms} is not better than the nominal arm's {before * 1e3:.4f} mm "
+                                     "on the held-out poses", rule)
+    passed = after <= limit
+    return Verdict(passed, limit, f"{rms} {'<=' if passed else '>'} {said}", rule)
 
 
 def streams_of(records: Sequence[SegmentRecord]) -> tuple[JointStream, TrackerStream, dict[str, int]]:
