@@ -477,8 +477,7 @@ class Engine:
 
         self._device_step(Move(segment.start))  # at rest at its start: by a safe route, as any move
         t = self.clock.monotonic()
-        record = record_segment(self.robot, self.tracker, segment, step.tracker_rate_hz, step.session,
-                                float(getattr(self.clock, "speed", 1.0)))
+        record = record_segment(self.robot, self.tracker, segment, step.tracker_rate_hz, step.session)
         self._last_q = np.asarray(segment.q[-1], dtype=float)
         seconds = self.clock.monotonic() - t
         self.stats.motion += seconds

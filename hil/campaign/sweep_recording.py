@@ -40,12 +40,19 @@ GAIN = 1000.0
 
 
 def record_segment(robot: Any, tracker: Tracker, segment: SweepSegment, tracker_rate_hz: float,
-                   session: str, speed: float = 1.0) -> SegmentRecord:
+                   session: str) -> SegmentRecord:
     """Stream `segment` with the robot's `follow` while the tracker streams; the two records.
 
     A tracker stream that fails (a dropped link) is raised after the motion, as the typed error it
     was, so the engine's suspenders can clear it and sweep the segment again. A robot that cannot
-    stream (no `follow`) or does not report its joints while streaming is refused."""
+    stream (no `follow`) or does not report its joints while streaming is refused.
+
+    The samples go out one per period of the servo loop, which keeps the wall clock's period: on a
+    simulated station in fast time (its seconds `speed` times the wall's) the arm therefore follows
+    the path `speed` times slower in the station's time than planned. Resampling the path to the
+    station's time would be faithful, but the driver checks each step against the joint speed limits
+    per wall period (`drivers.robot.ur.URRobot.follow`) and would refuse it; a real station (speed 1)
+    follows the plan as planned."""
     if not isinstance(robot, FollowsPaths):
         raise TypeError(f"{type(robot).__name__} cannot stream a path (no follow): the sweep needs it")
     samples: list[StreamSample] = []
@@ -62,10 +69,7 @@ def record_segment(robot: Any, tracker: Tracker, segment: SweepSegment, tracker_
     thread = threading.Thread(target=take, name="sweep-tracker-stream", daemon=True)
     thread.start()
     try:
-        info = getattr(robot, "info", None)
-        rate = float(info.rate_hz) if info is not None else segment.rate_hz
-        result = robot.follow(servo_samples(segment, rate, speed), lookahead=LOOKAHEAD, gain=GAIN,
-                              settle=0.0)
+        result = robot.follow(segment.q, lookahead=LOOKAHEAD, gain=GAIN, settle=0.0)
     finally:
         stop.set()
         thread.join(timeout=10.0)
@@ -76,23 +80,6 @@ def record_segment(robot: Any, tracker: Tracker, segment: SweepSegment, tracker_
     tracker_t, tracker_p = tracker_record(samples)
     return SegmentRecord(segment.index, session, np.asarray(result.controller_t, float),
                          np.asarray(result.actual_q, float).reshape(-1, 6), tracker_t, tracker_p)
-
-
-def servo_samples(segment: SweepSegment, servo_rate_hz: float, speed: float = 1.0) -> np.ndarray:
-    """`segment`'s path as the servo loop must send it: one sample per controller period of the
-    loop's own clock. The loop keeps the wall clock's period (``initPeriod``/``waitPeriod``), so on a
-    station in fast time (`speed` > 1: a simulated controller's seconds run `speed` times the wall's)
-    each period covers `speed` periods of the planned path, which is resampled (linearly, per joint)
-    so the arm follows it at its planned speed in the station's time; on a real station (speed 1, the
-    controller's own rate) the samples are the plan's."""
-    q = np.asarray(segment.q, dtype=float)
-    step = speed * segment.rate_hz / servo_rate_hz  # planned samples per servo period
-    if abs(step - 1.0) < 1e-12 or len(q) < 2:
-        return q
-    s = np.arange(0.0, len(q) - 1, step)
-    s = np.append(s, len(q) - 1.0) if s[-1] < len(q) - 1 else s
-    k = np.arange(len(q), dtype=float)
-    return np.column_stack([np.interp(s, k, q[:, j]) for j in range(q.shape[1])])
 
 
 def tracker_record(samples: list[StreamSample]) -> tuple[np.ndarray, np.ndarray]:
