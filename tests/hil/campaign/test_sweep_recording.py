@@ -72,7 +72,8 @@ class StreamTracker(TrackerParts):
     def __init__(self, arm: SweepArm, truth: Geometry, lost: int = 0) -> None:
         self.arm, self.kin, self.lost = arm, Kinematics(truth), lost
 
-    def stream(self, rate_hz: float, *, stop: threading.Event | None = None, **_: Any) -> Iterator[StreamSample]:
+    def stream(self, rate_hz: float, *, stop: threading.Event | None = None,
+               **_: Any) -> Iterator[StreamSample]:
         seen, k = len(self.arm.path), 0
         while True:
             ended = stop is not None and stop.is_set()  # what the arm did before the stop was heard
@@ -141,7 +142,8 @@ def test_an_interrupted_sweep_resumes_at_the_first_segment_not_recorded_whole(st
     assert isinstance(got, SweepRecorded) and [r.index for r in got.segments] == [2, 3]
     assert len(arm.streamed) == 4  # 0, 1, then 2 (again, whole) and 3: nothing recorded is swept again
     final = sweep_state(store, cid)
-    assert sorted(final) == [0, 1, 2, 3] and [final[k].session for k in range(4)] == ["run-1"] * 2 + ["run-2"] * 2
+    assert sorted(final) == [0, 1, 2, 3]
+    assert [final[k].session for k in range(4)] == ["run-1"] * 2 + ["run-2"] * 2
     assert np.allclose(final[2].joint_q, plan[2].q, atol=1e-5)
     done = store.events(cid, types=("SweepSegmentDone",))
     assert [e.segment for e in done] == [0, 1, 2, 3]
