@@ -3,6 +3,8 @@ station's speed and acceleration, checked before anything moves; its verdict on 
 
 from __future__ import annotations
 
+from itertools import pairwise
+
 import numpy as np
 import pytest
 
@@ -27,7 +29,7 @@ def test_segments_run_rest_to_rest_through_the_waypoints_within_the_stations_lim
     waypoints = np.array([swing(-0.3), swing(0.2), swing(0.5)])
     segs = sweep_tour(waypoints, config, get_robot("ur5e"), Geometry.nominal("ur5e"))
     assert [s.index for s in segs] == [0, 1]
-    for seg, (a, b) in zip(segs, zip(waypoints[:-1], waypoints[1:], strict=True), strict=True):
+    for seg, (a, b) in zip(segs, pairwise(waypoints), strict=True):
         assert np.allclose(seg.q[0], a) and np.allclose(seg.q[-1], b)
         speed = np.abs(np.diff(seg.q, axis=0)) * seg.rate_hz
         assert speed.max() <= config.robot["speed"] * (1 + 1e-9)
