@@ -161,7 +161,9 @@ class StreamJoin:
         for seg in _segments(joints.t, gap_factor):
             t, q = joints.t[seg], joints.q[seg]
             period = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
-            window = round(derivative_window_s / period) | 1 if period > 0 else 0
+            # at least 5 samples, the fewest a cubic Savitzky–Golay fit takes (a joint stream read
+            # more sparsely than the window wants: a simulated controller in fast time)
+            window = max(5, round(derivative_window_s / period) | 1) if period > 0 else 0
             if len(t) < max(window, 5):
                 continue  # too short to differentiate: its tracker samples fall in a joint gap
             qd = savgol_filter(q, window, 3, deriv=1, delta=period, axis=0)
