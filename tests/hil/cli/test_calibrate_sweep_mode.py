@@ -41,9 +41,10 @@ def test_mode_sweep_with_geocom_is_refused_in_one_line_before_anything_starts(tm
 
 def test_mode_sweep_with_a_geocom_config_is_refused(tmp_path):
     config = tmp_path / "station.toml"
-    config.write_text('[robot]\naddress = "127.0.0.1"\n[tracker]\nprotocol = "geocom"\nurl = "/dev/ttyUSB0"\n')
-    proc = subprocess.run([sys.executable, "-m", "hil", "calibrate", "--config", str(config), "--mode", "sweep",
-                           "--db", str(tmp_path / "hil.db")], cwd=ROOT, capture_output=True, text=True,
-                          timeout=60)
+    config.write_text('[robot]\naddress = "127.0.0.1"\n'
+                      '[tracker]\nprotocol = "geocom"\nurl = "/dev/ttyUSB0"\n')
+    proc = subprocess.run([sys.executable, "-m", "hil", "calibrate", "--config", str(config),
+                           "--mode", "sweep", "--db", str(tmp_path / "hil.db")],
+                          cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2 and "GeoCOM cannot stream fast enough" in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
