@@ -104,6 +104,9 @@ class FollowResult:
     # None from a driver that does not record it.
     controller_t: np.ndarray | None = None
     actual_q: np.ndarray | None = None
+    # (K,) when each of those frames was read, on time.monotonic() (as `times`): ties the controller's
+    # clock to the host's, for a first guess of a clock map the data then fix
+    host_t: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

@@ -505,11 +505,11 @@ class URRobot:
                 stream.send(Qa[-1])
             hold_end = time.monotonic()
         periods = np.asarray(stream.periods)
-        stamps, joints = stream.recorded()
+        stamps, joints, hosts = stream.recorded()
         return FollowResult(times=times, hold_end=hold_end, period_count=int(periods.size),
                             period_mean=float(periods.mean()) if periods.size else 0.0,
                             period_max=float(periods.max()) if periods.size else 0.0,
-                            controller_t=stamps, actual_q=joints)
+                            controller_t=stamps, actual_q=joints, host_t=hosts)
 
     @contextmanager
     def servo(self, *, lookahead: float = 0.1, gain: float = 300.0) -> Iterator[ServoStream]:
@@ -552,6 +552,7 @@ class ServoStream:
         self.record = False
         self._stamps: list[float] = []
         self._joints: list[list[float]] = []
+        self._hosts: list[float] = []
 
     def step(self, q: Sequence[float], *, pose: bool = False) -> float:
         """Validate and send one target (joints, or a TCP pose with ``pose=True``); see `send`."""
@@ -592,11 +593,14 @@ class ServoStream:
             if not self._stamps or stamp > self._stamps[-1]:  # a new controller frame
                 self._stamps.append(stamp)
                 self._joints.append(list(self._r.getActualQ()))
+                self._hosts.append(time.monotonic())
         return now
 
-    def recorded(self) -> tuple[np.ndarray, np.ndarray]:
-        """The controller frames read during the session: timestamps (K,) s and actual_q (K, 6) rad."""
-        return np.asarray(self._stamps, dtype=float), np.asarray(self._joints, dtype=float).reshape(-1, 6)
+    def recorded(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The controller frames read during the session: timestamps (K,) s, actual_q (K, 6) rad and
+        when each was read (K,) on time.monotonic()."""
+        return (np.asarray(self._stamps, dtype=float), np.asarray(self._joints, dtype=float).reshape(-1, 6),
+                np.asarray(self._hosts, dtype=float))
 
     def actual_q(self) -> np.ndarray:
         return np.asarray(self._r.getActualQ(), dtype=float)

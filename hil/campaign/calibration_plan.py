@@ -99,6 +99,7 @@ from hil.campaign.sweep_plan import (
     CONTROLLER_RATE_HZ,
     SWEEP,
     TRACKER_RATE_HZ,
+    first_clock,
     streams_of,
     sweep_tour,
     sweep_verdict,
@@ -391,10 +392,11 @@ def _sweep_finish(config: StationConfig, campaign: str, start: Geometry, static:
     from hil.calibration.sweep_fit import fit_sweep
 
     robot, camp = config.robot["type"], config.campaign
-    joints, stream, other = streams_of(segments)
+    joints, stream, other, joined = streams_of(segments)
+    offset, drift = first_clock(joined)
     try:
         swept = fit_sweep(start, joints, stream, static=static if len(static) else None,
-                          compliance=camp["compliance"])
+                          compliance=camp["compliance"], initial_offset_s=offset, initial_drift=drift)
     except InputError as exc:  # too little trusted data: the run failed, the input was fine
         raise IdentificationError(f"cannot identify from the sweep: {exc}") from None
     fit = swept.fit

@@ -336,6 +336,8 @@ class SweepSegmentDone(Event):
     lost: int
     breaks: int
     seconds: float
+    # (tracker stamp, controller stamp) of one instant by the host's clock (`sweep_recording.anchor`)
+    anchor: list[float] | None = None
 
 
 @dataclass(frozen=True, kw_only=True)

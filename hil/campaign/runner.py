@@ -391,5 +391,5 @@ def sweep_state(store: Any, campaign: str) -> dict[int, SegmentRecord]:
         if isinstance(event, SweepSegmentDone):
             done[event.segment] = event
     return {k: record_from_store(k, e.session, store.stream_chunks(campaign, k, e.take, "joints"),
-                                 store.stream_chunks(campaign, k, e.take, "tracker"))
+                                 store.stream_chunks(campaign, k, e.take, "tracker"), e.anchor)
             for k, e in sorted(done.items())}

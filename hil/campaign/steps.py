@@ -202,6 +202,9 @@ class SegmentRecord:
     joint_q: np.ndarray
     tracker_t: np.ndarray
     tracker_p: np.ndarray
+    # (tracker stamp, controller stamp) of one instant, both read against the host's clock: a first
+    # guess of the map between the two clocks (None: the instruments did not say enough)
+    anchor: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)

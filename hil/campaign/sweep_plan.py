@@ -86,8 +86,10 @@ def sweep_verdict(after: float, before: float, robot: str, acceptance: float | N
     return Verdict(passed, limit, f"{rms} {'<=' if passed else '>'} {said}", rule)
 
 
-def streams_of(records: Sequence[SegmentRecord]) -> tuple[JointStream, TrackerStream, dict[str, int]]:
-    """The recorded segments as one joint stream and one tracker stream on the instruments' clocks.
+def streams_of(records: Sequence[SegmentRecord]
+               ) -> tuple[JointStream, TrackerStream, dict[str, int], list[SegmentRecord]]:
+    """The recorded segments as one joint stream and one tracker stream on the instruments' clocks,
+    the tracker samples left out by reason, and the segments joined.
 
     Segments recorded by different runs of the campaign (`SegmentRecord.session`) may be on clocks
     that restarted between them (a controller rebooted, a simulator started again): one clock map
@@ -110,14 +112,30 @@ def streams_of(records: Sequence[SegmentRecord]) -> tuple[JointStream, TrackerSt
     jt, jq, tt, tp = jt[j_order], jq[j_order], tt[t_order], tp[t_order]
     jk = np.concatenate([[True], np.diff(jt) > 0])
     tk = np.concatenate([[True], np.diff(tt) > 0])
-    return JointStream(jt[jk], jq[jk]), TrackerStream(tt[tk], tp[tk]), left
+    return JointStream(jt[jk], jq[jk]), TrackerStream(tt[tk], tp[tk]), left, chosen
 
 
 def record_from_store(segment: int, session: str, joints: tuple[list[float], list[Any]],
-                      tracker: tuple[list[float], list[Any]]) -> SegmentRecord:
+                      tracker: tuple[list[float], list[Any]], anchor: Sequence[float] | None = None
+                      ) -> SegmentRecord:
     """A stored segment (`hil.store.queries.StoreQueries.stream_chunks` of its take) as a record."""
     jt, jq = joints
     tt, tp = tracker
     points = np.array([(np.nan,) * 3 if v is None else v for v in tp], dtype=float).reshape(-1, 3)
     return SegmentRecord(segment, session, np.asarray(jt, float), np.asarray(jq, float).reshape(-1, 6),
-                         np.asarray(tt, float), points)
+                         np.asarray(tt, float), points,
+                         None if anchor is None else (float(anchor[0]), float(anchor[1])))
+
+
+def first_clock(records: Sequence[SegmentRecord]) -> tuple[float | None, float]:
+    """A first guess of the map t_ctrl = a + (1 + d)·t_trk from the segments' host-clock anchors
+    (`hil.campaign.sweep_recording.anchor`): a line through them (two or more segments: seconds to
+    minutes apart, so the drift is fixed to the anchors' milliseconds over that span), else drift 0
+    through the one anchor; (None, 0) without any (the join's own first guess then)."""
+    pts = np.array([r.anchor for r in records if r.anchor is not None], dtype=float).reshape(-1, 2)
+    if len(pts) == 0:
+        return None, 0.0
+    if len(pts) == 1 or np.ptp(pts[:, 0]) < 1.0:
+        return float(np.mean(pts[:, 1] - pts[:, 0])), 0.0
+    slope, offset = np.polyfit(pts[:, 0], pts[:, 1], 1)
+    return float(offset), float(slope - 1.0)

@@ -79,7 +79,25 @@ def record_segment(robot: Any, tracker: Tracker, segment: SweepSegment, tracker_
         raise TrackerError("the robot driver reported no joint stream for the sweep")
     tracker_t, tracker_p = tracker_record(samples)
     return SegmentRecord(segment.index, session, np.asarray(result.controller_t, float),
-                         np.asarray(result.actual_q, float).reshape(-1, 6), tracker_t, tracker_p)
+                         np.asarray(result.actual_q, float).reshape(-1, 6), tracker_t, tracker_p,
+                         anchor(samples, result.controller_t, result.host_t))
+
+
+def anchor(samples: list[StreamSample], controller_t: np.ndarray, host_t: np.ndarray | None
+           ) -> tuple[float, float] | None:
+    """(tracker stamp, controller stamp) at the middle of the segment on the host's clock: each
+    instrument's stamps fitted against when the host heard them (a straight line: over a segment's
+    seconds their rates hardly differ), both read at one host instant. Good to the links' latency
+    (milliseconds): a first guess the join then fixes from the motion itself, which a sweep on a
+    clock with a large drift needs (a simulated station in fast time: its tracker keeps the wall's
+    rate, so the map's drift is the speed − 1). None without host times or two stamped samples."""
+    stamped = [s for s in samples if s.stamp is not None and s.position is not None]
+    if host_t is None or len(host_t) < 2 or len(stamped) < 2:
+        return None
+    mid = float(np.median(host_t))
+    ctrl = np.polyval(np.polyfit(np.asarray(host_t, float), np.asarray(controller_t, float), 1), mid)
+    trk = np.polyval(np.polyfit([s.t for s in stamped], [s.stamp for s in stamped], 1), mid)
+    return float(trk), float(ctrl)
 
 
 def tracker_record(samples: list[StreamSample]) -> tuple[np.ndarray, np.ndarray]:
@@ -124,4 +142,5 @@ def segment_events(campaign: str, record: SegmentRecord, take: str, total: int,
     yield SweepSegmentDone(campaign=campaign, segment=record.index, segments=total, take=take,
                            session=record.session, joints=len(record.joint_t),
                            tracker=len(record.tracker_t) - lost, lost=lost, breaks=breaks(record.tracker_p),
-                           seconds=float(seconds))
+                           seconds=float(seconds),
+                           anchor=None if record.anchor is None else list(record.anchor))

@@ -182,5 +182,5 @@ def test_lost_samples_are_placed_on_the_trackers_clock_and_breaks_counted():
 def test_segments_of_another_session_are_counted_not_joined():
     rec = [SegmentRecord(k, "a" if k < 3 else "b", np.arange(5) + 10.0 * k, np.zeros((5, 6)),
                          np.arange(4) + 10.0 * k, np.zeros((4, 3))) for k in range(4)]
-    joints, tracker, left = streams_of(rec)
+    joints, tracker, left, _ = streams_of(rec)
     assert len(joints.t) == 15 and len(tracker.t) == 12 and left == {"other session": 4}
