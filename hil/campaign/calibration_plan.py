@@ -405,12 +405,14 @@ def _sweep_finish(config: StationConfig, campaign: str, start: Geometry, static:
     clock = swept.clock
     left = {k: int(v) for k, v in {**swept.left_out, **other}.items() if v}
     figures = {"offset_s": clock.offset_s, "drift": clock.drift, "sigma_offset_s": clock.sigma_offset_s,
+               "t_ref": clock.t_ref, "sigma_at_ref_s": clock.sigma_at_ref_s,
                "sigma_drift": clock.sigma_drift, "used": int(swept.used), "left_out": left,
                "rms": float(swept.rms_m), "segments": len(segments),
                "joint_samples": len(joints.t), "tracker_samples": len(stream.t)}
     yield Emit(SweepFitted(campaign=campaign, offset_s=clock.offset_s, drift=clock.drift,
                            sigma_offset_s=clock.sigma_offset_s, sigma_drift=clock.sigma_drift,
-                           used=int(swept.used), left_out=left, rms=float(swept.rms_m)))
+                           used=int(swept.used), left_out=left, rms=float(swept.rms_m),
+                           t_ref=float(clock.t_ref), sigma_at_ref_s=float(clock.sigma_at_ref_s)))
     yield Emit(ModelIdentified(campaign=campaign, rms=fit.rms, max=fit.max_error, iterations=fit.iterations,
                                rejected=[], model=model_document(fit, controller=controller)))
     yield Phase("validate")

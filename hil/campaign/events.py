@@ -352,6 +352,8 @@ class SweepFitted(Event):
     used: int
     left_out: dict[str, int]
     rms: float
+    t_ref: float = 0.0  # the tracker time the fit is centred on, where the map is known best
+    sigma_at_ref_s: float = 0.0  # the map's σ there (s)
 
 
 @dataclass(frozen=True, kw_only=True)

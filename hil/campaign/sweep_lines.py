@@ -25,7 +25,8 @@ def describe(event: Event) -> str | None:
                 f"{event.tracker} tracker samples{health}")
     if isinstance(event, SweepFitted):
         left = ", ".join(f"{k} {v}" for k, v in sorted(event.left_out.items()) if v) or "none"
-        return (f"sweep clock: offset {event.offset_s:.6f} s ± {event.sigma_offset_s * 1e6:.1f} µs, "
+        sigma = event.sigma_at_ref_s or event.sigma_offset_s
+        return (f"sweep clock: offset {event.offset_s:.6f} s ± {sigma * 1e6:.1f} µs, "
                 f"drift {event.drift * 1e6:.2f} ± {event.sigma_drift * 1e6:.2f} ppm; {event.used} samples "
                 f"used, {event.rms * 1e6:.0f} µm RMS; left out: {left}")
     return None

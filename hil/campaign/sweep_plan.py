@@ -41,6 +41,12 @@ TRACKER_RATE_HZ = 1000.0
 CONTROLLER_RATE_HZ = 500.0
 
 
+#: How far (s) a later run's anchors may lie from the main run's first clock map and still be on the
+#: same clocks: the anchors are good to the links' latency (milliseconds, several in fast time); a
+#: restarted instrument's clock is off by its whole running time (seconds at least).
+CLOCK_AGREEMENT_S = 0.05
+
+
 def sweep_tour(waypoints: np.ndarray, config: Any, spec: RobotSpec, check_model: Geometry,
                rate_hz: float = CONTROLLER_RATE_HZ) -> list[SweepSegment]:
     """The tour through `waypoints` (m, 6) as segments between consecutive waypoints, each planned
@@ -93,8 +99,10 @@ def streams_of(records: Sequence[SegmentRecord]
 
     Segments recorded by different runs of the campaign (`SegmentRecord.session`) may be on clocks
     that restarted between them (a controller rebooted, a simulator started again): one clock map
-    cannot hold them, so only the session with the most segments (the latest on a tie) is joined and
-    the others' tracker samples are counted as left out (``other session``)."""
+    cannot hold them. The session with the most segments (the latest on a tie) is joined, and with it
+    every other whose host-clock anchors lie on its first map within `CLOCK_AGREEMENT_S` (the
+    instruments' clocks went on); the rest's tracker samples are counted as left out
+    (``other session``)."""
     if not records:
         raise InputError("the sweep recorded no segment")
     sessions: dict[str, int] = {}
@@ -102,8 +110,16 @@ def streams_of(records: Sequence[SegmentRecord]
         sessions[r.session] = sessions.get(r.session, 0) + 1
     ordered = list(dict.fromkeys(r.session for r in records))
     keep = max(ordered, key=lambda s: (sessions[s], ordered.index(s)))
-    chosen = sorted((r for r in records if r.session == keep), key=lambda r: float(r.joint_t[0]))
-    left = {"other session": int(sum(len(r.tracker_t) for r in records if r.session != keep))}
+    main = [r for r in records if r.session == keep]
+    offset, drift = first_clock(main)
+    joined = {keep}
+    for other in ordered:  # a run whose instruments' clocks went on (no restart) joins the main one
+        anchors = [r.anchor for r in records if r.session == other and r.anchor is not None]
+        if other != keep and offset is not None and anchors and all(
+                abs(c - (offset + (1.0 + drift) * t)) < CLOCK_AGREEMENT_S for t, c in anchors):
+            joined.add(other)
+    chosen = sorted((r for r in records if r.session in joined), key=lambda r: float(r.joint_t[0]))
+    left = {"other session": int(sum(len(r.tracker_t) for r in records if r.session not in joined))}
     jt = np.concatenate([r.joint_t for r in chosen])
     jq = np.concatenate([r.joint_q for r in chosen])
     tt = np.concatenate([r.tracker_t for r in chosen])

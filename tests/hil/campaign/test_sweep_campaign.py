@@ -1,0 +1,109 @@
+"""Whole sweep campaigns on the simulated station with emScon: bootstrap, the sweep through the
+calibration poses while both instruments stream, validation on still poses, the verdict; and a sweep
+interrupted mid-way that resumes without sweeping again what it has.
+
+Fast time is limited for a sweep: the servo loop keeps the wall's period (`hil.campaign.sweep_recording`),
+so the joint stream in station time is the loop's rate over the speed; at speed 4 it is still dense
+enough for the join's derivative window."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hil.campaign.chooser import campaign_chooser
+from hil.campaign.engine import RealClock
+from hil.campaign.events import EventBus, RunFinished, SweepFitted, SweepSegmentDone
+from hil.campaign.runner import resume_state, run_campaign
+from hil.station.config import default_config
+from hil.station.devices import open_devices
+from hil.store import Store
+from mocks.station import start_station
+
+SPEED = 4.0
+
+
+class SweepStation:
+    """The simulated station (emScon) in its own process, and campaigns run on it from this one."""
+
+    def __init__(self, tmp_path: Path, seed: int = 5, mode: str = "sweep") -> None:
+        self.sim = start_station(speed=SPEED, seed=seed, ideal=True)
+        svc = self.sim.info["services"][0]
+        self.clock_map = svc["clock_map"]
+        self.config = default_config().with_overrides(
+            robot__address=self.sim.address, tracker__protocol="emscon",
+            tracker__url=svc["tracker_emscon_url"], robot__speed=1.0, robot__acceleration=2.0, campaign__calibration_poses=12,
+            campaign__validation_poses=6, campaign__candidates=2000, campaign__mode=mode,
+            timeouts__relock=20.0, timeouts__suspend=90.0, warmup__enabled=False)
+        self.store = Store.open(tmp_path / f"{mode}.db")
+        self.campaign = self.store.create_campaign(self.config, "ur5e")
+        self.events: list = []
+
+    def run(self, *, interrupt_after: int | None = None):
+        bus = EventBus()
+        bus.subscribe(self.store.as_subscriber(), critical=True)
+        bus.subscribe(self.events.append)
+        engines = []
+        if interrupt_after is not None:
+            def stop(event):
+                if isinstance(event, SweepSegmentDone) and event.segment == interrupt_after:
+                    engines[0].request_interrupt("the operator stops the sweep")
+            bus.subscribe(stop)
+        resume = resume_state(self.store, self.campaign) if self.of(RunFinished) else None
+        return run_campaign(self.config, campaign_chooser(self.config), bus=bus, campaign=self.campaign,
+                            resume=resume, clock=RealClock(SPEED), devices=open_devices(self.config),
+                            engine_ready=engines.append)
+
+    def of(self, kind):
+        return [e for e in self.events if isinstance(e, kind)]
+
+    def close(self) -> None:
+        self.sim.stop()
+        self.store.close()
+
+
+@pytest.fixture
+def station(tmp_path):
+    st = SweepStation(tmp_path)
+    yield st
+    st.close()
+
+
+def test_a_sweep_campaign_is_accepted_and_finds_the_stations_clock(station):
+    outcome = station.run()
+    assert outcome.status == "accepted", (outcome.error, outcome.result and outcome.result.verdict)
+    result = outcome.result
+    done = station.of(SweepSegmentDone)
+    assert [e.segment for e in done] == list(range(11)) and all(e.joints > 100 for e in done)
+    fitted = station.of(SweepFitted)[-1]
+    truth = station.clock_map
+    # the map at the sweep's mean tracker time, where the fit knows it best, against the station's truth
+    t = fitted.t_ref
+    err = (fitted.offset_s + (1 + fitted.drift) * t) - (truth["offset_s"] + (1 + truth["drift"]) * t)
+    assert abs(err) <= 3 * fitted.sigma_at_ref_s, (err, fitted)
+    assert abs(fitted.drift - truth["drift"]) <= 3 * fitted.sigma_drift, (fitted.drift, truth)
+    assert result.after.rms < result.before.rms and result.after.rms < 0.1e-3
+    stop_and_go = SweepStation(Path(station.store.location).parent, mode="stop-and-go")
+    try:
+        reference = stop_and_go.run()
+    finally:
+        stop_and_go.close()
+    assert reference.status == "accepted"
+    assert result.after.rms <= 2.0 * reference.result.after.rms + 10e-6, (result.after.rms,
+                                                                         reference.result.after.rms)
+
+
+def test_an_interrupted_sweep_resumes_without_sweeping_again_what_it_has(station):
+    first = station.run(interrupt_after=3)
+    assert first.status == "interrupted"
+    kept = [e.segment for e in station.of(SweepSegmentDone)]
+    assert kept[:4] == [0, 1, 2, 3]
+    before = len(kept)
+    second = station.run()
+    again = [e.segment for e in station.of(SweepSegmentDone)][before:]
+    assert again and min(again) == max(kept) + 1  # resumed at the first segment not recorded whole
+    assert sorted(kept + again) == list(range(11))  # every segment once
+    assert second.status == "accepted", second.error
+    assert station.of(SweepFitted)[-1].left_out.get("other session", 0) == 0  # one station session
