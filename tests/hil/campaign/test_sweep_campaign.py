@@ -33,7 +33,8 @@ class SweepStation:
         self.clock_map = svc["clock_map"]
         self.config = default_config().with_overrides(
             robot__address=self.sim.address, tracker__protocol="emscon",
-            tracker__url=svc["tracker_emscon_url"], robot__speed=1.0, robot__acceleration=2.0, campaign__calibration_poses=12,
+            tracker__url=svc["tracker_emscon_url"], robot__speed=1.0, robot__acceleration=2.0,
+            campaign__calibration_poses=12,
             campaign__validation_poses=6, campaign__candidates=2000, campaign__mode=mode,
             timeouts__relock=20.0, timeouts__suspend=90.0, warmup__enabled=False)
         self.store = Store.open(tmp_path / f"{mode}.db")
