@@ -22,7 +22,8 @@ def test_the_sweep_line_follows_segments_then_the_clock():
     run.apply(RunStarted(campaign="c1", robot="ur5e", station="s", poses=20))
     assert run.sweep_line == ""
     run.apply(SweepPlanned(campaign="c1", segments=[{"index": 0, "seconds": 3.0},
-                                                    {"index": 1, "seconds": 2.5}], waypoints=[[0.0] * 6] * 3, rate_hz=500.0, tracker_rate_hz=1000.0, done=[0]))
+                                                    {"index": 1, "seconds": 2.5}],
+                           waypoints=[[0.0] * 6] * 3, rate_hz=500.0, tracker_rate_hz=1000.0, done=[0]))
     assert run.sweep_line == "sweep: 2 segments through 3 poses, 5.5 s of motion, 1 recorded before"
     run.apply(segment_done(2, lost=150, breaks=1))
     assert run.sweep_line == ("sweep segment 3/14: 1200 joint, 3600 tracker samples, 1 beam break "
