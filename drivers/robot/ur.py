@@ -589,11 +589,15 @@ class ServoStream:
             robot.check_status()
         c.waitPeriod(t_start)
         if self.record:
+            # the stamp read on both sides of the joints: a frame that arrived between the two reads
+            # would pair this frame's joints with another's time, so that cycle is not recorded
             stamp = float(self._r.getTimestamp())
-            if not self._stamps or stamp > self._stamps[-1]:  # a new controller frame
+            q = list(self._r.getActualQ())
+            host = time.monotonic()
+            if float(self._r.getTimestamp()) == stamp and (not self._stamps or stamp > self._stamps[-1]):
                 self._stamps.append(stamp)
-                self._joints.append(list(self._r.getActualQ()))
-                self._hosts.append(time.monotonic())
+                self._joints.append(q)
+                self._hosts.append(host)
         return now
 
     def recorded(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
