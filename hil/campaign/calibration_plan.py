@@ -602,7 +602,11 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
             if isinstance(got, SweepRecorded):
                 sweep_records.update({r.index: r for r in got.segments})
     left = [(i, r) for i, r, _ in todo if not (r == CALIBRATION and stop.stopped)]
-    yield Phase("measure", f"{len(left)} of {len(planned)} poses to measure")
+    if sweeping:  # the calibration poses were swept: the still ones left are the validation's
+        still = sum(1 for _, r, _ in planned if r != CALIBRATION)
+        yield Phase("measure", f"{len(left)} of {still} still validation poses to measure")
+    else:
+        yield Phase("measure", f"{len(left)} of {len(planned)} poses to measure")
     if todo:
         yield from watch.start()
     sight = _SightCheck(robot, smr_guess, tracker.translation, config.smr["acceptance_angle"],
