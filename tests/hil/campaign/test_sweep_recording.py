@@ -22,8 +22,8 @@ from hil.campaign.engine import Engine, RealClock
 from hil.campaign.events import EventBus, SweepChunk, SweepSegmentDone
 from hil.campaign.runner import store_recorder, sweep_state
 from hil.campaign.steps import SegmentRecord, Sweep, SweepRecorded, SweepSegment
-from hil.campaign.sweep_plan import streams_of
-from hil.campaign.sweep_recording import CHUNK, breaks, tracker_record
+from hil.campaign.sweep_plan import first_clock, streams_of
+from hil.campaign.sweep_recording import CHUNK, anchor, breaks, tracker_record
 from hil.station.config import default_config
 from hil.store import Store
 from tests.hil.campaign.fakes import FakeArm, TrackerParts
@@ -184,3 +184,31 @@ def test_segments_of_another_session_are_counted_not_joined():
                          np.arange(4) + 10.0 * k, np.zeros((4, 3))) for k in range(4)]
     joints, tracker, left, _ = streams_of(rec)
     assert len(joints.t) == 15 and len(tracker.t) == 12 and left == {"other session": 4}
+
+
+def test_the_first_clock_comes_from_the_host_anchors():
+    """Each segment ties both instruments' stamps to the host's clock; a line through the anchors of
+    segments minutes apart gives the map's offset and drift (here a fast-time station's: drift 3)."""
+    host = np.arange(0.0, 2.0, 0.002)
+    ctrl = 50.0 + 4.0 * host  # the controller's seconds run 4 times the host's
+    samples = [StreamSample(float(h), (0.0, 0.0, 0.0), PointStatus.OK, stamp=1000.0 + float(h))
+               for h in host[::3]]
+    t_trk, t_ctrl = anchor(samples, ctrl, host)
+    assert t_ctrl == pytest.approx(50.0 + 4.0 * (t_trk - 1000.0))
+    recs = [SegmentRecord(k, "s", np.zeros(2), np.zeros((2, 6)), np.zeros(2), np.zeros((2, 3)),
+                          (1000.0 + 30.0 * k, 50.0 + 4.0 * 30.0 * k)) for k in range(3)]
+    offset, drift = first_clock(recs)
+    assert drift == pytest.approx(3.0) and offset == pytest.approx(50.0 - 4.0 * 1000.0)
+    assert first_clock([SegmentRecord(0, "s", np.zeros(2), np.zeros((2, 6)), np.zeros(2),
+                                      np.zeros((2, 3)))]) == (None, 0.0)
+
+
+def test_a_later_run_on_the_same_clocks_is_joined_one_on_restarted_clocks_is_not():
+    def rec(k: int, session: str, shift: float = 0.0) -> SegmentRecord:
+        t = 1000.0 + 30.0 * k
+        return SegmentRecord(k, session, np.arange(5) + 10.0 * k, np.zeros((5, 6)), np.arange(4) + 10.0 * k,
+                             np.zeros((4, 3)), (t, 50.0 + 1.00002 * t + shift))
+    same = [rec(0, "a"), rec(1, "a"), rec(2, "b")]
+    assert streams_of(same)[2] == {"other session": 0}
+    restarted = [rec(0, "a"), rec(1, "a"), rec(2, "b", shift=-700.0)]  # the controller rebooted
+    assert streams_of(restarted)[2] == {"other session": 4}
