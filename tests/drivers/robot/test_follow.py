@@ -87,6 +87,21 @@ def test_follow_streams_the_trajectory_and_ends_at_its_last_sample(arm: Any) -> 
     # the loop keeps the controller's 2 ms period (see assert_on_period for why a low percentile)
     assert_on_period(res.times, 0.002)
     assert np.allclose(arm.read_joints(5).q, traj[-1], atol=1e-3)
+    # the controller's own record of the motion: its RTDE timestamp and actual_q, at most one new frame
+    # per cycle, on the controller's clock (not the host's), read between the first send and the hold.
+    # A loaded host starves the loop (cycles late, frames straddling a read are dropped): a tenth of
+    # the 450 cycles at least
+    k = len(res.controller_t)
+    assert res.actual_q.shape == (k, 6) and res.host_t.shape == (k,) and 45 <= k <= 450
+    assert np.all(np.diff(res.controller_t) > 0) and np.all(np.diff(res.host_t) >= 0)
+    assert res.times[0] <= res.host_t[0] and res.host_t[-1] <= res.hold_end
+    # the arm went where it was sent: each recorded q lies on the ramp between its ends
+    span = traj[-1] - traj[0]
+    j = int(np.argmax(np.abs(span)))
+    s = (res.actual_q[:, j] - traj[0, j]) / span[j]
+    assert np.all((s > -0.01) & (s < 1.01)) and s[-1] > 0.99
+    off = res.actual_q - (traj[0] + s[:, None] * span)
+    assert np.abs(off).max() < 1e-3
     print(f"\n{type(arm).__name__}: {res.period_count} periods, mean {res.period_mean * 1e3:.3f} ms, "
           f"max {res.period_max * 1e3:.3f} ms")
 

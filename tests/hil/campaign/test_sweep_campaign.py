@@ -35,7 +35,7 @@ class SweepStation:
         self.config = default_config().with_overrides(
             robot__address=self.sim.address, tracker__protocol="emscon",
             tracker__url=svc["tracker_emscon_url"], robot__speed=2.0, robot__acceleration=4.0,
-            campaign__calibration_poses=10,
+            campaign__calibration_poses=11,
             campaign__validation_poses=6, campaign__candidates=2000, campaign__mode=mode,
             timeouts__relock=20.0, timeouts__suspend=90.0, warmup__enabled=False)
         self.store = Store.open(tmp_path / f"{mode}.db")
@@ -77,7 +77,7 @@ def test_a_sweep_campaign_is_accepted_and_finds_the_stations_clock(station):
     assert outcome.status == "accepted", (outcome.error, outcome.result and outcome.result.verdict)
     result = outcome.result
     done = station.of(SweepSegmentDone)
-    assert [e.segment for e in done] == list(range(9)) and all(e.joints > 100 for e in done)
+    assert [e.segment for e in done] == list(range(10)) and all(e.joints > 100 for e in done)
     fitted = station.of(SweepFitted)[-1]
     truth = station.clock_map
     # the map at the sweep's mean tracker time, where the fit knows it best, against the station's truth
@@ -106,6 +106,6 @@ def test_an_interrupted_sweep_resumes_without_sweeping_again_what_it_has(station
     second = station.run()
     again = [e.segment for e in station.of(SweepSegmentDone)][before:]
     assert again and min(again) == max(kept) + 1  # resumed at the first segment not recorded whole
-    assert sorted(kept + again) == list(range(9))  # every segment once
+    assert sorted(kept + again) == list(range(10))  # every segment once
     assert second.status == "accepted", second.error
     assert station.of(SweepFitted)[-1].left_out.get("other session", 0) == 0  # one station session
