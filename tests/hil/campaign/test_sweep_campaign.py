@@ -72,6 +72,7 @@ def station(tmp_path):
     st.close()
 
 
+@pytest.mark.timeout(600)  # two campaigns (the sweep's and stop-and-go's): minutes on a loaded machine
 def test_a_sweep_campaign_is_accepted_and_finds_the_stations_clock(station):
     """Accepted on still validation poses, as a stop-and-go campaign on the same arm is; the clock map
     found near the station's truth.
