@@ -388,10 +388,16 @@ def _sweep_finish(config: StationConfig, campaign: str, start: Geometry, static:
     """A sweep campaign's fit, validation and verdict (`hil.campaign.sweep_plan`): the kinematics and
     the clock map fitted together from the recorded streams and the bootstrap's still poses
     (`hil.calibration.sweep_fit.fit_sweep`), then validated on the held-out still poses as
-    stop-and-go's are. Returns the `CampaignResult`."""
+    stop-and-go's are. The fit starts from the nominal arm located on the bootstrap's points (tracker
+    pose and SMR; a resumed run has only the stored tracker and the SMR's guess otherwise, centimetres
+    off). Returns the `CampaignResult`."""
     from hil.calibration.sweep_fit import fit_sweep
 
     robot, camp = config.robot["type"], config.campaign
+    boot = [r for (role, _), r in sorted(records.items()) if role == BOOTSTRAP]
+    if len(boot) >= 3:  # the first model from the still poses: also on a resume, which skips locating
+        located_tracker, located_smr = _locate(boot, robot, np.asarray(start.smr, dtype=float))
+        start = Geometry.nominal(robot, located_smr, located_tracker)
     joints, stream, other, joined = streams_of(segments)
     offset, drift = first_clock(joined)
     try:
