@@ -625,6 +625,9 @@ def parse_config(data: dict[str, Any], source: str = "<config>") -> StationConfi
         problem = sweep_refused(values["tracker"]["protocol"])
         if problem:
             raise InputError(f"{source}: campaign.mode: {problem}")
+        if values["campaign"]["stop_early"]:  # it would be silently ignored
+            raise InputError(f"{source}: campaign.stop_early: a sweep passes every calibration pose in one "
+                             "tour; stopping early is stop-and-go's (campaign.mode = \"stop-and-go\")")
     val, clusters = values["campaign"]["validation_poses"], values["campaign"]["validation_clusters"]
     if clusters > val:
         raise InputError(f"{source}: campaign.validation_clusters: {clusters} clusters for "

@@ -26,6 +26,9 @@ def test_a_configured_sweep_with_geocom_is_refused_naming_the_key():
         parse_config({"campaign": {"mode": "sweep"}, "tracker": {"protocol": "geocom"}}, "station.toml")
     ok = parse_config({"campaign": {"mode": "sweep"}, "tracker": {"protocol": "emscon"}}, "station.toml")
     assert ok.campaign["mode"] == "sweep"
+    with pytest.raises(InputError, match=r"campaign.stop_early: a sweep passes every calibration pose"):
+        parse_config({"campaign": {"mode": "sweep", "stop_early": True}, "tracker": {"protocol": "emscon"}},
+                     "station.toml")
 
 
 @pytest.mark.parametrize("extra", [[], ["--tracker-protocol", "geocom"]])
