@@ -21,6 +21,9 @@ How the path is built, and why:
   acceleration limits (the spline couples neighbouring segments, so this iterates; the shortest
   feasible timing found is kept). The limits are *checked on the sampled path* and a path that cannot
   be brought within them is refused (`SweepRefused`), never clamped.
+* **Stops.** The static poses a sweep campaign still measures (its bootstrap and its validation poses)
+  can be rests of the same tour (`stops`, held `dwell_s`): ordered with the waypoints, each stretch
+  between two rests one rest-to-rest spline — no separate stop-and-go tour to travel.
 * **Sampling.** One sample per controller period (1/rate_hz; 500 Hz on e-series, UR's RTDE guide): the
   whole timing is stretched by less than one period so the last sample is the end at rest.
 """
@@ -59,13 +62,28 @@ class SweepTour:
     q: np.ndarray  # (n, N) rad, encoder targets
     waypoints: np.ndarray  # (m, N) the informative poses it passes through, in order
     rate_hz: float
-    #: (m,) s: when the tour passes each waypoint (the last one: the end, at rest)
+    #: (m,) s: when the tour passes each waypoint
     waypoint_times: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    #: (s, N) the poses it rests at (`plan_sweep`'s `stops`), in order, and (s,) when each rest begins
+    stops: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
+    stop_times: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def duration(self) -> float:
         """Seconds from the first sample to the last (the arm at rest at both)."""
         return float(self.t[-1] - self.t[0])
+
+    def approach_directions(self) -> np.ndarray:
+        """(s, N) the sign of each joint's last motion before each stop (−1, 0 or +1): the side its lost
+        motion lags from (`hil.calibration.synthetic.measure`'s `directions`)."""
+        out = np.zeros_like(self.stops)
+        for k, ts in enumerate(self.stop_times):
+            i = round(float(ts) * self.rate_hz)
+            moved = np.diff(self.q[: i + 1], axis=0)
+            for j in range(self.q.shape[1]):
+                nz = np.flatnonzero(np.abs(moved[:, j]) > 1e-12)
+                out[k, j] = np.sign(moved[nz[-1], j]) if nz.size else 0.0
+        return out
 
     def velocities(self) -> np.ndarray:
         """(n, N) rad/s of the sampled path, by central differences (one-sided at the ends)."""
@@ -134,30 +152,10 @@ def _segment_ratios(spline: CubicSpline, durations: np.ndarray, speed: np.ndarra
     return r.reshape(len(durations), per_segment).max(axis=1)
 
 
-def plan_sweep(waypoints: np.ndarray, start: np.ndarray, *, max_speed: np.ndarray | float,
-               max_acceleration: np.ndarray | float, rate_hz: float = 500.0) -> SweepTour:
-    """A smooth joint path from `start` (at rest) through `waypoints` (in a short order) to rest at the
-    last one, within the per-joint `max_speed` (rad/s) and `max_acceleration` (rad/s²) on every sample
-    (module docstring). `SweepRefused` if no timing meets them (it never clamps)."""
-    W = np.atleast_2d(np.asarray(waypoints, dtype=float))
-    q0 = np.asarray(start, dtype=float).ravel()
-    if W.ndim != 2 or W.shape[0] < 1 or W.shape[1] != q0.size or not np.isfinite(W).all() \
-            or not np.isfinite(q0).all():
-        raise InputError(f"sweep: waypoints must be (m ≥ 1, {q0.size}) finite joint angles and start "
-                         f"{q0.size} finite angles, got {W.shape} and {q0.shape}")
-    if not (np.isfinite(rate_hz) and rate_hz > 0):
-        raise InputError(f"sweep: rate_hz must be positive, got {rate_hz}")
-    n = q0.size
-    speed = _limits(max_speed, n, "max_speed")
-    accel = _limits(max_acceleration, n, "max_acceleration")
-    order = tour_order(q0, W, speed)
-    W = W[order]
-    knots = np.vstack([q0[None], W])
-    # drop a waypoint repeating the previous knot: a spline cannot have two knots at one time
-    keep = np.r_[True, np.max(np.abs(np.diff(knots, axis=0)), axis=1) > 1e-9]
-    knots = knots[keep]
-    if len(knots) < 2:
-        raise InputError("sweep: every waypoint is the start; nothing to sweep")
+def _leg(knots: np.ndarray, speed: np.ndarray, accel: np.ndarray, rate_hz: float
+         ) -> tuple[np.ndarray, np.ndarray]:
+    """One rest-to-rest leg through `knots` (k ≥ 2, no repeats): its samples (n, N) from the first knot
+    to the last, and when it passes each knot after the first (k − 1,) s from the leg's start."""
     delta = np.abs(np.diff(knots, axis=0))
     durations = np.max(np.maximum(1.5 * delta / speed, np.sqrt(6.0 * delta / accel)), axis=1)
     durations = np.maximum(durations, 2.0 / rate_hz)
@@ -178,18 +176,75 @@ def plan_sweep(waypoints: np.ndarray, start: np.ndarray, *, max_speed: np.ndarra
     total = float(best.sum())
     periods = int(np.ceil(total * rate_hz - 1e-9))
     best = best * (periods / rate_hz) / total  # stretched (< 1 period): the end falls on a sample
-    spline = _spline(knots, best)
-    t = np.arange(periods + 1) / rate_hz
-    q = spline(t)
+    q = _spline(knots, best)(np.arange(periods + 1) / rate_hz)
     q[0], q[-1] = knots[0], knots[-1]
-    times = np.cumsum(best)
-    passes = np.empty(len(order))
-    passes[np.flatnonzero(keep[1:])] = times
-    for k in range(len(passes)):  # a dropped duplicate passes when the knot it repeats does
-        if not keep[k + 1]:
-            passes[k] = passes[k - 1] if k else 0.0
-    tour = SweepTour(t, q, W, float(rate_hz), passes)
-    check_sweep(tour, max_speed=speed, max_acceleration=accel)
+    return q, np.cumsum(best)
+
+
+def plan_sweep(waypoints: np.ndarray, start: np.ndarray, *, max_speed: np.ndarray | float,
+               max_acceleration: np.ndarray | float, rate_hz: float = 500.0,
+               spec: RobotSpec | None = None, stops: np.ndarray | None = None,
+               dwell_s: float = 0.0) -> SweepTour:
+    """A smooth joint path from `start` (at rest) through `waypoints` (in a short order) to rest at the
+    last one, within the per-joint `max_speed` (rad/s) and `max_acceleration` (rad/s²) on every sample
+    (module docstring). `SweepRefused` if no timing meets them (it never clamps).
+
+    `stops` are poses the tour comes to rest at and holds for `dwell_s` (the static poses a sweep
+    campaign still measures — its bootstrap and validation poses — visited in the same tour instead of
+    a separate stop-and-go one); they are ordered with the waypoints, and the path between two stops
+    is one rest-to-rest spline. With `spec` every sample is also checked against the arm's joint
+    limits: a spline passing through a waypoint at a joint's limit overshoots it between samples (by
+    ~10⁻⁴ rad), so waypoints must keep a margin from the limits; a tour that does not is refused naming
+    the sample and joint."""
+    W = np.atleast_2d(np.asarray(waypoints, dtype=float))
+    q0 = np.asarray(start, dtype=float).ravel()
+    S = np.zeros((0, q0.size)) if stops is None else np.atleast_2d(np.asarray(stops, dtype=float))
+    if W.ndim != 2 or W.shape[0] < 1 or W.shape[1] != q0.size or S.shape[1:] != (q0.size,) \
+            or not (np.isfinite(W).all() and np.isfinite(q0).all() and np.isfinite(S).all()):
+        raise InputError(f"sweep: waypoints and stops must be (m, {q0.size}) finite joint angles (m ≥ 1 "
+                         f"waypoints) and start {q0.size} finite angles, got {W.shape}, {S.shape} and "
+                         f"{q0.shape}")
+    if not (np.isfinite(rate_hz) and rate_hz > 0) or not (np.isfinite(dwell_s) and dwell_s >= 0):
+        raise InputError(f"sweep: rate_hz must be positive and dwell_s ≥ 0, got {rate_hz} and {dwell_s}")
+    n = q0.size
+    speed = _limits(max_speed, n, "max_speed")
+    accel = _limits(max_acceleration, n, "max_acceleration")
+    points = np.vstack([W, S])
+    order = tour_order(q0, points, speed)
+    is_stop = np.arange(len(points)) >= len(W)
+    hold = round(dwell_s * rate_hz)
+    pieces: list[np.ndarray] = [q0[None]]
+    passes = np.zeros(len(points))
+    clock = 0.0  # s at the end of the samples so far
+    knots, members = [q0], []
+    for pos, k in enumerate(order):
+        if np.max(np.abs(points[k] - knots[-1])) > 1e-9:
+            knots.append(points[k])
+        members.append((k, len(knots) - 1))
+        if not (is_stop[k] or pos == len(order) - 1):
+            continue
+        if len(knots) > 1:
+            q, times = _leg(np.array(knots), speed, accel, rate_hz)
+            pieces.append(q[1:])
+            for m, i in members:
+                passes[m] = clock + (times[i - 1] if i else 0.0)
+            clock += (len(q) - 1) / rate_hz
+        else:
+            for m, _ in members:
+                passes[m] = clock
+        if is_stop[k] and hold:
+            pieces.append(np.repeat(knots[-1][None], hold, axis=0))
+            clock += hold / rate_hz
+        knots, members = [knots[-1]], []
+    q = np.vstack(pieces)
+    if len(q) < 2:
+        raise InputError("sweep: every waypoint is the start; nothing to sweep")
+    t = np.arange(len(q)) / rate_hz
+    ways = [k for k in order if not is_stop[k]]
+    stop_order = [k for k in order if is_stop[k]]
+    tour = SweepTour(t, q, W[ways], float(rate_hz), passes[ways], S[np.array(stop_order, dtype=int) - len(W)]
+                     if stop_order else np.zeros((0, n)), passes[stop_order])
+    check_sweep(tour, max_speed=speed, max_acceleration=accel, spec=spec)
     return tour
 
 

@@ -20,6 +20,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 
 from hil.arm.dynamics import MovingArm
 from hil.arm.geometry import Geometry
@@ -55,13 +56,28 @@ class SweepPath:
                 -self.amplitude * self.omega**2 * s)
 
 
+class SplinePath:
+    """Any smooth joint path given as samples (a planned tour, `hil.calibration.sweep_path.SweepTour`):
+    q, q̇, q̈ from the cubic spline through them (``scipy.interpolate.CubicSpline``; a tour is itself a
+    cubic spline, so this recovers it between its samples)."""
+
+    def __init__(self, t: np.ndarray, q: np.ndarray) -> None:
+        self._spline = CubicSpline(np.asarray(t, dtype=float), np.asarray(q, dtype=float), axis=0)
+        self.duration = float(t[-1] - t[0])
+
+    def at(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(q, q̇, q̈), each (N, 6), at true times `t` (N,)."""
+        t = np.asarray(t, dtype=float)
+        return self._spline(t), self._spline(t, 1), self._spline(t, 2)
+
+
 @dataclass(frozen=True)
 class SweepStreams:
     """What a synthetic sweep recorded, and its truth."""
 
     joints: JointStream
     tracker: TrackerStream
-    path: SweepPath
+    path: SweepPath | SplinePath
     clocks: StationClocks
     tool_speed_rms: float  # m/s, of the SMR along the path (true)
 
@@ -84,7 +100,7 @@ def sweep_path(truth: Geometry, tool_speed: float, seed: int = 0, duration: floa
     return path
 
 
-def _rms_speed(truth: Geometry, path: SweepPath, duration: float) -> float:
+def _rms_speed(truth: Geometry, path: SweepPath | SplinePath, duration: float) -> float:
     t = np.linspace(0.0, duration, 4001)
     p = MovingArm(truth.rigid()).points(path.at(t)[0])
     v = np.linalg.norm(np.diff(p, axis=0), axis=1) / np.diff(t)
@@ -94,17 +110,22 @@ def _rms_speed(truth: Geometry, path: SweepPath, duration: float) -> float:
 def sweep_streams(truth: Geometry, *, tool_speed: float = 0.25, duration: float = 20.0,
                   clocks: StationClocks | None = None, noise: Noise | None = None, seed: int = 0,
                   beam_breaks: Sequence[tuple[float, float]] = (),
-                  joint_gaps: Sequence[tuple[float, float]] = ()) -> SweepStreams:
+                  joint_gaps: Sequence[tuple[float, float]] = (),
+                  path: SplinePath | None = None) -> SweepStreams:
     """A sweep of `duration` true seconds at RMS `tool_speed`.
 
     `beam_breaks` (true-time intervals) lose the tracker's samples (NaN points, as the emScon driver
     yields a lost beam); `joint_gaps` drop the controller's samples (an RTDE link that stalled).
     `clocks` defaults to `StationClocks.realistic()`, `noise` to `Noise()` (the tracker's model and
-    the encoders' σ); `Noise(tracker_sigma=0.0, encoder_sigma=0.0)` is noise-free."""
+    the encoders' σ); `Noise(tracker_sigma=0.0, encoder_sigma=0.0)` is noise-free. A given `path` (a
+    planned tour) replaces the example path: then `tool_speed` is unused and `duration` is the path's."""
     clocks = StationClocks.realistic() if clocks is None else clocks
     noise = Noise() if noise is None else noise
     rng = np.random.default_rng(seed)
-    path = sweep_path(truth, tool_speed, seed, duration)
+    if path is None:
+        path = sweep_path(truth, tool_speed, seed, duration)
+    else:
+        duration = path.duration
     ctrl, trk = clocks.controller, clocks.tracker
     # each instrument samples on its own clock's grid, from its reading at true time 0 on
     c_grid = ctrl.reading(0.0) + CONTROLLER_PERIOD_S * np.arange(int(duration / CONTROLLER_PERIOD_S) + 1)
