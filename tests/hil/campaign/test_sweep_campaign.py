@@ -97,7 +97,7 @@ def test_a_sweep_campaign_is_accepted_and_finds_the_stations_clock(station):
     err = (fitted.offset_s + (1 + fitted.drift) * t) - (truth["offset_s"] + (1 + truth["drift"]) * t)
     assert abs(err) < 2e-3, (err, fitted)
     assert abs(fitted.drift - truth["drift"]) < 50e-6, (fitted.drift, truth)
-    assert fitted.used >= 1000 and fitted.left_out.get("beam lost", 0) >= 0
+    assert fitted.used >= 10 * 32  # ten tracker samples a fitted term (≈30 parameters and the clock's 2)
     assert result.after.rms < result.before.rms / 10 and result.after.rms < 52.5e-6  # bound / 10
     # the same arm (the station's seed) calibrated stop-and-go, in faster time (it streams nothing)
     stop_and_go = SweepStation(station.tmp, mode="stop-and-go", speed=40.0)
