@@ -1,7 +1,7 @@
 """The adversarial pass, as figures: bad inputs over every subcommand, and faults injected into campaigns.
 
     python bench/adversarial.py [--faults 10] [--seed 1] [--only calibrate,select] [--no-faults]
-                                [--no-sweep] [--verbose]
+                                [--no-sweep] [--classes] [--station] [--verbose]
 
 1. **Bad inputs.** Runs the table of tests/hil/cli/bad_input_cases.py (the one
    tests/hil/cli/test_bad_input_sweep.py runs) in this process, each case with a time limit, and prints
@@ -10,7 +10,9 @@
    of bad input and bad surroundings (case ids ``c1-`` … ``c6-``: inputs that never end, outputs that
    go nowhere, numbers that are not physical, a config checked before any connection, a damaged store
    row, odd environments) the cases, how many meet the contract and the longest time one took to be
-   refused (target: under 2 s).
+   refused (target: under 2 s); then each case that connects to the simulated station (a robot type
+   the controller contradicts, ``--station`` runs only those) with its time to be refused, cold and
+   warm.
 2. **Faults.** Runs ``hil calibrate --sim --speed 50`` (a small campaign) in a subprocess and interrupts
    it at seeded random moments — SIGKILL of the process (``kill -9``), SIGINT to its process group
    (Ctrl-C) or SIGTERM (``kill``), a random number of measured points into the run plus a random
@@ -52,13 +54,16 @@ sys.path.insert(0, str(ROOT))
 
 # ------------------------------------------------------------------------------------------ bad inputs
 
-def sweep(only: set[str] | None, verbose: bool, classes_only: bool = False) -> tuple[int, int]:
+def sweep(only: set[str] | None, verbose: bool, classes_only: bool = False,
+          station_only: bool = False) -> tuple[int, int]:
     """Run the bad-input table; print the per-subcommand table; return (cases, meeting the contract).
-    `classes_only`: only the cases of the classes (`CLASSES`)."""
+    `classes_only`: only the cases of the classes (`CLASSES`); `station_only`: only the cases that
+    connect to the simulated station (`Case.station`)."""
     from tests.hil.cli.bad_input_cases import CASES, Outcome, build_fixtures, run_case, start_sim_station
 
     cases = [c for c in CASES if (only is None or c.cmd in only)
-             and (not classes_only or c.id.split("-", 1)[0] in CLASSES)]
+             and (not classes_only or c.id.split("-", 1)[0] in CLASSES)
+             and (not station_only or c.station)]
     work = Path(tempfile.mkdtemp(prefix="hil-adversarial-"))
     station = None
     no_station = ""
@@ -80,7 +85,7 @@ def sweep(only: set[str] | None, verbose: bool, classes_only: bool = False) -> t
             outcome = run_case(case, fixtures, work / f"case-{i}", station=station, timeout=case.timeout)
             results.append(outcome)
             shutil.rmtree(work / f"case-{i}", ignore_errors=True)
-            if case.id.split("-", 1)[0] in CLASSES:  # again, its libraries loaded: the refusal alone
+            if case.id.split("-", 1)[0] in CLASSES or case.station:  # again, its libraries loaded
                 again = run_case(case, fixtures, work / f"case-{i}-warm", station=station,
                                  timeout=case.timeout)
                 WARM[case.name] = again.seconds if again.ok else float("inf")
@@ -106,6 +111,7 @@ def sweep(only: set[str] | None, verbose: bool, classes_only: bool = False) -> t
     total_fail = sum(1 for r in results if not r.ok)
     print(f"{'total':<12} {len(results):>5} {len(results) - total_fail:>5} {total_fail:>5}")
     by_class(results)
+    by_station(results)
     if verbose and total_fail:
         print("\nFailing cases:")
         for r in results:
@@ -152,6 +158,20 @@ def by_class(results: list[Any]) -> None:
         met = sum(r.ok for r in refused)
         print(f"{'every bad input of the table (cold)':<40} {len(refused):>5} {met:>5} "
               f"{slowest.seconds:>7.2f}s {'':>8}  {slowest.case.name}")
+
+
+def by_station(results: list[Any]) -> None:
+    """Each case that connects to the simulated station (its robot type checked against the
+    controller's): the time to refuse on its first run (cold: the command's imports not yet done in
+    this process, which started the station) and its second (warm)."""
+    rs = [r for r in results if r.case.station]
+    if not rs:
+        return
+    print("\nCases that connect (a robot type the simulated UR5e's controller contradicts): time to refuse")
+    print(f"{'case':<60} {'meets':>5} {'cold':>8} {'warm':>8}")
+    for r in rs:
+        print(f"{r.case.name:<60} {'yes' if r.ok else 'no':>5} {r.seconds:>7.2f}s "
+              f"{WARM.get(r.case.name, float('nan')):>7.2f}s")
 
 
 # ------------------------------------------------------------------------------------------ faults
@@ -433,6 +453,9 @@ def main() -> int:
     ap.add_argument("--no-sweep", action="store_true", help="skip the bad-input table")
     ap.add_argument("--classes", action="store_true",
                     help="only the cases of the classes (ids c1-... to c6-...)")
+    ap.add_argument("--station", action="store_true",
+                    help="only the cases that connect to the simulated station (a robot type checked "
+                         "against the controller)")
     ap.add_argument("--no-faults", action="store_true", help="skip the fault injection")
     ap.add_argument("--verbose", action="store_true", help="print why each failing case fails")
     ap.add_argument("--keep", action="store_true", help="keep the fault trials' stores and logs")
@@ -441,7 +464,8 @@ def main() -> int:
         ap.error("--faults and --kills-per-trial must be at least 1")
     ok = True
     if not args.no_sweep:
-        cases, meeting = sweep(set(args.only.split(",")) if args.only else None, args.verbose, args.classes)
+        cases, meeting = sweep(set(args.only.split(",")) if args.only else None, args.verbose, args.classes,
+                               args.station)
         ok &= cases == meeting
     if not args.no_faults:
         injected, exact, baseline = faults(args.faults, args.seed, args.kills_per_trial, args.keep)

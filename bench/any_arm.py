@@ -20,8 +20,12 @@ are pooled over trials as root-mean-square. The UR5e's two rows calibrate the sa
 truth drawn for the catalog arm, carried by the chain of the URDF built from its DH table.
 Identification time is the median wall time of `identify` per trial (say the machine's load with it).
 
-Poses selected vs random at equal count: a column is kept for it; it is filled once ``hil select``
-works for arms from their URDF.
+How sure the ratio is: each trial's held-out mean square is a quadratic form δᵀAδ of the parameter
+error δ ~ N(0, C) (A the held-out poses' mean J_vᵀJ_v), of variance 2·trace((AC)²); the "± 1σ" column
+is the pooled ratio's predicted spread from it (a few directions of A·C carry each trial's error, so
+one trial scatters by about ±45 % of its mean square, and ten trials by about ±7 % of the ratio).
+
+Poses selected vs random at equal count: `bench/urdf_pose_selection.py`.
 
 Run: python bench/any_arm.py [--trials 10] [--poses 40] [--seed 1]
 """
@@ -76,8 +80,9 @@ def point_weights(points: np.ndarray) -> np.ndarray:
 
 
 def trial(robot: Robot, poses: int, rng: np.random.Generator,
-          prior: bool = True) -> tuple[float, float, float, float, Geometry]:
-    """(held-out MS, Cramér–Rao MS, MS of the registered nominal, seconds, calibrated geometry)."""
+          prior: bool = True) -> tuple[float, float, float, float, Geometry, float]:
+    """(held-out MS, Cramér–Rao MS, MS of the registered nominal, seconds, calibrated geometry, the
+    held-out MS's predicted variance)."""
     truth = random_truth("ur5e" if robot == "ur5e-urdf" else robot, rng, rigid=True)
     if robot == "ur5e-urdf":  # the catalog arm's station, through the chain of its URDF
         robot = ur5e_urdf()
@@ -98,9 +103,10 @@ def trial(robot: Robot, poses: int, rng: np.random.Generator,
     information = np.einsum("nki,nkl,nlj->ij", J, point_weights(kin.points(q[fit.used])), J)
     C = np.linalg.inv(information)
     Jv = kin.jacobian(qv, idx)
-    cr = float(np.mean(np.einsum("nij,jk,nik->n", Jv, C, Jv)))
+    AC = np.einsum("nji,njk->ik", Jv, Jv) / len(qv) @ C
+    cr = float(np.trace(AC))
     return (float(np.mean(np.sum(err**2, 1))), cr, float(np.mean(np.sum(before**2, 1))), seconds,
-            fit.geometry)
+            fit.geometry, float(2.0 * np.trace(AC @ AC)))
 
 
 def ur5e_urdf() -> Robot:
@@ -126,8 +132,8 @@ def main() -> None:
           f"placement errors, AT960 noise model, {VALIDATION} held-out poses, "
           f"{'least squares' if args.no_prior else 'MAP fit'}; load {os.getloadavg()[0]:.2f}")
     print(f"{'arm':<17} | {'joints':>6} | {'params':>6} | {'before (mm)':>11} | {'held-out (µm)':>13} | "
-          f"{'Cramér–Rao (µm)':>15} | {'ratio':>5} | {'time (ms)':>9} | selected vs random")
-    print("-" * 122)
+          f"{'Cramér–Rao (µm)':>15} | {'ratio':>5} | {'± 1σ':>5} | {'time (ms)':>9}")
+    print("-" * 112)
     models: dict[str, list[Geometry]] = {}
     for name, robot in robots.items():
         rng = np.random.default_rng(args.seed)  # every arm sees the same stream: the UR5e rows compare
@@ -135,11 +141,12 @@ def main() -> None:
         models[name] = [r[4] for r in rows]
         held, cr, before = (float(np.sqrt(np.mean([r[k] for r in rows]))) for k in range(3))
         ms = float(np.median([r[3] for r in rows])) * 1e3
+        # the ratio's predicted relative spread: the pooled MS's relative σ, halved for the square root
+        spread = 0.5 * float(np.sqrt(sum(r[5] for r in rows)) / sum(r[1] for r in rows)) * held / cr
         chain = ur5e_urdf() if robot == "ur5e-urdf" else robot
         dof = 6 if isinstance(chain, str) else chain.dof
         print(f"{name:<17} | {dof:>6} | {len(identifiable_parameters(chain)):>6} | {before * 1e3:>11.3f} | "
-              f"{held * 1e6:>13.2f} | {cr * 1e6:>15.2f} | {held / cr:>5.2f} | {ms:>9.1f} | "
-              "n/a (hil select for URDF arms)")
+              f"{held * 1e6:>13.2f} | {cr * 1e6:>15.2f} | {held / cr:>5.2f} | {spread:>5.2f} | {ms:>9.1f}")
     Q = random_configurations("ur5e", VALIDATION, np.random.default_rng(99))
     gap = max(float(np.max(np.abs(Kinematics(a).points(Q) - Kinematics(b).points(Q))))
               for a, b in zip(models["UR5e via URDF"], models["UR5e catalog"], strict=True))

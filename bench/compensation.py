@@ -22,7 +22,7 @@ from hil.calibration.synthetic import random_truth
 from hil.compensation.poses import CANONICAL_NEAR, format_number, to_vector
 from hil.compensation.solve import Compensator
 from hil.compensation.targets_csv import compensate_csv
-from hil.compensation.urscript import compensate_program
+from hil.compensation.urscript import compensate_program, scan_program
 
 ROBOT = "ur5e"
 
@@ -69,6 +69,15 @@ def main() -> None:
             best = min(best, time.perf_counter() - t0)
         n = len(summary.moved)
         print(f"{name:<18} {n:>8} {best:>8.3f} {best / n * 1000:>17.3f} {best / n * 1e3:>12.3f}")
+    # the scanner alone (tokens, calls, assignments, targets): what a long program costs before any IK
+    # about 2 MB: the same lines over and over
+    big = program.replace("end\n", "") * max(1, int(2e6 // len(program))) + "end\n"
+    best = np.inf
+    for _ in range(args.repeats):
+        t0 = time.perf_counter()
+        scan_program(big, "bench.script", comp.tcp)
+        best = min(best, time.perf_counter() - t0)
+    print(f"URScript scanner: {len(big) / 1e6:.1f} MB in {best:.2f} s, {len(big) / 1e6 / best:.2f} MB/s")
 
 
 if __name__ == "__main__":

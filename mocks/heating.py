@@ -42,10 +42,11 @@ class Heating:
     """
 
     def __init__(self, thermal: Thermal, clock: Callable[[], float], moved: Callable[[], float],
-                 holding: Callable[[], bool], idle: float = IDLE_HEAT) -> None:
+                 holding: Callable[[], bool], idle: float = IDLE_HEAT, start: float = 0.0) -> None:
+        """`start`: ΔT (K) at the start (0: a cold arm; ``thermal.rise``: one that has been working)."""
         self.thermal, self.idle = thermal, float(idle)
         self._clock, self._moved, self._holding = clock, moved, holding
-        self._t, self._m, self._rise = float(clock()), float(moved()), 0.0
+        self._t, self._m, self._rise = float(clock()), float(moved()), float(start)
         self._lock = threading.Lock()
 
     def rise(self) -> float:

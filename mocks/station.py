@@ -13,10 +13,12 @@ service reports carries it, so tests and benches know the model the controller m
 
 The arm is a real one unless ``rigid``: the random truth sags under gravity and its payload and warms
 up as its joints work (`mocks.heating`: moving, and a little while holding the arm; the world evaluates
-``truth.grown(ΔT)``), and the
-controller reports the warming in RTDE ``joint_temperatures`` (`joint_temperatures`). A truth file's
-``noise.encoder_sigma`` sets the controller's encoder noise. Every arm rings after its joint moves
-(`mocks.ringing`, seen by the trackers, not by the encoders), and the GeoCOM instrument takes
+``truth.grown(ΔT)``), and the controller reports the warming in RTDE ``joint_temperatures``
+(`joint_temperatures`). A truth file's
+``noise.encoder_sigma`` sets the controller's encoder noise and ``noise.standstill_sigma`` how far each
+joint stops off its target, differently at every stop (the arm's repeatability; a random realistic
+arm's is its datasheet figure, `hil.arm.joint_physics.standstill_sigma`). Every arm rings after its
+joint moves (`mocks.ringing`, seen by the trackers, not by the encoders), and the GeoCOM instrument takes
 `GEOCOM_MEASURE_S` of the controller's time per measurement.
 
 Unless ``ideal`` (or ``rigid``), the random arm's link angles also carry the joint errors and lost
@@ -39,13 +41,14 @@ simulated seconds with a cold laser).
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from hil.arm.joint_physics import IDEAL_BY_DEFAULT
+from hil.arm.joint_physics import IDEAL_BY_DEFAULT, standstill_sigma
 from hil.arm.thermal import Thermal
 from hil.calibration.model_file import load_truth, read_json, truth_controller, truth_document
 from hil.calibration.stream_clocks import ClockMap, StationClocks
@@ -150,11 +153,15 @@ class StationService:
 def station_service(controller: Any, truth: str | None = None, seed: int = 0,
                     acceptance_angle: float = 30.0, baudrate: int | None = None,
                     tracker_port: int = 0, rigid: bool = False,
-                    ideal: bool = IDEAL_BY_DEFAULT) -> StationService:
+                    ideal: bool = IDEAL_BY_DEFAULT, thermal: bool = True) -> StationService:
     """Build the world and the tracker simulator around a running `SimController`.
 
     `rigid` (without `truth`): the random arm without compliance, payload and warm-up; `ideal` (without
-    `truth`): without joint errors and lost motion.
+    `truth`): without joint errors and lost motion; `thermal` False (without `truth`): without thermal
+    growth, for tests of something else whose warm-up is off (a warm-up test's arm warms; an arm of
+    fixed temperature is no real arm's, but with its warm-up off a campaign rightly reads any warming or
+    cooling as drift: a fault campaign's arm started at the full rise cooled by 3.4 K toward its
+    campaign's duty, `mocks.heating`).
     """
     rng = np.random.default_rng(seed)
     if truth:
@@ -162,8 +169,14 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
         calibration = truth_controller(read_json(truth), str(truth))
         controller.arm.set_encoder_noise(noise.encoder_sigma)
     else:
-        geometry, noise = random_truth(controller.config.robot, rng, rigid=rigid, ideal=ideal), Noise()
-        calibration = None
+        robot = controller.config.robot
+        # the realistic arm stops off its targets by its datasheet repeatability; the ideal and the rigid
+        # arm stop exactly on them, as the simulator's arm did before
+        noise = Noise(standstill_sigma=0.0 if rigid or ideal else standstill_sigma(robot))
+        geometry, calibration = random_truth(robot, rng, rigid=rigid, ideal=ideal), None
+        if not thermal:
+            geometry = dataclasses.replace(geometry, thermal=None)
+    controller.arm.set_standstill(noise.standstill_sigma)
     if calibration is None:
         calibration = factory_calibration(geometry, seed)
     controller.set_calibration(calibration)
@@ -188,7 +201,7 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
                              address=controller.config.address, port=tracker_port)
     # the instrument measures on the controller's clock, as the emScon simulator does: a fast-time
     # station shortens its measuring time with everything else
-    simulator = GeoComSimulator(world, config, sleep=controller.clock.sleep)
+    simulator = GeoComSimulator(world, config, sleep=controller.clock.sleep, now=controller.clock.now)
     # the tracker's and the controller's clocks differ as two real instruments' do
     # (`hil.calibration.stream_clocks`: offset, drift, jitter, latency, each with its source)
     clocks = StationClocks.realistic()
@@ -218,6 +231,8 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
         "clock_pair": clock_pair,
         "tracker_measurements": lambda: simulator.instrument.measurements,
         "tracker_measuring_seconds": lambda: simulator.instrument.measuring_seconds,
+        # the arm's temperature rise now (K), for tests and benches that check what the arm went through
+        "thermal_rise": lambda: 0.0 if heating is None else heating.rise(),
     })
     return StationService(simulator, world, truth_document(geometry, noise, calibration), home, emscon,
                           clocks, controller)
@@ -225,41 +240,41 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
 
 def station_spec(truth: str | None = None, seed: int = 0, acceptance_angle: float = 30.0,
                  baudrate: int | None = None, rigid: bool = False,
-                 ideal: bool = IDEAL_BY_DEFAULT) -> str:
+                 ideal: bool = IDEAL_BY_DEFAULT, thermal: bool = True) -> str:
     """The service spec that puts the world and the tracker into the robot simulator's process."""
     import json
 
     options = {"truth": truth, "seed": seed, "acceptance_angle": acceptance_angle, "baudrate": baudrate,
-               "rigid": rigid, "ideal": ideal}
+               "rigid": rigid, "ideal": ideal, **({} if thermal else {"thermal": False})}
     return "mocks.station:station_service " + json.dumps(options)
 
 
 def start_station(robot: str = "ur5e", truth: str | None = None, speed: float = 1.0, seed: int = 0,
                   acceptance_angle: float = 30.0, baudrate: int | None = None, rigid: bool = False,
-                  ideal: bool = IDEAL_BY_DEFAULT) -> Any:
+                  ideal: bool = IDEAL_BY_DEFAULT, thermal: bool = True) -> Any:
     """Start the whole simulated station in its own process on a free loopback address.
 
     Returns the running `mocks.ur.process.SimProcess`; ``.info["services"][0]`` holds the tracker's
     URL and pty and the hidden truth. The caller must `stop()` it. `rigid`: a random arm without
     compliance, payload and warm-up (the arm of the simulator before they existed); `ideal`: without
-    joint errors and lost motion (the ideal arm).
+    joint errors and lost motion (the ideal arm); `thermal` False: without thermal growth (`station_service`).
     """
     from mocks.ur.controller import SimConfig
     from mocks.ur.testing import start_sim
 
-    spec = station_spec(truth, seed, acceptance_angle, baudrate, rigid, ideal)
-    serial = simulated_serial(robot, seed, truth, rigid, ideal)
+    spec = station_spec(truth, seed, acceptance_angle, baudrate, rigid, ideal, thermal)
+    serial = simulated_serial(robot, seed, truth, rigid, ideal, thermal)
     return start_sim(SimConfig(robot=robot, speed=speed, seed=seed, serial=serial), services=[spec])
 
 
 def simulated_serial(robot: str, seed: int, truth: str | None = None, rigid: bool = False,
-                     ideal: bool = IDEAL_BY_DEFAULT) -> str:
+                     ideal: bool = IDEAL_BY_DEFAULT, thermal: bool = True) -> str:
     """The serial number a simulated arm's controller reports (dashboard ``get serial number``).
 
     Each simulated arm is a robot of its own, as each arm of a plant is: the serial is derived from
     what makes the arm — its type, the seed of its random truth, noise and start pose, the truth file's
-    bytes (sha256), whether it is rigid and whether ideal (a truth file's arm is what the file says,
-    so these two count only without one) — so the same simulated arm always has the same serial (a
+    bytes (sha256), whether it is rigid, ideal or without thermal growth (a truth file's arm is what
+    the file says, so these count only without one) — so the same simulated arm always has the same serial (a
     re-run resumes its campaign, which is found by serial) and two different ones never share one (on
     one machine they would refuse each other as one robot driven twice; the seed alone once made every
     UR5e and UR10e of seed 1 serial 20235500001). 11 digits like a UR serial (ur_rtde refuses a serial
@@ -270,4 +285,6 @@ def simulated_serial(robot: str, seed: int, truth: str | None = None, rigid: boo
     key = f"{robot.lower()}|seed={int(seed)}|truth={truth_sha}|rigid={bool(rigid)}"
     if not truth and not rigid and not ideal:  # the ideal arm keeps the serial it always had
         key += "|realistic"
+    if not truth and not thermal:
+        key += "|no-thermal"
     return f"9999{int(hashlib.sha256(key.encode()).hexdigest(), 16) % 10**7:07d}"

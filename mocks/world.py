@@ -101,15 +101,24 @@ class World:
         an instantaneous sample of a 9 Hz ring every 0.1 s would alias it to a slow, steady-looking
         offset that no real instrument reports). `at`: a reading ending at that simulated time, else
         now. Zero without a ringing model."""
+        now = float(self.clock()) if at is None and self.clock is not None else float(at or 0.0)
+        return self.ring_offsets(np.array([now]))[0]
+
+    def ring_offsets(self, ats: np.ndarray, reading_time: float | None = None) -> np.ndarray:
+        """(n, 3) `ring_offset` of readings ending at each simulated time of `ats`, each integrated over
+        `reading_time` seconds (None: the world's `reading_time`; 0: an instant), computed in one pass
+        (`mocks.ringing.Ringing.offsets`): one stationary measurement is hundreds of readings."""
+        ats = np.atleast_1d(np.asarray(ats, dtype=float))
         if self.ringing is None or self.clock is None:
-            return np.zeros(3)
-        now = float(self.clock()) if at is None else float(at)
-        if self.reading_time > 0:
-            times = now - self.reading_time * (np.arange(READING_SAMPLES) + 0.5) / READING_SAMPLES
-            offset = np.mean([self.ringing.offset(float(t)) for t in times], axis=0)
+            return np.zeros((len(ats), 3))
+        span = self.reading_time if reading_time is None else float(reading_time)
+        if span > 0:
+            back = span * (np.arange(READING_SAMPLES) + 0.5) / READING_SAMPLES
+            offsets = self.ringing.offsets((ats[:, None] - back[None, :]).ravel())
+            offset = offsets.reshape(len(ats), READING_SAMPLES, 3).mean(axis=1)
         else:
-            offset = self.ringing.offset(now)
-        return self.truth.tracker.rotation.T @ offset
+            offset = self.ringing.offsets(ats)
+        return offset @ self.truth.tracker.rotation  # each row turned into the tracker frame
 
     def running_time(self) -> float:
         """Simulated seconds the arm has been running (0 without a clock)."""
@@ -135,10 +144,12 @@ class World:
         p_base = F[:3, :3] @ self.truth.smr + F[:3, 3]
         return self._in_tracker(p_base), self._angle(F, p_base)
 
-    def positions_at(self, times: np.ndarray) -> np.ndarray:
+    def positions_at(self, times: np.ndarray, reading_time: float | None = None) -> np.ndarray:
         """(n, 3) true SMR positions (m, tracker frame, ringing included) at simulated `times`, from
         the arm's recorded states (`joints_at`): what a tracker sampling at those instants measures,
-        however late its own thread got round to asking. Without a record: the current position."""
+        however late its own thread got round to asking. `reading_time`: seconds each reading
+        integrates the ring over (`ring_offsets`; None: the world's). Without a record: the current
+        position."""
         times = np.atleast_1d(np.asarray(times, dtype=float))
         if self.joints_at is None:
             return np.tile(self.target().position, (len(times), 1))
@@ -150,7 +161,7 @@ class World:
         T = self.truth.tracker
         p = (p_base - T.translation) @ T.rotation
         if self.ringing is not None and self.clock is not None:
-            p = p + np.array([self.ring_offset(float(t)) for t in times])
+            p = p + self.ring_offsets(times, reading_time)
         return p
 
     def _in_tracker(self, p_base: np.ndarray) -> np.ndarray:

@@ -17,7 +17,6 @@ factor, O(m·n² + n³), negligible at n = 27.
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg
 
 from selector.errors import SelectorError
 
@@ -100,6 +99,10 @@ class DesignState:
         return len(self.chosen)
 
     def _refresh(self) -> None:
+        # imported here, not with the module: a command that only asks `selector.design.minimum_poses`
+        # (a pose count refused before the station is taken) need not load scipy.linalg (0.25 s cold)
+        import scipy.linalg
+
         self.M = information(self.G, self.chosen)
         scale = max(float(np.trace(self.M)) / self.n, 1e-300)
         try:

@@ -15,6 +15,7 @@ import time
 from dataclasses import dataclass
 
 from drivers.robot.errors import RobotUnreachable
+from drivers.robot.model import ControllerInfo
 
 _HDR = struct.Struct(">HB")
 
@@ -65,6 +66,53 @@ class DashboardStatus:
     robot_mode: str
 
 
+def controller_model(reported: str, major: int) -> str:
+    """The model as hil spells it from the dashboard's ``get robot model`` and the controller's major
+    version: an e-Series dashboard (software 5.x) answers ``UR5`` for a UR5e, so the "e" is added;
+    the UR20 and UR30 exist only as e-Series and keep their names; a CB3 (3.x) answers ``UR5``."""
+    e_series = major >= 5 and reported[-1:].isdigit() and reported not in ("UR20", "UR30")
+    return reported + ("e" if e_series else "")
+
+
+def controller_series(major: int) -> tuple[str, float]:
+    """The series ("e" or "cb3") and its RTDE rate in Hz: 500 Hz on an e-Series, 125 Hz on a CB3
+    (Universal Robots, "Real-Time Data Exchange (RTDE) Guide", the output frequency ranges)."""
+    return ("e", 500.0) if major >= 5 else ("cb3", 125.0)
+
+
+def dashboard_knows_serial(major: int, minor: int) -> bool:
+    """Whether the dashboard answers ``get serial number`` and ``is in remote control``: PolyScope
+    5.6 and later (Universal Robots, "Dashboard Server e-Series" command list: both "added in version
+    5.6.0"); a CB3 and an older e-Series do not."""
+    return major >= 5 and (major, minor) >= (5, 6)
+
+
+def ask_controller(host: str, timeout: float) -> ControllerInfo:
+    """Who the controller at `host` is (model, serial, software, version), without taking control:
+    RTDE's version negotiation and three dashboard questions, each bounded by `timeout`.
+
+    Nothing is uploaded nor started, so a caller learns the robot's model in milliseconds and can
+    refuse a station before opening the driver. `kinematics` stays None (the primary interface is not
+    read). `RobotUnreachable` when either port does not answer.
+    """
+    version = rtde_version(host, timeout)
+    major, minor = version[0], version[1]
+    series, rate = controller_series(major)
+    with DashboardLine(host, timeout) as dash:
+        model = dash.ask("get robot model")
+        serial = dash.ask("get serial number") if dashboard_knows_serial(major, minor) else ""
+        software = polyscope_version(dash.ask("PolyscopeVersion"))
+    return ControllerInfo(model=controller_model(model, major), serial=serial,
+                          software_version=software or ".".join(map(str, version)), version=version,
+                          series=series, rate_hz=rate)
+
+
+def polyscope_version(reply: str) -> str:
+    """The four-part version in the dashboard's ``PolyscopeVersion`` reply (the reply itself if none)."""
+    m = re.search(r"\d+\.\d+\.\d+\.\d+", reply)
+    return m.group(0) if m else reply
+
+
 class DashboardLine:
     """A minimal dashboard client with a timeout on every line (for pre-flight and status checks)."""
 
@@ -112,15 +160,14 @@ class DashboardLine:
             raise RobotUnreachable(f"dashboard {self.host}: {command!r} failed: {exc}") from exc
 
     def status(self, major: int, minor: int) -> DashboardStatus:
-        new_enough = major >= 5 and (major, minor) >= (5, 6)
+        new_enough = dashboard_knows_serial(major, minor)
         serial = self.ask("get serial number") if new_enough else ""
         remote = None
         if new_enough:
             remote = self.ask("is in remote control").strip().lower() == "true"
-        version = self.ask("PolyscopeVersion")
-        m = re.search(r"\d+\.\d+\.\d+\.\d+", version)
+        version = polyscope_version(self.ask("PolyscopeVersion"))
         safety = self.ask("safetystatus" if major >= 5 else "safetymode").split(":")[-1].strip()
         robot_mode = self.ask("robotmode").split(":")[-1].strip()
         return DashboardStatus(model=self.ask("get robot model"), serial=serial,
-                               polyscope_version=m.group(0) if m else version, remote_control=remote,
+                               polyscope_version=version, remote_control=remote,
                                safety=safety, robot_mode=robot_mode)

@@ -56,7 +56,7 @@ from drivers.robot.errors import (
 )
 from drivers.robot.kinematics_info import KinematicsInfo, read_kinematics_info
 from drivers.robot.model import ControllerInfo, FollowResult, JointReading, RobotConfig
-from drivers.robot.probe import DashboardLine, rtde_version
+from drivers.robot.probe import DashboardLine, controller_model, controller_series, rtde_version
 from drivers.robot.trajectory import check_trajectory, keep_in_checkpoints
 
 log = logging.getLogger(__name__)
@@ -98,9 +98,8 @@ class URRobot:
         with DashboardLine(cfg.host, cfg.connect_timeout) as dash:
             status = dash.status(major, minor)
         self._check_dashboard(status.remote_control, status.safety, status.robot_mode)
-        series = "e" if major >= 5 else "cb3"
-        model = status.model + ("e" if series == "e" and status.model[-1:].isdigit()
-                                and status.model not in ("UR20", "UR30") else "")
+        series, rate = controller_series(major)
+        model = controller_model(status.model, major)
         try:
             import rtde_control
             import rtde_receive
@@ -118,7 +117,6 @@ class URRobot:
         except ProgramStopped:
             self.close()
             raise
-        rate = 500.0 if series == "e" else 125.0
         self.info = ControllerInfo(model=model, serial=status.serial,
                               software_version=status.polyscope_version or ".".join(map(str, version)),
                               version=version, series=series, rate_hz=rate, kinematics=self._kinematics())

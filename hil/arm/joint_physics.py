@@ -36,6 +36,22 @@ for ratio ≥ 80) is measured by the output encoder like the gear's windup; what
 misses is the output side's own play, modelled as the same share of the gear's figure that
 `hil.arm.physical.UNSEEN_WINDUP` takes of its compliance (hil's assumption, for the same reason).
 
+**Repeatability** (`standstill_sigma`). A joint's servo brings its output encoder to the commanded
+angle only to within a small error that differs from stop to stop (the encoder's resolution, the
+gear's friction and lost-motion band the position loop settles in, the controller's error at
+standstill). UR does not publish the joint-level figure, only the arm's: pose repeatability per
+ISO 9283, ±0.03 mm for the UR3e and UR5e, ±0.05 mm for the UR10e, UR16e and UR20, ±0.1 mm for the
+UR30 and the CB3 UR3, UR5 and UR10 (Universal Robots, e-Series and CB3 technical specifications,
+"Pose repeatability per ISO 9283"). The simulated arm's stops scatter by one σ per joint such that
+its own RP (without any instrument's noise) is that figure: ISO 9283's RP = l̄ + 3·S_l is
+`RP_PER_SIGMA` σ for an isotropic Gaussian scatter of σ per axis, and the SMR moves
+`lever_per_axis` metres per axis per radian of joint scatter (RMS over the workspace). That the arm
+meets its datasheet figure, no better, is hil's assumption: no published measurement of a UR's
+repeatability by an instrument finer than the figure itself was found (a laser tracker's own noise
+is of the same size: Slamani, Nubiola & Bonev, Industrial Robot 39(1), 2012). The encoders see this
+error (the reading is the output side's), so it scatters commanded poses (ISO 9283's RP, a drift
+watch's reference) but not a calibration's measured joints.
+
 With these, a geometry-only fit of a simulated UR5e or UR10e predicts held-out poses at about a tenth
 to a quarter of a millimetre, as real UR arms do (docs/design.md, Facts: what real arms reach;
 `bench/realistic_arm.py` measures it).
@@ -43,8 +59,11 @@ to a quarter of a millimetre, as real UR arms do (docs/design.md, Facts: what re
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 
+from hil.arm.catalog import get_robot
 from hil.arm.joint_errors import Harmonic, JointErrors
 from hil.arm.physical import UNSEEN_WINDUP, gear_sizes
 
@@ -108,3 +127,41 @@ def typical_lost_motion(robot: str, rng: np.random.Generator) -> np.ndarray:
     joint 0.5–1.5 times it (a catalog figure is a typical value; joints of one size differ)."""
     gear_sizes(robot)  # a robot the catalog knows
     return UNSEEN_WINDUP * GEAR_HYSTERESIS * rng.uniform(0.5, 1.5, 6)
+
+
+#: Pose repeatability per ISO 9283 (m, RP: the datasheet's "±" figure), Universal Robots' technical
+#: specifications of each model (e-Series: UR3e/UR5e ±0.03 mm, UR10e/UR16e/UR20 ±0.05 mm, UR30 ±0.1 mm;
+#: CB3: UR3/UR5/UR10 ±0.1 mm).
+POSE_REPEATABILITY: dict[str, float] = {
+    "ur3e": 0.03e-3, "ur5e": 0.03e-3, "ur10e": 0.05e-3, "ur16e": 0.05e-3, "ur20": 0.05e-3,
+    "ur30": 0.1e-3, "ur3": 0.1e-3, "ur5": 0.1e-3, "ur10": 0.1e-3,
+}
+#: ISO 9283's RP = l̄ + 3·S_l in units of σ for an isotropic Gaussian scatter of σ per axis: the
+#: distance l from the barycentre is Maxwell-distributed, mean 2σ·√(2/π), standard deviation
+#: σ·√(3 − 8/π).
+RP_PER_SIGMA = 2.0 * np.sqrt(2.0 / np.pi) + 3.0 * np.sqrt(3.0 - 8.0 / np.pi)
+#: Workspace poses (seeded, so the figure is the same on every run) over which `lever_per_axis`
+#: averages, and the SMR's offset on the flange they are taken with (a flange-mounted nest).
+LEVER_POSES, LEVER_SEED, LEVER_SMR = 200, 30, (0.0, 0.0, 0.045)
+
+
+@cache
+def lever_per_axis(robot: str) -> float:
+    """RMS over workspace poses (upper arm above the shoulder, any other angle) of how far the SMR
+    moves per axis (m) for one radian of independent scatter on every joint: √(trace(J·Jᵀ)/3)."""
+    from hil.arm.geometry import Geometry  # pinocchio: loaded by the one caller that needs it, not by
+    from hil.arm.kinematics import Kinematics  # every help text that names the ideal arm's default
+
+    spec = get_robot(robot)
+    rng = np.random.default_rng(LEVER_SEED)
+    q = rng.uniform(-np.pi, np.pi, (LEVER_POSES, 6))
+    q[:, 1] = rng.uniform(-np.pi, 0.0, LEVER_POSES)
+    J = Kinematics(Geometry.nominal(spec, smr=LEVER_SMR)).joint_sensitivities(q)
+    return float(np.sqrt(np.mean(np.einsum("nij,nij->n", J, J)) / 3.0))
+
+
+def standstill_sigma(robot: str) -> float:
+    """σ (rad) of each joint's stop-to-stop position error, so that the arm's own ISO 9283 RP is its
+    datasheet figure (`POSE_REPEATABILITY`; see the module docstring)."""
+    spec = get_robot(robot)
+    return POSE_REPEATABILITY[spec.name] / (RP_PER_SIGMA * lever_per_axis(spec.name))

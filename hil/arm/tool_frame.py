@@ -23,6 +23,11 @@ groups ordered tracker, SMR, tool rotation, reflectors, joints, flange, so the t
 error (one rigid transform after joint 6 is all the data see). With orientations the tool rotation is
 identified beside the position fit's 27 (30 for a UR: FIGAROH reports 30 for its 6-D UR10 fit, the
 shared camera file's source); each further reflector adds its 3 offsets.
+
+**Any serial arm** (a chain read from its URDF): the local layout is its geometric layout
+(`parameter_layout(dof)`: 6·N joint columns, flange, SMR, tracker) followed by the tool's columns, and
+the regressor is taken at its last joint; a UR's is the module constants (N = 6). Names follow
+`pose_parameter_names`.
 """
 
 from __future__ import annotations
@@ -32,20 +37,19 @@ from functools import lru_cache
 import numpy as np
 import pinocchio as pin
 
+from hil.arm.chain import Robot, chain_of
 from hil.arm.geometry import Geometry
 from hil.arm.kinematics import (
     EXTENDED_PARAMETER_NAMES,
-    FLANGE_SLICE,
-    JOINT_SLICE,
     N_PARAMETERS,
-    SMR_SLICE,
-    TRACKER_SLICE,
     Kinematics,
     _skew,
     apply_update,
     deviation_from,
     generic_configurations,
     generic_geometry,
+    parameter_layout,
+    parameter_names,
     select_identifiable,
 )
 
@@ -63,21 +67,36 @@ FIRST_TOOL_PARAMETER = len(EXTENDED_PARAMETER_NAMES)
 TOOL_SLICE = slice(N_PARAMETERS, N_PARAMETERS + 3)
 
 
-def width(reflectors: int) -> int:
-    """Columns of the local layout for a tool with `reflectors` reflectors."""
-    return N_PARAMETERS + 3 + 3 * (reflectors - 1)
+def width(reflectors: int, dof: int = 6) -> int:
+    """Columns of the local layout for a tool with `reflectors` reflectors on an arm of `dof` joints."""
+    return parameter_layout(dof).size + 3 + 3 * (reflectors - 1)
 
 
-def reflector_slice(k: int) -> slice:
-    """Local columns of reflector k (0-based, k ≥ 1; reflector 0 is the SMR's `SMR_SLICE`)."""
-    start = N_PARAMETERS + 3 + 3 * (k - 1)
+def tool_slice(dof: int = 6) -> slice:
+    """Local columns of the tool rotation on an arm of `dof` joints (`TOOL_SLICE` for six)."""
+    size = parameter_layout(dof).size
+    return slice(size, size + 3)
+
+
+def reflector_slice(k: int, dof: int = 6) -> slice:
+    """Local columns of reflector k (0-based, k ≥ 1; reflector 0 is the SMR's) on an arm of `dof`
+    joints."""
+    start = parameter_layout(dof).size + 3 + 3 * (k - 1)
     return slice(start, start + 3)
 
 
-def to_names(local: np.ndarray) -> np.ndarray:
-    """Indices into `POSE_PARAMETER_NAMES` of local columns `local`."""
+def pose_parameter_names(robot: Robot) -> tuple[str, ...]:
+    """Every parameter name a model of `robot` may carry: its position fit's (`parameter_names`: a UR's
+    include compliance and joint errors), then the tool's (`POSE_PARAMETER_NAMES` for a UR)."""
+    return parameter_names(robot) + TOOL_ROTATION_NAMES + REFLECTOR_NAMES
+
+
+def to_names(local: np.ndarray, robot: Robot = "ur5e") -> np.ndarray:
+    """Indices into `pose_parameter_names(robot)` of local columns `local` (a UR by default: into
+    `POSE_PARAMETER_NAMES`)."""
     idx = np.asarray(local, dtype=int)
-    return np.where(idx < N_PARAMETERS, idx, idx - N_PARAMETERS + FIRST_TOOL_PARAMETER)
+    size = parameter_layout(chain_of(robot).dof).size
+    return np.where(idx < size, idx, idx - size + len(parameter_names(robot)))
 
 
 def tool_rotation(geometry: Geometry) -> np.ndarray:
@@ -134,6 +153,8 @@ def frame_and_jacobian(geometry: Geometry, q: np.ndarray,
     reflector (its angular rows are the frame's); the others are closed forms.
     """
     kin = Kinematics(geometry)
+    dof = kin.dof
+    lay = parameter_layout(dof)
     if not geometry.encoder_exact:
         raise ValueError("the tool-frame Jacobian models the geometry only (no compliance or joint errors)")
     Q = np.atleast_2d(np.asarray(q, dtype=float))
@@ -141,49 +162,50 @@ def frame_and_jacobian(geometry: Geometry, q: np.ndarray,
     s = reflector_offsets(geometry)
     R_count = len(s)
     placements = [geometry.flange * pin.SE3(np.eye(3), sk) for sk in s]
-    reg_lin = np.empty((m, R_count, 3, 36))
-    reg_ang = np.empty((m, 3, 36))
-    R6 = np.empty((m, 3, 3))
+    reg_lin = np.empty((m, R_count, 3, 6 * dof))
+    reg_ang = np.empty((m, 3, 6 * dof))
+    R_last = np.empty((m, 3, 3))
     model, data = kin.model, kin.data
     for n, qn in enumerate(Q):
         pin.forwardKinematics(model, data, qn)
         for k, placement in enumerate(placements):
-            reg = pin.computeJointKinematicRegressor(model, data, 6, pin.LOCAL_WORLD_ALIGNED, placement)
+            reg = pin.computeJointKinematicRegressor(model, data, dof, pin.LOCAL_WORLD_ALIGNED, placement)
             reg_lin[n, k] = reg[:3]
             if k == 0:
                 reg_ang[n] = reg[3:]
-        R6[n] = data.oMi[6].rotation
+        R_last[n] = data.oMi[dof].rotation
     p, R = predict(geometry, Q)
     Rt = geometry.tracker.inverse().rotation  # base -> instrument
-    R_bs = np.einsum("ij,njk->nik", Rt, R6 @ geometry.flange.rotation)  # flange axes, instrument frame
+    R_bs = np.einsum("ij,njk->nik", Rt, R_last @ geometry.flange.rotation)  # flange axes, instrument frame
     rows = 3 * R_count + (3 if orientation else 0)
-    J = np.zeros((m, rows, width(R_count)))
+    J = np.zeros((m, rows, width(R_count, dof)))
     for k in range(R_count):
         r = slice(3 * k, 3 * k + 3)
-        J[:, r, JOINT_SLICE] = np.einsum("ij,njk->nik", Rt, reg_lin[:, k])
-        J[:, r, FLANGE_SLICE] = np.concatenate([R_bs, -R_bs @ _skew(s[k])], axis=2)
-        J[:, r, SMR_SLICE if k == 0 else reflector_slice(k)] = R_bs
-        J[:, r, TRACKER_SLICE] = np.concatenate([np.broadcast_to(-np.eye(3), (m, 3, 3)), _skew(p[:, k])],
-                                                axis=2)
+        J[:, r, lay.joints] = np.einsum("ij,njk->nik", Rt, reg_lin[:, k])
+        J[:, r, lay.flange] = np.concatenate([R_bs, -R_bs @ _skew(s[k])], axis=2)
+        J[:, r, lay.smr if k == 0 else reflector_slice(k, dof)] = R_bs
+        J[:, r, lay.tracker] = np.concatenate([np.broadcast_to(-np.eye(3), (m, 3, 3)), _skew(p[:, k])],
+                                              axis=2)
     if orientation:
         o = slice(3 * R_count, rows)
-        J[:, o, JOINT_SLICE] = np.einsum("ij,njk->nik", Rt, reg_ang)
-        J[:, o, FLANGE_SLICE.start + 3: FLANGE_SLICE.stop] = R_bs
-        J[:, o, TRACKER_SLICE.start + 3: TRACKER_SLICE.stop] = -np.eye(3)
-        J[:, o, TOOL_SLICE] = R_bs @ tool_rotation(geometry)
+        J[:, o, lay.joints] = np.einsum("ij,njk->nik", Rt, reg_ang)
+        J[:, o, lay.flange.start + 3: lay.flange.stop] = R_bs
+        J[:, o, lay.tracker.start + 3: lay.tracker.stop] = -np.eye(3)
+        J[:, o, tool_slice(dof)] = R_bs @ tool_rotation(geometry)
     return p, R, J
 
 
 def apply_tool_update(geometry: Geometry, delta: np.ndarray) -> Geometry:
-    """The geometry after a local-layout step: the 51 geometric parameters as `apply_update`, the tool
-    rotation multiplicatively, the further reflectors additively."""
+    """The geometry after a local-layout step: the geometric parameters (51 on a UR) as `apply_update`,
+    the tool rotation multiplicatively, the further reflectors additively."""
     delta = np.asarray(delta, dtype=float)
-    g = apply_update(geometry, delta[:N_PARAMETERS])
+    dof = len(geometry.joints)
+    g = apply_update(geometry, delta[:parameter_layout(dof).size])
     if g.tool_rotation is not None:
-        g.tool_rotation = g.tool_rotation @ pin.exp3(delta[TOOL_SLICE])
+        g.tool_rotation = g.tool_rotation @ pin.exp3(delta[tool_slice(dof)])
     if g.reflectors is not None:
         for k in range(1, len(g.reflectors)):
-            g.reflectors[k] = g.reflectors[k] + delta[reflector_slice(k)]
+            g.reflectors[k] = g.reflectors[k] + delta[reflector_slice(k, dof)]
         g.reflectors[0] = g.smr
     return g
 
@@ -191,22 +213,24 @@ def apply_tool_update(geometry: Geometry, delta: np.ndarray) -> Geometry:
 def tool_deviation(reference: Geometry, geometry: Geometry) -> np.ndarray:
     """Local-layout vector δ with `geometry` ≈ `reference` updated by δ (logs on SE(3) and SO(3))."""
     s, s0 = reflector_offsets(geometry), reflector_offsets(reference)
-    out = np.zeros(width(len(s)))
-    out[:N_PARAMETERS] = deviation_from(reference, geometry)
-    out[TOOL_SLICE] = pin.log3(tool_rotation(reference).T @ tool_rotation(geometry))
+    dof = len(geometry.joints)
+    out = np.zeros(width(len(s), dof))
+    out[:parameter_layout(dof).size] = deviation_from(reference, geometry)
+    out[tool_slice(dof)] = pin.log3(tool_rotation(reference).T @ tool_rotation(geometry))
     for k in range(1, len(s)):
-        out[reflector_slice(k)] = s[k] - (s0[k] if k < len(s0) else s0[0])
+        out[reflector_slice(k, dof)] = s[k] - (s0[k] if k < len(s0) else s0[0])
     return out
 
 
-def group_order(reflectors: int) -> tuple[slice, ...]:
+def group_order(reflectors: int, dof: int = 6) -> tuple[slice, ...]:
     """The identifiable-set groups of the local layout: tracker, SMR, tool rotation, further reflectors,
-    joints 1..6, flange (module docstring)."""
-    return (TRACKER_SLICE, SMR_SLICE, TOOL_SLICE, *(reflector_slice(k) for k in range(1, reflectors)),
-            *(slice(6 * i, 6 * i + 6) for i in range(6)), FLANGE_SLICE)
+    joints 1..N, flange (module docstring)."""
+    lay = parameter_layout(dof)
+    return (lay.tracker, lay.smr, tool_slice(dof), *(reflector_slice(k, dof) for k in range(1, reflectors)),
+            *(slice(6 * i, 6 * i + 6) for i in range(dof)), lay.flange)
 
 
-def generic_tool(robot: str, reflectors: int, orientation: bool) -> Geometry:
+def generic_tool(robot: Robot, reflectors: int, orientation: bool) -> Geometry:
     """`generic_geometry` with a tool at a generic point: a tilted frame, reflectors spread off-axis."""
     g = generic_geometry(robot)
     if orientation:
@@ -221,23 +245,28 @@ def generic_tool(robot: str, reflectors: int, orientation: bool) -> Geometry:
 
 
 @lru_cache(maxsize=64)
-def _identifiable_cached(robot: str, reflectors: int, orientation: bool) -> tuple[int, ...]:
+def _identifiable_cached(robot: Robot, reflectors: int, orientation: bool) -> tuple[int, ...]:
     g = generic_tool(robot, reflectors, orientation)
     _, _, J = frame_and_jacobian(g, generic_configurations(robot), orientation)
-    return tuple(select_identifiable(J.reshape(-1, J.shape[2]), groups=group_order(reflectors)))
+    groups = group_order(reflectors, chain_of(robot).dof)
+    return tuple(select_identifiable(J.reshape(-1, J.shape[2]), groups=groups))
 
 
-def identifiable_tool_parameters(robot: str, reflectors: int, orientation: bool) -> np.ndarray:
+def identifiable_tool_parameters(robot: Robot, reflectors: int, orientation: bool) -> np.ndarray:
     """Local columns a fit of `reflectors` positions per pose (and, with `orientation`, the measured
-    frame's orientation) identifies: 27 + 3·(R − 1), and 3 more with orientations, on a UR."""
+    frame's orientation) identifies: 27 + 3·(R − 1), and 3 more with orientations, on a UR; for any
+    arm, its position fit's set plus the same (`robot` a catalog name or a chain)."""
     return np.array(_identifiable_cached(robot, int(reflectors), bool(orientation)), dtype=int)
 
 
-def registration_columns(reflectors: int, orientation: bool) -> np.ndarray:
+def registration_columns(reflectors: int, orientation: bool, dof: int = 6) -> np.ndarray:
     """Local columns of what places the tool and the instrument (tracker pose, SMR offset, the tool
     rotation with orientations, the further reflectors): what a nominal model fits."""
-    cols = [np.arange(N_PARAMETERS)[TRACKER_SLICE], np.arange(N_PARAMETERS)[SMR_SLICE]]
+    lay = parameter_layout(dof)
+    cols = [np.arange(lay.size)[lay.tracker], np.arange(lay.size)[lay.smr]]
     if orientation:
-        cols.append(np.arange(TOOL_SLICE.start, TOOL_SLICE.stop))
-    cols += [np.arange(reflector_slice(k).start, reflector_slice(k).stop) for k in range(1, reflectors)]
+        ts = tool_slice(dof)
+        cols.append(np.arange(ts.start, ts.stop))
+    cols += [np.arange(reflector_slice(k, dof).start, reflector_slice(k, dof).stop)
+             for k in range(1, reflectors)]
     return np.concatenate(cols).astype(int)

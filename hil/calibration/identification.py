@@ -53,7 +53,7 @@ from hil.arm.kinematics import (
 )
 from hil.arm.payload import Payload
 from hil.arm.pivoted_qr import pivoted_qr
-from hil.arm.tool_frame import POSE_PARAMETER_NAMES
+from hil.arm.tool_frame import pose_parameter_names
 from hil.calibration.distributions import f_sf
 from hil.calibration.measurements import Measurements, measurements_sha256
 from hil.calibration.prior import Prior, manufacturing_prior
@@ -124,12 +124,13 @@ class FitResult:
     prior: Prior | None = None  # the MAP fit's prior on `indices` (None: plain least squares)
     prior_weights: np.ndarray | None = None  # (n,) σ²/τ² the fit used (m² per unit² of each parameter)
     #: a 6-D or several-reflector fit's additions (`hil.calibration.pose_identification.PoseFit`); its
-    #: indices then name `hil.arm.tool_frame.POSE_PARAMETER_NAMES`, tool.* and reflector<k>.* from 99
+    #: indices then name `hil.arm.tool_frame.pose_parameter_names`, tool.* and reflector<k>.* after the
+    #: position fit's names (from 99 on a UR)
     pose_fit: Any = None
 
     @property
     def names(self) -> list[str]:
-        table = POSE_PARAMETER_NAMES if chain_of(self.robot).is_ur else parameter_names(self.robot)
+        table = pose_parameter_names(self.robot)
         return [table[i] for i in self.indices]
 
     @property

@@ -107,15 +107,19 @@ def read_measurements(path: str | os.PathLike[str], joint_units: str | None = No
     columns without a suffix.
 
     For an arm from its URDF (`chain`, not a UR) the joints are ``q1..qN`` (`forms.chain_joints`: a
-    count that is not the chain's is one line naming the file and line) and the positions any position
-    form; orientations and further reflectors are not read (its fit is of positions only)."""
+    count that is not the chain's is one line naming the file and line), the positions any position
+    form, and orientations and several reflectors are read as for a UR (the 6-D fit,
+    `hil.calibration.pose_identification`, takes any chain); approach directions ``d1..d6`` are a UR
+    joint's lost motion and are not read."""
     if chain is not None and not chain.is_ur:
         rows = forms.read_rows(path)
         forms.choose(rows.header, forms.POSITION_FORMS, required=True, expected=forms.POSITIONS_EXPECTED)
+        forms.choose(rows.header, forms.ORIENTATION_FORMS, required=False, expected="")
         q, lines = forms.chain_joints(rows, chain.joint_names, chain.kinds, chain.lower, chain.upper,
                                       f"{chain.name} (URDF)", joint_units)
-        p, _, _ = forms.positions(rows, lines)
-        return Measurements(q, p, lines, rows.header.source, rows.sha256)
+        p, reflectors, _ = forms.positions(rows, lines)
+        rotation, _ = forms.rotations(rows, lines)
+        return Measurements(q, p, lines, rows.header.source, rows.sha256, rotation, reflectors)
     rows = forms.read_rows(path)
     forms.check_measurements_header(rows)
     q, lines = forms.joints(rows, joint_units)

@@ -41,7 +41,8 @@ CONTROLLER_KEYS: tuple[str, ...] = (*DELTA_KEYS, "checksum", "calibration_status
 PLACEMENT_QUANTITIES = {"joints": "link offset", "flange": "link offset", "tracker": "tracker position"}
 #: A truth's simulated noise (`noise.*`) and the quantity of each.
 NOISE_QUANTITIES = {"tracker_sigma": "tracker noise", "encoder_sigma": "angle noise",
-                    "distance_sigma": "tracker noise", "angle_sigma": "angle noise"}
+                    "distance_sigma": "tracker noise", "angle_sigma": "angle noise",
+                    "standstill_sigma": "angle noise"}
 
 
 def software_versions() -> dict[str, str]:
@@ -324,7 +325,9 @@ def load_truth(path: str | os.PathLike[str]) -> tuple[Geometry, Noise]:
             values[key] = None
             continue
         values[key] = json_number(block[key], f"{path}: noise.{key}", NOISE_QUANTITIES[key])
-    for key in ("distance_sigma", "angle_sigma"):
-        if key in block:  # optional: the tracker model's figures (hil.calibration.tracker_noise) otherwise
+    # optional: the tracker model's figures (hil.calibration.tracker_noise) otherwise, and no
+    # stop-to-stop scatter of the joints (a truth written before the simulated arm had one)
+    for key in ("distance_sigma", "angle_sigma", "standstill_sigma"):
+        if key in block:
             values[key] = json_number(block[key], f"{path}: noise.{key}", NOISE_QUANTITIES[key])
     return geometry, Noise(**values)  # type: ignore[arg-type]

@@ -33,8 +33,9 @@ from typing import Any
 import numpy as np
 
 from hil.arm import tool_frame as tf
+from hil.arm.chain import Robot, chain_of
 from hil.arm.geometry import Geometry
-from hil.arm.kinematics import N_PARAMETERS, Kinematics, numerical_rank
+from hil.arm.kinematics import Kinematics, numerical_rank, parameter_layout
 from hil.calibration.distributions import f_sf
 from hil.calibration.identification import (
     PRIOR_PASSES,
@@ -239,14 +240,15 @@ def _outlier(Ju: np.ndarray, res: np.ndarray, inv: np.ndarray, level: float) -> 
     return (k, p) if p < level else None
 
 
-def identify_pose(meas: Measurements, robot: str, smr_guess: np.ndarray | None = None, *,
+def identify_pose(meas: Measurements, robot: Robot, smr_guess: np.ndarray | None = None, *,
                   position_noise: float = POSITION_NOISE, orientation_noise: float = ORIENTATION_NOISE,
                   reject_outliers: bool = True, prior: bool = True, max_iter: int = 100,
                   arm: Geometry | None = None, registration_only: bool = False) -> FitResult:
     """The 6-D / several-reflector fit of `meas` (module docstring), as a `FitResult` whose
     ``pose_fit`` holds what it adds. `arm` replaces the nominal joints and flange (the controller's
     model, registered as the nominal is); `registration_only` stops after the registration (a
-    nominal or controller model placed on the data)."""
+    nominal or controller model placed on the data). `robot` is a catalog name or any serial arm's chain
+    (`hil.arm.urdf_chain.chain_from_urdf`): its N joints give the local layout (`hil.arm.tool_frame`)."""
     t0 = time.perf_counter()
     for name, value, row in (("--position-noise", position_noise, "position noise"),
                              ("--orientation-noise", orientation_noise, "orientation noise")):
@@ -263,7 +265,8 @@ def identify_pose(meas: Measurements, robot: str, smr_guess: np.ndarray | None =
     start = register(meas, robot, smr_guess, max_iter, arm=arm)
     start = tf.with_tool(start, count, orientation)
     start = place_tool(start, problem)
-    reg_cols = tf.registration_columns(count, orientation)
+    dof = chain_of(robot).dof
+    reg_cols = tf.registration_columns(count, orientation, dof)
     baseline, iterations, _ = _lm(start, problem, reg_cols, max_iter)
     local = reg_cols if registration_only else tf.identifiable_tool_parameters(robot, count, orientation)
     n = len(local)
@@ -297,9 +300,9 @@ def identify_pose(meas: Measurements, robot: str, smr_guess: np.ndarray | None =
         raise InputError(f"{meas.source}: the data cannot identify the {n} parameters of the 6-D fit "
                          f"(condition number {cond:.3g}); the measurements do not follow the joint motion")
     tolerance, weights = None, None
-    names = tf.to_names(local)
+    names = tf.to_names(local, robot)
     if prior and not registration_only:
-        geometric = local < N_PARAMETERS
+        geometric = local < parameter_layout(dof).size
         base = manufacturing_prior(robot, local[geometric])
         mean, std = np.zeros(n), np.full(n, np.inf)
         mean[geometric], std[geometric] = base.mean, base.std
@@ -328,7 +331,8 @@ def identify_pose(meas: Measurements, robot: str, smr_guess: np.ndarray | None =
     info = PoseFit(orientation, count, position_noise, orientation_noise, float(np.sqrt(s2)), local, dp, do)
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(std, std)
-    labels = [tf.POSE_PARAMETER_NAMES[i] for i in names]
+    table = tf.pose_parameter_names(robot)
+    labels = [table[i] for i in names]
     correlated = sorted((Correlation(labels[a], labels[c], float(corr[a, c]))
                          for a in range(n) for c in range(a + 1, n) if abs(corr[a, c]) >= 0.95),
                         key=lambda c: -abs(c.rho))

@@ -261,6 +261,22 @@ def _subsample(trusted: np.ndarray, count: int) -> np.ndarray:
     return idx[np.unique(np.linspace(0, len(idx) - 1, count).round().astype(int))]
 
 
+def without_intervals(tracker: TrackerStream, intervals: Sequence[tuple[float, float]]) -> TrackerStream:
+    """`tracker` less its samples stamped inside any of `intervals` ((start, end) on the tracker's clock,
+    s, ends included): the stretches a fit must not see — a sweep campaign's validation rests, whose
+    poses must stay poses the fit never saw, so the validation means what a stop-and-go one does. The
+    hole each leaves is a gap to the join (the 50 ms after it are left out as "after a gap")."""
+    keep = np.ones(len(tracker.t), dtype=bool)
+    for a, b in intervals:
+        if not (np.isfinite(a) and np.isfinite(b) and a <= b):
+            raise InputError(f"sweep fit: an interval to leave out must be finite with start ≤ end, got "
+                             f"({a}, {b})")
+        keep &= ~((tracker.t >= a) & (tracker.t <= b))
+    if keep.sum() < 2:
+        raise InputError("sweep fit: the intervals left out cover the whole tracker stream")
+    return TrackerStream(tracker.t[keep], tracker.p[keep])
+
+
 def fit_sweep(start: Geometry, joints: JointStream, tracker: TrackerStream, *,
               static: Measurements | None = None, compliance: bool = True,
               initial_offset_s: float | None = None, dynamics: bool = True,

@@ -8,8 +8,10 @@ How the path is built, and why:
 
 * **Order.** The waypoints are visited in the order that keeps the tour short: nearest neighbour from
   the start, then 2-opt (reversing any stretch of the tour that shortens it), on the time-like joint
-  distance max_j |Δq_j| / v_j — how long a joint-space move between two poses takes at the speed limits
-  (the joint that has farthest to go, for its speed, sets the time).
+  distance `leg_seconds` — how long a rest-to-rest cubic between two poses takes at the speed and
+  acceleration limits (the joint slowest to get there sets the time). On the speed alone, short hops
+  look cheaper than they are (they are acceleration-bound); the rest-to-rest time ordered 28 random
+  UR5e rests (1 m/s, the quasi-static acceleration limit) 1–3 % shorter.
 * **Shape.** A cubic spline through the start, the waypoints and back to rest at the last one
   (``scipy.interpolate.CubicSpline`` with clamped ends: zero velocity at both ends). A cubic spline is
   C²: the acceleration is continuous and the jerk piecewise constant, so the arm's structural modes
@@ -22,8 +24,11 @@ How the path is built, and why:
   feasible timing found is kept). The limits are *checked on the sampled path* and a path that cannot
   be brought within them is refused (`SweepRefused`), never clamped.
 * **Stops.** The static poses a sweep campaign still measures (its bootstrap and its validation poses)
-  can be rests of the same tour (`stops`, held `dwell_s`): ordered with the waypoints, each stretch
-  between two rests one rest-to-rest spline — no separate stop-and-go tour to travel.
+  can be rests of the same tour (`stops`, each held its `dwell_s`: one for all or one per stop, since a
+  validation pose is read as a stop-and-go campaign reads it while a bootstrap rest may need fewer
+  readings): ordered with the waypoints, each stretch between two rests one rest-to-rest spline — no
+  separate stop-and-go tour to travel. A tour of rests alone (no waypoints) is allowed: its legs
+  between the rests are the sweep.
 * **Sampling.** One sample per controller period (1/rate_hz; 500 Hz on e-series, UR's RTDE guide): the
   whole timing is stretched by less than one period so the last sample is the end at rest.
 """
@@ -36,6 +41,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from drivers.robot.trajectory import keep_in_checkpoints
 from hil.arm.catalog import RobotSpec
 from hil.arm.geometry import Geometry
 from hil.arm.kinematics_cache import kinematics_of
@@ -109,11 +115,25 @@ def _tour_cost(points: np.ndarray, order: Sequence[int], speed: np.ndarray) -> f
     return float(np.sum(np.max(np.abs(np.diff(path, axis=0)) / speed, axis=1)))
 
 
-def tour_order(start: np.ndarray, waypoints: np.ndarray, speed: np.ndarray) -> list[int]:
+def leg_seconds(A: np.ndarray, B: np.ndarray, speed: np.ndarray, accel: np.ndarray | None = None
+                ) -> np.ndarray:
+    """Time-like distance between the rows of A and B (broadcasting, last axis the joints): the
+    rest-to-rest cubic's time max_j max(1.5·|Δq_j|/v_j, √(6·|Δq_j|/a_j)) (`_leg`'s first timing), or with
+    no `accel` the speed-only max_j |Δq_j|/v_j. Short moves are acceleration-bound: on the speed alone a
+    tour of rests is ordered as if a 0.1 rad hop cost a tenth of a 1 rad one, where it costs a third."""
+    d = np.abs(np.asarray(B, dtype=float) - np.asarray(A, dtype=float))
+    if accel is None:
+        return np.max(d / speed, axis=-1)
+    return np.max(np.maximum(1.5 * d / speed, np.sqrt(6.0 * d / accel)), axis=-1)
+
+
+def tour_order(start: np.ndarray, waypoints: np.ndarray, speed: np.ndarray,
+               accel: np.ndarray | None = None) -> list[int]:
     """Indices of `waypoints` in a short visiting order from `start` (nearest neighbour, then 2-opt),
-    on the time-like distance max_j |Δq_j| / speed_j; the tour ends at its last waypoint."""
+    on the time-like distance `leg_seconds` (with `accel`, a rest-to-rest leg's time); the tour ends at
+    its last waypoint."""
     pts = np.vstack([start[None], waypoints])
-    D = np.max(np.abs(pts[:, None, :] - pts[None, :, :]) / speed, axis=2)
+    D = leg_seconds(pts[:, None, :], pts[None, :, :], speed, accel)
     left = set(range(1, len(pts)))
     order, here = [], 0
     while left:
@@ -184,7 +204,7 @@ def _leg(knots: np.ndarray, speed: np.ndarray, accel: np.ndarray, rate_hz: float
 def plan_sweep(waypoints: np.ndarray, start: np.ndarray, *, max_speed: np.ndarray | float,
                max_acceleration: np.ndarray | float, rate_hz: float = 500.0,
                spec: RobotSpec | None = None, stops: np.ndarray | None = None,
-               dwell_s: float = 0.0) -> SweepTour:
+               dwell_s: float | Sequence[float] | np.ndarray = 0.0) -> SweepTour:
     """A smooth joint path from `start` (at rest) through `waypoints` (in a short order) to rest at the
     last one, within the per-joint `max_speed` (rad/s) and `max_acceleration` (rad/s²) on every sample
     (module docstring). `SweepRefused` if no timing meets them (it never clamps).
@@ -192,27 +212,36 @@ def plan_sweep(waypoints: np.ndarray, start: np.ndarray, *, max_speed: np.ndarra
     `stops` are poses the tour comes to rest at and holds for `dwell_s` (the static poses a sweep
     campaign still measures — its bootstrap and validation poses — visited in the same tour instead of
     a separate stop-and-go one); they are ordered with the waypoints, and the path between two stops
-    is one rest-to-rest spline. With `spec` every sample is also checked against the arm's joint
+    is one rest-to-rest spline. `dwell_s` is one hold for every stop or one per stop (in `stops`'
+    order). `waypoints` may be empty when there are stops: the tour is then its rests and the legs
+    between them. With `spec` every sample is also checked against the arm's joint
     limits: a spline passing through a waypoint at a joint's limit overshoots it between samples (by
     ~10⁻⁴ rad), so waypoints must keep a margin from the limits; a tour that does not is refused naming
     the sample and joint."""
-    W = np.atleast_2d(np.asarray(waypoints, dtype=float))
     q0 = np.asarray(start, dtype=float).ravel()
-    S = np.zeros((0, q0.size)) if stops is None else np.atleast_2d(np.asarray(stops, dtype=float))
-    if W.ndim != 2 or W.shape[0] < 1 or W.shape[1] != q0.size or S.shape[1:] != (q0.size,) \
+    W = np.asarray(waypoints, dtype=float)
+    W = W.reshape(0, q0.size) if W.size == 0 else np.atleast_2d(W)
+    S = np.zeros((0, q0.size)) if stops is None else np.asarray(stops, dtype=float)
+    S = S.reshape(0, q0.size) if S.size == 0 else np.atleast_2d(S)
+    if W.ndim != 2 or W.shape[0] + S.shape[0] < 1 or W.shape[1] != q0.size or S.shape[1:] != (q0.size,) \
             or not (np.isfinite(W).all() and np.isfinite(q0).all() and np.isfinite(S).all()):
-        raise InputError(f"sweep: waypoints and stops must be (m, {q0.size}) finite joint angles (m ≥ 1 "
-                         f"waypoints) and start {q0.size} finite angles, got {W.shape}, {S.shape} and "
+        raise InputError(f"sweep: waypoints and stops must be (m, {q0.size}) finite joint angles (at least "
+                         f"one of either) and start {q0.size} finite angles, got {W.shape}, {S.shape} and "
                          f"{q0.shape}")
-    if not (np.isfinite(rate_hz) and rate_hz > 0) or not (np.isfinite(dwell_s) and dwell_s >= 0):
-        raise InputError(f"sweep: rate_hz must be positive and dwell_s ≥ 0, got {rate_hz} and {dwell_s}")
+    dwell = np.asarray(dwell_s, dtype=float)
+    if dwell.ndim == 0:
+        dwell = np.full(len(S), float(dwell))
+    if not (np.isfinite(rate_hz) and rate_hz > 0) or dwell.shape != (len(S),) \
+            or not (np.isfinite(dwell).all() and np.all(dwell >= 0)):
+        raise InputError(f"sweep: rate_hz must be positive and dwell_s ≥ 0 (one for all stops or one per "
+                         f"stop, {len(S)}), got {rate_hz} and {np.round(dwell_s, 4).tolist()}")
     n = q0.size
     speed = _limits(max_speed, n, "max_speed")
     accel = _limits(max_acceleration, n, "max_acceleration")
     points = np.vstack([W, S])
-    order = tour_order(q0, points, speed)
+    order = tour_order(q0, points, speed, accel)  # most legs of a tour with rests are rest-to-rest
     is_stop = np.arange(len(points)) >= len(W)
-    hold = round(dwell_s * rate_hz)
+    hold = np.round(np.r_[np.zeros(len(W)), dwell] * rate_hz).astype(int)  # periods held, per point
     pieces: list[np.ndarray] = [q0[None]]
     passes = np.zeros(len(points))
     clock = 0.0  # s at the end of the samples so far
@@ -232,9 +261,9 @@ def plan_sweep(waypoints: np.ndarray, start: np.ndarray, *, max_speed: np.ndarra
         else:
             for m, _ in members:
                 passes[m] = clock
-        if is_stop[k] and hold:
-            pieces.append(np.repeat(knots[-1][None], hold, axis=0))
-            clock += hold / rate_hz
+        if is_stop[k] and hold[k]:
+            pieces.append(np.repeat(knots[-1][None], hold[k], axis=0))
+            clock += hold[k] / rate_hz
         knots, members = [knots[-1]], []
     q = np.vstack(pieces)
     if len(q) < 2:
@@ -303,7 +332,7 @@ def check_sweep(tour: SweepTour, *, max_speed: np.ndarray | float | None = None,
                                f"{acc[i, j]:.4f} rad/s², over its {a_max[j]:.4f} rad/s²")
     if model is None or (keep_in is None and acceptance_angle is None):
         return
-    checked = _checkpoints(Q, spacing)
+    checked = keep_in_checkpoints(Q, spacing)
     if keep_in is not None:
         lo, hi = (np.asarray(b, dtype=float) for b in keep_in)
         pts = kinematics_of(model).points(Q[checked], frame="base")
@@ -322,16 +351,3 @@ def check_sweep(tour: SweepTour, *, max_speed: np.ndarray | float | None = None,
             if why is not None:
                 raise SweepRefused(f"sweep sample {i} (t = {tour.t[i]:.3f} s): the tracker would not see "
                                    f"the SMR ({why}; nothing moved)")
-
-
-def _checkpoints(Q: np.ndarray, spacing: float) -> list[int]:
-    """The first and last samples and every one at least `spacing` rad (largest joint change) from the
-    previous checked one (the driver's `keep_in_checkpoints` rule)."""
-    idx, last = [0], Q[0]
-    for i in range(1, len(Q)):
-        if float(np.max(np.abs(Q[i] - last))) >= spacing:
-            idx.append(i)
-            last = Q[i]
-    if idx[-1] != len(Q) - 1:
-        idx.append(len(Q) - 1)
-    return idx

@@ -48,7 +48,8 @@ DEFAULT_SMR = (0.0, 0.0, 0.045)  # flange-mounted SMR nest, 45 mm out along the 
 #: RP = l̄ + 3·S_l is 3.6 σ for an isotropic Gaussian scatter of σ per axis, so σ ≤ 8 µm; the six
 #: joints of a UR5e in a working pose move the flange by √Σr² ≈ 0.9 m per radian, about 0.5 m per
 #: axis, so a joint may read at most 1.6e-5 rad noisy. Friction and servo error take most of that
-#: budget, so a third of it is the encoders': 5e-6 rad, about one count of a 20-bit absolute encoder
+#: budget (the simulated arm's stop-to-stop error, `hil.arm.joint_physics.standstill_sigma`, is that
+#: whole budget), so a third of it is the encoders': 5e-6 rad, about one count of a 20-bit absolute encoder
 #: (2π/2²⁰ = 6.0e-6 rad).
 ENCODER_SIGMA = 5e-6
 
@@ -88,6 +89,10 @@ class Noise:
     encoder_sigma: float = ENCODER_SIGMA  # rad, per joint reading (a UR joint's, see ENCODER_SIGMA)
     distance_sigma: float = DISTANCE_SIGMA  # m, along the beam (tracker model only)
     angle_sigma: float = ANGLE_SIGMA  # rad, of each angle (tracker model only)
+    # rad, σ of each joint's stop-to-stop position error, seen by its encoder (the simulated arm's
+    # repeatability, `hil.arm.joint_physics.standstill_sigma`); offline measurements take the joints
+    # as they stand, so only the robot simulator, which is commanded, uses it
+    standstill_sigma: float = 0.0
 
     def perturb(self, points: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """(N, 3) tracker-frame `points` as measured: with the flat σ, or as the tracker reads them."""
@@ -99,7 +104,8 @@ class Noise:
     def as_dict(self) -> dict[str, float | None]:
         """The truth file's ``noise`` block (docs/design.md): ``tracker_sigma`` null for the tracker model."""
         return {"tracker_sigma": self.tracker_sigma, "encoder_sigma": self.encoder_sigma,
-                "distance_sigma": self.distance_sigma, "angle_sigma": self.angle_sigma}
+                "distance_sigma": self.distance_sigma, "angle_sigma": self.angle_sigma,
+                "standstill_sigma": self.standstill_sigma}
 
 
 def chain_reach(chain: Chain) -> float:

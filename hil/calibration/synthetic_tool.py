@@ -18,7 +18,7 @@ import pinocchio as pin
 from hil.arm import tool_frame as tf
 from hil.arm.geometry import Geometry
 from hil.calibration.measurement_forms import URDF_JOINT_NAMES
-from hil.calibration.measurements import Measurements
+from hil.calibration.measurements import Measurements, joint_columns
 from hil.files.outputs import atomic_write_text, format_csv
 
 
@@ -49,15 +49,20 @@ def measure_tool(truth: Geometry, q: np.ndarray, rng: np.random.Generator, posit
                         p if p.shape[1] > 1 else None)
 
 
-def write_tool_csv(path: str | os.PathLike[str], meas: Measurements) -> None:
+def write_tool_csv(path: str | os.PathLike[str], meas: Measurements, joints: tuple[str, ...] | None = None
+                   ) -> None:
     """`meas` as a FIGAROH-form CSV: markers ``x<k>,y<k>,z<k>``, then ``phix1,phiy1,phiz1`` (roll,
-    pitch, yaw of R = Rz·Ry·Rx) when it has orientations, then the URDF joint names (radians)."""
+    pitch, yaw of R = Rz·Ry·Rx) when it has orientations, then the joints (radians) under `joints`:
+    by default a UR's URDF joint names, ``q1..qN`` for an arm of N ≠ 6 joints (an arm from its URDF
+    reads ``q1..qN``, so pass `joint_columns(6)` for one of six)."""
     points = meas.p[:, None, :] if meas.reflectors is None else meas.reflectors
     header = [f"{a}{k + 1}" for k in range(points.shape[1]) for a in "xyz"]
     parts = [points.reshape(len(points), -1)]
     if meas.rotation is not None:
         header += ["phix1", "phiy1", "phiz1"]
         parts.append(np.array([pin.rpy.matrixToRpy(R) for R in meas.rotation]))
-    header += list(URDF_JOINT_NAMES)
+    if joints is None:
+        joints = URDF_JOINT_NAMES if meas.q.shape[1] == 6 else joint_columns(meas.q.shape[1])
+    header += list(joints)
     parts.append(meas.q)
     atomic_write_text(path, format_csv(tuple(header), np.hstack(parts)))

@@ -9,10 +9,17 @@ now asks what the arm and the instrument can give:
    reported its own, better than that. Always required, whatever the threshold: a model that may make the
    arm worse is never accepted.
 2. **The validation agrees with the cross-validated floor**: the validation RMS is at most
-   `FLOOR_FACTOR` × the cross-validated RMS of the calibrated model. Cross-validation on the fitted poses
+   `floor_factor` × the cross-validated RMS of the calibrated model (`FLOOR_FACTOR`, more for very few
+   validation poses: below). Cross-validation on the fitted poses
    predicts what validation will measure (both are measured points, noise included); a validation far
    above it says something changed between the two (the arm warmed, the tracker or the base moved, a
-   pose set that covers the workspace badly), which the fit cannot vouch for.
+   pose set that covers the workspace badly), which the fit cannot vouch for. When the stopping rule
+   ended the acquisition early (`hil.campaign.stopping`), the campaign stopped on its own prediction of
+   the validation RMS (the parameters' covariance at the validation poses, σ at its upper bound), so that
+   prediction is the floor when it is the larger: with few poses, leave-one-fold-out refits sit close
+   to their neighbours and cross-validation reads optimistic (a simulated run stopped at 14 poses:
+   cross-validated 0.021 mm, predicted 0.076 mm, validation 0.066 mm — as predicted, and rejected
+   against 2 × 0.021 mm before).
 3. **An absolute bound for the robot class**: validation RMS ≤ `class_bound` of the robot.
 
 A threshold the user sets (``campaign.acceptance``, ``hil calibrate --accept``) replaces 2 and 3 by
@@ -23,6 +30,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from typing import Any
+
+import numpy as np
 
 from hil.arm.catalog import get_robot
 
@@ -44,6 +53,25 @@ CLASS_MARGIN = 2.5
 #: Measured on 24 realistic synthetic UR5e/UR10e stations (30 random calibration poses, compliance fitted,
 #: 20 µm): validation RMS / cross-validated RMS 0.53–1.30 with 4 validation poses, 0.64–1.50 with 10.
 FLOOR_FACTOR = 2.0
+#: Few validation poses make the comparison noisy: with n validation poses and N cross-validated ones,
+#: (validation RMS / cross-validated RMS)² of one error distribution is F-distributed with (3n, 3N)
+#: degrees of freedom (three coordinates a pose; Gaussian errors). The factor applied is at least the
+#: square root of that ratio's `FLOOR_QUANTILE` quantile, so that noise alone rejects at most one sound
+#: campaign in a thousand: it exceeds `FLOOR_FACTOR` only below three validation poses (1 pose against
+#: 24: 2.45; 2: 2.05; 4: 1.73, so 2.0 holds).
+FLOOR_QUANTILE = 0.999
+
+
+def floor_factor(validation_poses: int | None, cross_validated_poses: int | None) -> float:
+    """The factor the validation RMS may exceed the cross-validated RMS by (module docstring):
+    `FLOOR_FACTOR`, or the F-test bound for these pose counts when that is larger. Unknown counts:
+    `FLOOR_FACTOR`."""
+    if not validation_poses or not cross_validated_poses:
+        return FLOOR_FACTOR
+    from scipy.stats import f  # on first use: the CLI's help and listings import this module
+
+    bound = float(np.sqrt(f.ppf(FLOOR_QUANTILE, 3 * int(validation_poses), 3 * int(cross_validated_poses))))
+    return max(FLOOR_FACTOR, bound)
 
 
 def class_bound(robot: str) -> float:
@@ -66,30 +94,39 @@ class Verdict:
     threshold: float  # the validation RMS threshold applied (m): the user's, or min(floor, class bound)
     reason: str
     rule: str  # "threshold" (the user's) or "auto"
+    floor_factor: float = FLOOR_FACTOR  # the factor applied to the cross-validated RMS (`floor_factor`)
 
     def as_dict(self) -> dict[str, Any]:
         return {"passed": self.passed, "threshold": self.threshold, "reason": self.reason,
-                "rule": self.rule, "floor_factor": FLOOR_FACTOR, "class_margin": CLASS_MARGIN}
+                "rule": self.rule, "floor_factor": self.floor_factor, "class_margin": CLASS_MARGIN}
 
 
 def judge(validation_rms: float, cross_validation: Any, robot: str,
-          acceptance: float | None = None) -> Verdict:
-    """The verdict of a campaign whose validation RMS is `validation_rms` (m).
+          acceptance: float | None = None, validation_poses: int | None = None,
+          predicted: float | None = None) -> Verdict:
+    """The verdict of a campaign whose validation RMS is `validation_rms` (m) over `validation_poses`
+    poses (None: unknown, `FLOOR_FACTOR` applies).
 
     `cross_validation`: the fit's `CrossValidation`; `acceptance`: the user's threshold (None: the
-    automatic rule of the module docstring).
+    automatic rule of the module docstring); `predicted`: the validation RMS (m) the stopping rule
+    stopped the acquisition on (None: it did not stop it).
     """
+    factor = floor_factor(validation_poses, getattr(cross_validation, "poses", None))
     rms = f"validation RMS {validation_rms * 1e3:.4f} mm"
     if acceptance is not None:
         limit, rule = float(acceptance), "threshold"
         said = f"acceptance {limit * 1e3:.4f} mm"
     else:
-        floor = FLOOR_FACTOR * cross_validation.calibrated.rms
+        cv_rms = float(cross_validation.calibrated.rms)
+        stopped_on = predicted is not None and np.isfinite(predicted) and predicted > cv_rms
+        reference = float(predicted) if stopped_on else cv_rms
+        floor = factor * reference
         bound = class_bound(robot)
         limit, rule = min(floor, bound), "auto"
-        said = (f"{FLOOR_FACTOR:g} x the cross-validated {cross_validation.calibrated.rms * 1e3:.4f} mm"
-                if floor <= bound else f"the {robot} class bound {bound * 1e3:.4f} mm")
+        what = (f"the stopping rule's predicted {reference * 1e3:.4f} mm (cross-validated "
+                f"{cv_rms * 1e3:.4f} mm)" if stopped_on else f"the cross-validated {cv_rms * 1e3:.4f} mm")
+        said = f"{factor:.3g} x {what}" if floor <= bound else f"the {robot} class bound {bound * 1e3:.4f} mm"
     if not cross_validation.better_than_nominal:
-        return Verdict(False, limit, cross_validation.verdict(), rule)
+        return Verdict(False, limit, cross_validation.verdict(), rule, factor)
     passed = validation_rms <= limit
-    return Verdict(passed, limit, f"{rms} {'<=' if passed else '>'} {said}", rule)
+    return Verdict(passed, limit, f"{rms} {'<=' if passed else '>'} {said}", rule, factor)

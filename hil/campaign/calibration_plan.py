@@ -683,7 +683,10 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
         precision = None
         yield Emit(Message(campaign=campaign, level="warning",
                            text=f"the validation RMS's standard error could not be estimated: {exc}"))
-    verdict = judge(after.rms, cv, robot, camp["acceptance"])
+    stopping = stop.summary()
+    predicted = stopping.get("predicted_rms") if stopping and stopping.get("stopped") else None
+    verdict = judge(after.rms, cv, robot, camp["acceptance"], validation_poses=after.count,
+                    predicted=None if predicted is None else float(predicted))
     iso = iso9283(val_records, fit.geometry)
     theirs = None
     if controller is not None:  # a comparison that cannot be made is said, never fails the campaign
@@ -699,5 +702,5 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     doc = model_document(fit, after.as_dict(), controller=controller, cross_validation=cv.as_dict())
     drift = watch.summary() if config.warmup["enabled"] or config.drift["every"] or watch.points else None
     return CampaignResult(fit, before, after, verdict.passed, list(records.values()), tracker, selection,
-                          iso, doc, theirs, drift, stop.summary(), precision,
+                          iso, doc, theirs, drift, stopping, precision,
                           pose_counts(boot_plan, planned, records), cv, verdict)

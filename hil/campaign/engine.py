@@ -80,6 +80,7 @@ from hil.campaign.events import (
     Suspended,
     SuspendExtended,
 )
+from hil.campaign.interruption import RunInterrupted  # defined apart: imported by signal handlers
 from hil.campaign.steps import (
     REFERENCE,
     Acquire,
@@ -102,6 +103,7 @@ from hil.campaign.steps import (
     SweepRecorded,
     SweepSegment,
 )
+from hil.campaign.stillness import judge
 from hil.errors import HilError
 
 log = logging.getLogger(__name__)
@@ -112,24 +114,6 @@ IDLE, RUNNING, PAUSED, SUSPENDED, STOPPING, ABORTED, INTERRUPTED, DONE, FAILED =
 
 class RunAborted(HilError):
     """The operator (or the caller) aborted the run."""
-
-
-_SIGNAL_NAMES = {2: "Ctrl-C (SIGINT)", 15: "SIGTERM", 1: "a closed terminal (SIGHUP)"}
-
-
-class RunInterrupted(KeyboardInterrupt):
-    """The process was told to stop by signal `signum` (SIGINT, SIGTERM, SIGHUP).
-
-    A KeyboardInterrupt, so no ``except Exception`` on the way swallows it. Unlike `RunAborted`
-    (final), an interrupted campaign stays resumable, as after ``kill -9``.
-    """
-
-    def __init__(self, signum: int = 2) -> None:
-        super().__init__(signum)
-        self.signum = int(signum)
-
-    def __str__(self) -> str:
-        return f"stopped by {_SIGNAL_NAMES.get(self.signum, f'signal {self.signum}')}"
 
 
 class StopRequested(RunInterrupted):
@@ -159,6 +143,14 @@ class PoseSkippedError(HilError):
 
 
 class Clock(Protocol):
+    """The engine's clock: `monotonic` (its statistics' seconds) and `sleep` (station seconds).
+
+    A clock may also have ``station()`` (seconds on the station's clock; else ``monotonic() · speed``)
+    and ``busy()``, a context the engine holds while a step waits on the station: a fast-time
+    simulated station's clock (`hil.station.paced_clock.PacedClock`) runs the simulator fast only
+    then, and at the wall's rate while the plan computes between steps.
+    """
+
     def monotonic(self) -> float: ...
 
     def sleep(self, seconds: float) -> None: ...
@@ -173,9 +165,17 @@ class RealClock:
     def monotonic(self) -> float:
         return time.monotonic()
 
+    def station(self) -> float:
+        """Station seconds: the wall's, times the fast-time factor."""
+        return time.monotonic() * self.speed
+
     def sleep(self, seconds: float) -> None:
         if seconds > 0:
             time.sleep(seconds / self.speed)
+
+
+#: Steps that only tell the plan's progress: the station is not waited on while they run.
+_BOOKKEEPING = (Phase, Emit, Checkpoint)
 
 
 @dataclass
@@ -268,7 +268,8 @@ class Engine:
         self._extend = 0  # request_extend: pending "wait longer" requests for the current suspension
         self._poke = threading.Event()  # wakes a suspension's wait for any request
         self._last_q: np.ndarray | None = None
-        self._t0: float | None = None  # the clock when the run started (`ReadConditions`)
+        self._t0: float | None = None  # the clock when the run started
+        self._s0: float | None = None  # the station's clock then (`ReadConditions`)
         self.current: Acquire | None = None
         self.records: list[PoseRecord] = []
         # events held back for delivery during the next move, each with the record it commits
@@ -399,6 +400,7 @@ class Engine:
     def run(self, plan: Plan) -> Any:
         """Execute `plan` to its end; returns the plan's return value."""
         t0 = self._t0 = self.clock.monotonic()
+        self._s0 = self._station_now()
         self._set_state(RUNNING)
         if self.home is not None:
             self._last_q = np.asarray(self.home, dtype=float)
@@ -439,7 +441,12 @@ class Engine:
         """Run one step of the plan by its handler (`_plan_handlers`); returns the plan's reply."""
         if not isinstance(step, Acquire | Move):  # only a move overlaps a held point's commit
             self._flush()
-        return _handler(self._plan_handlers, step)(step)
+        handler = _handler(self._plan_handlers, step)
+        busy = getattr(self.clock, "busy", None)
+        if busy is None or isinstance(step, _BOOKKEEPING):
+            return handler(step)
+        with busy():  # the station works (and a fast-time one runs fast) while the step waits on it
+            return handler(step)
 
     def _phase(self, step: Phase) -> None:
         self.emit(PhaseChanged(campaign=self.campaign, phase=step.name, detail=step.detail))
@@ -494,9 +501,15 @@ class Engine:
     def station_time(self) -> float:
         """Seconds since the run started, on the station's clock: the engine's clock scaled by its
         ``speed`` (`RealClock` of a fast-time simulation: the simulators' seconds; 1 on a station)."""
-        if self._t0 is None:
+        if self._s0 is None:
             return 0.0
-        return (self.clock.monotonic() - self._t0) * float(getattr(self.clock, "speed", 1.0))
+        return self._station_now() - self._s0
+
+    def _station_now(self) -> float:
+        station = getattr(self.clock, "station", None)
+        if station is not None:
+            return float(station())
+        return self.clock.monotonic() * float(getattr(self.clock, "speed", 1.0))
 
     def _conditions(self, temperatures: bool) -> Conditions:
         """`ReadConditions`: the station time and, when asked and the arm has ``joint_temperatures()``
@@ -564,18 +577,18 @@ class Engine:
             joints.append(np.asarray(self.robot.read_joints(frames).q, float))
             if len(points) >= window:
                 P = np.array(points[-window:])
-                spread = P.std(axis=0, ddof=1)
-                if float(spread.max()) <= step.stability:
+                verdict = judge(P, step.stability)  # agree within stability, and no drift
+                spread = verdict.spread
+                if verdict.still:
                     break
-            # judged on a full window only: in fast time one slow reading (wall milliseconds times the
-            # speed) can pass max_wait before a window exists, and the arm may well be still
-            if len(points) >= window and (clock.monotonic() - t0) * speed > step.max_wait:
-                last = np.array(points[-window:])
-                worst = float(last.std(axis=0, ddof=1).max()) if len(last) > 1 else float("nan")
-                raise UnstablePoint(f"not steady within {step.max_wait:g} s: the last {len(last)} readings "
-                                    f"spread {worst * 1e6:.1f} µm > {step.stability * 1e6:.1f} µm",
-                                    tuple(float(v) for v in (last.std(axis=0, ddof=1) if len(last) > 1
-                                                             else np.zeros(3))))
+                # given up only on a window begun after max_wait: when readings come seconds apart (a
+                # loaded fast-time station: wall milliseconds times the speed) the first window may end
+                # past max_wait holding the one reading taken while the arm still rang, and the next
+                # reading would have made a still window
+                if (stamps[-window] - t0) * speed > step.max_wait:
+                    raise UnstablePoint(f"not steady within {step.max_wait:g} s: the last {window} readings' "
+                                        f"{verdict.describe(step.stability)}",
+                                        tuple(float(v) for v in verdict.spread))
         end = clock.monotonic()
         start = stamps[-window]
         self.stats.settle += start - t0

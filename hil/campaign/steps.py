@@ -80,13 +80,15 @@ class SettleMeasure:
     Replaces `Settle` + `ReadJoints` + `Measure` (``robot.settle = "stable"``). After the move the
     tracker reads the SMR one reading at a time, and after each reading the joints are read (enough
     controller cycles that the window holds at least `joint_samples` of them). As soon as the last
-    ``max(samples, 2)`` readings have a per-axis spread (sample standard deviation) ≤ `stability` (m),
+    ``max(samples, 2)`` readings are still (`hil.campaign.stillness`: per axis they agree within
+    `stability` (m), largest minus smallest, and their older and newer halves do not drift apart),
     the point is their mean and the joints are the mean of the same window's frames: the arm's ring
     (the links flex after a stop; the encoders do not see it) has died out, and nothing waits longer
     than it must. Two readings at least, because one reading has no spread to judge stillness by.
-    Nothing for `max_wait` seconds of station time (a ring that does not die out, a vibrating floor):
-    the tracker's `UnstablePoint`, as a fixed wait's measurement would raise. No minimum wait:
-    ``robot.settle_time`` is the fixed mode's wait only. Answered with `Settled`.
+    Nothing still among the windows begun within `max_wait` seconds of station time, nor in one begun
+    after it (a ring that does not die out, a vibrating floor): the tracker's `UnstablePoint`, as a
+    fixed wait's measurement would raise. No minimum wait: ``robot.settle_time`` is the fixed mode's
+    wait only. Answered with `Settled`.
     """
 
     samples: int
@@ -254,16 +256,20 @@ class Skipped:
 def acquire(index: int, role: str, q: Iterable[float], *, settle: float, joint_samples: int,
             samples: int, speed: float | None = None, acceleration: float | None = None,
             mode: str = "fixed", stability: float = 50e-6, settle_max: float = 5.0,
-            approach: float = 0.0) -> Acquire:
+            approach: float = 0.0, dwell: float = 0.0) -> Acquire:
     """The standard pose visit: move (arriving from `approach` below in every joint, `Move`), then
     (``mode="fixed"``) wait `settle` s, read averaged joints, measure; or (``mode="stable"``) settle
-    and measure on the tracker's evidence (`SettleMeasure`)."""
+    and measure on the tracker's evidence (`SettleMeasure`). `dwell` s of standing still come first in
+    either mode: a visit that must see micrometres (the drift watch's reference) lets the arm's ring
+    die out before any reading, which a window's spread cannot tell from the tracker's noise."""
     move = Move(tuple(float(v) for v in q), speed, acceleration, approach=approach)
     if mode == "stable":
-        return Acquire(index, role, (move, SettleMeasure(samples, joint_samples, stability, settle_max)))
+        wait = (Settle(dwell),) if dwell > 0 else ()
+        measure = SettleMeasure(samples, joint_samples, stability, settle_max)
+        return Acquire(index, role, (move, *wait, measure))
     if mode != "fixed":
         raise ValueError(f"settle mode must be 'stable' or 'fixed', got {mode!r}")
-    return Acquire(index, role, (move, Settle(settle), ReadJoints(joint_samples), Measure(samples)))
+    return Acquire(index, role, (move, Settle(settle + dwell), ReadJoints(joint_samples), Measure(samples)))
 
 
 #: How far below each pose (rad, every joint) a campaign's visit starts its last leg (`Move.approach`;

@@ -44,8 +44,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "write a hil-model/1 JSON. The fit is cross-validated beside the "
                                    "nominal model (and the controller's own with --controller); exit 1 "
                                    "when it does not predict held-out poses better than them. "
-                                   + URDF_SCOPE + " Such an arm's measurements are q1..qN,x,y,z (N its "
-                                   "joints) and its geometry alone is identified.")
+                                   + URDF_SCOPE + " Such an arm's joints are q1..qN (N its joints), "
+                                   "beside any position form (orientations and several reflectors "
+                                   "too), and its geometry alone is identified.")
     p.add_argument("--robot", help=f"robot type ({', '.join(ROBOT_NAMES)}), or --urdf")
     add_urdf_options(p)
     p.add_argument("--measurements", required=True, metavar="M.csv", type=CSV_FILE,

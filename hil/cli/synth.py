@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from hil.arm.catalog import ROBOT_NAMES
-from hil.arm.joint_physics import IDEAL_BY_DEFAULT
+from hil.arm.joint_physics import IDEAL_BY_DEFAULT, standstill_sigma
 from hil.calibration.measurements import write_measurements
 from hil.calibration.model_file import load_truth, truth_document, write_json
 from hil.calibration.synthetic import Noise, measure, random_configurations, random_truth
@@ -99,10 +99,13 @@ def run(args: argparse.Namespace) -> int:
             agreed_robot([*claims, Claim(truth.robot, f"the truth {args.truth} is for {truth.robot}")])
     else:
         ideal = IDEAL_BY_DEFAULT if args.ideal is None else args.ideal
-        truth, noise = random_truth(agreed_robot(claims, default="ur5e"), rng, rigid=args.rigid,
-                                    ideal=ideal), Noise()
+        robot = agreed_robot(claims, default="ur5e")
+        # the realistic arm's repeatability goes with its truth, for a simulated station that runs it
+        # (`hil calibrate --sim --truth`); the measurements here take the joints as they stand
+        stops = 0.0 if args.rigid or ideal else standstill_sigma(robot)
+        truth, noise = random_truth(robot, rng, rigid=args.rigid, ideal=ideal), Noise(standstill_sigma=stops)
     if args.noise is not None:
-        noise = Noise(args.noise, noise.encoder_sigma)
+        noise = Noise(args.noise, noise.encoder_sigma, standstill_sigma=noise.standstill_sigma)
     out = Path(args.out_dir)
     # every pose approached from below in every joint, as a campaign does (a UR's lost motion needs it)
     up = np.ones(6) if truth.chain is None else None

@@ -20,8 +20,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "6-D or several-reflector file also every reflector the model knows "
                                    "and the orientation error of a model with a tool frame. Exit "
                                    "code 1 when --max-rms is exceeded (by all compared reflectors). "
-                                   "A model of an arm from its URDF carries the URDF: its measurements "
-                                   "are q1..qN,x,y,z.")
+                                   "A model of an arm from its URDF carries the URDF: its joints are "
+                                   "q1..qN.")
     p.add_argument("--model", required=True, metavar="model.json", type=JSON_FILE,
                    help="model to check (hil-model/1, or a hil-truth/1 to see the noise floor)")
     p.add_argument("--measurements", required=True, metavar="V.csv", type=CSV_FILE,

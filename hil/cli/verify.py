@@ -69,7 +69,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from hil.cli.support.interrupts import interruptible
-    from hil.verify.session import load_model
+    from hil.verify.inputs import load_model
 
     model = load_model(args.model) if args.model else None  # a missing or bad file: exit 2, nothing started
     _check_outputs(args)

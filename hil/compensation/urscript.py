@@ -38,6 +38,7 @@ structure above.
 
 from __future__ import annotations
 
+import bisect
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -250,8 +251,8 @@ class _Program:
         found = self.assigns.get(var)
         if not found:
             return None
-        before = [a for a in found if a.index < index]
-        return before[-1] if before else found[0]
+        k = bisect.bisect_left(found, index, key=lambda a: a.index)  # `found` is in text order
+        return found[k - 1] if k else found[0]
 
 
 def _numbers(lit: Literal | None) -> np.ndarray | None:
@@ -390,6 +391,13 @@ def _target(prog: _Program, out: _Analysis, call: Call, arg: Arg, site: Site) ->
 
 def _format(values: np.ndarray, pose: bool, comma: str) -> str:
     return ("p[" if pose else "[") + comma.join(format_number(v) for v in values) + "]"
+
+
+def scan_program(text: str, name: str, tcp: pin.SE3) -> int:
+    """Read `text` as `compensate_program` does before it solves anything (tokens, calls, assignments,
+    targets); the number of targets found. InputError for a malformed program, as there."""
+    found = _analyse(_Program(text, name), tcp)
+    return len(found.sites) + len(found.joint_targets)
 
 
 def compensate_program(text: str, name: str, compensator: Compensator, near: Sequence[float],

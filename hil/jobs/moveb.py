@@ -94,14 +94,13 @@ def run_moveb(request: MovebRequest, *, say: Say = quiet) -> MovebOutcome:
     the configuration's ``smr.offset`` (the simulated station's: its SMR holder's drawing). Without a
     model `say` says it before the arm moves: the tracker measures the SMR, the path is commanded for
     the assumed one, and the difference shows wherever the tool turns."""
+    # What refuses bad input is imported first; the planner and the run's solvers (SciPy's splines,
+    # the compensator: most of a cold start) only once the station is taken, so that a controller of
+    # another robot is refused without them (issue 31: every refusal within 2 s).
     import numpy as np
 
     from hil.arm.geometry import Geometry
-    from hil.arm.kinematics import Kinematics
-    from hil.calibration.model_file import load_geometry
-    from hil.moveb.path_plan import plan_program
     from hil.moveb.program import load_program
-    from hil.moveb.run import NothingMeasured, execute, facing_frame, program_in_frame
     from hil.moveb.timing import Limits
     from hil.station.devices import HARDWARE_ERRORS
     from hil.station.robot_type import Claim, agreed_robot, config_claim, option_claim
@@ -109,7 +108,11 @@ def run_moveb(request: MovebRequest, *, say: Say = quiet) -> MovebOutcome:
     request.check()
     program = load_program(request.program)
     limits = Limits(request.velocity, request.acceleration, request.jerk, request.normal_acceleration)
-    model = load_geometry(request.model)[0] if request.model else None
+    model = None
+    if request.model:
+        from hil.calibration.model_file import load_geometry
+
+        model = load_geometry(request.model)[0]
     place = request.place
     if place == "tracker" and not (request.sim or model is not None):
         raise InputError("--frame tracker: needs --model (its tracker pose) or --sim")
@@ -139,6 +142,8 @@ def run_moveb(request: MovebRequest, *, say: Say = quiet) -> MovebOutcome:
             # the absolute path error calibration removes, not only its non-rigid part
             geometry = Geometry.nominal(model.robot, smr=model.smr, tracker=model.tracker)
         if place == "tracker":  # where the tracker stands: the model's, else the simulated world's
+            from hil.moveb.run import facing_frame, program_in_frame
+
             where = (model.tracker if model is not None else Geometry.from_dict(truth, source="sim")
                      .tracker).translation
             program = program_in_frame(program, facing_frame(program, where, geometry.spec.reach))
@@ -146,6 +151,10 @@ def run_moveb(request: MovebRequest, *, say: Say = quiet) -> MovebOutcome:
             taken = stack.enter_context(take_station(config, what="hil moveb run", claims=said))
         except HARDWARE_ERRORS as exc:
             return _fault(exc)
+        from hil.arm.kinematics import Kinematics
+        from hil.moveb.path_plan import plan_program
+        from hil.moveb.run import NothingMeasured, execute, program_in_frame
+
         devices = taken.devices
         smr_mm = [float(v) * 1e3 for v in geometry.smr]
         if model is None:

@@ -2,7 +2,7 @@
 
 Where a job's station comes from (`StationSource`: a station configuration, or the simulated station
 started for the job) and how the arm is taken (`take_station`): the host-local lock on the arm's
-address, the robot and the tracker opened, the controller's word on the robot type checked, the
+address, the controller's word on the robot type checked, the robot and the tracker opened, the
 store opened or created, one robot identity. ``hil calibrate``, ``hil verify``, ``hil moveb run`` and
 the terminal app all take the arm this way, so a guard added here guards every one of them; before
 this module each front-end spelled the sequence out itself, and the lock and the robot-type check had
@@ -12,9 +12,14 @@ Order matters, and is the same for all:
 
 1. an existing store is opened first (a damaged or newer one is refused before the arm is touched);
 2. the arm's address lock (`hil.store.address_lock`): no second hil process of this host connects;
-3. the devices (`hil.station.devices.open_devices`; a driver error leaves nothing open and is raised
-   as it is, typed, for the caller to report as a station fault);
-4. the controller's model checked against ``robot.type`` and every other claim (`check_controller`);
+3. the controller asked what it is (`hil.station.devices.ask_controller`: RTDE's version and the
+   dashboard's model and serial, read-only) and its model checked against ``robot.type`` and every
+   other claim (`check_controller`) — before the devices, whose opening and closing take seconds
+   (the driver's client process, its control script uploaded and stopped again, the tracker): a
+   controller of another robot is refused within milliseconds of connecting;
+4. the devices (`hil.station.devices.open_devices`; a driver error leaves nothing open and is raised
+   as it is, typed, for the caller to report as a station fault), and the connected controller's
+   word checked again (it is what the run records as the robot);
 5. only then is a new store file created, so a refused station leaves no file behind.
 
 Everything taken is released on every way out (an exception, Ctrl-C, a normal end) in reverse order.
@@ -36,6 +41,7 @@ from hil.station.config import StationConfig, check_runnable, load_config
 from hil.station.robot_type import Claim, agreed_robot, check_controller, config_claim, option_claim
 
 if TYPE_CHECKING:
+    from hil.campaign.engine import Clock
     from hil.station.devices import Devices
     from hil.store import Store
 
@@ -131,6 +137,25 @@ class StationSetup:
     truth: dict[str, Any] | None  # the simulated arm's hidden truth (None: a real station)
     simulator: Any = None  # the running simulator (fault injection), None for a real station
 
+    @contextlib.contextmanager
+    def clock(self, speed: float) -> Iterator[Clock]:
+        """The engine's clock for a run on this station: the wall clock on a real one; on a simulated
+        one in fast time a `PacedClock`, so that the host's computing between steps is not multiplied
+        into simulated standstill (`hil.station.paced_clock`). The simulator gets its full speed back
+        when the run ends."""
+        from hil.campaign.engine import RealClock
+
+        if self.simulator is None or speed == 1.0:
+            yield RealClock(speed)
+            return
+        from hil.station.paced_clock import PacedClock, simulator_pace
+
+        paced = PacedClock(speed, simulator_pace(self.simulator))
+        try:
+            yield paced
+        finally:
+            paced.close()
+
 
 @contextlib.contextmanager
 def station_setup(source: StationSource) -> Iterator[StationSetup]:
@@ -210,10 +235,10 @@ def simulator_words(simulator: Any) -> str | None:
 def open_existing_store(location: Any, config: StationConfig | None) -> Store | None:
     """The store at `location` if it exists (a server always does), opened now so that a damaged or a
     newer one is refused before the arm is touched; None for a file still to be created."""
-    from hil.store import Store
-
     if isinstance(location, Path) and not location.exists():
         return None
+    from hil.store import Store  # SQLAlchemy, not needed to find that there is no file yet
+
     return Store.open(location, config=config)
 
 
@@ -223,29 +248,38 @@ def take_station(config: StationConfig, *, what: str, claims: Sequence[Claim] = 
     """Take the station for one job (see the module docstring); `what` names the job in the lock.
 
     `claims` are further words on the robot type (``--robot``, a model file) the controller must agree
-    with. `store`: None (the job needs none), an open `Store` (kept open: its owner closes it), or a
-    location (`hil.store.resolve_location`) opened here (created once the controller agreed) and
-    closed on exit. A held lock is `hil.store.LeaseRefused` (bad input, naming the holder); a device
-    that cannot be reached raises its driver's error after everything taken is released.
+    with; it is asked before the devices are opened, so a disagreement opens nothing. `store`: None
+    (the job needs none), an open `Store` (kept open: its owner closes it), or a location
+    (`hil.store.resolve_location`) opened here (created once the controller agreed) and closed on exit.
+    A held lock is `hil.store.LeaseRefused` (bad input, naming the holder); a controller that does not
+    answer, or a device that cannot be opened, raises its driver's error after everything taken is
+    released.
     """
     from hil.station import devices as station_devices
-    from hil.store import Store, address_lock
+    from hil.store import address_lock
 
+    # a location is what `hil.store.resolve_location` returns (a Path or a URL), anything else an open
+    # Store: told apart without importing the store (SQLAlchemy, a quarter of a second cold) before
+    # the controller is asked, so a refused station is refused without it
+    location: Path | str | None = store if isinstance(store, Path | str) else None
+    given: Store | None = None if location is not None else store  # handed in: its owner closes it
     with contextlib.ExitStack() as stack:
         opened: Store | None = None
-        if store is not None and not isinstance(store, Store):
-            location = store
+        if location is not None:
             opened = open_existing_store(location, config)
             if opened is not None:
                 stack.callback(opened.close)
         stack.enter_context(address_lock(config.robot["address"], what=what))
+        check_controller(config, station_devices.ask_controller(config), *claims)  # before opening
         devices = station_devices.open_devices(config)
         info = devices.robot.info
         taken = TakenStation(config, devices, RobotIdentity.of(config.robot["type"], info))
         stack.callback(taken.close_devices)
-        check_controller(config, info, *claims)  # before anything is recorded or moved
-        if store is not None and not isinstance(store, Store) and opened is None:
+        check_controller(config, info, *claims)  # the robot the run records, before anything is moved
+        if location is not None and opened is None:
+            from hil.store import Store
+
             opened = Store.open(location, config=config)
             stack.callback(opened.close)
-        taken.store = store if isinstance(store, Store) else opened
+        taken.store = given if given is not None else opened
         yield taken

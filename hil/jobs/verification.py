@@ -16,7 +16,14 @@ from typing import TYPE_CHECKING, Any
 
 from hil.errors import InputError
 from hil.jobs.outcome import EXIT_BAD_INPUT, EXIT_FAULT, JobOutcome
-from hil.jobs.station import StationSource, TakenStation, station_setup, store_location, take_station
+from hil.jobs.station import (
+    StationSetup,
+    StationSource,
+    TakenStation,
+    station_setup,
+    store_location,
+    take_station,
+)
 from hil.jobs.words import Say, outage_words, quiet
 
 if TYPE_CHECKING:
@@ -24,7 +31,7 @@ if TYPE_CHECKING:
     from hil.campaign.runner import RunOutcome
     from hil.station.config import StationConfig
     from hil.verify.cube import Cube
-    from hil.verify.session import ModelInput
+    from hil.verify.inputs import ModelInput
 
 
 def checked_cube(config: StationConfig, sim: bool, tool: Any = None) -> Cube | None:
@@ -32,7 +39,7 @@ def checked_cube(config: StationConfig, sim: bool, tool: Any = None) -> Cube | N
     and the keep-in box for the SMR at `tool` (default: the configured offset) before anything
     connects."""
     from hil.verify.design import check_cube
-    from hil.verify.session import cube_where, requested_cube
+    from hil.verify.inputs import cube_where, requested_cube
 
     cube = requested_cube(config, sim=sim)
     if cube is not None:
@@ -67,7 +74,8 @@ class VerifyAfter:
 
 
 def verify_after(after: VerifyAfter, run: RunOutcome, taken: TakenStation, identity: Mapping[str, Any],
-                 truth: Mapping[str, Any] | None, *, say: Say = quiet) -> tuple[dict[str, Any], int]:
+                 truth: Mapping[str, Any] | None, *, say: Say = quiet, setup: StationSetup | None = None
+                 ) -> tuple[dict[str, Any], int]:
     """``--verify``: the ISO 9283 pose test with the model just accepted, on the same devices.
 
     Returns the result's ``verification`` block and the exit code it asks for (0: done; the test's own
@@ -79,16 +87,19 @@ def verify_after(after: VerifyAfter, run: RunOutcome, taken: TakenStation, ident
         return {"status": "not run", "reason": f"the calibration ended {run.status}"}, 0
     from hil.arm.geometry import Geometry
     from hil.campaign.engine import RealClock
-    from hil.verify.session import ModelInput, verify
+    from hil.verify.inputs import ModelInput
+    from hil.verify.session import verify
 
     doc = run.result.model
     model = ModelInput.of(doc, Geometry.from_dict(doc, source="the calibrated model"),
                           f"campaign {run.campaign}")
     say("verifying the calibrated model (ISO 9283 pose test)", "information")
     try:
-        done = verify(taken.store, taken.devices, taken.config, identity, taken.robot.as_dict(), model=model,
-                      cube=after.cube, cycles=after.cycles, clock=RealClock(after.speed),
-                      subscribers=after.options.subscribers(), truth=truth)
+        with (setup.clock(after.speed) if setup is not None
+              else contextlib.nullcontext(RealClock(after.speed))) as clock:
+            done = verify(taken.store, taken.devices, taken.config, identity, taken.robot.as_dict(),
+                          model=model, cube=after.cube, cycles=after.cycles, clock=clock,
+                          subscribers=after.options.subscribers(), truth=truth)
     except InputError as exc:  # no configuration serves the cube: the calibration stands, said so
         say(f"error: --verify: {exc}", "error")
         return {"status": "not run", "reason": str(exc)}, EXIT_BAD_INPUT
@@ -121,10 +132,7 @@ def run_verification(request: VerificationRequest, *, subscribers: Sequence[Call
                      say: Say = quiet) -> JobOutcome:
     """Run (or resume) the pose test (module docstring); the outcome's document is its
     ``hil-verification/1``, None unless it finished."""
-    from hil.campaign.engine import RealClock
     from hil.station.devices import HARDWARE_ERRORS
-    from hil.store import FINISHED, StoreError
-    from hil.verify.session import verify
 
     model = request.model
     if request.db:  # --db needs no config: refused before a simulated station starts
@@ -144,6 +152,9 @@ def run_verification(request: VerificationRequest, *, subscribers: Sequence[Call
                 return JobOutcome(EXIT_FAULT, "failed")
             assert taken.store is not None
             taken.store.on_outage = outage_words(say)
+            # the run's modules once the station is taken: a refusal before it does not load them
+            from hil.store import FINISHED, StoreError
+            from hil.verify.session import verify
 
             def started(campaign: str, resumed: bool) -> None:
                 # the run's start itself ("starting verification …", its visits, cycles and modes) is
@@ -154,10 +165,11 @@ def run_verification(request: VerificationRequest, *, subscribers: Sequence[Call
                         "controller's own model)", "information")
 
             try:
-                done = verify(taken.store, taken.devices, config, setup.identity, taken.robot.as_dict(),
-                              model=model, cube=cube, cycles=cycles, clock=RealClock(request.source.speed),
-                              subscribers=subscribers, new=request.new, resume_only=request.resume_only,
-                              truth=setup.truth, on_campaign=started)
+                with setup.clock(request.source.speed) as clock:
+                    done = verify(taken.store, taken.devices, config, setup.identity, taken.robot.as_dict(),
+                                  model=model, cube=cube, cycles=cycles, clock=clock,
+                                  subscribers=subscribers, new=request.new, resume_only=request.resume_only,
+                                  truth=setup.truth, on_campaign=started)
             except StoreError as exc:  # the result could not be recorded (a full disk): a fault
                 say(f"fault: could not record the verification: {exc.__cause__ or exc}", "error")
                 return JobOutcome(EXIT_FAULT, "failed")

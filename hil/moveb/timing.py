@@ -33,7 +33,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import minimum_filter1d
 
 from hil.errors import InputError
 from hil.files.quantities import quantity
@@ -91,6 +90,10 @@ def erode_by_travel(vlim: np.ndarray, ds: float, horizon: float, step: float = 1
     `minimum_filter1d` at its largest radius, so a point may act a little (< `step`) wider than
     needed, never narrower. Points at the highest ceiling cannot lower anything and are skipped.
     """
+    # imported here, not with the module: `Limits` is read by jobs that must refuse bad input fast
+    # (a MOVEB run refuses a controller of another robot), and scipy.ndimage is a third of a second
+    from scipy.ndimage import minimum_filter1d
+
     out = np.array(vlim, dtype=float)
     top = out.max()
     radius = np.ceil(out * horizon / ds).astype(np.int64)

@@ -529,14 +529,13 @@ def _campaign(d: ReportData) -> str:
             parts.append(f'<p class="muted">{esc(note)}</p>')
         if retries is not None:
             parts.append(_kv([("pose visits retried after a suspension", esc(retries))]))
-    parts.append("<h3>Suspensions</h3>")
     if d.suspensions:
-        parts.append(_table(["kind", "message", "waited"],
-                            [[esc(s.kind), esc(s.message),
-                              esc(f"{s.waited:.1f} s" if _finite(s.waited) else "never resumed")]
-                             for s in d.suspensions]))
-    else:
-        parts.append('<p class="muted">None: the campaign ran without interruption.</p>')
+        parts.append("<h3>Suspensions</h3>" + _table(
+            ["kind", "message", "waited"],
+            [[esc(s.kind), esc(s.message), esc(f"{s.waited:.1f} s" if _finite(s.waited) else "never resumed")]
+             for s in d.suspensions]))
+    elif d.campaign:  # an identification's report (`hil report --model`) has no campaign to suspend
+        parts.append('<h3>Suspensions</h3><p class="muted">None: the campaign ran without interruption.</p>')
     if d.notes:
         parts.append("<h3>Notes</h3><ul>" + "".join(f"<li>{esc(n)}</li>" for n in d.notes) + "</ul>")
     return "".join(parts)
@@ -596,6 +595,12 @@ def _controller(block: Mapping[str, Any], robot: str) -> str:
 def _provenance(d: ReportData) -> str:
     robot = [("model", esc(d.robot.type or "—")), ("serial number", esc(d.robot.serial or "—")),
              ("controller software", esc(d.robot.software or "—"))]
+    urdf = (d.model or {}).get("urdf")
+    if isinstance(urdf, Mapping):  # an arm from its URDF: which file and which chain of it
+        joints = urdf.get("joints") if isinstance(urdf.get("joints"), list) else []
+        robot += [("URDF", esc(str(urdf.get("file") or "—"))),
+                  ("chain", esc(f"{urdf.get('base') or '—'} → {urdf.get('tip') or '—'}, "
+                                f"{len(joints)} joints: {', '.join(str(j) for j in joints)}"))]
     software = [(esc(k), esc(v)) for k, v in d.software.items()]
     hashes = [(esc(k), f"<code>{esc(v)}</code>") for k, v in d.hashes.items()]
     return ("<h3>Robot</h3>" + _kv(robot)

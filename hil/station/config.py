@@ -429,8 +429,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
     "warmup": {
         "enabled": Key("bool", True, help="warm the arm up before measuring"),
         # a joint's warm-up time constant is about 15 min (`hil.arm.thermal`, τ = 900 s): a check every
-        # 2 min gives the fit 7 points per time constant and costs one reference visit (~10 s, under 10 %
-        # of the motion); under 10 s is mostly reference visits, and over an hour sees no warm-up at all
+        # 2 min gives the fit 7 points per time constant and costs one reference visit (~10 s, plus
+        # drift.settle's 2 s and drift.samples' 2 s of GeoCOM readings: about a tenth of the motion);
+        # under 10 s is mostly reference visits, and over an hour sees no warm-up at all
         "interval": Key("float", 120.0, _quantity("warm-up interval"),
                         "seconds of cycling motion between reference measurements"),
         # a tenth of the default 0.1 mm acceptance, and a third of the drift watch's limit, so a warm arm
@@ -456,6 +457,17 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # calibration is judged on; three times the warm-up limit, so noise alone does not flag a campaign
         "limit": Key("float", 30e-6, _quantity("point spread"),
                      "flag the campaign when the reference moved more than this (m)"),
+        # a reference visit (drift watch and warm-up) must see micrometres, while the arm rings after its
+        # approach for a while (a lightweight arm's first modes 7-12 Hz, structural damping 2-3.6 %:
+        # mocks.ringing's sources), and a window's spread cannot tell an aliased ring from the tracker's
+        # noise (a realistic simulated UR5e's drift watch read 9-24 µm of ring with 0.4-5 µm of true drift,
+        # docs/design.md, Facts: what a drift watch sees). 2 s still is 3 envelope time constants of a
+        # 3.6 %-damped 7 Hz mode (4 % of its ring left; hil's assumption that a UR's servos damp no less)
+        "settle": Key("float", 2.0, _quantity("settle time"),
+                      "seconds the arm stands still at the reference before it is read"),
+        # 20 readings average the tracker's noise by 2 against a pose's 5 and the ring's remainder over
+        # a 2 s window (GeoCOM's 0.1 s readings; an emScon point's 0.5 s makes it 10 s)
+        "samples": Key("int", 20, _quantity("samples"), "tracker samples per reference measurement"),
     },
     "timeouts": {
         # how long the run waits before calling something lost; the longest move of a UR arm (half a

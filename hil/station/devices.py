@@ -15,7 +15,8 @@ import numpy as np
 
 from drivers.robot import errors as robot_errors
 from drivers.robot.isolated import IsolatedURRobot
-from drivers.robot.model import KeepInZone, RobotConfig
+from drivers.robot.model import ControllerInfo, KeepInZone, RobotConfig
+from drivers.robot.probe import ask_controller as ask_dashboard
 from drivers.tracker import errors as tracker_errors
 from drivers.tracker.device import Atmosphere, Tracker
 from drivers.tracker.emscon import EmsconConfig, EmsconTracker, TcpConfig
@@ -101,6 +102,18 @@ class Devices:
         for close in (self.robot.close, self.tracker.close):
             with contextlib.suppress(Exception):  # best effort; both must be attempted
                 close()
+
+
+def ask_controller(config: StationConfig) -> ControllerInfo:
+    """Who the station's controller is (model, serial, software), asked before the devices are opened.
+
+    The robot type is checked against this answer (`hil.jobs.station.take_station`), so a controller
+    of another robot is refused in milliseconds: opening the driver starts a client process, uploads
+    the control script and opens the tracker, and closing them again takes seconds (stopping the
+    script). Read-only: nothing is uploaded, started or moved; bounded by ``timeouts.connect``.
+    A controller that does not answer is `drivers.robot.errors.RobotUnreachable`, as at open.
+    """
+    return ask_dashboard(config.robot["address"], config.timeouts["connect"])
 
 
 def open_devices(config: StationConfig) -> Devices:

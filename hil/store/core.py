@@ -135,6 +135,19 @@ class Store(EventRecorder, StoreQueries):
                 return str(cid)
         return None
 
+    def unfinished_campaigns(self) -> list[str]:
+        """Every unfinished campaign, newest first, each config read through the damaged-row check:
+        what ``--resume`` could continue, known before a simulated station's seconds of start-up (a
+        damaged row among them is named, `row_json`)."""
+        c = tb.campaigns
+        q = (select(c.c.id, c.c.config).where(c.c.status.not_in(sorted(FINISHED)))
+             .order_by(c.c.created.desc(), c.c.id.desc()))
+        found = []
+        for cid, stored in self._query(lambda conn: conn.execute(q).all()):
+            row_json(stored, table="campaigns", row=cid, column="config", campaign=str(cid))
+            found.append(str(cid))
+        return found
+
     # --- leases (hil.store.leases: one process per campaign, one campaign per robot) ----------------
     def claim(self, campaign: str, robot_serial: str = "", *, ttl: float = LEASE_TTL,
               heartbeat: bool = True) -> Lease:

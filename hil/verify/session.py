@@ -19,7 +19,6 @@
 
 from __future__ import annotations
 
-import hashlib
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -37,7 +36,6 @@ from hil.campaign.runner import RunOutcome, claim_run, run_plan, store_recorder
 from hil.compensation.solve import Compensator
 from hil.errors import FaultError, InputError
 from hil.station.config import StationConfig
-from hil.store.hashing import canonical_json
 from hil.verify.cube import Cube
 from hil.verify.design import (
     DEFAULT_CUBE_TURNS,
@@ -48,67 +46,14 @@ from hil.verify.design import (
     design_test,
     tracker_from_start,
 )
+from hil.verify.inputs import ModelInput, cube_where
 from hil.verify.result import FORMAT, deviation, evaluate, model_frame, registered_frame, summary
 from hil.verify.verification_plan import KIND, verification_plan
 
-#: The geometry block of a model document: what its sha256 (the verification's identity) covers.
-MODEL_KEYS = ("robot", "joints", "flange", "smr", "tracker", "compliance", "payload")
 #: Campaign keys of the station configuration a verification does not depend on (they size and judge
 #: a calibration); the rest (samples, stability, max_consecutive_lost) stay in its identity.
 _CALIBRATION_ONLY = ("calibration_poses", "validation_poses", "bootstrap_poses", "candidates",
                      "acceptance", "index", "seed")
-
-
-@dataclass(frozen=True)
-class ModelInput:
-    """hil's calibrated model for the compensated mode, and where it came from."""
-
-    geometry: Geometry
-    sha256: str
-    source: str  # a file, or "campaign <id>"
-
-    @classmethod
-    def of(cls, doc: Mapping[str, Any], geometry: Geometry, source: str) -> ModelInput:
-        block = {k: doc[k] for k in MODEL_KEYS if k in doc}
-        return cls(geometry, hashlib.sha256(canonical_json(block).encode()).hexdigest(), source)
-
-    def as_dict(self) -> dict[str, Any]:
-        return {"source": self.source, "sha256": self.sha256}
-
-
-def load_model(path: str) -> ModelInput:
-    """A model file (``hil-model/1``, or a ``hil calibrate --out`` result embedding one); InputError
-    naming the file when it is missing or wrong."""
-    from hil.calibration.model_file import MODEL_FORMAT, load_geometry
-
-    geometry, doc = load_geometry(path, (MODEL_FORMAT,))
-    return ModelInput.of(doc, geometry, str(path))
-
-
-def requested_cube(config: StationConfig, sim: bool) -> Cube | None:
-    """The ``[verify]`` cube, or None for the default one (``--sim`` only: `default_cube`).
-
-    A real station must name its cube: ISO 9283 puts it in the part of the working space the cell uses
-    most, which hil cannot guess, and a cube guessed wrong is one the arm is driven around in.
-    """
-    v = config.verify
-    if v["centre"] is None:
-        if sim:
-            return None
-        raise InputError(f"{config.source}: verify.centre: the ISO 9283 test cube's centre (robot base "
-                         "frame, m) is required on a station, e.g. centre = [0.5, 0.0, 0.3]")
-    from hil.arm.catalog import get_robot
-
-    edge = v["edge"] if v["edge"] is not None else round(0.25 * get_robot(config.robot["type"]).reach, 3)
-    return Cube(np.array(v["centre"]), edge)
-
-
-def cube_where(config: StationConfig) -> str:
-    """How an error names the cube: the configuration's keys, or the simulated station's default."""
-    if config.verify["centre"] is None:
-        return "the default test cube"
-    return f"{config.source}: verify.centre/verify.edge" if not config.source.startswith("<") else \
-        "verify.centre/verify.edge"
 
 
 def controller_of(robot: str, info: Any) -> tuple[ControllerCalibration, dict[str, Any] | None]:

@@ -91,8 +91,10 @@ runs when the machine lets it, so a source that keeps a record of its past (`pos
 simulated station's `mocks.world.World`, from the arm's `mocks.ur.history`) is asked where the SMR was
 at each sample's simulated time (the source's clock reads ``source_epoch`` when ``now`` is 0), and
 samples later than the newest time it knows (`known_until()`) wait for the next tick; a stall of
-this thread then delays samples but never moves them. A source
-without a record (`StaticTarget`) is read linearly between the last two looks at it, which is exact
+this thread then delays samples but never moves them. Each reading is an instant (`READING_S`):
+the source is asked with ``reading_time=0``. A stationary result is due when its measuring time
+ends (`next_due`, which the server wakes for), so its answer does not wait for a polling period. A
+source without a record (`StaticTarget`) is read linearly between the last two looks at it, which is exact
 for a target that moves only between ticks.
 
 StopMeasurement answers AllOK (also when idle) and ends the stream; a stationary measurement it
@@ -153,6 +155,11 @@ from mocks.geocom.target import TargetSource, TargetState
 
 log = logging.getLogger(__name__)
 
+#: Seconds one reading integrates the SMR's motion over: an AT960 outputs 1000 readings a second (Leica's
+#: AT960 datasheet, the max data rate GetTrackerInfo answers below), so a reading spans at most
+#: 1 ms, a hundredth of the 9 Hz ring's period (`mocks.ringing`): an instant. A stationary measurement
+#: integrates by averaging its readings; a continuous stream's samples are such readings.
+READING_S = 0.0
 #: Seconds of the tracker's clock over which the simulation's rate (simulated seconds per tracker
 #: second) is measured: long next to a tick's jitter of a millisecond or so (0.1 % of it at most).
 RATE_BASELINE_S = 1.0
@@ -393,6 +400,20 @@ class EmsconInstrument:
             self._observe(now, now)
         return self._drain(now)
 
+    def next_due(self) -> float | None:
+        """The simulated time of the next thing this tracker does by itself (an answer queued behind a
+        busy command, the end of a stationary measurement), None when nothing is pending: the server
+        wakes for it then, so the instrument's own times, not a polling period, decide when a result
+        leaves (a 10 ms poll is 0.4 s of simulated time at 40x)."""
+        due = [self._outbox[0][0]] if self._outbox else []
+        if isinstance(self._measurement, _Stationary):
+            due.append(self._measurement.end)
+        return min(due) if due else None
+
+    def wall_seconds(self, simulated: float) -> float:
+        """Seconds of the tracker's clock (the wall's) that `simulated` seconds take at the rate seen."""
+        return simulated / self._rate
+
     def laser_cold(self, seconds: float, now: float) -> None:
         """Fault: the laser is not warm for ``seconds`` of simulated time from ``now``."""
         if not 0 <= seconds < 86_400:
@@ -476,7 +497,8 @@ class EmsconInstrument:
             t = np.asarray(times, dtype=float)
             if on_clock:
                 t = self._now + (t - self._clock_now) * self._rate
-            return np.asarray(recorded(t + self.source_epoch), dtype=float).reshape(-1, 3)
+            return np.asarray(recorded(t + self.source_epoch, reading_time=READING_S),
+                              dtype=float).reshape(-1, 3)
         axis = 1 if on_clock else 0
         (t0, p0), (t1, p1) = ((a[axis], a[2]) for a in self._anchors)
         p0, p1 = np.asarray(p0, dtype=float), np.asarray(p1, dtype=float)
@@ -492,15 +514,18 @@ class EmsconInstrument:
         t_set, p_set, _ = self.environment
         scale = 1.0 + 1e-6 * (atmospheric_ppm(t_set, p_set)
                               - atmospheric_ppm(cfg.true_temperature_c, cfg.true_pressure_mbar))
-        polar = np.empty((len(times), 3))
-        previous: NDArray[np.float64] | None = None
-        hz = v = d = 0.0
-        for i, p in enumerate(self._truths(times, on_clock)):
-            if previous is None or not np.array_equal(p, previous):  # a still target: convert once
-                hz, v, d = cartesian_to_polar(p)
-                previous = p
-            polar[i] = cfg.noise.perturb(hz, v, d * scale, self._rng)
-        return polar_to_cartesian(polar[:, 0], polar[:, 1], polar[:, 2]).reshape(-1, 3)
+        truths = self._truths(times, on_clock)
+        d = np.linalg.norm(truths, axis=1)
+        hz = np.arctan2(truths[:, 0], truths[:, 1]) % (2 * np.pi)
+        v = np.arctan2(np.hypot(truths[:, 0], truths[:, 1]), truths[:, 2])
+        # the draws `NoiseSpec.perturb` makes reading by reading (hz, v, then d), all at once: the same
+        # stream, so a seed gives the same readings
+        z = self._rng.standard_normal((len(truths), 3))
+        s = cfg.noise
+        hz = (hz + s.angle_sigma_rad * z[:, 0]) % (2 * np.pi)
+        v = v + s.angle_sigma_rad * z[:, 1]
+        d = d * scale + s.distance_sigma_m * z[:, 2]
+        return polar_to_cartesian(hz, v, d).reshape(-1, 3)
 
     def _apriori(self, position: NDArray[np.float64]) -> NDArray[np.float64]:
         """Per-axis σ (m) of one reading at ``position``: the `NoiseSpec` propagated to x, y, z."""

@@ -267,7 +267,7 @@ class EmsconSimulator:
                 if self._stalled():
                     self.stopping.wait(self.config.poll_s)
                     continue
-                ready, _, _ = select.select([conn], [], [], self.config.poll_s)
+                ready, _, _ = select.select([conn], [], [], self._wait())
                 if self._stalled():  # (a stall that began while waiting holds what just arrived)
                     continue
                 if ready:
@@ -304,6 +304,17 @@ class EmsconSimulator:
             self._client = None
             _close(conn)
             log.info("emScon client gone")
+
+    def _wait(self) -> float:
+        """Wall seconds to wait for the client before ticking: `poll_s`, or less when the instrument has
+        something due sooner (`EmsconInstrument.next_due`), so a stationary result leaves at the end of
+        its measuring time and not up to a poll later."""
+        with self._lock:
+            due = self.instrument.next_due()
+            if due is None:
+                return self.config.poll_s
+            now = self.now()
+            return min(self.config.poll_s, max(0.0, self.instrument.wall_seconds(due - now)))
 
     def _send(self, conn: socket.socket, packets: list[bytes]) -> None:
         if packets:

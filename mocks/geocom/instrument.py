@@ -72,6 +72,10 @@ class InstrumentConfig:
     processing_s: float = 0.0  # time one measurement RPC takes inside the instrument
 
 
+#: Wall seconds a reading waits at most for the source's record to reach its instant (`_wait_for_record`).
+RECORD_WAIT_S = 1.0
+
+
 class _BadParamsError(Exception):
     """A handler could not decode its parameters (answered with GRC_IVPARAM)."""
 
@@ -85,11 +89,15 @@ class GeoComInstrument:
         config: InstrumentConfig | None = None,
         faults: FaultInjector | None = None,
         sleep: Callable[[float], None] = time.sleep,
+        now: Callable[[], float] | None = None,
     ) -> None:
         self.source = source
         self.config = config or InstrumentConfig()
         self.faults = faults or FaultInjector()
         self._sleep = sleep
+        # the simulated clock `sleep` runs on: with it and a source that keeps its past
+        # (`positions_at`), a reading is of the instant its measuring time ends (`_measure`)
+        self._now = now
         # measurements taken and the seconds they took (`processing_s` each): the benches' robot time
         self.measurements = 0
         self.measuring_seconds = 0.0
@@ -199,14 +207,31 @@ class GeoComInstrument:
         except ValueError as exc:
             raise _BadParamsError from exc
 
-    def _visible(self) -> tuple[bool, np.ndarray | None]:
-        """One optical check: (beam reaches the SMR, true position)."""
+    def _visible(self, at: float | None = None) -> tuple[bool, np.ndarray | None]:
+        """One optical check: (beam reaches the SMR, true position). `at`: the simulated instant the
+        reading ends, the position then from the source's record (`_measure`)."""
         state = self.source.target()
+        position = state.position
+        recorded = getattr(self.source, "positions_at", None)
+        if at is not None and recorded is not None:
+            self._wait_for_record(at)
+            position = np.asarray(recorded(np.array([at])), dtype=float).reshape(3)
         if self.faults.beam_broken():
-            return False, state.position
+            return False, position
         if not state.visible:
             log.debug("target not visible: %s", state.reason)
-        return state.visible, state.position
+        return state.visible, position
+
+    def _wait_for_record(self, at: float) -> None:
+        """Wait (a second of wall time at most) until the source has recorded the arm at `at`: its
+        controller thread may lag behind the clock on a loaded machine."""
+        known = getattr(self.source, "known_until", None)
+        deadline = time.monotonic() + RECORD_WAIT_S
+        while known is not None and time.monotonic() < deadline:
+            newest = known()
+            if newest is None or newest >= at:
+                return
+            time.sleep(0.0005)
 
     def _reading(self, position: np.ndarray) -> tuple[float, float, float]:
         """A noisy (hz, v, d) of the true position, distance scaled by the atmospheric ppm error."""
@@ -222,11 +247,15 @@ class GeoComInstrument:
 
     def _measure(self) -> tuple[int, tuple[float, float, float]]:
         """(rc, (hz, v, d)) for the measuring RPCs, following lock and measurement program."""
+        # the reading ends `processing_s` of simulated time after the request arrived, whenever this
+        # thread wakes from its sleep: in fast time a late wake-up (a loaded host) would otherwise be
+        # simulated time by which the reading comes later after the arm's last move
+        at = None if self._now is None else self._now() + self.config.processing_s
         if self.config.processing_s > 0:
             self._sleep(self.config.processing_s)
             self.measuring_seconds += self.config.processing_s  # the instrument's own account
         self.measurements += 1
-        visible, position = self._visible()
+        visible, position = self._visible(at)
         if not visible:
             self.locked = False
         if not self.locked or position is None:

@@ -178,12 +178,14 @@ class GeoComSimulator:
         config: SimulatorConfig | None = None,
         faults: FaultInjector | None = None,
         sleep: Callable[[float], None] | None = None,
+        now: Callable[[], float] | None = None,
     ) -> None:
         self.config = config or SimulatorConfig()
         self.faults = faults or FaultInjector()
-        # `sleep`: how the instrument waits out its measuring time (a simulated clock's, in a station)
+        # `sleep`: how the instrument waits out its measuring time (a simulated clock's, in a station);
+        # `now`: that clock, so a reading is of its own instant (`GeoComInstrument._measure`)
         self.instrument = GeoComInstrument(source, self.config.instrument, self.faults,
-                                           **({"sleep": sleep} if sleep is not None else {}))
+                                           **({"sleep": sleep} if sleep is not None else {}), now=now)
         self.stopping = threading.Event()
         self._threads: list[threading.Thread] = []
         self._master_fd: int | None = None

@@ -6,9 +6,13 @@ the controller rate (500 Hz e-series, 125 Hz CB3) on the shared `SimClock`. Ever
 one re-entrant lock, so it is safe to read ``true_joints()`` from another service in the same process
 (the tracker simulator looks at the *true* joints: what the encoders read, minus their noise).
 
-Encoder noise is added to ``actual_q`` only; ``actual_TCP_pose`` is computed from ``actual_q`` with the
-controller's *own* model (nominal DH plus its factory deltas, `mocks.ur.hil_model.controller_fk`), as a
-real controller does not know the arm's hidden errors. `set_fk` swaps that model (a new calibration).
+Each joint move stops a little off its commanded angles, differently at every stop (the arm's
+repeatability, `ArmConfig.standstill_sigma`, `hil.arm.joint_physics.standstill_sigma`): the true joints
+end at the target plus that error, which the encoders see (``actual_q``) while ``target_q`` keeps the
+command during the move. Encoder noise is added to ``actual_q`` only; ``actual_TCP_pose`` is computed
+from ``actual_q`` with the controller's *own* model (nominal DH plus its factory deltas,
+`mocks.ur.hil_model.controller_fk`), as a real controller does not know the arm's hidden errors.
+`set_fk` swaps that model (a new calibration).
 
 RTDE's ``timestamp`` is the controller's running time read on its own clock (`controller_clock`,
 perfect unless the simulated station sets its truth: `hil.calibration.stream_clocks`); the joints'
@@ -81,6 +85,9 @@ class ArmConfig:
     max_speed: np.ndarray = field(default_factory=lambda: np.array([3.14, 3.14, 3.14, 3.14, 3.14, 3.14]))
     rate_hz: float = 500.0
     encoder_noise: float = ENCODER_SIGMA  # rad, standard deviation of actual_q around the true joints
+    # rad, σ of each joint's stop-to-stop position error after a movej (the arm's repeatability); 0: the
+    # joints stop exactly on their targets
+    standstill_sigma: float = 0.0
     seed: int = 0
     q_home: np.ndarray = field(
         default_factory=lambda: np.array([0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0]))
@@ -99,6 +106,8 @@ class SimArm:
         self._fk = fk
         self.lock = threading.RLock()
         self._rng = np.random.default_rng(config.seed)
+        # the stops' own stream, so the encoders' noise is the same draws with or without them
+        self._stops = np.random.default_rng([config.seed, 1])
         self.q = np.array(config.q_home, dtype=float)
         self.qd = np.zeros(6)
         self.qdd = np.zeros(6)
@@ -243,9 +252,13 @@ class SimArm:
         if not self._within_limits(q):
             self.protective_stop("movej target outside the joint limits")
             return None
-        self.motion = JointMove(self.q, q, v, a, self.config.max_speed)
+        # where the joints will really stop: the target plus this stop's position error (a movej the
+        # controller finishes there, so the profile ends there and no joint turns back at its end)
+        sigma = self.config.standstill_sigma
+        stop = q + self._stops.normal(0.0, sigma, 6) if sigma > 0 else q
+        self.motion = JointMove(self.q, stop, v, a, self.config.max_speed)
         self.joint_moves += 1
-        self.q_target = self.motion.target.copy()
+        self.q_target = q.copy()
         # the move's first step (this tick's) covers the tick's whole dt: it started at the previous tick
         self._announced = self.motion
         self._notify("movej", start=self._t_last - self._tick_dt, q0=self.q.copy(), q1=q.copy(),
@@ -489,6 +502,13 @@ class SimArm:
             raise ValueError(f"encoder noise must be a non-negative number of radians, got {sigma!r}")
         with self.lock:
             self.config.encoder_noise = float(sigma)
+
+    def set_standstill(self, sigma: float) -> None:
+        """σ (rad) of each joint's stop-to-stop position error from the next movej on."""
+        if not (np.isfinite(sigma) and sigma >= 0):
+            raise ValueError(f"standstill error must be a non-negative number of radians, got {sigma!r}")
+        with self.lock:
+            self.config.standstill_sigma = float(sigma)
 
     def set_temperatures(self, temperatures: TemperatureFn | None) -> None:
         """Report joint temperatures from `temperatures(running seconds)` from the next cycle on."""

@@ -44,6 +44,8 @@ class ControlServer(TcpService):
             cmd = str(req.pop("cmd"))
             if cmd in ("state", "ping"):
                 return {"ok": True, "state": self.controller.state()}
+            if cmd == "pace":  # every step of a paced fast-time run: the clock alone, not the whole state
+                return {"ok": True, "state": self.controller.pace(float(req["speed"]))}
             return {"ok": True, "state": self.controller.inject(cmd, **req)}
         except (ValueError, KeyError, TypeError) as exc:
             return {"ok": False, "error": str(exc)}

@@ -283,6 +283,15 @@ class SimController:
                 "controller": self.calibration.to_dict(),
             }
 
+    def pace(self, speed: float) -> dict[str, float]:
+        """Run the clock at `speed` simulated seconds per wall second from now (`hil.station.paced_clock`:
+        fast while the host waits on the station, the wall's rate while it computes); returns the clock's
+        ``time`` at the switch and its ``speed``."""
+        if not speed > 0 or speed == float("inf"):
+            raise ValueError(f"pace: speed must be a positive number, got {speed}")
+        self.clock.speed = speed
+        return {"time": self.clock.now(), "speed": self.clock.speed}
+
     # ----------------------------------------------------------------- faults
     def inject(self, name: str, **args: Any) -> dict[str, Any]:
         """Apply one fault or setup action (see the module docstring); returns the new state."""

@@ -63,3 +63,13 @@ def test_a_half_moving_interval_heats_as_the_fraction_of_it_spent_moving() -> No
     arm.t, arm.moved = 100.0, 50.0
     u = 0.5 + IDLE_HEAT * 0.5
     assert h.rise() == pytest.approx(THERMAL.rise * u * (1 - 2.718281828459045 ** (-100 / 900)), rel=1e-9)
+
+
+def test_an_arm_that_starts_warm_stays_warm_while_it_works_and_cools_while_it_stands() -> None:
+    arm = Arm()
+    h = Heating(THERMAL, lambda: arm.t, lambda: arm.moved, lambda: arm.holding, start=THERMAL.rise)
+    arm.advance(600.0, moving=True)
+    assert h.rise() == pytest.approx(THERMAL.rise, rel=1e-12)
+    arm.advance(THERMAL.time_constant, moving=False)  # one time constant toward the holding share
+    held = IDLE_HEAT * THERMAL.rise
+    assert h.rise() == pytest.approx(held + (THERMAL.rise - held) * 2.718281828459045 ** -1, rel=1e-9)

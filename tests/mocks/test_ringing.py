@@ -101,3 +101,26 @@ def test_the_ring_is_deterministic_given_the_motion():
         c1.t += dt
         c2.t += dt
         assert np.array_equal(w1.target().position, w2.target().position)
+
+
+def test_offsets_in_one_pass_are_the_offsets_one_by_one():
+    ring = Ringing()
+    ring.record(0.0, 1.2, 0.4, 2.0, np.array([0.5, -0.2, 0.1]))
+    ring.record(1.5, 0.8, 0.4, 1.0, np.array([0.0, 0.3, 0.4]))
+    t = np.linspace(-0.5, 4.0, 301)
+    np.testing.assert_allclose(ring.offsets(t), [ring.offset(float(x)) for x in t], rtol=1e-12, atol=1e-18)
+
+
+def test_a_reading_integrates_the_ring_as_asked():
+    arm, world, clock = ringing_station()
+    with arm.lock:
+        arm.start_movej(Q1, 1.0, 2.0)
+    run_until_still(arm, clock)
+    ends = clock.t + np.array([0.0, 0.05, 0.1, 0.3])
+    world.reading_time = 0.1
+    integrated = world.ring_offsets(ends)
+    np.testing.assert_allclose(integrated, [world.ring_offset(float(t)) for t in ends], rtol=1e-12)
+    instants = world.ring_offsets(ends, reading_time=0.0)
+    expected = np.array([world.ringing.offset(float(t)) for t in ends]) @ world.truth.tracker.rotation
+    np.testing.assert_allclose(instants, expected, rtol=1e-12)
+    assert not np.allclose(integrated, instants, atol=1e-7)  # 0.1 s of a 9 Hz ring is not an instant

@@ -6,19 +6,25 @@ import numpy as np
 import pytest
 
 from hil.arm.catalog import ROBOT_NAMES
+from hil.arm.geometry import Geometry
 from hil.arm.joint_errors import MAX_ORDER
 from hil.arm.joint_physics import (
     ARCSEC,
     ECCENTRICITY_SIGMA,
     GEAR_HYSTERESIS,
     INTERPOLATION_ERROR,
+    POSE_REPEATABILITY,
+    RP_PER_SIGMA,
     SECOND_HARMONIC_RATIO,
     eccentricity_amplitudes,
     graduation_diameters,
+    standstill_sigma,
     typical_joint_errors,
     typical_lost_motion,
 )
+from hil.arm.kinematics import Kinematics
 from hil.arm.physical import UNSEEN_WINDUP
+from hil.verify.accuracy import pose_accuracy
 
 
 def test_heidenhains_relation_gives_the_once_per_turn_error() -> None:
@@ -59,3 +65,28 @@ def test_every_catalog_arm_has_joint_errors_its_ik_can_invert(robot: str) -> Non
     q = np.linspace(-np.pi, np.pi, 4001)[:, None] * np.ones(6)
     assert np.abs(errors.slopes(q)).max() < 0.2
     assert np.abs(errors.offsets(q)).max() < 2e-3  # far inside the file bound (MAX_AMPLITUDE per term)
+
+
+@pytest.mark.parametrize("robot", ["ur5e", "ur10e", "ur5"])
+def test_stops_scattered_by_standstill_sigma_repeat_to_the_datasheet_figure(robot: str) -> None:
+    """An arm whose joints stop with `standstill_sigma` scatter reaches its datasheet RP (ISO 9283's
+    formula, `hil.verify.accuracy`, on 30 simulated stops) on average over workspace poses: the
+    scatter is what UR publishes, measured the standard's way, not by `RP_PER_SIGMA`'s algebra."""
+    rng = np.random.default_rng(3)
+    sigma = standstill_sigma(robot)
+    kin = Kinematics(Geometry.nominal(robot, smr=(0.0, 0.0, 0.045)))
+    rps = []
+    for _ in range(150):
+        q = rng.uniform(-np.pi, np.pi, 6)
+        q[1] = rng.uniform(-np.pi, 0.0)
+        stops = q + rng.normal(0.0, sigma, (30, 6))
+        attained = kin.points(stops, frame="base")
+        rps.append(pose_accuracy(attained, kin.points(q[None], frame="base")[0]).rp_l)
+    assert np.mean(rps) == pytest.approx(POSE_REPEATABILITY[robot], rel=0.1)
+    # a joint-level figure of the order the encoder-noise budget allows (hil.calibration.synthetic)
+    assert 1e-5 < sigma < 1e-4
+
+
+def test_every_catalog_arm_has_a_datasheet_repeatability() -> None:
+    assert set(POSE_REPEATABILITY) == set(ROBOT_NAMES)
+    assert abs(RP_PER_SIGMA - 3.616) < 1e-3  # Maxwell: 2√(2/π) + 3√(3 − 8/π)

@@ -88,6 +88,7 @@ def test_synth_refuses_a_truth_with_a_bad_number(files, tmp_path, capsys, change
     ("encoder_sigma", "0", 'noise.encoder_sigma: expected a number, got "0"'),
     ("tracker_sigma", 5.0, "noise.tracker_sigma: must be in [0, 0.01] m, got 5"),
     ("encoder_sigma", -1e-6, "noise.encoder_sigma: must be in [0, 0.01] rad, got -1e-06"),
+    ("standstill_sigma", 0.5, "noise.standstill_sigma: must be in [0, 0.01] rad, got 0.5"),
 ])
 def test_a_truth_s_noise_must_be_a_plausible_number(files, tmp_path, key, value, says) -> None:
     bad = edited(files / "truth.json", tmp_path / "truth.json", setter("noise", key)(value))

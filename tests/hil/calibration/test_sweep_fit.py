@@ -11,9 +11,10 @@ from hil.arm.physical import typical_compliance
 from hil.calibration.identification import identify, register
 from hil.calibration.measurements import Measurements
 from hil.calibration.stream_join import StreamJoin
-from hil.calibration.sweep_fit import SweepFit, fit_sweep
+from hil.calibration.sweep_fit import SweepFit, fit_sweep, without_intervals
 from hil.calibration.synthetic import Noise, measure, random_truth, true_points
 from hil.calibration.synthetic_stream import sweep_streams
+from hil.errors import InputError
 
 ROBOT = "ur5e"
 DURATION = 20.0  # s: a shorter example sweep reverses too few times to tell the offset from joint offsets
@@ -119,3 +120,25 @@ def test_a_gap_and_a_beam_break_are_left_out_and_counted(station, joint_fit):
     c = fit.clock
     assert abs(float(c.map(c.t_ref) - want(c.t_ref))) < 3 * c.sigma_at_ref_s
     assert fit.trusted + sum(left.values()) == len(s.tracker.t)
+
+
+def test_a_validation_rest_left_out_is_never_seen_by_the_fit(station, joint_fit):
+    # a sweep campaign's validation poses are rests of its tour: the fit must not get their samples
+    truth, _, _, _, _, _ = station
+    s = sweep_streams(truth, tool_speed=0.25, duration=8.0, seed=3)
+    t = s.tracker.t
+    rests = [(t[0] + 2.0, t[0] + 2.5), (t[0] + 5.0, t[0] + 5.3)]
+    kept = without_intervals(s.tracker, rests)
+    inside = np.zeros(len(t), dtype=bool)
+    for a, b in rests:
+        inside |= (t >= a) & (t <= b)
+    assert 790 <= inside.sum() <= 810  # 0.8 s at 1 kHz
+    np.testing.assert_array_equal(kept.t, t[~inside])
+    np.testing.assert_array_equal(kept.p, s.tracker.p[~inside])
+    fit = fit_sweep(joint_fit.geometry, s.joints, kept, samples=800)
+    assert fit.trusted + sum(fit.left_out.values()) == len(kept.t)  # every kept sample, once
+    assert 90 <= fit.left_out["after a gap"] <= 110  # each hole is a gap: its 50 ms re-lock guard
+    with pytest.raises(InputError, match="start ≤ end"):
+        without_intervals(s.tracker, [(3.0, 2.0)])
+    with pytest.raises(InputError, match="whole tracker stream"):
+        without_intervals(s.tracker, [(t[0] - 1.0, t[-1] + 1.0)])

@@ -6,7 +6,14 @@ import pytest
 
 from hil.arm.catalog import get_robot
 from hil.calibration.selection import hidden_reason
-from hil.calibration.sweep_path import SweepRefused, SweepTour, check_sweep, plan_sweep, tour_order
+from hil.calibration.sweep_path import (
+    SweepRefused,
+    SweepTour,
+    check_sweep,
+    leg_seconds,
+    plan_sweep,
+    tour_order,
+)
 from hil.calibration.synthetic import random_configurations, random_truth
 from hil.errors import InputError
 
@@ -65,6 +72,46 @@ def test_stops_are_rests_held_for_the_dwell():
     assert np.all(np.abs(tour.accelerations()) <= ACCEL)
     d = tour.approach_directions()
     assert d.shape == (3, 6) and set(np.unique(d)) <= {-1.0, 0.0, 1.0}
+
+
+def test_each_stop_holds_its_own_dwell_and_a_tour_of_rests_alone_is_allowed():
+    # a sweep campaign holds its validation rests for the stop-and-go dwell and its bootstrap rests for
+    # fewer readings; with no waypoints the tour is its rests and the legs between them
+    rng = np.random.default_rng(8)
+    stops = rng.uniform(-1.0, 1.0, (4, 6))
+    dwell = np.array([0.1, 0.6, 0.3, 1.2])
+    tour = plan_sweep(np.zeros((0, 6)), np.zeros(6), max_speed=SPEED, max_acceleration=ACCEL, stops=stops,
+                      dwell_s=dwell)
+    assert tour.waypoints.shape == (0, 6) and len(tour.stops) == 4
+    for pose, ts in zip(tour.stops, tour.stop_times, strict=True):
+        k = int(np.flatnonzero(np.all(stops == pose, axis=1))[0])
+        i, hold = round(ts * tour.rate_hz), round(dwell[k] * tour.rate_hz)
+        np.testing.assert_allclose(tour.q[i: i + hold + 1], np.broadcast_to(pose, (hold + 1, 6)), atol=1e-12)
+        if i + hold + 1 < len(tour.q):  # and no longer: the next leg's first sample moves
+            assert np.abs(tour.q[i + hold + 1] - pose).max() > 0
+    moving = np.abs(np.diff(tour.q, axis=0)).max(axis=1) > 0
+    # the whole tour is its legs plus the holds: the dwell is each stop's own, not one for all
+    assert tour.duration == pytest.approx(moving.sum() / tour.rate_hz + dwell.sum(), abs=5 / tour.rate_hz)
+    same = plan_sweep(np.zeros((0, 6)), np.zeros(6), max_speed=SPEED, max_acceleration=ACCEL, stops=stops,
+                      dwell_s=1.2)
+    assert same.duration == pytest.approx(tour.duration + (4 * 1.2 - dwell.sum()), abs=2 / tour.rate_hz)
+    with pytest.raises(InputError, match="one per stop"):
+        plan_sweep(np.zeros((0, 6)), np.zeros(6), max_speed=SPEED, max_acceleration=ACCEL, stops=stops,
+                   dwell_s=[0.1, 0.2])
+    with pytest.raises(InputError, match="at least one"):
+        plan_sweep(np.zeros((0, 6)), np.zeros(6), max_speed=SPEED, max_acceleration=ACCEL)
+
+
+def test_the_order_distance_is_a_rest_to_rest_leg_time():
+    # the ordering's distance is what one rest-to-rest leg of the tour takes (its first timing, exact
+    # for one cubic segment), so a tour of rests is ordered by the time it costs
+    rng = np.random.default_rng(9)
+    for _ in range(5):
+        a, b = rng.uniform(-1.0, 1.0, (2, 6))
+        b[rng.integers(6)] = a[rng.integers(6)]  # any joint may stand
+        leg = plan_sweep(np.zeros((0, 6)), a, max_speed=SPEED, max_acceleration=ACCEL, stops=b[None])
+        assert leg.duration == pytest.approx(float(leg_seconds(a, b, SPEED, ACCEL)), rel=0.02, abs=0.004)
+    assert float(leg_seconds(a, b, SPEED)) == pytest.approx(np.max(np.abs(b - a) / SPEED))
 
 
 def test_the_order_is_short():

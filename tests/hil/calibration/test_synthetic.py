@@ -48,9 +48,9 @@ def test_a_truth_with_every_block_survives_its_file(tmp_path) -> None:
     truth = random_truth("ur10e", np.random.default_rng(2))
     truth.gravity = gravity_of_mounting((0.4, -0.3, 0.0))  # a tilted base
     path = tmp_path / "truth.json"
-    write_json(path, truth_document(truth, Noise(15e-6, 3e-6)))
+    write_json(path, truth_document(truth, Noise(15e-6, 3e-6, standstill_sigma=1.6e-5)))
     back, noise = load_truth(path)
-    assert noise == Noise(15e-6, 3e-6)
+    assert noise == Noise(15e-6, 3e-6, standstill_sigma=1.6e-5)
     np.testing.assert_array_equal(back.compliance, truth.compliance)
     assert back.payload == Payload(truth.payload.mass, truth.payload.com)
     np.testing.assert_array_equal(back.gravity, truth.gravity)

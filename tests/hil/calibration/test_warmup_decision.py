@@ -25,8 +25,8 @@ def warming(rng: np.random.Generator, *, interval: float, per_kelvin: float, sta
     of an arm warming from ΔT `start` to `steady` K (first order, `tau`), its reference moving
     `per_kelvin` m/K in a random direction with `scatter` m per axis of per-visit noise (the tracker's
     and the arm's repositioning). The temperatures carry the ripple of a reference visit's pause: a
-    first-order response to a heat input that drops to a quarter for 15 s of each interval, as
-    `mocks.heating` makes it."""
+    first-order response to a heat input that drops to a quarter for 15 s of each interval, as a real
+    joint's does while it holds the arm (the simulator's keeps its temperature then: `mocks.heating`)."""
     times = interval * np.arange(n) + rng.uniform(0.0, 5.0, n)
     rise = steady + (start - steady) * np.exp(-times / tau)
     ripple = 0.02 * (steady - start) * np.sin(2 * np.pi * times / interval)

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from hil.arm.catalog import get_robot
+from hil.arm.kinematics import Kinematics
 from hil.arm.routes import UnsafePathError
 from hil.arm.thermal import Thermal
 from hil.calibration.synthetic import random_truth
@@ -39,7 +40,7 @@ from hil.campaign.warmup import APPROACH
 from hil.station.config import default_config
 from hil.store import Store
 from hil.store.records import ROLES
-from tests.hil.campaign.fakes import visible_poses
+from tests.hil.campaign.fakes import Point, visible_poses
 from tests.hil.campaign.thermal_fakes import AMBIENT, Devices, VirtualClock, WarmingArm, WarmingTracker
 
 #: The simulated arm's warm-up (docs/design.md, Facts: thermal growth: 2.3e-5 /K, 6 K, 900 s).
@@ -390,3 +391,62 @@ def _watching(emit, reference, engine):
             _no_path_to(engine, event.reference)
         emit(event)
     return wrapped
+
+
+# --- the drift watch against an arm that rings --------------------------------------------------------
+#: A ring like the simulated arm's (`mocks.ringing`: 9 Hz, ζ = 0.1; its realistic UR5e's reference,
+#: 1 m/rad from the joints, rang 637 µm at the end of the 0.005 rad approach leg at 1 rad/s²) along
+#: the tip's direction there (tracker frame), read by 0.1 s readings (GeoCOM's tracking rate).
+RING_AMPLITUDE, RING_HZ, RING_ZETA, READING_S = 600e-6, 9.0, 0.10, 0.1
+RING_DIRECTION = np.array([0.07, -0.39, 0.92]) / np.linalg.norm([0.07, -0.39, 0.92])
+
+
+class RingingArm(WarmingArm):
+    """A `WarmingArm` that stopped a little before the engine heard it had (a driver's latency, drawn
+    per move), so each visit's readings meet its ring at another phase."""
+
+    def move_to(self, q, *, speed=None, acceleration=None):
+        reading = super().move_to(q, speed=speed, acceleration=acceleration)
+        self.stopped_at = self.clock.now - self.rng.uniform(0.0, 0.15)
+        return reading
+
+
+class RingingTracker(WarmingTracker):
+    """A `WarmingTracker` whose every reading integrates the arm's decaying ring over `READING_S`."""
+
+    def ring(self, t: float) -> np.ndarray:
+        omega = 2 * np.pi * RING_HZ
+        s = np.linspace(t, t + READING_S, 9) - getattr(self.arm, "stopped_at", -1e9)
+        x = np.where(s >= 0, np.exp(-RING_ZETA * omega * s) * np.cos(omega * s), 0.0)
+        return RING_AMPLITUDE * float(x.mean()) * RING_DIRECTION
+
+    def measure_point(self, samples: int = 1):
+        self.measurements += 1
+        p = Kinematics(self.truth).points(self.arm.q)[0]
+        s = np.empty((samples, 3))
+        for k in range(samples):
+            s[k] = p + self.ring(self.clock.now) + self.rng.normal(0, self.sigma, 3)
+            self.clock.sleep(READING_S)
+        return Point(s.mean(0), s.std(0), samples)
+
+
+def _ringing_cell(tmp_path, **overrides) -> Cell:
+    cell = Cell(tmp_path, thermal=None, warmup__enabled=False, drift__every=3, **overrides)
+    cell.arm = RingingArm(cell.arm.start, clock=cell.clock, truth=cell.truth)
+    cell.tracker = RingingTracker(cell.arm, cell.truth, sigma=5e-6, clock=cell.clock)
+    return cell
+
+
+def test_the_drift_watch_reads_no_drift_on_a_ringing_arm_that_does_not_drift(tmp_path):
+    """The arm does not grow at all; only its ring after each move and the tracker's noise differ
+    between reference visits. Standing `drift.settle` s and averaging `drift.samples` readings, the
+    watch reads the tracker's noise (20 readings of 5 µm: about 2.5 µm between two visits); read like
+    a pose (no dwell, 5 readings) the same arm's ring reads as drift several times that."""
+    cell = _ringing_cell(tmp_path / "still")
+    cell.run()
+    watched = [r.drift for r in cell.of(ReferenceMeasured) if not r.baseline]
+    assert len(watched) >= 4 and max(watched) < 6e-6, watched
+    hasty = _ringing_cell(tmp_path / "hasty", drift__settle=0.0, drift__samples=5)
+    hasty.run()
+    rung = [r.drift for r in hasty.of(ReferenceMeasured) if not r.baseline]
+    assert max(rung) > 10e-6, rung

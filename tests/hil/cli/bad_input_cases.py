@@ -652,6 +652,10 @@ def _cases() -> list[Case]:
         add("verify", f"config:{dotted}={_toml_value(value)}", ["verify", "--config", f"{d}/bad.toml", "--db",
                                                                   f"{d}/ver.db"], names,
             files={"bad.toml": config_with(dotted, value, base=verify_base)})
+    add("verify", "config:robot.type=ur10e-vs-UR5e-controller",  # the controller (a simulated UR5e) says not
+        ["verify", "--config", f"{d}/sim.toml", "--db", f"{d}/ver.db", "--out", f"{d}/verify-out.json"],
+        ["ur10e", "ur5e"], files={"sim.toml": _sim_config("ur10e", verify=verify_base["verify"])},
+        station=True, timeout=60)
 
     # ---------------------------------------------------------------- identify
     ident = ["identify", "--robot", "ur5e", "--measurements", f"{d}/measurements.csv"]
@@ -1222,6 +1226,15 @@ def _cases() -> list[Case]:
             files=files, expect=0)
         add("robots", f"c5-damaged-{label}-lists-the-rest", ["robots", "--db", f"{d}/dmg.db"], [],
             files=files, expect=0)
+    # --resume on a store that cannot give one: refused before a simulated station starts (seconds)
+    add("calibrate", "c5-r3-resume-damaged-unfinished-config",
+        ["calibrate", "--sim", "--resume", "--db", f"{d}/dmg.db"], ["table campaigns"],
+        files={"dmg.db": damaged_store("UPDATE campaigns SET config = '{broken', status = 'interrupted'")})
+    add("calibrate", "c5-r3-resume-nothing-unfinished",
+        ["calibrate", "--sim", "--resume", "--db", f"{d}/fin.db"], ["--resume", "fin.db", "unfinished"],
+        files={"fin.db": damaged_store("UPDATE campaigns SET status = 'accepted'")})
+    add("calibrate", "c5-r3-resume-no-store", ["calibrate", "--sim", "--resume", "--db", f"{d}/none.db"],
+        ["--resume", "none.db"])
     add("show", "c5-damaged-joints-export", ["show", "last", "--db", f"{d}/dmg.db", "--export-measurements",
                                              f"{d}/m-out.csv"], ["table measurements"],
         files={"dmg.db": damaged_store(damaged["joints"][0])})
@@ -1501,11 +1514,11 @@ CONFIG_SUBSET: tuple[tuple[str, Any], ...] = (
 )
 
 
-def _sim_config(robot: str) -> Callable[[Path], str]:
+def _sim_config(robot: str, **sections: Mapping[str, Any]) -> Callable[[Path], str]:
     """A station config for the shared simulated UR5e station (address and tracker URL filled in when
-    the case runs), claiming robot type `robot`."""
+    the case runs), claiming robot type `robot`; `sections` added (``verify``'s cube)."""
     def make(d: Path) -> str:
-        doc = {s: dict(v) for s, v in BASE_CONFIG.items()}
+        doc = {s: dict(v) for s, v in {**BASE_CONFIG, **sections}.items()}
         doc["robot"]["type"] = robot
         doc["robot"]["address"] = "{sim_address}"
         doc["tracker"]["url"] = "{sim_tracker}"
@@ -1599,6 +1612,7 @@ def _tripwires(case: Case, station: SimStation | None) -> Iterator[list[Any]]:
 
     opened: list[Any] = []
     saved = [(devices_mod, "open_devices", devices_mod.open_devices),
+             (devices_mod, "ask_controller", devices_mod.ask_controller),
              (station_mod, "start_station", station_mod.start_station),
              (process_mod, "serve", process_mod.serve)]
     real_open = devices_mod.open_devices
@@ -1619,6 +1633,7 @@ def _tripwires(case: Case, station: SimStation | None) -> Iterator[list[Any]]:
         devices_mod.open_devices = open_without_motion
     else:
         devices_mod.open_devices = trip("connected to the robot/tracker before refusing")
+        devices_mod.ask_controller = trip("asked the controller (connected to it) before refusing")
         station_mod.start_station = trip("started the simulated station before refusing")
     process_mod.serve = trip("started serving (hil sim) before refusing")
     tui_saved = None

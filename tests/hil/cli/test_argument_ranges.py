@@ -119,6 +119,7 @@ def nothing_starts(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(mocks.station, "start_station", tripwire)
     monkeypatch.setattr(mocks.ur.process, "serve", tripwire)
     monkeypatch.setattr(hil.station.devices, "open_devices", tripwire)
+    monkeypatch.setattr(hil.station.devices, "ask_controller", tripwire)  # asking it connects too
     monkeypatch.setattr(hil.tui.app, "create_app", tripwire)
 
 

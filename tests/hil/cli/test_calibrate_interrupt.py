@@ -90,6 +90,7 @@ class Cell:
             return choose
 
         monkeypatch.setattr("hil.station.devices.open_devices", open_devices)
+        monkeypatch.setattr("hil.station.devices.ask_controller", lambda config: self.arm.info)
         monkeypatch.setattr("hil.campaign.chooser.campaign_chooser", chooser)
 
     def calibrate(self, *extra: str) -> int:

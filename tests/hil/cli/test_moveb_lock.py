@@ -45,16 +45,18 @@ def _config(tmp_path: Path) -> Path:
 
 
 def _connects(monkeypatch: pytest.MonkeyPatch, then=None) -> list[object]:
-    """A tripwire on the station's connect: records each call (its config), then calls `then`."""
+    """A tripwire on the station's connect — its first connection, the controller asked what it is
+    (`hil.station.devices.ask_controller`, before the devices open): records each call (its config),
+    then calls `then` (None: nothing answers)."""
     calls: list[object] = []
 
-    def open_devices(config):  # type: ignore[no-untyped-def]
+    def ask_controller(config):  # type: ignore[no-untyped-def]
         calls.append(config)
         if then is None:
             raise RobotUnreachable(f"no controller at {config.robot['address']} (test)")
         return then(config)
 
-    monkeypatch.setattr(hil.station.devices, "open_devices", open_devices)
+    monkeypatch.setattr(hil.station.devices, "ask_controller", ask_controller)
     return calls
 
 
@@ -87,8 +89,7 @@ def test_config_an_arm_another_process_drives_is_refused_before_connecting(tmp_p
 def test_sim_the_lock_refuses_a_run_is_held_while_it_runs_and_freed_after(tmp_path, monkeypatch, capsys):
     """On the simulated station (its address is random: read from the station the command starts)."""
     real_station = hil.station.simulated.simulated_station
-    real_open = hil.station.devices.open_devices
-    connects = _connects(monkeypatch, then=real_open)
+    connects = _connects(monkeypatch, then=hil.station.devices.ask_controller)
     hold = {"lock": True}
     seen: dict[str, object] = {}
 

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from hil.arm.joint_physics import standstill_sigma
 from hil.cli import main
 
 
@@ -47,6 +48,9 @@ def test_ideal_leaves_out_joint_errors_and_lost_motion_and_no_ideal_adds_them(tm
     assert len(real["joint_errors"]) == 6 and len(real["lost_motion"]) == 6
     for key in ("joints", "flange", "smr", "tracker", "compliance", "payload", "thermal"):
         assert real[key] == ideal[key]  # one seed, one arm: only the two blocks differ
+    # the realistic arm's truth carries its repeatability for a simulated station (the ideal arm none)
+    assert real["noise"]["standstill_sigma"] == pytest.approx(standstill_sigma("ur5e"))
+    assert ideal["noise"]["standstill_sigma"] == 0.0
     ideal_rows = (tmp_path / "ideal" / "measurements.csv").read_text().splitlines()[1:]
     real_rows = (tmp_path / "real" / "measurements.csv").read_text().splitlines()[1:]
     assert [r.split(",")[:6] for r in ideal_rows] == [r.split(",")[:6] for r in real_rows]

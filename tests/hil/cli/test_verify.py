@@ -84,6 +84,7 @@ class Station:
             return choose
 
         monkeypatch.setattr("hil.station.devices.open_devices", open_devices)
+        monkeypatch.setattr("hil.station.devices.ask_controller", lambda config: self.arm.info)
         monkeypatch.setattr("hil.campaign.chooser.campaign_chooser", chooser)
 
     def verify(self, *extra: str, model: bool = True) -> int:

@@ -50,3 +50,30 @@ def test_malformed_programs_are_named_by_line(text: str, says: str) -> None:
     with pytest.raises(InputError) as err:
         tokenize(text, "t.script")
     assert str(err.value).startswith(says)
+
+
+def test_operators_lone_marks_and_odd_characters_are_single_tokens() -> None:
+    toks = _texts("a<=b != c == d >= e < f . g $ h é\x85i\r'\\'' + \"\\\\\"")
+    assert toks == [("name", "a"), ("op", "<="), ("name", "b"), ("op", "!="), ("name", "c"), ("op", "=="),
+                    ("name", "d"), ("op", ">="), ("name", "e"), ("op", "<"), ("name", "f"), ("op", "."),
+                    ("name", "g"), ("op", "$"), ("name", "h"), ("op", "é"), ("op", "\x85"), ("name", "i"),
+                    ("newline", "\r"), ("string", "'\\''"), ("op", "+"), ("string", '"\\\\"')]
+
+
+def test_a_long_program_reads_in_linear_time() -> None:
+    """Guards the scan's cost against a quadratic regression: 16 times the program is not more than
+    about 16 times the time (a quadratic scan would be 256 times). Ratios, so the host's speed cancels."""
+    import time
+
+    line = "  movel(p[0.1, -0.4, 0.2, 0, 3.14, 0], a=1.2, v=0.25)  # go\n  x = p[1, 2, 3, 4, 5, 6]\n"
+
+    def seconds(n: int) -> float:
+        text = line * n
+        best = float("inf")
+        for _ in range(3):
+            t0 = time.perf_counter()
+            tokenize(text, "t.script")
+            best = min(best, time.perf_counter() - t0)
+        return best
+
+    assert seconds(16_000) < 60 * seconds(1_000)

@@ -1,7 +1,8 @@
 """Taking a station (`hil.jobs.station.take_station`), the one sequence every job that drives an arm
-goes through: the store opened first, the arm's address lock, the devices, the controller's word on the
-robot type, a new store created only after that, one robot identity — and all of it released on every
-way out. On in-process fakes: `hil.station.devices.open_devices` is monkeypatched, nothing connects.
+goes through: the store opened first, the arm's address lock, the controller's word on the robot type
+(asked before the devices are opened), the devices, a new store created only after that, one robot
+identity — and all of it released on every way out. On in-process fakes:
+`hil.station.devices.ask_controller` and `open_devices` are monkeypatched, nothing connects.
 
 And where a job's station comes from (`StationSource.of`): the options checked before anything starts.
 """
@@ -29,14 +30,17 @@ from hil.store import LeaseRefused, Store, StoreError, address_lock
 SERIAL = "20235500001"
 
 
+def _info(model: str = "UR5e", serial: str = SERIAL, software: str = "5.15.0") -> ControllerInfo:
+    return ControllerInfo(model, serial, software, (5, 15, 0, 0), "e", 500.0)
+
+
 class FakeDevices:
     """Devices whose robot reports `model`; counts its closes and notes whether the arm's address lock
     was still held when it was closed (the station is released in reverse order)."""
 
-    def __init__(self, address: str, model: str = "UR5e", serial: str = SERIAL,
-                 software: str = "5.15.0") -> None:
+    def __init__(self, address: str, model: str = "UR5e", **info: str) -> None:
         self.address = address
-        self.robot = SimpleNamespace(info=ControllerInfo(model, serial, software, (5, 15, 0, 0), "e", 500.0))
+        self.robot = SimpleNamespace(info=_info(model, **info))
         self.tracker = SimpleNamespace(identity=None)
         self.closes = 0
         self.lock_held_at_close: bool | None = None
@@ -51,16 +55,32 @@ class FakeDevices:
 
 
 class Opener:
-    """Stands in for `hil.station.devices.open_devices`: records each call; raises `error` if set,
-    else opens new `FakeDevices` of `model`."""
+    """Stands in for `hil.station.devices.open_devices` (`__call__`) and `ask_controller` (`ask`): records
+    each call; raises `error` (opening) or `ask_error` (asking) if set, else opens new `FakeDevices` of
+    `model` / answers that controller. `ask_lock_held` notes, per question, whether the arm's address
+    lock was held when the controller was asked (it must be: the lock comes before connecting)."""
 
     def __init__(self, address: str) -> None:
         self.address = address
         self.model = "UR5e"
         self.info: dict[str, str] = {}
         self.error: BaseException | None = None
+        self.ask_error: BaseException | None = None
         self.calls: list[StationConfig] = []
+        self.asked: list[StationConfig] = []
+        self.ask_lock_held: list[bool] = []
         self.opened: list[FakeDevices] = []
+
+    def ask(self, config: StationConfig) -> ControllerInfo:
+        self.asked.append(config)
+        try:
+            assert_lock_free(self.address)
+            self.ask_lock_held.append(False)
+        except LeaseRefused:
+            self.ask_lock_held.append(True)
+        if self.ask_error is not None:
+            raise self.ask_error
+        return _info(self.model, **self.info)
 
     def __call__(self, config: StationConfig) -> FakeDevices:
         self.calls.append(config)
@@ -75,6 +95,7 @@ class Opener:
 def opener(monkeypatch: pytest.MonkeyPatch, address: str) -> Opener:
     op = Opener(address)
     monkeypatch.setattr("hil.station.devices.open_devices", op)
+    monkeypatch.setattr("hil.station.devices.ask_controller", op.ask)
     return op
 
 
@@ -119,13 +140,17 @@ def test_every_way_out_of_the_body_releases_the_devices_then_the_lock(
     assert len(opener.calls) == 2 and opener.opened[1].closes == 1
 
 
-def test_a_controller_of_another_robot_is_refused_and_everything_released(
+def test_a_controller_of_another_robot_is_refused_before_any_device_is_opened(
         opener: Opener, address: str) -> None:
+    """Asked under the lock, refused on its answer: the devices (the driver's client process, its control
+    script, the tracker: seconds to open and close) are never opened (issue 31: refused within 2 s)."""
     opener.model = "UR10e"
-    with pytest.raises(ControllerMismatch) as exc, take_station(_config(address), what="test"):
+    config = _config(address)
+    with pytest.raises(ControllerMismatch) as exc, take_station(config, what="test"):
         raise AssertionError("the body ran on a controller of another robot")
     assert str(exc.value) == f"robot.type is ur5e but the controller at {address} reports UR10e"
-    assert opener.opened[0].closes == 1
+    assert opener.asked == [config] and opener.ask_lock_held == [True]
+    assert opener.calls == []  # nothing opened, so nothing to close
     assert_lock_free(address)
 
 
@@ -136,7 +161,31 @@ def test_a_claim_the_controller_contradicts_is_refused_naming_every_source(
         raise AssertionError("the body ran")
     assert str(exc.value) == (f"robot.type is ur5e and the controller at {address} reports UR5e "
                               "but --robot is ur10e")
-    assert opener.opened[0].closes == 1
+    assert opener.calls == []
+    assert_lock_free(address)
+
+
+def test_the_opened_controller_is_checked_again_and_closed_when_it_disagrees(
+        opener: Opener, address: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The controller the devices connected to is what the run records: its word is checked too (a
+    controller that answered the question as a UR5e and connected as a UR10e is refused, devices
+    closed)."""
+    monkeypatch.setattr("hil.station.devices.ask_controller", lambda config: _info("UR5e"))
+    opener.model = "UR10e"
+    with pytest.raises(ControllerMismatch), take_station(_config(address), what="test"):
+        raise AssertionError("the body ran")
+    assert opener.opened[0].closes == 1 and opener.opened[0].lock_held_at_close is True
+    assert_lock_free(address)
+
+
+def test_a_controller_that_does_not_answer_the_question_raises_the_drivers_error(
+        opener: Opener, address: str, tmp_path: Path) -> None:
+    location = tmp_path / "new.db"
+    opener.ask_error = error = RobotUnreachable(f"no RTDE answer from {address}:30004")
+    with pytest.raises(RobotUnreachable) as exc, take_station(_config(address), what="test", store=location):
+        raise AssertionError("the body ran without a controller")
+    assert exc.value is error  # typed, as the driver raised it: the caller's station fault
+    assert opener.calls == [] and not location.exists()
     assert_lock_free(address)
 
 
@@ -171,7 +220,7 @@ def test_a_held_lock_is_refused_before_any_device_is_opened_or_store_created(
             take_station(_config(address), what="test", store=location):
         raise AssertionError("the body ran on a held arm")
     assert f"the robot at {address} is in use by hil calibrate (pid " in str(exc.value)
-    assert opener.calls == []
+    assert opener.asked == [] and opener.calls == []  # not even asked: the lock comes before connecting
     assert not location.exists()
 
 
@@ -184,7 +233,7 @@ def test_a_damaged_store_is_refused_before_the_lock_and_the_devices(
         raise AssertionError("the body ran")
     assert not isinstance(exc.value, LeaseRefused)  # the store was looked at first
     assert str(location) in str(exc.value) and "not a hil database" in str(exc.value)
-    assert opener.calls == []
+    assert opener.asked == [] and opener.calls == []
 
 
 def test_a_new_store_is_created_only_once_the_controller_agreed_and_closed_on_exit(
@@ -194,6 +243,7 @@ def test_a_new_store_is_created_only_once_the_controller_agreed_and_closed_on_ex
     with pytest.raises(ControllerMismatch), take_station(_config(address), what="test", store=location):
         raise AssertionError("the body ran")
     assert list(tmp_path.iterdir()) == []  # a refused station leaves no file behind
+    assert opener.calls == []
 
     opener.model = "UR5e"
     with take_station(_config(address), what="test", store=location) as taken:
@@ -220,7 +270,7 @@ def test_the_robot_identity_is_the_configured_type_as_the_controller_reports_its
     config = _config(address, "ur10e")
     with take_station(config, what="test") as taken:
         assert taken.robot == RobotIdentity("ur10e", "20205500042", "UR10e", "5.12.3.1234")
-        assert taken.config is config and opener.calls == [config]
+        assert taken.config is config and opener.asked == [config] and opener.calls == [config]
         assert taken.devices is opener.opened[0]
         assert taken.store is None  # none asked for
 

@@ -111,6 +111,7 @@ def test_a_tracker_that_saw_nothing_makes_the_run_incomplete_not_a_hardware_faul
     devices = SimpleNamespace(robot=_Robot(home), tracker=_BlindTracker(), close=lambda: None)
     monkeypatch.setattr(hil.jobs.moveb, "station_setup", station)
     monkeypatch.setattr(hil.station.devices, "open_devices", lambda _config: devices)
+    monkeypatch.setattr(hil.station.devices, "ask_controller", lambda _config: devices.robot.info)
     out = tmp_path / "run.json"
     code = main(["moveb", "run", str(EXAMPLES / "square.moveb"), "--sim", "--ideal", "--out", str(out)])
     captured = capsys.readouterr()

@@ -100,6 +100,7 @@ def no_hardware(monkeypatch: pytest.MonkeyPatch) -> None:
         raise AssertionError("connected to the station before refusing the configuration")
 
     monkeypatch.setattr(hil.station.devices, "open_devices", tripwire)
+    monkeypatch.setattr(hil.station.devices, "ask_controller", tripwire)  # asking it connects too
 
 
 @pytest.mark.parametrize(("key", "value", "span"), BAD, ids=[f"{k}={v}" for k, v, _ in BAD])

@@ -14,7 +14,7 @@ from hil.station.config import EXAMPLE, default_config, parse_config
 def test_the_defaults_warm_up_and_watch_the_drift():
     config = default_config()
     assert config.warmup == {"enabled": True, "interval": 120.0, "limit": 10e-6, "max_time": 3600.0}
-    assert config.drift == {"every": 10, "limit": 30e-6}
+    assert config.drift == {"every": 10, "limit": 30e-6, "settle": 2.0, "samples": 20}
     example = tomllib.loads(EXAMPLE.read_text())
     assert parse_config(example).warmup == config.warmup and parse_config(example).drift == config.drift
 
@@ -31,7 +31,9 @@ def test_the_defaults_warm_up_and_watch_the_drift():
     ("drift", {"every": -1}, "drift.every: must be in [0, 1000], got -1"),
     ("drift", {"every": 2.5}, "drift.every: must be an integer"),
     ("drift", {"limit": 30}, "drift.limit: must be in (0, 0.001] m, got 30"),
-    ("drift", {"watch": True}, "unknown key drift.watch (known in [drift]: every, limit)"),
+    ("drift", {"settle": -1.0}, "drift.settle: must be in [0, 60] s, got -1"),
+    ("drift", {"samples": 0}, "drift.samples: must be in [1, 100], got 0"),
+    ("drift", {"watch": True}, "unknown key drift.watch (known in [drift]: every, limit, settle, samples)"),
 ])
 def test_a_wrong_value_is_refused_naming_the_key(section, values, message):
     with pytest.raises(InputError) as exc:

@@ -57,6 +57,7 @@ def no_hardware(monkeypatch: pytest.MonkeyPatch) -> None:
         raise AssertionError("connected to the station before refusing the damaged store")
 
     monkeypatch.setattr(hil.station.devices, "open_devices", tripwire)
+    monkeypatch.setattr(hil.station.devices, "ask_controller", tripwire)  # asking it connects too
 
 
 @pytest.mark.parametrize("argv", [["history"], ["history", "--json"], ["show", "last"],

@@ -123,6 +123,7 @@ class FakeStation:
             campaign__approach=0.0)  # one move a pose (tests/hil/campaign/test_approach.py: the approach)
         self.store = Store.open(tmp_path / "hil.db")
         self.reconnects: list[Any] = []  # what the session's connect() after a run gets
+        self.asked: list[Any] = []  # the configurations the controller was asked what it is for
         rng = self.rng
 
         def chooser(config: Any) -> Any:
@@ -135,7 +136,12 @@ class FakeStation:
             return outcome
 
         monkeypatch.setattr("hil.campaign.chooser.campaign_chooser", chooser)
+        def ask_controller(config: Any) -> ControllerInfo:  # the arm's word, before the devices open
+            self.asked.append(config)
+            return self.arm.info
+
         monkeypatch.setattr("hil.station.devices.open_devices", open_devices)
+        monkeypatch.setattr("hil.station.devices.ask_controller", ask_controller)
 
     def devices(self) -> Devices:
         return Devices(self.arm, self.tracker)  # type: ignore[arg-type]

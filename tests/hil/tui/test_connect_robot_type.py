@@ -2,8 +2,9 @@
 
 Before, the Station screen's connect (c) accepted a controller reporting another robot than the
 configured ``robot.type``: the screen said CONNECTED, and the mismatch showed only once a run was
-started. Now connect refuses it at once — a notice and the Station screen's error naming both, the
-devices closed, the arm's address lock let go — and a run asked for afterwards does not move the arm.
+started. Now connect refuses it at once — a notice and the Station screen's error naming both, no
+device opened (the controller is asked what it is first), the arm's address lock let go — and a run
+asked for afterwards does not move the arm.
 On the in-process fakes (tests/hil/tui/fake_station.py).
 """
 
@@ -57,7 +58,8 @@ def test_connect_to_a_controller_of_another_robot_type_is_refused_on_the_station
                             "reports UR10e")
             session = app.session
             assert session.devices is None and session.station.phase == "disconnected"
-            assert CountingDevices.closed == 1  # what was opened is closed again
+            assert len(st.asked) == 1  # the controller was asked what it is
+            assert len(st.reconnects) == 2 and CountingDevices.closed == 0  # and no device was opened
             with address_lock(address):  # and the arm's lock is let go
                 pass
             await pilot.pause()
@@ -65,13 +67,14 @@ def test_connect_to_a_controller_of_another_robot_type_is_refused_on_the_station
             assert "DISCONNECTED" in shown and "cannot use this robot" in shown and "UR10e" in shown
             # a run asked for now connects again, is refused the same way, and moves nothing
             await pilot.press("3", "g")
-            await wait_for(pilot, lambda: CountingDevices.closed == 2, 10, "the second refusal")
+            await wait_for(pilot, lambda: len(st.asked) == 2, 10, "the second refusal")
             await pilot.pause(0.2)
             assert not session.run_active and session.devices is None
             await press_to_close(pilot, "q")
 
     asyncio.run(scenario())
     assert st.arm.moves == 0 and st.store.campaigns() == []
+    assert len(st.reconnects) == 2 and CountingDevices.closed == 0  # the run opened nothing either
     st.store.close()
 
 

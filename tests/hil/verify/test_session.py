@@ -14,7 +14,8 @@ from hil.errors import InputError
 from hil.station.config import default_config
 from hil.store.hashing import measurement_hash
 from hil.verify.cube import Cube
-from hil.verify.session import ModelInput, identity, load_model, requested_cube
+from hil.verify.inputs import ModelInput, load_model, requested_cube
+from hil.verify.session import identity
 
 
 def test_a_verification_is_found_by_its_model_cube_cycles_and_controller_not_as_a_calibration(tmp_path):

@@ -37,7 +37,7 @@ class CircleTarget:
     def target(self) -> TargetState:
         return TargetState(self._at(np.array([self.now + self.epoch]))[0], True)
 
-    def positions_at(self, times: np.ndarray) -> np.ndarray:
+    def positions_at(self, times: np.ndarray, reading_time: float | None = None) -> np.ndarray:
         return self._at(times)
 
     def known_until(self) -> float | None:
