@@ -13,11 +13,11 @@ from pathlib import Path
 import pytest
 
 from hil.campaign.chooser import campaign_chooser
-from hil.campaign.engine import RealClock
 from hil.campaign.events import EventBus, RunFinished, SweepFitted, SweepSegmentDone
 from hil.campaign.runner import resume_state, run_campaign
 from hil.station.config import default_config
 from hil.station.devices import open_devices
+from hil.station.paced_clock import PacedClock, simulator_pace
 from hil.store import Store
 from mocks.station import start_station
 
@@ -54,7 +54,8 @@ class SweepStation:
             bus.subscribe(stop)
         resume = resume_state(self.store, self.campaign) if self.of(RunFinished) else None
         return run_campaign(self.config, campaign_chooser(self.config), bus=bus, campaign=self.campaign,
-                            resume=resume, clock=RealClock(self.speed), devices=open_devices(self.config),
+                            resume=resume, clock=PacedClock(self.speed, simulator_pace(self.sim)),
+                            devices=open_devices(self.config),
                             engine_ready=engines.append)
 
     def of(self, kind):
