@@ -104,9 +104,12 @@ class FollowResult:
     # None from a driver that does not record it.
     controller_t: np.ndarray | None = None
     actual_q: np.ndarray | None = None
-    # (K,) when each of those frames was read, on time.monotonic() (as `times`): ties the controller's
-    # clock to the host's, for a first guess of a clock map the data then fix
+    # (L,) when the loop read a frame, on time.monotonic() (as `times`), and (L,) that frame's
+    # controller stamp: ties the controller's clock to the host's, for a first guess of a clock map
+    # the data then fix. The loop reads the latest frame once a cycle, so these may miss frames the
+    # joint stream above has.
     host_t: np.ndarray | None = None
+    host_stamps: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

@@ -80,7 +80,8 @@ def record_segment(robot: Any, tracker: Tracker, segment: SweepSegment, tracker_
     tracker_t, tracker_p = tracker_record(samples)
     return SegmentRecord(segment.index, session, np.asarray(result.controller_t, float),
                          np.asarray(result.actual_q, float).reshape(-1, 6), tracker_t, tracker_p,
-                         anchor(samples, result.controller_t, result.host_t))
+                         anchor(samples, result.controller_t if result.host_stamps is None
+                                else result.host_stamps, result.host_t))
 
 
 def anchor(samples: list[StreamSample], controller_t: np.ndarray, host_t: np.ndarray | None
