@@ -239,7 +239,8 @@ class StreamJoin:
         samples remain (fewer than 10) to fix two parameters.
 
         `initial_drift` is where Gauss–Newton starts and the scan's fixed drift: 0 for two quartzes,
-        speed − 1 for a fast-time simulated station, whose tracker clock keeps the wall's rate."""
+        speed − 1 for a fast-time simulated station, whose tracker clock runs speed times slower
+        than its controller's (`mocks.emscon.server`)."""
         t_trk = self.tracker.t
         t_ref = float(np.mean(t_trk))
         a0 = (float(self.joints.t[0] - (1.0 + initial_drift) * t_trk[0]) if initial_offset_s is None
