@@ -113,7 +113,7 @@ class _JointPath:
             if len(t) < 5:
                 continue
             period = float(np.median(np.diff(t)))
-            window = round(DERIVATIVE_WINDOW_S / period) | 1
+            window = max(5, round(DERIVATIVE_WINDOW_S / period) | 1)  # a cubic fit takes 5 at least
             if len(t) < window:
                 continue
             qd = savgol_filter(q, window, 3, deriv=1, delta=period, axis=0)

@@ -1,0 +1,125 @@
+"""Whole sweep campaigns on the simulated station with emScon: bootstrap, the sweep through the
+calibration poses while both instruments stream, validation on still poses, the verdict; and a sweep
+interrupted mid-way that resumes without sweeping again what it has.
+
+Fast time is limited for a sweep: the servo loop keeps the wall's period (`hil.campaign.sweep_recording`),
+so the joint stream in station time is the loop's rate over the speed; at speed 4 it is still dense
+enough for the join's derivative window."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from hil.campaign.chooser import campaign_chooser
+from hil.campaign.events import EventBus, RunFinished, SweepFitted, SweepSegmentDone
+from hil.campaign.runner import resume_state, run_campaign
+from hil.station.config import default_config
+from hil.station.devices import open_devices
+from hil.station.paced_clock import PacedClock, simulator_pace
+from hil.store import Store
+from mocks.station import start_station
+
+SPEED = 4.0
+
+
+class SweepStation:
+    """The simulated station (emScon) in its own process, and campaigns run on it from this one."""
+
+    def __init__(self, tmp_path: Path, seed: int = 5, mode: str = "sweep", speed: float = SPEED) -> None:
+        self.speed, self.tmp = speed, tmp_path
+        self.sim = start_station(speed=speed, seed=seed, ideal=True)
+        svc = self.sim.info["services"][0]
+        self.clock_map = svc["clock_map"]
+        self.config = default_config().with_overrides(
+            robot__address=self.sim.address, tracker__protocol="emscon",
+            tracker__url=svc["tracker_emscon_url"], robot__speed=2.0, robot__acceleration=4.0,
+            campaign__calibration_poses=11,
+            campaign__validation_poses=6, campaign__candidates=2000, campaign__mode=mode,
+            timeouts__relock=20.0, timeouts__suspend=90.0, warmup__enabled=False)
+        self.store = Store.open(tmp_path / f"{mode}.db")
+        self.campaign = self.store.create_campaign(self.config, "ur5e")
+        self.events: list = []
+
+    def run(self, *, interrupt_after: int | None = None):
+        bus = EventBus()
+        bus.subscribe(self.store.as_subscriber(), critical=True)
+        bus.subscribe(self.events.append)
+        engines = []
+        if interrupt_after is not None:
+            def stop(event):
+                if isinstance(event, SweepSegmentDone) and event.segment == interrupt_after:
+                    engines[0].request_interrupt("the operator stops the sweep")
+            bus.subscribe(stop)
+        resume = resume_state(self.store, self.campaign) if self.of(RunFinished) else None
+        return run_campaign(self.config, campaign_chooser(self.config), bus=bus, campaign=self.campaign,
+                            resume=resume, clock=PacedClock(self.speed, simulator_pace(self.sim)),
+                            devices=open_devices(self.config),
+                            engine_ready=engines.append)
+
+    def of(self, kind):
+        return [e for e in self.events if isinstance(e, kind)]
+
+    def close(self) -> None:
+        self.sim.stop()
+        self.store.close()
+
+
+@pytest.fixture
+def station(tmp_path):
+    st = SweepStation(tmp_path)
+    yield st
+    st.close()
+
+
+@pytest.mark.timeout(600)  # two campaigns (the sweep's and stop-and-go's): minutes on a loaded machine
+def test_a_sweep_campaign_is_accepted_and_finds_the_stations_clock(station):
+    """Accepted on still validation poses, as a stop-and-go campaign on the same arm is; the clock map
+    found near the station's truth.
+
+    Measured (seed 5, speed 4, two busy loops beside it on 2 cores): validation RMS 13.0 µm against
+    stop-and-go's 8.7 µm on the same arm (nominal: 3.6 mm); the map at the sweep's mean tracker time
+    129 µs from the station's stated truth, where the fit states σ = 10.4 µs. Not within 3σ: joined
+    with the *true* arm and map, the samples the join keeps still sit 17 µm RMS from the truth (speed 1)
+    — the simulated controller's cycle is speed × 2 ms and its thread, on a loaded machine, skips
+    frames — so this checks the map to what the simulator supports: the fast-time drift (speed − 1 =
+    3) to 50 ppm and the sync to 2 ms (0.5 mm at 0.25 m/s), and the validation within a tenth of the
+    class bound, not to the fit's σ."""
+    outcome = station.run()
+    assert outcome.status == "accepted", (outcome.error, outcome.result and outcome.result.verdict)
+    result = outcome.result
+    done = station.of(SweepSegmentDone)
+    assert [e.segment for e in done] == list(range(10)) and all(e.joints > 100 for e in done)
+    fitted = station.of(SweepFitted)[-1]
+    truth = station.clock_map
+    t = fitted.t_ref  # the map where the fit knows it best, against the station's truth
+    err = (fitted.offset_s + (1 + fitted.drift) * t) - (truth["offset_s"] + (1 + truth["drift"]) * t)
+    assert abs(err) < 2e-3, (err, fitted)
+    assert abs(fitted.drift - truth["drift"]) < 50e-6, (fitted.drift, truth)
+    assert fitted.used >= 10 * 32  # ten tracker samples a fitted term (≈30 parameters and the clock's 2)
+    assert result.after.rms < result.before.rms / 10 and result.after.rms < 52.5e-6  # bound / 10
+    # the same arm (the station's seed) calibrated stop-and-go, in faster time (it streams nothing)
+    stop_and_go = SweepStation(station.tmp, mode="stop-and-go", speed=40.0)
+    try:
+        reference = stop_and_go.run()
+    finally:
+        stop_and_go.close()
+    assert reference.status == "accepted"
+    print(f"\nsweep {result.after.rms * 1e6:.1f} µm, stop-and-go {reference.result.after.rms * 1e6:.1f} µm, "
+          f"clock {err * 1e6:.0f} µs from the stated truth (σ {fitted.sigma_at_ref_s * 1e6:.1f} µs)")
+
+
+@pytest.mark.timeout(600)  # two runs of one campaign: minutes on a loaded machine
+def test_an_interrupted_sweep_resumes_without_sweeping_again_what_it_has(station):
+    first = station.run(interrupt_after=3)
+    assert first.status == "interrupted"
+    kept = [e.segment for e in station.of(SweepSegmentDone)]
+    assert kept[:4] == [0, 1, 2, 3]
+    before = len(kept)
+    second = station.run()
+    again = [e.segment for e in station.of(SweepSegmentDone)][before:]
+    assert again and min(again) == max(kept) + 1  # resumed at the first segment not recorded whole
+    assert sorted(kept + again) == list(range(10))  # every segment once
+    assert second.status == "accepted", (second.error, second.result and second.result.verdict)
+    assert station.of(SweepFitted)[-1].left_out.get("other session", 0) == 0  # one station session
