@@ -518,12 +518,11 @@ class URRobot:
             stamps, joints, hosts = stream.recorded()
             every = read_frames(frames, stamps[0], stamps[-1]) if recording and len(stamps) > 1 else None
         periods = np.asarray(stream.periods)
+        frame_t, frame_q = (stamps, joints) if every is None else union_of_frames(stamps, joints, *every)
         return FollowResult(times=times, hold_end=hold_end, period_count=int(periods.size),
                             period_mean=float(periods.mean()) if periods.size else 0.0,
                             period_max=float(periods.max()) if periods.size else 0.0,
-                            controller_t=stamps if every is None else every[0],
-                            actual_q=joints if every is None else every[1], host_t=hosts,
-                            host_stamps=stamps)
+                            controller_t=frame_t, actual_q=frame_q, host_t=hosts, host_stamps=stamps)
 
     @contextmanager
     def servo(self, *, lookahead: float = 0.1, gain: float = 300.0) -> Iterator[ServoStream]:
@@ -645,3 +644,24 @@ def read_frames(path: str, first: float, last: float) -> tuple[np.ndarray, np.nd
         return None
     rising = np.r_[True, np.diff(t) > 0]
     return t[rising], q[rising]
+
+
+def union_of_frames(read_t: np.ndarray, read_q: np.ndarray, recorded_t: np.ndarray,
+                    recorded_q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every frame either record has, in time order, once: the loop's reads (exact stamps and
+    joints) and ur_rtde's recording (rounded to the microsecond). Neither holds the other: ur_rtde
+    writes one line per pass of its receive thread, the newest of the frames that arrived together,
+    while the loop may have read one of the others; a frame in both (stamps within a microsecond) is
+    kept as the loop read it."""
+    read_t, recorded_t = np.asarray(read_t, dtype=float), np.asarray(recorded_t, dtype=float)
+    fresh = np.ones(len(recorded_t), dtype=bool)
+    if len(read_t):
+        i = np.searchsorted(read_t, recorded_t)
+        left = read_t[np.clip(i - 1, 0, len(read_t) - 1)]
+        right = read_t[np.clip(i, 0, len(read_t) - 1)]
+        fresh = np.minimum(np.abs(recorded_t - left), np.abs(recorded_t - right)) > 1e-6
+    t = np.concatenate([read_t, recorded_t[fresh]])
+    q = np.concatenate([np.asarray(read_q, dtype=float).reshape(-1, 6),
+                        np.asarray(recorded_q, dtype=float).reshape(-1, 6)[fresh]])
+    order = np.argsort(t, kind="stable")
+    return t[order], q[order]

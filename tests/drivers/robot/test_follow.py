@@ -88,14 +88,13 @@ def test_follow_streams_the_trajectory_and_ends_at_its_last_sample(arm: Any) -> 
     assert_on_period(res.times, 0.002)
     assert np.allclose(arm.read_joints(5).q, traj[-1], atol=1e-3)
     # the controller's own record of the motion: its RTDE timestamp and actual_q on the controller's
-    # clock (not the host's), every frame it sent between the first frame the loop read and the last
-    # (ur_rtde's recording, `drivers.robot.ur.read_frames`): frames one controller cycle apart (the
-    # simulator's cycle is 2 ms of its time at 1x, 20 ms at the fixture's 10x: one per tick of its
-    # own thread, which a loaded machine also makes late), however late the loop's own cycles were
+    # clock (not the host's), every frame the loop read or ur_rtde recorded between the first frame
+    # the loop read and the last (`drivers.robot.ur.read_frames`, `union_of_frames`). How many
+    # depends on the machine: the simulator sends one frame per tick of its own thread (20 ms of
+    # its time at the fixture's 10x), a loaded machine makes those ticks late, and ur_rtde records
+    # the newest of frames that arrive together (a fresh-clone run had them 34-37 ms apart)
     k = len(res.controller_t)
     assert res.actual_q.shape == (k, 6) and np.all(np.diff(res.controller_t) > 0)
-    cycle = 10.0 * 0.002
-    assert np.median(np.diff(res.controller_t)) == pytest.approx(cycle, rel=0.05)
     # the loop's own reads, one a cycle at most: the host-clock anchors, stamps among the frames'
     L = len(res.host_t)
     assert res.host_stamps.shape == (L,) and 45 <= L <= 450 and np.all(np.diff(res.host_t) >= 0)
@@ -103,7 +102,7 @@ def test_follow_streams_the_trajectory_and_ends_at_its_last_sample(arm: Any) -> 
     assert res.host_stamps[0] == pytest.approx(res.controller_t[0], abs=1e-6)
     assert res.host_stamps[-1] == pytest.approx(res.controller_t[-1], abs=1e-6)
     nearest = np.abs(res.host_stamps[:, None] - res.controller_t[None, :]).min(axis=1)
-    assert np.mean(nearest < 1e-6) > 0.9 and k >= L  # every frame the loop read, and those it missed
+    assert np.all(nearest < 1e-9) and k >= L  # every frame the loop read, and those it missed
     assert res.times[0] <= res.host_t[0] and res.host_t[-1] <= res.hold_end
     # the arm went where it was sent: each recorded q lies on the ramp between its ends
     span = traj[-1] - traj[0]
