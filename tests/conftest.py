@@ -26,6 +26,15 @@ def _own_lock_dir(tmp_path_factory, monkeypatch) -> None:
     monkeypatch.setenv("HIL_LOCK_DIR", str(tmp_path_factory.mktemp("locks")))
 
 
+@pytest.fixture(autouse=True)
+def _own_data_dir(tmp_path_factory, monkeypatch) -> None:
+    """Each test its own per-user data folder, and no plant store from the environment: a test that
+    leaves the store to its default (``hil calibrate --sim`` writes ``sim.db`` there) must neither read
+    nor write the person's own, which another hil version may have written (a newer schema is refused)."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path_factory.mktemp("data")))
+    monkeypatch.delenv("HIL_DB", raising=False)
+
+
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(12345)

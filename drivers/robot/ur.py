@@ -172,11 +172,16 @@ class URRobot:
             if not c.isConnected():
                 _ABANDONED.append(c)
             else:
-                try:
-                    c.stopScript()
-                    c.disconnect()
-                except RuntimeError as exc:
-                    log.debug("closing the control interface: %s", exc)
+                # after a stop from another thread (the engine's on Ctrl-C) whose stopJ is still under
+                # way: ur_rtde's commands share one register, and a stopScript sent beside the stopJ
+                # was cleared by it, so the stopScript waited for the script to end (20 s, till the
+                # proxy's timeout killed the client). One command at a time, as every other here.
+                with self._cmd_lock:
+                    try:
+                        c.stopScript()
+                        c.disconnect()
+                    except RuntimeError as exc:
+                        log.debug("closing the control interface: %s", exc)
         if r is not None:
             if not r.isConnected():
                 _ABANDONED.append(r)

@@ -359,3 +359,25 @@ def test_servo_stream_follows_a_trajectory(robot: URRobot, sim: SimProcess) -> N
     assert 0.0015 < float(np.percentile(stream.periods, 10)) < 0.003
     time.sleep(0.1)
     assert np.allclose(robot.read_joints(5).q, traj[-1], atol=5e-3)
+
+
+def test_close_right_after_a_stop_from_another_thread_ends_the_script_at_once(sim: SimProcess) -> None:
+    """The engine's Ctrl-C: stop the arm (the isolated client's stop pipe answers at once, its stopJ
+    still under way), then close. ur_rtde's commands share one register: a stopScript sent beside the
+    stopJ was cleared by it and then waited for the script to end, until the proxy's call timeout
+    killed the client (24 s after Ctrl-C in `hil calibrate --sim`)."""
+    robot = IsolatedURRobot(config(sim))
+    robot.open()
+    closed: list[float] = []
+    try:
+        with once_moving(sim, robot.stop):
+            robot.start_move(Q_FAR)
+        began = time.monotonic()
+        robot.close()
+        closed.append(time.monotonic() - began)
+    finally:
+        robot.close()
+    assert_arm_stopped(sim)
+    assert sim.state()["runtime_state"] == "STOPPED"  # the control script ended
+    # the stop itself takes about 1 s at 1x (STOP_DECEL); the proxy's timeout for close is 20 s
+    assert closed[0] < 8.0, f"close took {closed[0]:.1f} s"

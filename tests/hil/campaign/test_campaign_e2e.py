@@ -186,9 +186,24 @@ class Station:
     def of(self, kind):
         return [e for e in self.events if isinstance(e, kind)]
 
+    def story(self, outcome) -> str:
+        """What a rejected run did, for its failure message: each validation pose's error and readings,
+        the faults met, and the drift check (a rejection on the ideal arm is rare and must say why)."""
+        result = outcome.result
+        if result is None:
+            return ""
+        lines = [f"validation errors (um): {np.round(result.after.errors * 1e6, 1).tolist()}",
+                 f"drift: {result.drift}", f"stopping: {result.stopping}"]
+        lines += [f"{e.kind} at {getattr(e, 'index', '?')}: {e.message}" for e in self.of(Suspended)]
+        lines += [f"{r.role} {r.index}: {r.samples} samples, spread {np.round(r.p_spread * 1e6, 1).tolist()}"
+                  f" um, q_spread {np.round(r.q_spread * 1e6, 1).tolist()} urad, {r.seconds:.1f} s, {r.extra}"
+                  for r in result.records if r.role == "validation"]
+        return "\n".join(lines)
+
     def check_nothing_lost(self, outcome) -> None:
         verdict = getattr(outcome.result, "verdict", None)
-        assert outcome.status == "accepted", outcome.error or (verdict and verdict.reason)
+        assert outcome.status == "accepted", (
+            outcome.error or f"{verdict and verdict.reason}\n{self.story(outcome)}")
         measured = self.of(PointMeasured)
         assert len({(e.role, e.index) for e in measured}) == len(measured)  # each pose once
         assert len(self.store.measured_poses(self.campaign)) == len(measured)
@@ -240,7 +255,8 @@ def test_emscon_faults_mid_campaign_suspend_and_resume_without_losing_anything(t
     st.on(PoseStarted, lambda e: e.index == 14, lambda e: st.sim.inject("emscon_laser_cold", seconds=60.0))
     outcome = st.run()
     kinds = [e.kind for e in st.of(Suspended)]
-    assert {"beam_lost", "tracker_unplugged", "tracker_not_ready"} <= set(kinds), kinds
+    assert {"beam_lost", "tracker_unplugged", "tracker_not_ready"} <= set(kinds), [
+        (e.kind, e.message, e.detail) for e in st.of(Suspended)]
     assert "warming up" in next(e.message for e in st.of(Suspended) if e.kind == "tracker_not_ready")
     st.check_nothing_lost(outcome)
 
