@@ -213,17 +213,19 @@ class StreamJoin:
                 fast[inside] = f[nearest]
         return seg, fast
 
-    def trust(self, clock: ClockMap) -> tuple[np.ndarray, dict[str, int]]:
-        """(M,) which tracker samples the join may use under `clock`, and the others counted by reason."""
+    def trust(self, clock: ClockMap, among: np.ndarray | None = None) -> tuple[np.ndarray, dict[str, int]]:
+        """(M,) which tracker samples the join may use under `clock`, and the others counted by reason
+        (only those of `among`, (M,) bool, when given: the samples a fit did not use)."""
         seg, fast = self._locate(clock(self.tracker.t))
+        counted = np.ones(len(seg), dtype=bool) if among is None else np.asarray(among, dtype=bool)
         reasons = Counter({r: 0 for r in REASONS})
-        reasons["beam lost"] = int(self._lost.sum())
+        reasons["beam lost"] = int((self._lost & counted).sum())
         rest = ~self._lost
-        reasons["after a gap"] = int((self._after & rest).sum())
+        reasons["after a gap"] = int((self._after & rest & counted).sum())
         rest &= ~self._after
-        reasons["joint gap"] = int((rest & (seg < 0)).sum())
+        reasons["joint gap"] = int((rest & (seg < 0) & counted).sum())
         rest &= seg >= 0
-        reasons["acceleration"] = int((rest & fast).sum())
+        reasons["acceleration"] = int((rest & fast & counted).sum())
         rest &= ~fast
         return rest, dict(reasons)
 

@@ -10,13 +10,23 @@ The tour is planned segment by segment, from one waypoint at rest to the next at
 (`hil.calibration.sweep_path.plan_sweep`, within ``robot.speed`` and ``robot.acceleration``): a
 segment is the unit a resumed campaign keeps or sweeps again, and its stops are reversals that make
 the clock offset observable. Every segment is checked before anything of the sweep moves
-(`check_sweep`, and the keep-in box along it with the model the engine checks moves with): a tour
-that leaves the box or the joint limits is bad input naming the segment and its first offending
-sample.
+(`check_sweep`): the keep-in box along it with the model the engine checks moves with, and the SMR in
+the tracker's view along it (facing the tracker within the acceptance angle, the beam clear of the
+arm) with the tracker where the bootstrap found it.
+
+Two poses the tracker sees do not make a straight joint path between them that it sees: the SMR turns
+with the wrist, and the tracker's emScon never re-locks by itself mid-stream, so a segment that leaves
+its view loses the rest of its samples (measured on the simulated station before this check: about
+half of each segment's tracker samples lost, beam broken once in 9 of 10 segments). So the tour's order
+is chosen for the segments that pass (`tour_segments`): from each waypoint, the nearest one not yet
+swept whose segment passes; where none does, the arm goes to the nearest by an ordinary move, not
+recorded (the engine's safe route; the tracker re-locks at the next segment's start). A tour with no
+segment that passes is bad input naming the first refused one and why.
 """
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 from typing import Any
 
@@ -28,6 +38,8 @@ from hil.calibration.stream_join import JointStream, TrackerStream
 from hil.campaign.acceptance import Verdict, class_bound
 from hil.campaign.steps import SegmentRecord, SweepSegment
 from hil.errors import InputError
+
+log = logging.getLogger(__name__)
 
 #: The campaign modes (`hil.station.config.MODES`).
 STOP_AND_GO, SWEEP = "stop-and-go", "sweep"
@@ -50,29 +62,87 @@ CLOCK_AGREEMENT_S = 0.5
 
 
 def sweep_tour(waypoints: np.ndarray, config: Any, spec: RobotSpec, check_model: Geometry,
-               rate_hz: float = CONTROLLER_RATE_HZ) -> list[SweepSegment]:
-    """The tour through `waypoints` (m, 6) as segments between consecutive waypoints, each planned
-    rest to rest within the station's joint speed and acceleration (and the arm's joint speed maxima)
-    and checked before anything moves (module docstring): joint limits, speed, acceleration and the
-    keep-in box (`check_sweep`, with `check_model`, the arm the engine checks moves with). InputError
-    naming the segment and the first offending sample."""
-    from hil.calibration.sweep_path import check_sweep, plan_sweep
+               rate_hz: float = CONTROLLER_RATE_HZ, sight_model: Geometry | None = None
+               ) -> list[SweepSegment]:
+    """The tour through `waypoints` (m, 6) as segments rest to rest, each within the station's joint
+    speed and acceleration (and the arm's joint speed maxima), inside the keep-in box (`check_model`,
+    the arm the engine checks moves with) and, with `sight_model` (its tracker and SMR: the
+    bootstrap's), in the tracker's view within ``smr.acceptance_angle`` — all checked before anything
+    moves. The order is `tour_segments`'; InputError when no segment of the tour passes, naming the
+    first refused and its first offending sample."""
+    from hil.calibration.selection import aimed_vias
+    from hil.calibration.sweep_path import SweepRefused, check_sweep, plan_leg
 
     keep_in = (np.asarray(config.keep_in["min"], float), np.asarray(config.keep_in["max"], float))
     speed = np.minimum(float(config.robot["speed"]), np.asarray(spec.max_joint_speed, float))
     accel = float(config.robot["acceleration"])
-    segments: list[SweepSegment] = []
-    for k in range(len(waypoints) - 1):
-        a, b = np.asarray(waypoints[k], float), np.asarray(waypoints[k + 1], float)
+    angle = float(config.smr["acceptance_angle"])
+    pts = np.asarray(waypoints, dtype=float)
+
+    def checked(a: int, through: np.ndarray) -> np.ndarray:
+        tour = plan_leg(np.vstack([pts[a][None, :], through]), max_speed=speed, max_acceleration=accel,
+                        rate_hz=rate_hz)
+        check_sweep(tour, max_speed=speed, max_acceleration=accel, spec=spec, keep_in=keep_in,
+                    model=check_model)
+        if sight_model is not None:
+            check_sweep(tour, model=sight_model, acceptance_angle=angle)
+        return np.asarray(tour.q, float)
+
+    def segment(a: int, b: int) -> np.ndarray:
+        """The checked path from waypoint `a` to `b`: straight in joint space, else through vias that
+        turn the wrist toward the tracker (`aimed_vias`); SweepRefused (the straight one's) if neither
+        may be swept."""
         try:
-            tour = plan_sweep(b[None, :], a, max_speed=speed, max_acceleration=accel, rate_hz=rate_hz)
-            check_sweep(tour, max_speed=speed, max_acceleration=accel, spec=spec, keep_in=keep_in,
-                        model=check_model)
-        except InputError as exc:
-            raise InputError(f"sweep segment {k + 1} of {len(waypoints) - 1} refused before the sweep "
-                             f"moved: {exc}") from None
-        segments.append(SweepSegment(k, np.asarray(tour.q, float), float(tour.rate_hz)))
-    return segments
+            return checked(a, pts[b][None, :])
+        except SweepRefused:
+            if sight_model is None:
+                raise
+            vias = aimed_vias(sight_model.robot, sight_model.smr, sight_model.tracker.translation,
+                              pts[a], pts[b], angle)
+            try:
+                return checked(a, np.vstack([vias, pts[b][None, :]]))
+            except SweepRefused:
+                pass
+            raise
+
+    paths, refused = tour_segments(pts, segment, SweepRefused)
+    log.info("sweep tour: %d segments through %d waypoints (%d straight or aimed paths refused)",
+             len(paths), len(pts), len(refused))
+    if not paths:
+        (a, _), why = refused[0] if refused else ((0, 0), "fewer than two waypoints")
+        raise InputError(f"sweep segment {a + 1} of {len(pts) - 1} refused before the sweep moved: {why}")
+    return [SweepSegment(k, q, float(rate_hz)) for k, q in enumerate(paths)]
+
+
+def tour_segments(waypoints: np.ndarray, segment: Any, refusal: type[Exception] = InputError
+                  ) -> tuple[list[np.ndarray], list[tuple[tuple[int, int], str]]]:
+    """The tour's segments in order, and the ones refused ((from, to) waypoint indices, why).
+
+    From the first waypoint: to the nearest waypoint not yet visited (by the largest joint difference,
+    what a joint move's time follows) whose `segment(a, b)` passes (it raises `refusal` otherwise);
+    where none does, to the nearest by a move that is not swept. A nearest-neighbour order, written here
+    because the tour has an edge rule (a segment must pass its checks) that the library tour solvers
+    (scipy has none; the selection's own tour is over still poses) do not take."""
+    n = len(waypoints)
+    if n < 2:
+        return [], []
+    paths: list[np.ndarray] = []
+    refused: list[tuple[tuple[int, int], str]] = []
+    here, left = 0, set(range(1, n))
+    while left:
+        order = sorted(left, key=lambda j: (float(np.max(np.abs(waypoints[j] - waypoints[here]))), j))
+        for j in order:
+            try:
+                paths.append(segment(here, j))
+            except refusal as exc:
+                refused.append(((here, j), str(exc)))
+                continue
+            here = j
+            break
+        else:  # no segment from here passes: the next nearest by an ordinary move
+            here = order[0]
+        left.discard(here)
+    return paths, refused
 
 
 def sweep_verdict(after: float, before: float, robot: str, acceptance: float | None) -> Verdict:
@@ -130,6 +200,8 @@ def streams_of(records: Sequence[SegmentRecord]
     jt, jq, tt, tp = jt[j_order], jq[j_order], tt[t_order], tp[t_order]
     jk = np.concatenate([[True], np.diff(jt) > 0])
     tk = np.concatenate([[True], np.diff(tt) > 0])
+    if not tk.all():  # one instant twice (a segment's end, the next's start): counted once, left out
+        left["repeated stamp"] = int((~tk).sum())
     return JointStream(jt[jk], jq[jk]), TrackerStream(tt[tk], tp[tk]), left, chosen
 
 

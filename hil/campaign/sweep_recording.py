@@ -55,6 +55,11 @@ def record_segment(robot: Any, tracker: Tracker, segment: SweepSegment, tracker_
     follows the plan as planned."""
     if not isinstance(robot, FollowsPaths):
         raise TypeError(f"{type(robot).__name__} cannot stream a path (no follow): the sweep needs it")
+    if tracker.lock_status() != "locked in":
+        # the arm came here by a move that was not swept (`hil.campaign.sweep_plan.tour_segments`) or
+        # the last segment lost the beam: emScon re-locks only when asked, so ask before streaming (a
+        # failed search leaves the stream's start to fail as a lost target, which the engine suspends on)
+        tracker.relock()
     samples: list[StreamSample] = []
     failure: list[BaseException] = []
     stop = threading.Event()

@@ -8,12 +8,20 @@ enough for the join's derivative window."""
 
 from __future__ import annotations
 
+import threading
 from pathlib import Path
 
 import pytest
 
 from hil.campaign.chooser import campaign_chooser
-from hil.campaign.events import EventBus, RunFinished, SweepFitted, SweepSegmentDone
+from hil.campaign.events import (
+    EventBus,
+    RunFinished,
+    Suspended,
+    SweepFitted,
+    SweepPlanned,
+    SweepSegmentDone,
+)
 from hil.campaign.runner import resume_state, run_campaign
 from hil.station.config import default_config
 from hil.station.devices import open_devices
@@ -41,11 +49,28 @@ class SweepStation:
         self.store = Store.open(tmp_path / f"{mode}.db")
         self.campaign = self.store.create_campaign(self.config, "ur5e")
         self.events: list = []
+        self.hooks: list = []  # more subscribers of every run's bus (`on`)
+
+    def on(self, kind, condition, action) -> None:
+        """Run `action(event)` once, at the first event of `kind` that meets `condition`."""
+        fired: list = []
+
+        def hook(event):
+            if isinstance(event, kind) and not fired and condition(event):
+                fired.append(event)
+                action(event)
+
+        self.hooks.append(hook)
+
+    def later(self, seconds: float, fault: str, **args) -> None:
+        threading.Timer(seconds, lambda: self.sim.inject(fault, **args)).start()
 
     def run(self, *, interrupt_after: int | None = None):
         bus = EventBus()
         bus.subscribe(self.store.as_subscriber(), critical=True)
         bus.subscribe(self.events.append)
+        for hook in self.hooks:
+            bus.subscribe(hook)
         engines = []
         if interrupt_after is not None:
             def stop(event):
@@ -60,6 +85,21 @@ class SweepStation:
 
     def of(self, kind):
         return [e for e in self.events if isinstance(e, kind)]
+
+    def segments(self) -> int:
+        """The tour's segments (`hil.campaign.sweep_plan.tour_segments`: those the tracker sees along)."""
+        return len(self.of(SweepPlanned)[-1].segments)
+
+    def check_every_sample_once(self) -> None:
+        """Each segment counts once (its last take), and the fit accounts for each of that take's
+        tracker samples once: used, or left out for a reason."""
+        counted = {e.segment: e for e in self.of(SweepSegmentDone)}  # a segment's last take counts
+        assert sorted(counted) == list(range(self.segments()))
+        fitted = self.of(SweepFitted)[-1]
+        recorded = sum(e.tracker + e.lost for e in counted.values())  # a lost sample is one too
+        assert fitted.used + sum(fitted.left_out.values()) == recorded, (
+            fitted.used, fitted.left_out, [(e.tracker, e.lost, e.breaks) for e in counted.values()])
+        assert fitted.left_out.get("other session", 0) == 0  # the station ran on: one clock map
 
     def close(self) -> None:
         self.sim.stop()
@@ -90,7 +130,7 @@ def test_a_sweep_campaign_is_accepted_and_finds_the_stations_clock(station):
     assert outcome.status == "accepted", (outcome.error, outcome.result and outcome.result.verdict)
     result = outcome.result
     done = station.of(SweepSegmentDone)
-    assert [e.segment for e in done] == list(range(10)) and all(e.joints > 100 for e in done)
+    assert [e.segment for e in done] == list(range(station.segments())) and all(e.joints > 100 for e in done)
     fitted = station.of(SweepFitted)[-1]
     truth = station.clock_map
     t = fitted.t_ref  # the map where the fit knows it best, against the station's truth
@@ -120,6 +160,21 @@ def test_an_interrupted_sweep_resumes_without_sweeping_again_what_it_has(station
     second = station.run()
     again = [e.segment for e in station.of(SweepSegmentDone)][before:]
     assert again and min(again) == max(kept) + 1  # resumed at the first segment not recorded whole
-    assert sorted(kept + again) == list(range(10))  # every segment once
+    assert sorted(kept + again) == list(range(station.segments()))  # every segment once
     assert second.status == "accepted", (second.error, second.result and second.result.verdict)
-    assert station.of(SweepFitted)[-1].left_out.get("other session", 0) == 0  # one station session
+    station.check_every_sample_once()
+
+
+@pytest.mark.timeout(600)
+def test_a_tracker_link_dropped_mid_segment_suspends_and_sweeps_that_segment_again(station):
+    """emScon's TCP link drops while segment 2 streams: the run suspends (tracker unplugged), the
+    link comes back, the segment is swept again under a new take, and nothing of the broken take
+    counts."""
+    station.on(SweepSegmentDone, lambda e: e.segment == 1, lambda e: station.later(0.3, "emscon_drop"))
+    outcome = station.run()
+    assert "tracker_unplugged" in [e.kind for e in station.of(Suspended)]
+    done = station.of(SweepSegmentDone)
+    takes = {e.segment: e.take for e in done}
+    assert len(done) == len(takes) == station.segments()  # the broken take never finished
+    assert outcome.status == "accepted", (outcome.error, outcome.result and outcome.result.verdict)
+    station.check_every_sample_once()

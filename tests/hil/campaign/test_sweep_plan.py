@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 from hil.arm.catalog import get_robot
-from hil.arm.geometry import Geometry
+from hil.arm.geometry import Geometry, look_at_tracker
 from hil.arm.kinematics import Kinematics
-from hil.campaign.sweep_plan import sweep_tour, sweep_verdict
+from hil.calibration.sweep_path import SweepRefused, SweepTour, check_sweep
+from hil.campaign.sweep_plan import sweep_tour, sweep_verdict, tour_segments
 from hil.errors import InputError
 from hil.station.config import default_config
 
@@ -56,3 +57,38 @@ def test_the_verdict_needs_the_model_better_than_the_nominal_arm_then_the_bound(
     worse = sweep_verdict(0.9e-3, 0.8e-3, "ur5e", None)
     assert not worse.passed and "not better than the nominal" in worse.reason
     assert not sweep_verdict(0.2e-3, 0.8e-3, "ur5e", 0.1e-3).passed
+
+
+def test_a_segment_the_tracker_would_not_see_along_turns_the_wrist_toward_it():
+    """Both ends face the tracker, the straight joint line between them turns the SMR away (found by a
+    seeded search of nominal UR5e poses); the tour's segment goes through vias that aim the wrist and
+    is seen along its whole length, from the one waypoint to the other."""
+    tracker = look_at_tracker([2.5, 0.0, 0.5])
+    model = Geometry.nominal("ur5e", (0.0, 0.0, 0.045), tracker)
+    a = np.array([-0.499, -2.076, 1.33, -2.371, 2.147, 0.766])
+    b = np.array([-1.619, -1.082, 1.609, -2.236, 3.064, 1.076])
+    config, spec = default_config(), get_robot("ur5e")
+    (straight,) = sweep_tour(np.array([a, b]), config, spec, model)  # no sight model: not checked
+    with pytest.raises(SweepRefused, match="would not see the SMR"):
+        check_sweep(SweepTour(np.arange(len(straight.q)) / straight.rate_hz, straight.q, b[None],
+                              straight.rate_hz), model=model, acceptance_angle=config.smr["acceptance_angle"])
+    (aimed,) = sweep_tour(np.array([a, b]), config, spec, model, sight_model=model)
+    assert np.allclose(aimed.q[0], a) and np.allclose(aimed.q[-1], b)
+    check_sweep(SweepTour(np.arange(len(aimed.q)) / aimed.rate_hz, aimed.q, b[None], aimed.rate_hz),
+                model=model, acceptance_angle=config.smr["acceptance_angle"])
+
+
+def test_the_tour_takes_the_nearest_segment_that_passes_and_moves_on_where_none_does():
+    """Waypoints 0..4 on a line: the segment 0 → 1 is refused, so the tour sweeps 0 → 2; nothing from
+    2 passes, so the arm moves to 1 unswept (the nearest left), then sweeps 1 → 3 → 4."""
+    points = np.arange(5, dtype=float)[:, None] * np.ones((1, 6)) * 0.1
+    refused = {(0, 1), (2, 1), (2, 3), (2, 4)}
+
+    def segment(a, b):
+        if (a, b) in refused:
+            raise InputError(f"{a} to {b} refused")
+        return np.array([points[a], points[b]])
+
+    paths, why = tour_segments(points, segment)
+    assert [(round(p[0, 0] * 10), round(p[-1, 0] * 10)) for p in paths] == [(0, 2), (1, 3), (3, 4)]
+    assert [w for w, _ in why] == [(0, 1), (2, 1), (2, 3), (2, 4)]
