@@ -100,6 +100,7 @@ from hil.campaign.sweep_plan import (
     SWEEP,
     TRACKER_RATE_HZ,
     first_clock,
+    stored_tour,
     streams_of,
     sweep_tour,
     sweep_verdict,
@@ -174,6 +175,8 @@ class ResumeState:
     stopping: dict[str, Any] | None = None
     # a sweep campaign's segments recorded whole (their SweepSegmentDone's take), by segment index
     sweep: dict[int, SegmentRecord] = field(default_factory=dict)
+    # the tour the campaign planned first (its stored SweepPlanned's segments); None: none yet
+    sweep_tour: list[dict[str, Any]] | None = None
 
 
 @dataclass
@@ -565,8 +568,11 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     segments: list[SweepSegment] = []
     if sweeping:  # the tour through the calibration poses, checked whole before the sweep moves
         waypoints = np.array([q for _, r, q in planned if r == CALIBRATION])
-        segments = sweep_tour(waypoints, config, get_robot(robot), keep_in_check or model,
-                              sight_model=model)
+        if resume.sweep_tour:  # the tour the campaign began: its segments' numbers name what is recorded
+            segments = stored_tour(resume.sweep_tour, config, get_robot(robot), keep_in_check or model)
+        else:
+            segments = sweep_tour(waypoints, config, get_robot(robot), keep_in_check or model,
+                                  sight_model=model)
     todo = [(i, r, q) for i, r, q in planned if (r, i) not in records
             and not (sweeping and r == CALIBRATION)]
     # the stopping rule (campaign.stop_early): a stop the store holds is kept as it was decided
@@ -601,7 +607,9 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
             campaign=campaign, segments=[{"index": g.index, "from": list(g.start),
                                           "to": [float(v) for v in g.q[-1]],
                                           "seconds": (len(g.q) - 1) / CONTROLLER_RATE_HZ,
-                                          "samples": len(g.q)} for g in segments],
+                                          "samples": len(g.q),
+                                          "knots": [] if g.knots is None else np.asarray(g.knots).tolist()}
+                                         for g in segments],
             waypoints=[list(map(float, w)) for w in waypoints], rate_hz=CONTROLLER_RATE_HZ,
             tracker_rate_hz=TRACKER_RATE_HZ, done=sorted(sweep_records)))
         if sweep_left:

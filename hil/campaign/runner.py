@@ -47,6 +47,7 @@ from hil.campaign.events import (
     ReferenceMeasured,
     RunFinished,
     RunStarted,
+    SweepPlanned,
 )
 from hil.campaign.ids import new_campaign_id
 from hil.campaign.steps import PoseRecord, SegmentRecord
@@ -372,7 +373,9 @@ def resume_state(store: Any, campaign: str) -> ResumeState:
     # the stopping rule's decision: the remaining calibration poses stay unvisited (the last stop)
     stops = [e for e in store.events(campaign, types=("AcquisitionStopped",))
              if isinstance(e, AcquisitionStopped)]
+    tours = [e for e in store.events(campaign, types=("SweepPlanned",)) if isinstance(e, SweepPlanned)]
     return ResumeState(poses=resumed, tracker=tracker, sweep=sweep_state(store, campaign),
+                       sweep_tour=list(tours[0].segments) if tours and resumed else None,
                        records=records, selection=plan.get("selection") or {}, bootstrap=bootstrap,
                        reference=np.array(reference, dtype=float) if reference and resumed else None,
                        references=references,

@@ -171,6 +171,9 @@ class SweepSegment:
     index: int
     q: np.ndarray
     rate_hz: float = 500.0  # samples per second of station time
+    # the leg's knots in order (m, 6): its start, any vias, its end (`hil.campaign.sweep_plan`); a
+    # resumed campaign plans the same segment again from them
+    knots: np.ndarray | None = None
 
     @property
     def start(self) -> tuple[float, ...]:

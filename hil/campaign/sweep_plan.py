@@ -79,16 +79,16 @@ def sweep_tour(waypoints: np.ndarray, config: Any, spec: RobotSpec, check_model:
     angle = float(config.smr["acceptance_angle"])
     pts = np.asarray(waypoints, dtype=float)
 
-    def checked(a: int, through: np.ndarray) -> np.ndarray:
-        tour = plan_leg(np.vstack([pts[a][None, :], through]), max_speed=speed, max_acceleration=accel,
-                        rate_hz=rate_hz)
+    def checked(a: int, through: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        knots = np.vstack([pts[a][None, :], through])
+        tour = plan_leg(knots, max_speed=speed, max_acceleration=accel, rate_hz=rate_hz)
         check_sweep(tour, max_speed=speed, max_acceleration=accel, spec=spec, keep_in=keep_in,
                     model=check_model)
         if sight_model is not None:
             check_sweep(tour, model=sight_model, acceptance_angle=angle)
-        return np.asarray(tour.q, float)
+        return np.asarray(tour.q, float), knots
 
-    def segment(a: int, b: int) -> np.ndarray:
+    def segment(a: int, b: int) -> tuple[np.ndarray, np.ndarray]:
         """The checked path from waypoint `a` to `b`: straight in joint space, else through vias that
         turn the wrist toward the tracker (`aimed_vias`); SweepRefused (the straight one's) if neither
         may be swept."""
@@ -111,12 +111,39 @@ def sweep_tour(waypoints: np.ndarray, config: Any, spec: RobotSpec, check_model:
     if not paths:
         (a, _), why = refused[0] if refused else ((0, 0), "fewer than two waypoints")
         raise InputError(f"sweep segment {a + 1} of {len(pts) - 1} refused before the sweep moved: {why}")
-    return [SweepSegment(k, q, float(rate_hz)) for k, q in enumerate(paths)]
+    return [SweepSegment(k, q, float(rate_hz), knots) for k, (q, knots) in enumerate(paths)]
+
+
+def stored_tour(segments: Sequence[dict[str, Any]], config: Any, spec: RobotSpec, check_model: Geometry,
+                rate_hz: float = CONTROLLER_RATE_HZ) -> list[SweepSegment]:
+    """The tour a campaign planned first (its stored `SweepPlanned` segments), planned again from
+    each segment's knots (its start and end for a tour stored without them) and checked again for the
+    limits, speed, acceleration and keep-in box. The sight check is not repeated: a resumed run knows
+    the tracker as stored but not the SMR the bootstrap located, and the tour must stay the one whose
+    segment numbers name what the store holds."""
+    from hil.calibration.sweep_path import SweepRefused, check_sweep, plan_leg
+
+    keep_in = (np.asarray(config.keep_in["min"], float), np.asarray(config.keep_in["max"], float))
+    speed = np.minimum(float(config.robot["speed"]), np.asarray(spec.max_joint_speed, float))
+    accel = float(config.robot["acceleration"])
+    out: list[SweepSegment] = []
+    for k, seg in enumerate(segments):
+        knots = np.asarray(seg.get("knots") or [seg["from"], seg["to"]], dtype=float)
+        try:
+            tour = plan_leg(knots, max_speed=speed, max_acceleration=accel, rate_hz=rate_hz)
+            check_sweep(tour, max_speed=speed, max_acceleration=accel, spec=spec, keep_in=keep_in,
+                        model=check_model)
+        except SweepRefused as exc:
+            raise InputError(f"stored sweep segment {k + 1} of {len(segments)} refused before the sweep "
+                             f"moved: {exc}") from None
+        out.append(SweepSegment(int(seg.get("index", k)), np.asarray(tour.q, float), float(rate_hz), knots))
+    return out
 
 
 def tour_segments(waypoints: np.ndarray, segment: Any, refusal: type[Exception] = InputError
-                  ) -> tuple[list[np.ndarray], list[tuple[tuple[int, int], str]]]:
-    """The tour's segments in order, and the ones refused ((from, to) waypoint indices, why).
+                  ) -> tuple[list[Any], list[tuple[tuple[int, int], str]]]:
+    """The tour's segments in order (what `segment(a, b)` returned for each), and the ones refused
+    ((from, to) waypoint indices, why).
 
     From the first waypoint: to the nearest waypoint not yet visited (by the largest joint difference,
     what a joint move's time follows) whose `segment(a, b)` passes (it raises `refusal` otherwise);
@@ -126,7 +153,7 @@ def tour_segments(waypoints: np.ndarray, segment: Any, refusal: type[Exception] 
     n = len(waypoints)
     if n < 2:
         return [], []
-    paths: list[np.ndarray] = []
+    paths: list[Any] = []
     refused: list[tuple[tuple[int, int], str]] = []
     here, left = 0, set(range(1, n))
     while left:

@@ -8,26 +8,35 @@ enough for the join's derivative window."""
 
 from __future__ import annotations
 
+import json
+import os
+import signal
+import subprocess
+import sys
 import threading
+import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from hil.campaign.chooser import campaign_chooser
 from hil.campaign.events import (
     EventBus,
-    RunFinished,
     Suspended,
     SweepFitted,
     SweepPlanned,
     SweepSegmentDone,
 )
-from hil.campaign.runner import resume_state, run_campaign
+from hil.campaign.runner import resume_state, run_campaign, sweep_state
 from hil.station.config import default_config
 from hil.station.devices import open_devices
 from hil.station.paced_clock import PacedClock, simulator_pace
 from hil.store import Store
 from mocks.station import start_station
+from mocks.ur.control_channel import ControlClient
+
+ROOT = Path(__file__).resolve().parents[3]
 
 SPEED = 4.0
 
@@ -40,12 +49,7 @@ class SweepStation:
         self.sim = start_station(speed=speed, seed=seed, ideal=True)
         svc = self.sim.info["services"][0]
         self.clock_map = svc["clock_map"]
-        self.config = default_config().with_overrides(
-            robot__address=self.sim.address, tracker__protocol="emscon",
-            tracker__url=svc["tracker_emscon_url"], robot__speed=2.0, robot__acceleration=4.0,
-            campaign__calibration_poses=11,
-            campaign__validation_poses=6, campaign__candidates=2000, campaign__mode=mode,
-            timeouts__relock=20.0, timeouts__suspend=90.0, warmup__enabled=False)
+        self.config = station_config(self.sim.address, svc["tracker_emscon_url"], mode)
         self.store = Store.open(tmp_path / f"{mode}.db")
         self.campaign = self.store.create_campaign(self.config, "ur5e")
         self.events: list = []
@@ -65,6 +69,18 @@ class SweepStation:
     def later(self, seconds: float, fault: str, **args) -> None:
         threading.Timer(seconds, lambda: self.sim.inject(fault, **args)).start()
 
+    def child(self) -> subprocess.Popen:
+        """The campaign run by another process on this station and store (`run_in_child`), as a hil
+        process a test can kill -9 while the station runs on."""
+        svc = self.sim.info
+        spec = {"db": str(self.tmp / "sweep.db"), "campaign": self.campaign, "speed": self.speed,
+                "control": [self.sim.address, int(svc["control_port"])],
+                "overrides": {"robot__address": self.config.robot["address"],
+                              "tracker__url": self.config.tracker["url"]}}
+        return subprocess.Popen([sys.executable, "-c", "from tests.hil.campaign.test_sweep_campaign import "
+                                 "run_in_child; run_in_child()", json.dumps(spec)], cwd=ROOT,
+                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+
     def run(self, *, interrupt_after: int | None = None):
         bus = EventBus()
         bus.subscribe(self.store.as_subscriber(), critical=True)
@@ -77,7 +93,7 @@ class SweepStation:
                 if isinstance(event, SweepSegmentDone) and event.segment == interrupt_after:
                     engines[0].request_interrupt("the operator stops the sweep")
             bus.subscribe(stop)
-        resume = resume_state(self.store, self.campaign) if self.of(RunFinished) else None
+        resume = resume_state(self.store, self.campaign)  # as `claim_run` does: whatever the store has
         return run_campaign(self.config, campaign_chooser(self.config), bus=bus, campaign=self.campaign,
                             resume=resume, clock=PacedClock(self.speed, simulator_pace(self.sim)),
                             devices=open_devices(self.config),
@@ -104,6 +120,33 @@ class SweepStation:
     def close(self) -> None:
         self.sim.stop()
         self.store.close()
+
+
+def station_config(address: str, tracker_url: str, mode: str = "sweep") -> Any:
+    """The tests' station config: emScon, a sweep through 11 calibration poses, 6 still validation
+    poses, no warm-up (the sweep, not the arm's heating, is tested)."""
+    return default_config().with_overrides(
+        robot__address=address, tracker__protocol="emscon", tracker__url=tracker_url, robot__speed=2.0,
+        robot__acceleration=4.0, campaign__calibration_poses=11, campaign__validation_poses=6,
+        campaign__candidates=2000, campaign__mode=mode, timeouts__relock=20.0, timeouts__suspend=90.0,
+        warmup__enabled=False)
+
+
+def run_in_child() -> None:
+    """A child process's run of a stored campaign (`SweepStation.child`): the spec in argv[1]."""
+    spec = json.loads(sys.argv[1])
+    address, port = spec["control"]
+    control = ControlClient(address, port)
+    overrides = spec["overrides"]
+    config = station_config(overrides["robot__address"], overrides["tracker__url"])
+    with Store.open(Path(spec["db"])) as store:
+        bus = EventBus()
+        bus.subscribe(store.as_subscriber(), critical=True)
+        run_campaign(config, campaign_chooser(config), bus=bus, campaign=spec["campaign"],
+                     resume=resume_state(store, spec["campaign"]),
+                     clock=PacedClock(float(spec["speed"]),
+                                      lambda rate: float(control.call("pace", speed=rate)["time"])),
+                     devices=open_devices(config))
 
 
 @pytest.fixture
@@ -166,15 +209,38 @@ def test_an_interrupted_sweep_resumes_without_sweeping_again_what_it_has(station
 
 
 @pytest.mark.timeout(600)
-def test_a_tracker_link_dropped_mid_segment_suspends_and_sweeps_that_segment_again(station):
-    """emScon's TCP link drops while segment 2 streams: the run suspends (tracker unplugged), the
-    link comes back, the segment is swept again under a new take, and nothing of the broken take
-    counts."""
-    station.on(SweepSegmentDone, lambda e: e.segment == 1, lambda e: station.later(0.3, "emscon_drop"))
+def test_a_sweep_killed_mid_segment_resumes_and_counts_each_recorded_sample_once(station):
+    """The hil process is killed (-9) while it sweeps its third segment; the station runs on, as a
+    real one does. The campaign resumes in another process at the first segment not recorded whole,
+    and there emScon's TCP link drops while the segment after the first it sweeps streams: the run
+    suspends (tracker unplugged), the link comes back and that segment is swept again under a new
+    take. Neither the killed take's committed chunks nor the broken take count; the fit counts each
+    sample of the segments recorded whole once, the killed run's joined with the resumed run's (the
+    clocks ran on)."""
+    child = station.child()
+    try:
+        deadline = time.monotonic() + 300
+        while True:  # until two segments are recorded whole and the third streams
+            assert child.poll() is None, child.stderr.read()[-2000:] if child.stderr else ""
+            assert time.monotonic() < deadline, "the child never recorded two segments"
+            if len(sweep_state(station.store, station.campaign)) >= 2:
+                break
+            time.sleep(0.2)
+        time.sleep(1.0)
+    finally:
+        os.kill(child.pid, signal.SIGKILL)
+        child.wait(30)
+    kept = sweep_state(station.store, station.campaign)
+    assert len(kept) >= 2
+    station.on(SweepSegmentDone, lambda e: True, lambda e: station.later(0.3, "emscon_drop"))
     outcome = station.run()
     assert "tracker_unplugged" in [e.kind for e in station.of(Suspended)]
-    done = station.of(SweepSegmentDone)
-    takes = {e.segment: e.take for e in done}
-    assert len(done) == len(takes) == station.segments()  # the broken take never finished
+    again = [e.segment for e in station.of(SweepSegmentDone)]
+    assert len(again) == len(set(again))  # the broken take never finished: each segment done once
+    assert not set(again) & set(kept)  # nothing recorded whole is swept again
+    assert sorted([*kept, *again]) == list(range(station.segments()))
     assert outcome.status == "accepted", (outcome.error, outcome.result and outcome.result.verdict)
-    station.check_every_sample_once()
+    fitted = station.of(SweepFitted)[-1]
+    recorded = sum(len(r.tracker_t) for r in sweep_state(station.store, station.campaign).values())
+    assert fitted.used + sum(fitted.left_out.values()) == recorded, (fitted.used, fitted.left_out, recorded)
+    assert fitted.left_out.get("other session", 0) == 0  # the killed run's segments joined the resumed

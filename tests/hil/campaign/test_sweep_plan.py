@@ -12,7 +12,7 @@ from hil.arm.catalog import get_robot
 from hil.arm.geometry import Geometry, look_at_tracker
 from hil.arm.kinematics import Kinematics
 from hil.calibration.sweep_path import SweepRefused, SweepTour, check_sweep
-from hil.campaign.sweep_plan import sweep_tour, sweep_verdict, tour_segments
+from hil.campaign.sweep_plan import stored_tour, sweep_tour, sweep_verdict, tour_segments
 from hil.errors import InputError
 from hil.station.config import default_config
 
@@ -92,3 +92,24 @@ def test_the_tour_takes_the_nearest_segment_that_passes_and_moves_on_where_none_
     paths, why = tour_segments(points, segment)
     assert [(round(p[0, 0] * 10), round(p[-1, 0] * 10)) for p in paths] == [(0, 2), (1, 3), (3, 4)]
     assert [w for w, _ in why] == [(0, 1), (2, 1), (2, 3), (2, 4)]
+
+
+def test_a_resumed_campaign_plans_the_stored_tour_again_exactly():
+    """A resumed run does not know the SMR the bootstrap located, so it would check sight with another
+    model and could order the tour otherwise: it plans the tour it stored instead, from each segment's
+    knots (a tour stored without them: from its ends), and gets the same samples."""
+    tracker = look_at_tracker([2.5, 0.0, 0.5])
+    model = Geometry.nominal("ur5e", (0.0, 0.0, 0.045), tracker)
+    a = np.array([-0.499, -2.076, 1.33, -2.371, 2.147, 0.766])
+    b = np.array([-1.619, -1.082, 1.609, -2.236, 3.064, 1.076])
+    config, spec = default_config(), get_robot("ur5e")
+    planned = sweep_tour(np.array([a, b, swing(0.2)]), config, spec, model, sight_model=model)
+    stored = [{"index": g.index, "from": list(g.start), "to": g.q[-1].tolist(), "knots": g.knots.tolist()}
+              for g in planned]
+    again = stored_tour(stored, config, spec, model)
+    assert [g.index for g in again] == [g.index for g in planned]
+    for g, h in zip(planned, again, strict=True):
+        np.testing.assert_array_equal(g.q, h.q)
+    older = [{"index": 0, "from": list(swing(-0.3)), "to": list(swing(0.2))}]
+    (old,) = stored_tour(older, config, spec, model)
+    np.testing.assert_allclose(old.q[[0, -1]], [swing(-0.3), swing(0.2)])
