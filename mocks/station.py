@@ -108,16 +108,17 @@ class StationService:
         """The true map from an emScon stamp to the RTDE ``timestamp`` of the same instant (after
         `start`): t_ctrl = a + (1 + d)·t_trk.
 
-        The tracker's reference clock τ runs at the wall clock's rate from the emScon server's start
-        (`mocks.emscon.server`), the controller's running time at the simulated clock's from the
-        controller's start; the simulated clock is ``speed`` × the wall clock (`SimClock`), so simulated
-        time = server start + speed·τ, and the two clocks' truths (`hil.calibration.stream_clocks`) do the
-        rest. In fast time the map's drift is speed − 1 beside the quartzes' ppm: the tracker's clock
-        keeps the wall's rate, as a real tracker's does."""
+        The tracker's reference clock τ counts the simulated time from the emScon server's start over
+        the station's nominal ``speed`` (`mocks.emscon.server`: its seconds pass in wall seconds while
+        the station runs at that speed), the controller's running time the simulated time from the
+        controller's start; so simulated time = server start + speed·τ, whatever pace the station ran
+        at since (`hil.station.paced_clock`), and the two clocks' truths
+        (`hil.calibration.stream_clocks`) do the rest. In fast time the map's drift is speed − 1
+        beside the quartzes' ppm."""
         if self.emscon is None or self.controller is None:
             raise RuntimeError("the clock map needs the emScon simulator and the controller")
         trk, ctrl = self.clocks.tracker, self.clocks.controller
-        speed = float(self.controller.clock.speed)
+        speed = float(self.emscon.config.time_scale)
         start = self.emscon.started_at - float(self.controller.arm.started_at)  # running time at τ = 0
         # τ = (s − o_t)/r_t − λ_t;  t_ctrl = o_c + r_c·(start + speed·τ + λ_c)
         slope = ctrl.rate * speed / trk.rate
@@ -206,8 +207,10 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
     # (`hil.calibration.stream_clocks`: offset, drift, jitter, latency, each with its source)
     clocks = StationClocks.realistic()
     controller.arm.controller_clock = clocks.controller
+    # the tracker's clock counts the station's time over its nominal speed (`StationService.clock_map`)
     emscon = EmsconSimulator(world, ServerConfig(instrument=EmsconConfig(seed=seed, clock=clocks.tracker),
-                                                 address=controller.config.address, port=0),
+                                                 address=controller.config.address, port=0,
+                                                 time_scale=float(controller.clock.speed)),
                              clock=controller.clock.now)
     # the trackers' faults, reachable through the robot simulator's control channel
     controller.extra_faults.update({

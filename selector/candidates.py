@@ -251,6 +251,19 @@ def aim_wrist(model: PoseModel, q: np.ndarray, constraints: Constraints, rng: np
     Rows with no such interval keep their q5 and fail the acceptance check. The rest of the distribution
     stays uniform.
     """
+    centre, half, ok = aim_interval(model, q, constraints)
+    k = aim_joint(model)
+    q5 = centre + half * (2.0 * rng.random(len(q)) - 1.0)
+    out = q.copy()
+    out[ok, k] = np.angle(np.exp(1j * q5[ok]))  # wrap to (−π, π]
+    return out
+
+
+def aim_interval(model: PoseModel, q: np.ndarray, constraints: Constraints
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For each row of `q`, the values of `aim_joint`'s joint that point the SMR at the tracker within
+    the acceptance half-angle, the others held (`aim_wrist`'s derivation): (centre, half-width, ok), the
+    interval centre ± half-width (rad, centre unwrapped), ok False where no value does."""
     c = constraints
     tracker = np.asarray(c.tracker, float)
     axis = np.asarray(c.opening_axis, float)
@@ -276,10 +289,7 @@ def aim_wrist(model: PoseModel, q: np.ndarray, constraints: Constraints, rng: np
         ratio = (math.cos(math.radians(c.half_angle_deg)) - uc) / rho
     ok = ratio <= 1.0
     half = np.arccos(np.clip(ratio, -1.0, 1.0))
-    q5 = phi + half * (2.0 * rng.random(len(q)) - 1.0)
-    out = q.copy()
-    out[ok, k] = np.angle(np.exp(1j * q5[ok]))  # wrap to (−π, π]
-    return out
+    return phi, half, ok
 
 
 def aim_joint(model: PoseModel) -> int | None:

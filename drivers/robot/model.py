@@ -98,6 +98,18 @@ class FollowResult:
     period_count: int  # loop periods measured (samples + hold cycles - 1)
     period_mean: float  # seconds
     period_max: float  # seconds
+    # What the arm did, as the controller reported it each loop cycle (RTDE ``timestamp``: the
+    # controller's running time on its own clock, and ``actual_q``), hold included, repeats of one
+    # controller cycle dropped: the joint stream a sweep joins with the tracker's. (K,) and (K, 6);
+    # None from a driver that does not record it.
+    controller_t: np.ndarray | None = None
+    actual_q: np.ndarray | None = None
+    # (L,) when the loop read a frame, on time.monotonic() (as `times`), and (L,) that frame's
+    # controller stamp: ties the controller's clock to the host's, for a first guess of a clock map
+    # the data then fix. The loop reads the latest frame once a cycle, so these may miss frames the
+    # joint stream above has.
+    host_t: np.ndarray | None = None
+    host_stamps: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -186,3 +198,13 @@ class ReadsJointTemperatures(Protocol):
     """A robot that reports its six joints' temperatures (°C; RTDE ``joint_temperatures``)."""
 
     def joint_temperatures(self) -> np.ndarray: ...
+
+
+@runtime_checkable
+class FollowsPaths(Protocol):
+    """A robot that streams a whole joint trajectory at its controller's rate (`URRobot.follow`) and
+    reports the controller's record of it (`FollowResult.controller_t`, `actual_q`): a MOVEB run and
+    a sweep campaign need it."""
+
+    def follow(self, Q: object, *, lookahead: float = 0.1, gain: float = 300.0,
+               settle: float = 0.0) -> FollowResult: ...

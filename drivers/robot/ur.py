@@ -28,6 +28,8 @@ Design choices, and why:
 from __future__ import annotations
 
 import logging
+import os
+import tempfile
 import threading
 import time
 from collections.abc import Iterator, Sequence
@@ -500,16 +502,32 @@ class URRobot:
                     raise KeepInZoneViolation(f"sample {i}: TCP {np.round(pose[:3], 4).tolist()} leaves "
                                               "the keep-in zone (trajectory refused, nothing moved)")
         times = np.empty(len(Qa))
-        with self._servo_session(lookahead, gain) as stream:
-            for i, q in enumerate(Qa):
-                times[i] = stream.send(q)
-            for _ in range(round(settle / stream.dt)):
-                stream.send(Qa[-1])
-            hold_end = time.monotonic()
+        with tempfile.TemporaryDirectory(prefix="hil-follow-") as tmp:
+            frames = os.path.join(tmp, "frames.csv")
+            # every frame the controller sends, written by ur_rtde's own receive thread: the loop
+            # below reads only the latest frame once a cycle, and a loaded host's late cycles skip
+            # frames the join would then interpolate across (`read_frames`)
+            start = getattr(r, "startFileRecording", None)  # (a test's stand-in may lack it)
+            recording = bool(start(frames, ["timestamp", "actual_q"])) if start is not None else False
+            try:
+                with self._servo_session(lookahead, gain) as stream:
+                    stream.record = True  # the loop's own reads: the host-clock anchors
+                    for i, q in enumerate(Qa):
+                        times[i] = stream.send(q)
+                    for _ in range(round(settle / stream.dt)):
+                        stream.send(Qa[-1])
+                    hold_end = time.monotonic()
+            finally:
+                if recording:
+                    r.stopFileRecording()
+            stamps, joints, hosts = stream.recorded()
+            every = read_frames(frames, stamps[0], stamps[-1]) if recording and len(stamps) > 1 else None
         periods = np.asarray(stream.periods)
+        frame_t, frame_q = (stamps, joints) if every is None else union_of_frames(stamps, joints, *every)
         return FollowResult(times=times, hold_end=hold_end, period_count=int(periods.size),
                             period_mean=float(periods.mean()) if periods.size else 0.0,
-                            period_max=float(periods.max()) if periods.size else 0.0)
+                            period_max=float(periods.max()) if periods.size else 0.0,
+                            controller_t=frame_t, actual_q=frame_q, host_t=hosts, host_stamps=stamps)
 
     @contextmanager
     def servo(self, *, lookahead: float = 0.1, gain: float = 300.0) -> Iterator[ServoStream]:
@@ -547,6 +565,12 @@ class ServoStream:
         self.periods: list[float] = []  # seconds between successive sends (time.monotonic)
         self._t_last: float | None = None
         self._n = 0
+        # `follow` turns this on: each cycle's RTDE timestamp and actual_q, read after waitPeriod
+        # (ur_rtde's RTDEReceiveInterface getTimestamp / getActualQ: the latest controller frame)
+        self.record = False
+        self._stamps: list[float] = []
+        self._joints: list[list[float]] = []
+        self._hosts: list[float] = []
 
     def step(self, q: Sequence[float], *, pose: bool = False) -> float:
         """Validate and send one target (joints, or a TCP pose with ``pose=True``); see `send`."""
@@ -582,7 +606,67 @@ class ServoStream:
         if self._n % 10 == 0:
             robot.check_status()
         c.waitPeriod(t_start)
+        if self.record:
+            # the stamp read on both sides of the joints: a frame that arrived between the two reads
+            # would pair this frame's joints with another's time, so that cycle is not recorded
+            stamp = float(self._r.getTimestamp())
+            q = list(self._r.getActualQ())
+            host = time.monotonic()
+            if float(self._r.getTimestamp()) == stamp and (not self._stamps or stamp > self._stamps[-1]):
+                self._stamps.append(stamp)
+                self._joints.append(q)
+                self._hosts.append(host)
         return now
+
+    def recorded(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The controller frames read during the session: timestamps (K,) s, actual_q (K, 6) rad and
+        when each was read (K,) on time.monotonic()."""
+        return (np.asarray(self._stamps, dtype=float), np.asarray(self._joints, dtype=float).reshape(-1, 6),
+                np.asarray(self._hosts, dtype=float))
 
     def actual_q(self) -> np.ndarray:
         return np.asarray(self._r.getActualQ(), dtype=float)
+
+
+def read_frames(path: str, first: float, last: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """(stamps (K,), actual_q (K, 6)) of the frames ur_rtde recorded to `path` (its CSV: a header
+    ``timestamp,actual_q_0,…,actual_q_5``, one row a frame, six decimals: a microsecond, a
+    microradian) from controller time `first` to `last`
+    (the servo session's first and last frames read; the recording starts a little before and ends
+    a little after). Repeated or out-of-order stamps are dropped. None when the file has fewer than
+    two such frames or is not that form, and the caller keeps the loop's own reads."""
+    try:
+        data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    except (OSError, ValueError):
+        return None
+    if data.ndim != 2 or data.shape[1] != 7:
+        return None
+    t, q = data[:, 0], data[:, 1:]
+    # the file's stamps are rounded to microseconds (ur_rtde writes six decimals)
+    keep = (t >= first - 1e-6) & (t <= last + 1e-6) & np.isfinite(data).all(axis=1)
+    t, q = t[keep], q[keep]
+    if len(t) < 2:
+        return None
+    rising = np.r_[True, np.diff(t) > 0]
+    return t[rising], q[rising]
+
+
+def union_of_frames(read_t: np.ndarray, read_q: np.ndarray, recorded_t: np.ndarray,
+                    recorded_q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every frame either record has, in time order, once: the loop's reads (exact stamps and
+    joints) and ur_rtde's recording (rounded to the microsecond). Neither holds the other: ur_rtde
+    writes one line per pass of its receive thread, the newest of the frames that arrived together,
+    while the loop may have read one of the others; a frame in both (stamps within a microsecond) is
+    kept as the loop read it."""
+    read_t, recorded_t = np.asarray(read_t, dtype=float), np.asarray(recorded_t, dtype=float)
+    fresh = np.ones(len(recorded_t), dtype=bool)
+    if len(read_t):
+        i = np.searchsorted(read_t, recorded_t)
+        left = read_t[np.clip(i - 1, 0, len(read_t) - 1)]
+        right = read_t[np.clip(i, 0, len(read_t) - 1)]
+        fresh = np.minimum(np.abs(recorded_t - left), np.abs(recorded_t - right)) > 1e-6
+    t = np.concatenate([read_t, recorded_t[fresh]])
+    q = np.concatenate([np.asarray(read_q, dtype=float).reshape(-1, 6),
+                        np.asarray(recorded_q, dtype=float).reshape(-1, 6)[fresh]])
+    order = np.argsort(t, kind="stable")
+    return t[order], q[order]

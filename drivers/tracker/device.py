@@ -72,6 +72,9 @@ class StreamSample:
     position: tuple[float, float, float] | None
     status: PointStatus | None  # None when lost
     reason: str = ""
+    # the instrument's own stamp on its own clock (s; emScon's lTime1 + lTime2 µs), None when it gives
+    # none (GeoCOM, a lost sample): what a sweep joins with the controller's clock
+    stamp: float | None = None
 
 
 @dataclass(frozen=True)

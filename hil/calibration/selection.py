@@ -59,7 +59,14 @@ from hil.calibration.selection_parameters import drop_unobservable, expected_mag
 from hil.calibration.urdf_selection import NON_UR_DISABLED, UrdfSelectionModel
 from hil.errors import InputError
 from selector.bound import d_optimal_bound
-from selector.candidates import CONSTRAINT_NAMES, Constraints, evaluate, generate_candidates
+from selector.candidates import (
+    CONSTRAINT_NAMES,
+    Constraints,
+    aim_interval,
+    aim_joint,
+    evaluate,
+    generate_candidates,
+)
 from selector.design import check_count
 from selector.indices import SCALINGS, parse_index, scale_columns
 from selector.order import order_poses, travel_time
@@ -352,14 +359,42 @@ def hidden_reason(robot: str, smr: Sequence[float], tracker: Sequence[float], q:
     within the acceptance half-angle less `RECHECK_MARGIN_DEG`, and the beam must clear the arm's
     enveloping capsules (thicker than the links).
     """
+    return hidden_reasons(robot, smr, tracker, np.asarray(q, dtype=float)[None], acceptance_angle)[0]
+
+
+def hidden_reasons(robot: str, smr: Sequence[float], tracker: Sequence[float], q: np.ndarray,
+                   acceptance_angle: float) -> list[str | None]:
+    """`hidden_reason` for each row of `q` (n, 6) in one evaluation: a sweep's path is checked at
+    dozens of samples a segment, and the selector's checks take all of them at once."""
     model = _sight_model(robot, tuple(map(float, smr)), tuple(map(float, tracker)))
     names = ("acceptance", "line-of-sight")
     constraints = Constraints(tracker=tuple(map(float, tracker)),
                               half_angle_deg=max(1.0, acceptance_angle - RECHECK_MARGIN_DEG),
                               disabled=frozenset(CONSTRAINT_NAMES) - set(names))
-    passes, _ = evaluate(model, np.asarray(q, dtype=float)[None], constraints)
-    if not passes["acceptance"][0]:
-        return f"the SMR would face away from the tracker (more than {constraints.half_angle_deg:.0f}°)"
-    if not passes["line-of-sight"][0]:
-        return "the arm would block the tracker's line of sight"
-    return None
+    passes, _ = evaluate(model, np.asarray(q, dtype=float).reshape(-1, 6), constraints)
+    away = f"the SMR would face away from the tracker (more than {constraints.half_angle_deg:.0f}°)"
+    return [away if not facing else "the arm would block the tracker's line of sight" if not clear else None
+            for facing, clear in zip(passes["acceptance"], passes["line-of-sight"], strict=True)]
+
+
+def aimed_vias(robot: str, smr: Sequence[float], tracker: Sequence[float], start: Sequence[float],
+               end: Sequence[float], acceptance_angle: float, count: int = 3) -> np.ndarray:
+    """`count` via poses (count, 6) between `start` and `end` that turn the wrist to face the SMR to
+    the tracker: on the straight joint line, each with the aiming joint (q5 on a UR) at the centre of
+    the values that face it (`selector.candidates.aim_interval`), the one nearest the line's.
+
+    Two poses the tracker sees can lie on a straight joint line it does not see along (the SMR turns
+    with the wrist on the way); a path through these vias keeps facing it where the wrist can make it."""
+    a, b = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
+    s = np.arange(1, count + 1, dtype=float)[:, None] / (count + 1)
+    vias = a + s * (b - a)
+    model = _sight_model(robot, tuple(map(float, smr)), tuple(map(float, tracker)))
+    constraints = Constraints(tracker=tuple(map(float, tracker)),
+                              half_angle_deg=max(1.0, acceptance_angle - RECHECK_MARGIN_DEG))
+    centre, _, ok = aim_interval(model, vias, constraints)
+    k = aim_joint(model)
+    if k is None:
+        return vias
+    line = vias[:, k]
+    vias[ok, k] = (line + np.angle(np.exp(1j * (centre - line))))[ok]  # the equivalent nearest the line
+    return vias

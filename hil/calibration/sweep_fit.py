@@ -78,6 +78,8 @@ from hil.errors import InputError
 
 #: Tracker samples the fit uses (module docstring, step 2).
 SAMPLES = 3000
+#: The left-out reason of a trusted sample the even subsample of `SAMPLES` passed over.
+THINNED = "thinned"
 #: Savitzky–Golay window for q̇ and q̈ (s), and the gap rule: the join's (`StreamJoin`'s defaults).
 DERIVATIVE_WINDOW_S = 0.05
 GAP_FACTOR = 2.5
@@ -113,7 +115,7 @@ class _JointPath:
             if len(t) < 5:
                 continue
             period = float(np.median(np.diff(t)))
-            window = round(DERIVATIVE_WINDOW_S / period) | 1
+            window = max(5, round(DERIVATIVE_WINDOW_S / period) | 1)  # a cubic fit takes 5 at least
             if len(t) < window:
                 continue
             qd = savgol_filter(q, window, 3, deriv=1, delta=period, axis=0)
@@ -360,6 +362,12 @@ def fit_sweep(start: Geometry, joints: JointStream, tracker: TrackerStream, *,
         trusted = again
     if not converged:
         raise IdentificationError(f"sweep fit: did not converge in {max_iter} iterations")
+    # every tracker sample counted once: used, or left out for the reason the final clock gives it (a
+    # trusted one the even subsample passed over: `THINNED`), so used + left out = the stream
+    unused = np.ones(len(tracker.t), dtype=bool)
+    unused[use] = False
+    _, left = join.trust(clock_map, among=unused)
+    left[THINNED] = int((trusted & unused).sum())
     weights = None if rows is None else np.r_[rows.weights, 0.0, 0.0]
     inv, sigma2, cond = _statistics(J, r, weights)
     cov = sigma2 * inv

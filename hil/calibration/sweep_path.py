@@ -277,6 +277,28 @@ def plan_sweep(waypoints: np.ndarray, start: np.ndarray, *, max_speed: np.ndarra
     return tour
 
 
+def plan_leg(knots: np.ndarray, *, max_speed: np.ndarray | float, max_acceleration: np.ndarray | float,
+             rate_hz: float = 500.0) -> SweepTour:
+    """One rest-to-rest leg through `knots` (k ≥ 2, m × N) in their given order, from the first at
+    rest to the last at rest, within the per-joint limits: what `plan_sweep` makes of each leg, without
+    its ordering (a sweep segment's vias must be passed in order). `SweepRefused` if no timing meets
+    the limits."""
+    K = np.asarray(knots, dtype=float)
+    if K.ndim != 2 or len(K) < 2 or not np.isfinite(K).all():
+        raise InputError(f"sweep leg: expected (k ≥ 2, N) finite knots, got {K.shape}")
+    keep = np.r_[True, np.max(np.abs(np.diff(K, axis=0)), axis=1) > 1e-9]
+    K = K[keep]
+    if len(K) < 2:
+        raise InputError("sweep leg: every knot is the start; nothing to sweep")
+    n = K.shape[1]
+    speed, accel = _limits(max_speed, n, "max_speed"), _limits(max_acceleration, n, "max_acceleration")
+    q, times = _leg(K, speed, accel, rate_hz)
+    t = np.arange(len(q)) / rate_hz
+    tour = SweepTour(t, q, K[1:], float(rate_hz), np.asarray(times, dtype=float))
+    check_sweep(tour, max_speed=speed, max_acceleration=accel)
+    return tour
+
+
 def check_sweep(tour: SweepTour, *, max_speed: np.ndarray | float | None = None,
                 max_acceleration: np.ndarray | float | None = None, spec: RobotSpec | None = None,
                 keep_in: tuple[np.ndarray, np.ndarray] | None = None, model: Geometry | None = None,
@@ -343,11 +365,11 @@ def check_sweep(tour: SweepTour, *, max_speed: np.ndarray | float | None = None,
                                f"{np.round(pts[outside[0]], 4).tolist()} m, outside the keep-in box "
                                f"{lo.tolist()}..{hi.tolist()} (nothing moved)")
     if acceptance_angle is not None:
-        from hil.calibration.selection import hidden_reason
+        from hil.calibration.selection import hidden_reasons
 
         tracker = np.asarray(model.tracker.translation, dtype=float)
-        for i in checked:
-            why = hidden_reason(model.robot, model.smr, tracker, Q[i], acceptance_angle)
+        whys = hidden_reasons(model.robot, model.smr, tracker, Q[checked], acceptance_angle)
+        for i, why in zip(checked, whys, strict=True):
             if why is not None:
                 raise SweepRefused(f"sweep sample {i} (t = {tour.t[i]:.3f} s): the tracker would not see "
                                    f"the SMR ({why}; nothing moved)")

@@ -50,6 +50,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from hil.arm.catalog import get_robot
 from hil.arm.geometry import Geometry, look_at_tracker, pose_to_dict
 from hil.arm.kinematics import Kinematics
 from hil.calibration.cross_validation import CrossValidation, cross_validate
@@ -75,6 +76,8 @@ from hil.campaign.events import (
     PlanReady,
     PoseSkipped,
     ReferenceMeasured,
+    SweepFitted,
+    SweepPlanned,
     ValidationDone,
 )
 from hil.campaign.steps import (
@@ -83,11 +86,25 @@ from hil.campaign.steps import (
     Plan,
     PoseRecord,
     ReadJoints,
+    SegmentRecord,
     Skipped,
+    Sweep,
+    SweepRecorded,
+    SweepSegment,
     acquire,
     visit_settings,
 )
 from hil.campaign.stopping import EarlyStop, StoppingRule
+from hil.campaign.sweep_plan import (
+    CONTROLLER_RATE_HZ,
+    SWEEP,
+    TRACKER_RATE_HZ,
+    first_clock,
+    stored_tour,
+    streams_of,
+    sweep_tour,
+    sweep_verdict,
+)
 from hil.campaign.warmup import ReferenceWatch, reference_pose
 from hil.errors import HilError, InputError
 from hil.station.config import StationConfig
@@ -156,6 +173,10 @@ class ResumeState:
     references: list[ReferenceMeasured] = field(default_factory=list)
     # the stopping rule's decision (the figures of the store's AcquisitionStopped event), kept as it was
     stopping: dict[str, Any] | None = None
+    # a sweep campaign's segments recorded whole (their SweepSegmentDone's take), by segment index
+    sweep: dict[int, SegmentRecord] = field(default_factory=dict)
+    # the tour the campaign planned first (its stored SweepPlanned's segments); None: none yet
+    sweep_tour: list[dict[str, Any]] | None = None
 
 
 @dataclass
@@ -185,6 +206,8 @@ class CampaignResult:
     cross_validation: CrossValidation | None = None
     # the verdict and its reason (`hil.campaign.acceptance.judge`); `passed` is its `passed`
     verdict: Verdict | None = None
+    # a sweep's join and fit (`SweepFitted`'s figures); None for stop-and-go
+    sweep: dict[str, Any] | None = None
 
 
 def pose_counts(bootstrap: list[tuple[int, np.ndarray]] | None, planned: list[tuple[int, str, np.ndarray]],
@@ -360,13 +383,80 @@ def iso9283(records: list[PoseRecord], geometry: Geometry) -> dict[str, Any] | N
     return {"poses": rows, "AP_max": max(r["AP"] for r in rows), "RP_max": max(r["RP"] for r in rows)}
 
 
+def _sweep_finish(config: StationConfig, campaign: str, start: Geometry, static: Measurements,
+                  segments: list[SegmentRecord], records: dict[tuple[str, int], PoseRecord],
+                  tracker: pin.SE3, selection: dict[str, Any], watch: ReferenceWatch, stop: EarlyStop,
+                  boot_plan: list[tuple[int, np.ndarray]] | None, planned: list[tuple[int, str, np.ndarray]],
+                  controller: Mapping[str, Any] | None) -> Plan:
+    """A sweep campaign's fit, validation and verdict (`hil.campaign.sweep_plan`): the kinematics and
+    the clock map fitted together from the recorded streams and the bootstrap's still poses
+    (`hil.calibration.sweep_fit.fit_sweep`), then validated on the held-out still poses as
+    stop-and-go's are. The fit starts from the nominal arm located on the bootstrap's points (tracker
+    pose and SMR; a resumed run has only the stored tracker and the SMR's guess otherwise, centimetres
+    off). Returns the `CampaignResult`."""
+    from hil.calibration.sweep_fit import fit_sweep
+
+    robot, camp = config.robot["type"], config.campaign
+    boot = [r for (role, _), r in sorted(records.items()) if role == BOOTSTRAP]
+    if len(boot) >= 3:  # the first model from the still poses: also on a resume, which skips locating
+        located_tracker, located_smr = _locate(boot, robot, np.asarray(start.smr, dtype=float))
+        start = Geometry.nominal(robot, located_smr, located_tracker)
+    joints, stream, other, joined = streams_of(segments)
+    offset, drift = first_clock(joined)
+    try:
+        swept = fit_sweep(start, joints, stream, static=static if len(static) else None,
+                          compliance=camp["compliance"], initial_offset_s=offset, initial_drift=drift)
+    except InputError as exc:  # too little trusted data: the run failed, the input was fine
+        raise IdentificationError(f"cannot identify from the sweep: {exc}") from None
+    fit = swept.fit
+    assert fit is not None
+    fit.baseline = start  # the nominal arm, located by the bootstrap: "before"
+    clock = swept.clock
+    left = {k: int(v) for k, v in {**swept.left_out, **other}.items() if v}
+    figures = {"offset_s": clock.offset_s, "drift": clock.drift, "sigma_offset_s": clock.sigma_offset_s,
+               "t_ref": clock.t_ref, "sigma_at_ref_s": clock.sigma_at_ref_s,
+               "sigma_drift": clock.sigma_drift, "used": int(swept.used), "left_out": left,
+               "rms": float(swept.rms_m), "segments": len(segments),
+               "joint_samples": len(joints.t), "tracker_samples": len(stream.t)}
+    yield Emit(SweepFitted(campaign=campaign, offset_s=clock.offset_s, drift=clock.drift,
+                           sigma_offset_s=clock.sigma_offset_s, sigma_drift=clock.sigma_drift,
+                           used=int(swept.used), left_out=left, rms=float(swept.rms_m),
+                           t_ref=float(clock.t_ref), sigma_at_ref_s=float(clock.sigma_at_ref_s)))
+    yield Emit(ModelIdentified(campaign=campaign, rms=fit.rms, max=fit.max_error, iterations=fit.iterations,
+                               rejected=[], model=model_document(fit, controller=controller)))
+    yield Phase("validate")
+    val_records = [r for (role, _), r in sorted(records.items()) if role == VALIDATION]
+    held_out = measurements_of(val_records, f"campaign {campaign} validation")
+    before = validate(start, held_out)
+    after = validate(fit.geometry, held_out)
+    try:
+        precision = campaign_validation_precision(after.errors, [r.index for r in val_records],
+                                                  selection.get("validation"))
+    except (ValueError, TypeError, KeyError) as exc:
+        precision = None
+        yield Emit(Message(campaign=campaign, level="warning",
+                           text=f"the validation RMS's standard error could not be estimated: {exc}"))
+    verdict = sweep_verdict(after.rms, before.rms, robot, camp["acceptance"])
+    yield Emit(ValidationDone(campaign=campaign, before=before.as_dict(), after=after.as_dict(),
+                              passed=verdict.passed, controller=None))
+    doc = model_document(fit, after.as_dict(), controller=controller)
+    drift = watch.summary() if config.warmup["enabled"] or config.drift["every"] or watch.points else None
+    return CampaignResult(fit, before, after, verdict.passed, list(records.values()), tracker, selection,
+                          iso9283(val_records, fit.geometry), doc, None, drift, stop.summary(), precision,
+                          pose_counts(boot_plan, planned, records), None, verdict, figures)
+
+
 def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
                      resume: ResumeState | None = None, validation_cycles: int = 1,
-                     controller: Mapping[str, Any] | None = None) -> Plan:
+                     controller: Mapping[str, Any] | None = None, keep_in_check: Geometry | None = None,
+                     session: str = "") -> Plan:
     """The whole campaign as a generator of steps; returns a `CampaignResult`.
 
     `controller`: the controller's own model (`controller_record`), when it reported one: kept in
-    the model document and validated on the same held-out poses as hil's.
+    the model document and validated on the same held-out poses as hil's. A sweep campaign
+    (``campaign.mode = "sweep"``, `hil.campaign.sweep_plan`) checks its tour with `keep_in_check`
+    (the arm the engine checks moves with; default: the located nominal arm) and records its
+    segments under `session` (this run's).
     """
     resume = resume or ResumeState()
     robot = config.robot["type"]
@@ -473,13 +563,24 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
                          reference=[float(v) for v in reference]))
 
     # --- measure -------------------------------------------------------------------------------
-    todo = [(i, r, q) for i, r, q in planned if (r, i) not in records]
+    sweeping = camp["mode"] == SWEEP
+    sweep_records = dict(resume.sweep)
+    segments: list[SweepSegment] = []
+    if sweeping:  # the tour through the calibration poses, checked whole before the sweep moves
+        waypoints = np.array([q for _, r, q in planned if r == CALIBRATION])
+        if resume.sweep_tour:  # the tour the campaign began: its segments' numbers name what is recorded
+            segments = stored_tour(resume.sweep_tour, config, get_robot(robot), keep_in_check or model)
+        else:
+            segments = sweep_tour(waypoints, config, get_robot(robot), keep_in_check or model,
+                                  sight_model=model)
+    todo = [(i, r, q) for i, r, q in planned if (r, i) not in records
+            and not (sweeping and r == CALIBRATION)]
     # the stopping rule (campaign.stop_early): a stop the store holds is kept as it was decided
     stop = EarlyStop(StoppingRule(robot, smr_guess, np.array([q for _, r, q in planned if r == VALIDATION]),
                                   acceptance_threshold(camp["acceptance"], robot), camp["stop_margin"],
                                   compliance=camp["compliance"],
                                   payload=config.payload, gravity=config.gravity)
-                     if camp["stop_early"] else None, resume.stopping)
+                     if camp["stop_early"] and not sweeping else None, resume.stopping)
 
     def fitted() -> list[PoseRecord]:
         return [r for (role, _), r in sorted(records.items()) if role in (BOOTSTRAP, CALIBRATION)]
@@ -497,10 +598,30 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     # the tracker frame was located from measured points (the bootstrap) unless it was configured
     watch = ReferenceWatch(config, campaign, reference, model, visit, resume.references,
                            located=config.tracker["position"] is None)
-    if todo:  # warm (again, on a resume: the arm may have cooled) before measuring anything
+    sweep_left = [g for g in segments if g.index not in sweep_records]
+    if todo or sweep_left:  # warm (again, on a resume: the arm may have cooled) before measuring anything
         yield from watch.warm_up([q for _, r, q in planned if r == CALIBRATION])
+    if segments:
+        yield Phase("sweep", f"{len(sweep_left)} of {len(segments)} sweep segments to record")
+        yield Emit(SweepPlanned(
+            campaign=campaign, segments=[{"index": g.index, "from": list(g.start),
+                                          "to": [float(v) for v in g.q[-1]],
+                                          "seconds": (len(g.q) - 1) / CONTROLLER_RATE_HZ,
+                                          "samples": len(g.q),
+                                          "knots": [] if g.knots is None else np.asarray(g.knots).tolist()}
+                                         for g in segments],
+            waypoints=[list(map(float, w)) for w in waypoints], rate_hz=CONTROLLER_RATE_HZ,
+            tracker_rate_hz=TRACKER_RATE_HZ, done=sorted(sweep_records)))
+        if sweep_left:
+            got = yield Sweep(tuple(sweep_left), len(segments), TRACKER_RATE_HZ, session)
+            if isinstance(got, SweepRecorded):
+                sweep_records.update({r.index: r for r in got.segments})
     left = [(i, r) for i, r, _ in todo if not (r == CALIBRATION and stop.stopped)]
-    yield Phase("measure", f"{len(left)} of {len(planned)} poses to measure")
+    if sweeping:  # the calibration poses were swept: the still ones left are the validation's
+        still = sum(1 for _, r, _ in planned if r != CALIBRATION)
+        yield Phase("measure", f"{len(left)} of {still} still validation poses to measure")
+    else:
+        yield Phase("measure", f"{len(left)} of {len(planned)} poses to measure")
     if todo:
         yield from watch.start()
     sight = _SightCheck(robot, smr_guess, tracker.translation, config.smr["acceptance_angle"],
@@ -536,6 +657,10 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     yield Phase("identify")
     fit_records = [r for (role, _), r in sorted(records.items()) if role in (BOOTSTRAP, CALIBRATION)]
     fitted = measurements_of(fit_records, f"campaign {campaign}")
+    if sweeping:
+        return (yield from _sweep_finish(config, campaign, model, fitted, list(sweep_records.values()),
+                                         records, tracker, selection, watch, stop, boot_plan, planned,
+                                         controller))
     try:
         fit = identify_with_joint_errors(
             fitted, robot, smr_guess, compliance=camp["compliance"], payload=config.payload,

@@ -52,6 +52,7 @@ failing, and hands a visit of role `REFERENCE` back to the plan alone: no pose e
 from __future__ import annotations
 
 import logging
+import secrets
 import threading
 import time
 from collections.abc import Callable, Sequence
@@ -98,6 +99,9 @@ from hil.campaign.steps import (
     SettleMeasure,
     Skipped,
     Step,
+    Sweep,
+    SweepRecorded,
+    SweepSegment,
 )
 from hil.campaign.stillness import judge
 from hil.errors import HilError
@@ -250,7 +254,8 @@ class Engine:
             SettleMeasure: self._settle_measure}
         self._plan_handlers: dict[type, Callable[[Any], Any]] = {
             Acquire: self._acquire, Phase: self._phase, Emit: self._emit, Checkpoint: self._checkpoint,
-            ReadConditions: self._read_conditions, Move: self._plan_move, Settle: self._plan_device_step,
+            ReadConditions: self._read_conditions, Move: self._plan_move, Sweep: self._sweep,
+            Settle: self._plan_device_step,
             ReadJoints: self._plan_device_step, Measure: self._plan_device_step,
             SettleMeasure: self._plan_device_step}
         self.stats = RunStats()
@@ -462,6 +467,31 @@ class Engine:
             if not step.optional:
                 raise
             return Skipped(-1, "", str(exc), lost=False)
+
+    def _sweep(self, step: Sweep) -> SweepRecorded:
+        """`Sweep`: each segment moved to, streamed and recorded (`hil.campaign.sweep_recording`), its
+        chunks and `SweepSegmentDone` delivered (the store commits them) before the next segment; a
+        suspension sweeps the interrupted segment again whole, under a new take."""
+        records = []
+        for segment in step.segments:
+            self._between_steps()
+            records.append(self._with_suspenders(lambda s=segment: self._sweep_segment(s, step)))
+        return SweepRecorded(tuple(records))
+
+    def _sweep_segment(self, segment: SweepSegment, step: Sweep) -> Any:
+        from hil.campaign.sweep_recording import record_segment, segment_events
+
+        self._device_step(Move(segment.start))  # at rest at its start: by a safe route, as any move
+        t = self.clock.monotonic()
+        record = record_segment(self.robot, self.tracker, segment, step.tracker_rate_hz, step.session)
+        self._last_q = np.asarray(segment.q[-1], dtype=float)
+        seconds = self.clock.monotonic() - t
+        self.stats.motion += seconds
+        take = secrets.token_hex(6)  # this attempt's: a segment cut short is never read back
+        for event in segment_events(self.campaign, record, take, step.total,
+                                    seconds * float(getattr(self.clock, "speed", 1.0))):
+            self.emit(event)
+        return record
 
     def _plan_device_step(self, step: Settle | ReadJoints | Measure | SettleMeasure) -> Any:
         """A device step outside a pose visit: retried after a suspension like a visit."""

@@ -287,6 +287,76 @@ class ValidationDone(Event):
 
 
 @dataclass(frozen=True, kw_only=True)
+class SweepPlanned(Event):
+    """The sweep's tour, checked before it moves: `segments` between the `waypoints` (the calibration
+    poses, in the tour's order), each ``{"index", "from", "to", "seconds", "samples"}``; `done`: the
+    segments a resumed campaign already has (not swept again)."""
+
+    segments: list[dict[str, Any]]
+    waypoints: list[list[float]]
+    rate_hz: float  # the servo stream's rate (the controller period's)
+    tracker_rate_hz: float
+    done: list[int] = field(default_factory=list)
+
+
+@dataclass(frozen=True, kw_only=True)
+class SweepChunk(Event):
+    """A chunk of one stream of one sweep segment's attempt (`take`), for the store's
+    ``stream_chunks`` table. `stamps` (s, the stream's own clock) and `values` (joints: 6 rad; tracker:
+    x, y, z m, or None when the beam was lost) stay out of its dict (the event log and ``--json`` carry
+    the counts; the samples are the table's), so `from_dict` rebuilds it without them."""
+
+    segment: int
+    take: str
+    stream: str  # "joints" or "tracker"
+    chunk: int
+    session: str = ""
+    count: int = 0
+    stamps: tuple[float, ...] = ()
+    values: tuple[Any, ...] = ()
+
+    def to_dict(self) -> dict[str, Any]:
+        data = super().to_dict()
+        del data["stamps"], data["values"]
+        return data
+
+
+@dataclass(frozen=True, kw_only=True)
+class SweepSegmentDone(Event):
+    """Segment `segment` (of `segments`) is recorded whole under `take`: its chunks count; a resumed
+    campaign does not sweep it again. The stream's health: samples per stream, beam breaks (runs of
+    lost tracker samples), lost samples, and the robot time the segment took (s)."""
+
+    segment: int
+    segments: int
+    take: str
+    session: str
+    joints: int
+    tracker: int
+    lost: int
+    breaks: int
+    seconds: float
+    # (tracker stamp, controller stamp) of one instant by the host's clock (`sweep_recording.anchor`)
+    anchor: list[float] | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class SweepFitted(Event):
+    """The sweep's join and fit: the clock map t_ctrl = offset + (1 + drift)·t_trk with its σ, the
+    tracker samples used and those left out by reason, the residual RMS (m)."""
+
+    offset_s: float
+    drift: float
+    sigma_offset_s: float
+    sigma_drift: float
+    used: int
+    left_out: dict[str, int]
+    rms: float
+    t_ref: float = 0.0  # the tracker time the fit is centred on, where the map is known best
+    sigma_at_ref_s: float = 0.0  # the map's σ there (s)
+
+
+@dataclass(frozen=True, kw_only=True)
 class Message(Event):
     level: str  # info, warning, error
     text: str

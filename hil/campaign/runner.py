@@ -11,6 +11,7 @@ keeps resumable, so re-running the same command continues the campaign as after 
 from __future__ import annotations
 
 import logging
+import secrets
 import signal
 import sqlite3
 from collections.abc import Callable, Iterable, Mapping
@@ -46,9 +47,10 @@ from hil.campaign.events import (
     ReferenceMeasured,
     RunFinished,
     RunStarted,
+    SweepPlanned,
 )
 from hil.campaign.ids import new_campaign_id
-from hil.campaign.steps import PoseRecord
+from hil.campaign.steps import PoseRecord, SegmentRecord
 from hil.campaign.stopping import stopped_words
 from hil.campaign.suspenders import suspenders
 from hil.errors import EXIT_ABORTED, EXIT_FAILED, EXIT_FAULT, EXIT_OK, HilError, InputError
@@ -153,9 +155,14 @@ def run_campaign(config: StationConfig, choose: ChoosePoses, *, bus: EventBus | 
         status = "accepted" if result.passed else "rejected"
         return status, f"{reason}{flag}{stopped_words(result.stopping)}"
 
+    session = secrets.token_hex(6)  # this run's: a sweep's segments name the run that recorded them
     return run_plan(
         config, lambda run: calibration_plan(config, choose, run.campaign, resume, validation_cycles,
-                                             run.controller),
+                                             run.controller,
+                                             keep_in_check=keep_in_model(get_robot(config.robot["type"]),
+                                                                         config.smr["offset"],
+                                                                         run.controller),
+                                             session=session),
         judge=judge, poses=planned, measured=measured, resumed=resume is not None, bus=bus,
         campaign=campaign, clock=clock, devices=devices, engine_ready=engine_ready, lease=lease,
         deviation=_nominal_deviation(config, resume.records.values() if resume else ()),
@@ -366,8 +373,26 @@ def resume_state(store: Any, campaign: str) -> ResumeState:
     # the stopping rule's decision: the remaining calibration poses stay unvisited (the last stop)
     stops = [e for e in store.events(campaign, types=("AcquisitionStopped",))
              if isinstance(e, AcquisitionStopped)]
-    return ResumeState(poses=resumed, tracker=tracker,
+    tours = [e for e in store.events(campaign, types=("SweepPlanned",)) if isinstance(e, SweepPlanned)]
+    return ResumeState(poses=resumed, tracker=tracker, sweep=sweep_state(store, campaign),
+                       sweep_tour=list(tours[0].segments) if tours and resumed else None,
                        records=records, selection=plan.get("selection") or {}, bootstrap=bootstrap,
                        reference=np.array(reference, dtype=float) if reference and resumed else None,
                        references=references,
                        stopping=dict(stops[-1].figures) if stops and resumed else None)
+
+
+def sweep_state(store: Any, campaign: str) -> dict[int, SegmentRecord]:
+    """A sweep campaign's segments recorded whole: each segment's last `SweepSegmentDone` names the
+    take whose chunks are read back (`hil.campaign.sweep_plan.record_from_store`); chunks of a take
+    no done event names (a segment cut short) are never read."""
+    from hil.campaign.events import SweepSegmentDone
+    from hil.campaign.sweep_plan import record_from_store
+
+    done: dict[int, SweepSegmentDone] = {}
+    for event in store.events(campaign, types=("SweepSegmentDone",)):
+        if isinstance(event, SweepSegmentDone):
+            done[event.segment] = event
+    return {k: record_from_store(k, e.session, store.stream_chunks(campaign, k, e.take, "joints"),
+                                 store.stream_chunks(campaign, k, e.take, "tracker"), e.anchor)
+            for k, e in sorted(done.items())}

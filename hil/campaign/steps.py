@@ -163,8 +163,64 @@ class Checkpoint:
     label: str
 
 
+@dataclass(frozen=True)
+class SweepSegment:
+    """One segment of a sweep's tour: the servo samples `q` (n, 6) rad at the controller period, from
+    one waypoint (at rest) to the next (at rest), already checked (`hil.campaign.sweep_plan`)."""
+
+    index: int
+    q: np.ndarray
+    rate_hz: float = 500.0  # samples per second of station time
+    # the leg's knots in order (m, 6): its start, any vias, its end (`hil.campaign.sweep_plan`); a
+    # resumed campaign plans the same segment again from them
+    knots: np.ndarray | None = None
+
+    @property
+    def start(self) -> tuple[float, ...]:
+        return tuple(float(v) for v in self.q[0])
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """Sweep the arm through `segments` while both instruments stream, committing what they record.
+
+    The engine moves the arm to each segment's start (a routed `Move`, as a pose visit's), streams its
+    samples with the robot's `follow` while the tracker streams at `tracker_rate_hz`, and emits the
+    segment's chunks and its `SweepSegmentDone`: a segment is the unit of recovery (after a suspension,
+    or in a resumed campaign, it is swept again whole under a new take). `total`: the tour's segments
+    (for "segment i of m"), `session`: the run recording them. Answered with `SweepRecorded`."""
+
+    segments: tuple[SweepSegment, ...]
+    total: int
+    tracker_rate_hz: float
+    session: str = ""
+
+
+@dataclass(frozen=True)
+class SegmentRecord:
+    """What one segment recorded: the controller's stream (stamps (K,) s, joints (K, 6) rad) and the
+    tracker's (its own stamps (M,) s, points (M, 3) m, NaN rows where the beam was lost)."""
+
+    index: int
+    session: str
+    joint_t: np.ndarray
+    joint_q: np.ndarray
+    tracker_t: np.ndarray
+    tracker_p: np.ndarray
+    # (tracker stamp, controller stamp) of one instant, both read against the host's clock: a first
+    # guess of the map between the two clocks (None: the instruments did not say enough)
+    anchor: tuple[float, float] | None = None
+
+
+@dataclass(frozen=True)
+class SweepRecorded:
+    """The answer to `Sweep`: the record of every segment it swept, in order."""
+
+    segments: tuple[SegmentRecord, ...]
+
+
 Step = (Move | Settle | ReadJoints | Measure | SettleMeasure | Acquire | Phase | Emit | Checkpoint
-        | ReadConditions)
+        | ReadConditions | Sweep)
 Plan = Generator[Step, Any, Any]
 
 

@@ -64,6 +64,8 @@ TIME_BUDGET = option("time budget")
 SEARCH_TIME = option("search time")
 #: --selection: campaign.selection's values (hil.station.config.SELECTIONS)
 SELECTIONS = ("tabu", "time-aware")
+#: --mode: campaign.mode's values (hil.station.config.MODES)
+MODES = ("stop-and-go", "sweep")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -97,6 +99,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="pose selection: tabu (the most informative --poses poses, then their tour) or "
                         "time-aware (poses and tour together: the same accuracy in the least robot time); "
                         "overrides campaign.selection")
+    p.add_argument("--mode", choices=MODES,
+                   help="stop-and-go (measure each pose standing still) or sweep (follow a path through "
+                        "the poses while emScon and the joints stream; emScon only); overrides "
+                        "campaign.mode")
     p.add_argument("--time-budget", type=TIME_BUDGET, metavar="SECONDS",
                    help="time-aware: the most accurate tour within this much robot time; overrides "
                         "campaign.time_budget")

@@ -95,10 +95,15 @@ class StationSource:
             loaded = config if isinstance(config, StationConfig) else load_config(config)
             loaded = check_runnable(loaded)  # before a store is opened or created
             agreed_robot([config_claim(loaded), *said])  # both must name the same arm
+            _check_sweep(overrides.get("campaign__mode"), loaded.tracker["protocol"],
+                         f"{loaded.source}: tracker.protocol")
             return cls(config=loaded, overrides=overrides)
         if not sim:
             raise InputError("--config or --sim: which station?")
         quantity("simulated speed").check(float(speed), "--speed")
+        _check_sweep(overrides.get("campaign__mode"), tracker_protocol or "geocom",
+                     "--tracker-protocol" if tracker_protocol else "--sim's tracker (GeoCOM unless "
+                     "--tracker-protocol emscon)")
         if truth and ideal is not None:
             raise InputError(f"--{'' if ideal else 'no-'}ideal chooses a random arm: the truth {truth} "
                              "says itself whether its arm has joint errors and lost motion")
@@ -110,6 +115,17 @@ class StationSource:
     def speed(self) -> float:
         """The station's clock speed: fast time for a simulated one, real time for a real one."""
         return self.sim.speed if self.sim is not None else 1.0
+
+
+def _check_sweep(mode: str | None, protocol: str, where: str) -> None:
+    """``--mode sweep`` with a tracker that cannot stream is bad input, said in one line before anything
+    connects (`hil.station.config.sweep_refused`); the configuration's own ``campaign.mode`` is checked
+    with the rest of the file."""
+    from hil.station.config import sweep_refused
+
+    problem = sweep_refused(protocol) if mode == "sweep" else None
+    if problem:
+        raise InputError(f"--mode sweep: {problem} ({where} is {protocol})")
 
 
 @dataclass(frozen=True)

@@ -66,6 +66,9 @@ def result_document(outcome: Any, config: StationConfig, events: list[Event], st
         if outcome.result.iso9283:
             doc["validation"]["iso9283_poses"] = outcome.result.iso9283["poses"]
         doc["selection"] = outcome.result.selection
+        sweep = getattr(outcome.result, "sweep", None)
+        if sweep is not None:  # a sweep campaign: its clock map, samples used and left out by reason
+            doc["sweep"] = sweep
     else:
         doc = {"format": "hil-result/1", "campaign": outcome.campaign, "passed": False,
                "station": config.station["name"], "robot": config.robot["type"]}

@@ -184,6 +184,28 @@ def _selection(v: Any) -> str | None:
     return None if v in SELECTIONS else f"must be one of {', '.join(SELECTIONS)}, got {v!r}"
 
 
+#: `campaign.mode` values: stop at every pose and measure it still, or sweep through the poses while
+#: both instruments stream (docs/design.md, The calibration campaign: the sweep mode).
+MODES = ("stop-and-go", "sweep")
+
+
+def _mode(v: Any) -> str | None:
+    return None if v in MODES else f"must be one of {', '.join(MODES)}, got {v!r}"
+
+
+def sweep_refused(protocol: str) -> str | None:
+    """Why a tracker speaking `protocol` cannot sweep, or None. GeoCOM is a polled RPC: a motorised
+    total station's tracking mode gives about 10 distances a second (Leica TPS1200 user manual,
+    ≈0.15 s per distance; docs/design.md, Facts: GeoCOM), a hundredth of emScon's continuous 1000 Hz
+    (Leica AT960 datasheet, Facts: two clocks), and its readings carry no instrument stamp: at 0.25 m/s
+    the SMR moves 25 mm between two of them."""
+    if protocol == "geocom":
+        return ("GeoCOM cannot stream fast enough: a polled reading takes about 0.15 s (about 10 a "
+                "second, Leica TPS1200) and carries no instrument time stamp; a sweep needs emScon's "
+                "continuous mode (tracker.protocol = \"emscon\")")
+    return None
+
+
 def _protocol(v: Any) -> str | None:
     return None if v in PROTOCOLS else f"must be one of {', '.join(PROTOCOLS)}, got {v!r}"
 
@@ -345,6 +367,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # chooses poses and order together for robot time (hil.calibration.timed_selection): the
         # predicted accuracy of method 000's calibration_poses, or the best within time_budget
         "selection": Key("str", "tabu", _selection, "pose selection: tabu (method 000) or time-aware"),
+        # stop-and-go measures each pose standing still; sweep follows a smooth path through the
+        # calibration poses while the tracker (emScon only) and the joints stream (hil.campaign.sweep)
+        "mode": Key("str", "stop-and-go", _mode, "campaign mode: stop-and-go or sweep (emScon only)"),
         # a campaign of 10 poses takes about a minute of robot time; a day is a value in milliseconds
         "time_budget": Key("float", 0.0, _quantity("time budget", off=0),
                            "time-aware: robot seconds for the calibration and validation tour "
@@ -608,6 +633,13 @@ def parse_config(data: dict[str, Any], source: str = "<config>") -> StationConfi
         raise InputError(f"{source}: warmup.max_time: {warmup['max_time']:g} s is shorter than one "
                          f"warmup.interval ({warmup['interval']:g} s): the warm-up could not check the arm "
                          "once")
+    if values["campaign"]["mode"] == "sweep":
+        problem = sweep_refused(values["tracker"]["protocol"])
+        if problem:
+            raise InputError(f"{source}: campaign.mode: {problem}")
+        if values["campaign"]["stop_early"]:  # it would be silently ignored
+            raise InputError(f"{source}: campaign.stop_early: a sweep passes every calibration pose in one "
+                             "tour; stopping early is stop-and-go's (campaign.mode = \"stop-and-go\")")
     val, clusters = values["campaign"]["validation_poses"], values["campaign"]["validation_clusters"]
     if clusters > val:
         raise InputError(f"{source}: campaign.validation_clusters: {clusters} clusters for "

@@ -37,6 +37,24 @@ class StoreQueries(ListingQueries, TransactionalStore):
                                             column="value")))
         return out
 
+    def stream_chunks(self, campaign: str, segment: int, take: str, stream: str
+                      ) -> tuple[list[float], list[Any]]:
+        """One recorded stream of a sweep segment's take, its chunks joined in order: (stamps, values)
+        (`hil.store.tables.stream_chunks`)."""
+        c = tb.stream_chunks
+        rows = self._query(lambda conn: conn.execute(
+            select(c.c.chunk, c.c.data).where(c.c.campaign == campaign, c.c.segment == segment,
+                                              c.c.take == take, c.c.stream == stream)
+            .order_by(c.c.chunk)).all())
+        stamps: list[float] = []
+        values: list[Any] = []
+        for chunk, data in rows:
+            doc = row_json(data, table="stream_chunks", row=f"{segment}/{take}/{stream}/{chunk}",
+                           column="data", campaign=campaign)
+            stamps.extend(doc["t"])
+            values.extend(doc["v"])
+        return stamps, values
+
     def model(self, campaign: str) -> dict[str, Any] | None:
         """The campaign's latest model document, or None if it has none yet."""
         m = tb.models

@@ -81,6 +81,7 @@ class EventRecorder(TransactionalStore):
             RunFinished,
             RunStarted,
             StateChanged,
+            SweepChunk,
             ValidationDone,
         )
 
@@ -105,6 +106,9 @@ class EventRecorder(TransactionalStore):
         elif isinstance(ev, ValidationDone):
             details = {"controller": ev.controller} if ev.controller else None
             rows.insert_validation(conn, cid, ev.before, ev.after, ev.passed, None, details, t, where)
+        elif isinstance(ev, SweepChunk) and ev.stamps:
+            rows.insert_stream_chunk(conn, cid, ev.segment, ev.take, ev.stream, ev.chunk, ev.session,
+                                     ev.stamps, ev.values)
         elif isinstance(ev, ControllerModel):
             rows.keep_controller(conn, cid, ev.model)
         elif isinstance(ev, RunFinished):

@@ -250,3 +250,19 @@ def insert_validation(conn: Connection, campaign: str, before: Mapping[str, Any]
         return int(conn.execute(select(v.c.id).where(v.c.campaign == campaign,
                                                      v.c.sha256 == key)).scalar_one())
     return int(row[0])
+
+
+def insert_stream_chunk(conn: Connection, campaign: str, segment: int, take: str, stream: str, chunk: int,
+                        session: str, stamps: Any, values: Any) -> None:
+    """One chunk of a sweep's stream (`hil.store.tables.stream_chunks`); again for the same key (a
+    retried transaction) it is kept once."""
+    t = [float(v) for v in stamps]
+    if not t:
+        raise StoreError(f"stream chunk {stream} {segment}/{chunk}: no samples")
+    data = {"t": t, "v": [None if v is None else [float(x) for x in v] for v in values]}
+    if len(data["v"]) != len(t):
+        raise StoreError(f"stream chunk {stream} {segment}/{chunk}: {len(t)} stamps, {len(data['v'])} values")
+    conn.execute(dialect_insert(conn, tb.stream_chunks).values(
+        campaign=campaign, segment=int(segment), take=str(take), stream=str(stream), chunk=int(chunk),
+        session=str(session), count=len(t), t0=t[0], t1=t[-1], data=dumps(data))
+        .on_conflict_do_nothing(index_elements=["campaign", "segment", "take", "stream", "chunk"]))

@@ -8,6 +8,6 @@ tests/hil/store/test_sqlite_reader.py checks it equals the migrations' head.
 from __future__ import annotations
 
 #: The newest revision this code knows (the head of `hil.store.migrations`).
-HEAD = "0005"
+HEAD = "0006"
 #: The schema version a number can say: revision "000N" is version N.
 SCHEMA_VERSION = int(HEAD)

@@ -18,6 +18,13 @@ Why the tables look as they do:
 * Pose ``idx`` is unique within a campaign across roles: it is the pose's number in the plan.
 * ``events.uid`` makes appending an event idempotent: a write retried after a lost database link,
   whose first COMMIT may or may not have landed, finds its own row instead of adding a second one.
+* ``stream_chunks`` holds a sweep's two streams (``joints``: the controller's timestamps and
+  actual_q; ``tracker``: the tracker's own stamps and points, a lost sample's point null) in chunks of
+  a few hundred samples, one row each, committed as the sweep records them. A segment of the sweep is
+  recorded under a ``take`` (one per attempt); its ``SweepSegmentDone`` event says which take is whole,
+  so a segment cut short (Ctrl-C, ``kill -9``) is swept again under a new take and its partial rows are
+  never read. ``session`` names the run that recorded it: the instruments' clocks may restart between
+  two runs of a campaign.
 * ``marks`` is a journal of judgements on a calibration (bad, with a reason; or good again): the
   current model of a robot is its newest accepted calibration whose latest mark is not bad.
 """
@@ -173,6 +180,21 @@ leases = Table(
     Column("since", Float, nullable=False),
     Column("heartbeat", Float, nullable=False),
     Index("leases_token", "token"),
+)
+
+stream_chunks = Table(
+    "stream_chunks", metadata,
+    Column("campaign", Text, ForeignKey("campaigns.id", ondelete="CASCADE"), nullable=False),
+    Column("segment", Integer, nullable=False),  # the sweep's segment (between two waypoints)
+    Column("take", Text, nullable=False),  # the attempt that recorded it (random, one per attempt)
+    Column("stream", Text, nullable=False),  # 'joints' or 'tracker'
+    Column("chunk", Integer, nullable=False),  # 0, 1, ... within the take's stream
+    Column("session", Text, nullable=False, server_default=""),  # the run that recorded it
+    Column("count", Integer, nullable=False),
+    Column("t0", Float, nullable=False),  # first and last stamp of the chunk (s, the stream's clock)
+    Column("t1", Float, nullable=False),
+    Column("data", Text, nullable=False),  # JSON {"t": [...], "v": [[...], ...]} (rad or m; null: lost)
+    PrimaryKeyConstraint("campaign", "segment", "take", "stream", "chunk"),
 )
 
 marks = Table(

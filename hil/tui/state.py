@@ -28,11 +28,15 @@ from hil.campaign.events import (
     StateChanged,
     Suspended,
     SuspendExtended,
+    SweepFitted,
+    SweepPlanned,
+    SweepSegmentDone,
     ValidationDone,
     WarmupFinished,
     WarmupProgress,
 )
 from hil.campaign.reference_lines import describe as describe_reference
+from hil.campaign.sweep_lines import describe as describe_sweep
 
 # Suspended.kind -> (station field, reading while suspended, reading once resumed); the run's own
 # events keep the Station screen current while the run has the devices (it does not poll them then).
@@ -121,6 +125,8 @@ class RunState:
     # warm-up and drift watch: the latest line about the reference pose (`hil.campaign.reference_lines`)
     reference_line: str = ""
     drift_flagged: bool = False  # the reference drifted beyond its limit (the verdict stays validation's)
+    # a sweep campaign: the latest line on its segments and streams (`hil.campaign.sweep_lines`)
+    sweep_line: str = ""
 
     @property
     def measured(self) -> int:
@@ -192,6 +198,8 @@ class RunState:
                 return  # the flag stays in view once raised
             self.reference_line = describe_reference(event) or self.reference_line
             self.drift_flagged = self.drift_flagged or isinstance(event, DriftFlagged)
+        elif isinstance(event, SweepPlanned | SweepSegmentDone | SweepFitted):
+            self.sweep_line = describe_sweep(event) or self.sweep_line
         elif isinstance(event, RunFinished):
             self.finished, self.active, self.suspended = event, False, None
             self.suspend_deadline = None

@@ -78,9 +78,10 @@ clock, which stamps continuous samples and spaces their grid. A real tracker's c
 own that runs at the rate of the host's (to tens of ppm) whatever the simulation's speed, and a client
 maps its stamps onto the host's clock by an offset alone; a fast-time station (simulated seconds 20
 times faster than the wall's) stamping samples in simulated seconds would make every sample's time
-wrong by up to 95 % of its age. So the server passes that clock (``clock``: seconds of the wall clock
-since it started) beside ``now``, and a continuous sample stamped τ carries the SMR's position at the
-simulated time that τ was. The stamp it carries is that clock's reading through
+wrong by up to 95 % of its age. So the server passes that clock (``clock``: the simulated seconds since
+it started over the station's nominal speed, `mocks.emscon.server`, which pass in wall seconds while
+the station runs at that speed) beside ``now``, and a continuous sample stamped τ carries the SMR's
+position at the simulated time that τ was. The stamp it carries is that clock's reading through
 `EmsconConfig.clock` (`hil.calibration.stream_clocks.InstrumentClock`: offset + (1 + drift)·(τ +
 latency) + jitter), perfect by default; the simulated station gives the tracker realistic ones, so its
 stamps and the controller's RTDE timestamps disagree as two real instruments' do. The time grid stays

@@ -3,8 +3,12 @@
 ``EmsconSimulator(source).start()`` listens on a loopback address (``.url``, ``tcp://127.0.0.1:<port>``).
 Time: the instrument runs on simulated seconds since `start()`, read from the ``clock`` given (the
 robot simulator's ``SimClock.now`` in the station, so both simulators agree) or, without one, from
-the wall clock times ``ServerConfig.time_scale``; the tracker's own clock, which stamps continuous
-samples, runs at the wall clock's rate either way (`tracker_clock`), as a real tracker's does. A
+the wall clock times ``ServerConfig.time_scale``. The tracker's own clock, which stamps continuous
+samples, counts the same simulated time divided by ``time_scale`` (`tracker_clock`): a quartz in the
+simulated world, so its map to the controller's clock stays one straight line also when a paced
+station (`hil.station.paced_clock`) switches the simulation between its fast speed and the wall's rate,
+and, while the simulation runs at its nominal speed, a second of it passes in a wall second, as a real
+tracker's does for the host that maps its stamps by an offset (`drivers.tracker.emscon.tracker`). A
 session thread reads commands, answers them, ticks the instrument every ``poll_s`` of wall time and
 lets continuous samples out every ``batch_s`` (emScon's TcpDataPacketRate: 3..10 packets/s).
 
@@ -43,9 +47,6 @@ from mocks.geocom.target import TargetSource
 log = logging.getLogger(__name__)
 
 ES_C_UNKNOWN = 64  # ES_C_Unknown: the command an unsolicited refusal names
-#: Seconds within which the simulated time and the tracker's clock count as read at one instant
-#: (`EmsconSimulator.paired_times`): a tenth of the 1 ms finest sample separation TPI allows.
-PAIR_S = 1e-4
 
 
 @dataclass(frozen=True)
@@ -55,7 +56,9 @@ class ServerConfig:
     instrument: EmsconConfig = field(default_factory=EmsconConfig)
     address: str = "127.0.0.1"  # any 127.x.y.z
     port: int = 0  # 0: pick a free one
-    time_scale: float = 1.0  # simulated seconds per wall second, when no clock is given
+    # simulated seconds per wall second when no clock is given; with one, the clock's nominal speed:
+    # simulated seconds per second of the tracker's clock either way
+    time_scale: float = 1.0
     poll_s: float = 0.01  # how often the session ticks the instrument and notices stop()
     batch_s: float = 0.1  # continuous samples leave about this often
     send_timeout_s: float = 2.0  # a client that does not read for this long is dropped
@@ -91,20 +94,12 @@ class EmsconSimulator:
         self.refused = 0  # connections turned away
 
     def _start_pair(self) -> tuple[float, float]:
-        """(wall clock, simulated clock) at the server's start, read at one instant as `paired_times`
-        reads them: the tracker's clock (wall rate) and the simulated time both count from here, and
-        the station's true clock map (`mocks.station.StationService.clock_map`) rests on the pair.
-        Without a clock given, simulated time is the scaled wall clock from this instant (0 here)."""
-        if self._clock == self._scaled_wall:
-            self._t0_wall = time.monotonic()
-            return self._t0_wall, self._clock()
-        for _ in range(5):
-            w0 = time.monotonic()
-            t = self._clock()
-            w1 = time.monotonic()
-            if w1 - w0 < PAIR_S:
-                break
-        return 0.5 * (w0 + w1), t
+        """(wall clock, simulated clock) at the server's start: the simulated time, and the tracker's
+        clock with it, count from here, and the station's true clock map
+        (`mocks.station.StationService.clock_map`) rests on it. Without a clock given, simulated time
+        is the scaled wall clock from this instant (0 here)."""
+        self._t0_wall = time.monotonic()
+        return self._t0_wall, self._clock()
 
     def _scaled_wall(self) -> float:
         return (time.monotonic() - self._t0_wall) * self.config.time_scale
@@ -119,23 +114,16 @@ class EmsconSimulator:
         return self._t0
 
     def tracker_clock(self) -> float:
-        """The tracker's own clock (seconds since the server started): the wall clock's rate, also
-        when ``now`` runs in fast time, as a real tracker's quartz does (`mocks.emscon.instrument`,
-        Clocks)."""
-        return time.monotonic() - self._t0_wall
+        """The tracker's own clock (seconds since the server started): the simulated time over
+        ``time_scale`` (module docstring)."""
+        return self.now() / self.config.time_scale
 
     def paired_times(self) -> tuple[float, float]:
-        """(`now`, `tracker_clock`) read at one instant: a thread pre-empted between two separate reads
-        (a loaded machine) would pair a simulated time with a tracker clock tenths of a second later,
-        and the instrument maps its samples' stamps onto simulated time by such pairs. The wall clock
-        is read around the simulated one until the two reads are less than `PAIR_S` apart."""
-        for _ in range(5):
-            w0 = time.monotonic()
-            now = self.now()
-            w1 = time.monotonic()
-            if w1 - w0 < PAIR_S:
-                break
-        return now, 0.5 * (w0 + w1) - self._t0_wall
+        """(`now`, `tracker_clock`) of one instant: the instrument maps its samples' stamps onto
+        simulated time by such pairs, and the tracker's clock is a function of the simulated one, so
+        one read gives both."""
+        now = self.now()
+        return now, now / self.config.time_scale
 
     @property
     def url(self) -> str:

@@ -423,7 +423,8 @@ class EmsconTracker:
                                   else PointStatus.WARNING)
                         p = s.position
                         yield StreamSample(s.seconds + (offset or 0.0),
-                                           (float(p[0]), float(p[1]), float(p[2])), status)
+                                           (float(p[0]), float(p[1]), float(p[2])), status,
+                                           stamp=float(s.seconds))
                         count += 1
         finally:
             self._end_stream()

@@ -32,10 +32,14 @@ from hil.campaign.events import (
     RunStarted,
     StateChanged,
     Suspended,
+    SweepFitted,
+    SweepPlanned,
+    SweepSegmentDone,
     WarmupFinished,
     WarmupProgress,
 )
 from hil.campaign.reference_lines import describe as describe_reference
+from hil.campaign.sweep_lines import describe as describe_sweep
 
 #: `PlanReady.selection["kind"]` of a verification (`hil.verify.verification_plan.KIND`; not imported, so
 #: that the CLI's start-up does not load the verification's kinematics).
@@ -181,6 +185,10 @@ class Progress:
             self._line(f"{event.level}: {event.text}")
         elif isinstance(event, WarmupProgress | WarmupFinished | ReferenceMeasured | DriftFlagged):
             line = describe_reference(event)  # warm-up and drift watch (hil.campaign.warmup)
+            if line is not None:
+                self._line(line)
+        elif isinstance(event, SweepPlanned | SweepSegmentDone | SweepFitted):
+            line = describe_sweep(event)  # the sweep's progress and its streams' health
             if line is not None:
                 self._line(line)
         elif isinstance(event, RunFinished):

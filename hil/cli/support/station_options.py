@@ -58,6 +58,8 @@ def config_overrides(args: argparse.Namespace) -> dict[str, Any]:
         out["campaign__search_time"] = args.search_time
     if getattr(args, "plan_cache", None) is not None:
         out["campaign__plan_cache"] = args.plan_cache
+    if getattr(args, "mode", None) is not None:  # hil calibrate: stop-and-go or sweep (wins over the config)
+        out["campaign__mode"] = args.mode
     return out
 
 

@@ -148,6 +148,9 @@ class RunScreen(HilScreen):
         drift = Static(id="run-drift")  # warm-up and drift watch: shown once there is something to say
         drift.display = False
         yield drift
+        sweep = Static(id="run-sweep")  # a sweep's segments and its streams' health, once it sweeps
+        sweep.display = False
+        yield sweep
         table: DataTable[Text] = DataTable(id="poses", cursor_type="row", zebra_stripes=True)
         for label, key, width in COLUMNS:
             table.add_column(Text(label), key=key, width=width)  # Text: "[mm]" is not markup
@@ -241,8 +244,16 @@ class RunScreen(HilScreen):
         line.display = bool(run.reference_line)
         line.update(Text(run.reference_line, style="bold red" if run.drift_flagged else "cyan"))
 
+    def _sweep(self, run: RunState) -> None:
+        """A sweep campaign's latest line: the segment recorded and its streams' health, then the
+        clock map the join found (`hil.campaign.sweep_lines`); yellow while the beam broke."""
+        line = self.query_one("#run-sweep", Static)
+        line.display = bool(run.sweep_line)
+        line.update(Text(run.sweep_line, style="yellow" if "beam break" in run.sweep_line else "cyan"))
+
     def _status(self, run: RunState) -> None:
         self._drift(run)
+        self._sweep(run)
         status = self.query_one("#run-status", Static)
         bar = self.query_one("#run-progress", ProgressBar)
         step = self.query_one("#run-step", Static)

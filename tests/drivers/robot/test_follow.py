@@ -87,6 +87,30 @@ def test_follow_streams_the_trajectory_and_ends_at_its_last_sample(arm: Any) -> 
     # the loop keeps the controller's 2 ms period (see assert_on_period for why a low percentile)
     assert_on_period(res.times, 0.002)
     assert np.allclose(arm.read_joints(5).q, traj[-1], atol=1e-3)
+    # the controller's own record of the motion: its RTDE timestamp and actual_q on the controller's
+    # clock (not the host's), every frame the loop read or ur_rtde recorded between the first frame
+    # the loop read and the last (`drivers.robot.ur.read_frames`, `union_of_frames`). How many
+    # depends on the machine: the simulator sends one frame per tick of its own thread (20 ms of
+    # its time at the fixture's 10x), a loaded machine makes those ticks late, and ur_rtde records
+    # the newest of frames that arrive together (a fresh-clone run had them 34-37 ms apart)
+    k = len(res.controller_t)
+    assert res.actual_q.shape == (k, 6) and np.all(np.diff(res.controller_t) > 0)
+    # the loop's own reads, one a cycle at most: the host-clock anchors, stamps among the frames'
+    L = len(res.host_t)
+    assert res.host_stamps.shape == (L,) and 45 <= L <= 450 and np.all(np.diff(res.host_t) >= 0)
+    # (the recording's stamps are rounded to the microsecond)
+    assert res.host_stamps[0] == pytest.approx(res.controller_t[0], abs=1e-6)
+    assert res.host_stamps[-1] == pytest.approx(res.controller_t[-1], abs=1e-6)
+    nearest = np.abs(res.host_stamps[:, None] - res.controller_t[None, :]).min(axis=1)
+    assert np.all(nearest < 1e-9) and k >= L  # every frame the loop read, and those it missed
+    assert res.times[0] <= res.host_t[0] and res.host_t[-1] <= res.hold_end
+    # the arm went where it was sent: each recorded q lies on the ramp between its ends
+    span = traj[-1] - traj[0]
+    j = int(np.argmax(np.abs(span)))
+    s = (res.actual_q[:, j] - traj[0, j]) / span[j]
+    assert np.all((s > -0.01) & (s < 1.01)) and s[-1] > 0.99
+    off = res.actual_q - (traj[0] + s[:, None] * span)
+    assert np.abs(off).max() < 1e-3
     print(f"\n{type(arm).__name__}: {res.period_count} periods, mean {res.period_mean * 1e3:.3f} ms, "
           f"max {res.period_max * 1e3:.3f} ms")
 

@@ -119,7 +119,10 @@ def test_a_gap_and_a_beam_break_are_left_out_and_counted(station, joint_fit):
     want = s.clocks.controller_from_tracker()
     c = fit.clock
     assert abs(float(c.map(c.t_ref) - want(c.t_ref))) < 3 * c.sigma_at_ref_s
-    assert fit.trusted + sum(left.values()) == len(s.tracker.t)
+    # every sample once: used, or left out for its reason (the trusted ones the subsample passed over
+    # as thinned)
+    assert fit.used + sum(left.values()) == len(s.tracker.t)
+    assert left["thinned"] == fit.trusted - fit.used
 
 
 def test_a_validation_rest_left_out_is_never_seen_by_the_fit(station, joint_fit):
@@ -136,7 +139,7 @@ def test_a_validation_rest_left_out_is_never_seen_by_the_fit(station, joint_fit)
     np.testing.assert_array_equal(kept.t, t[~inside])
     np.testing.assert_array_equal(kept.p, s.tracker.p[~inside])
     fit = fit_sweep(joint_fit.geometry, s.joints, kept, samples=800)
-    assert fit.trusted + sum(fit.left_out.values()) == len(kept.t)  # every kept sample, once
+    assert fit.used + sum(fit.left_out.values()) == len(kept.t)  # every kept sample, once
     assert 90 <= fit.left_out["after a gap"] <= 110  # each hole is a gap: its 50 ms re-lock guard
     with pytest.raises(InputError, match="start ≤ end"):
         without_intervals(s.tracker, [(3.0, 2.0)])

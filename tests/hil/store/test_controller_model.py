@@ -99,17 +99,17 @@ def _v4_store(location: str) -> None:
         engine.dispose()
 
 
-def test_a_v4_store_upgrades_to_v5_in_place(location, monkeypatch):
+def test_a_v4_store_upgrades_to_the_head_in_place(location, monkeypatch):
     _v4_store(location)
     upgrades: list[str] = []
     real = command.upgrade
     monkeypatch.setattr(command, "upgrade",
                         lambda config, revision, *a, **k: (upgrades.append(revision), real(config, revision)))
     with Store.open(location) as s:
-        assert upgrades == ["0005"] and SCHEMA_VERSION == 5
-        assert raw(s).execute("SELECT version_num FROM alembic_version").fetchall() == [("0005",)]
+        assert upgrades == ["0006"] and SCHEMA_VERSION == 6
+        assert raw(s).execute("SELECT version_num FROM alembic_version").fetchall() == [("0006",)]
         if not location.startswith("postgresql"):
-            assert count(s, "PRAGMA user_version") == 5
+            assert count(s, "PRAGMA user_version") == 6
         old = s.campaign("20240101-000000-abcd")
         assert old.controller is None and old.summary.status == "accepted"  # ran before v5
         assert robot_history(s, ROBOT.serial).robot.controller == RECORD  # kept through the upgrade
@@ -117,7 +117,7 @@ def test_a_v4_store_upgrades_to_v5_in_place(location, monkeypatch):
         s.record_event(ControllerModel(campaign=cid, model=RECORD))
         assert s.campaign(cid).controller == RECORD
     with Store.open(location) as s:  # opened again: nothing more to upgrade
-        assert upgrades == ["0005"] and s.campaign(cid).controller == RECORD
+        assert upgrades == ["0006"] and s.campaign(cid).controller == RECORD
 
 
 def test_a_controller_model_is_stored_as_json_text(location):

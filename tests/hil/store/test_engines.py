@@ -461,8 +461,8 @@ def test_a_readonly_open_never_creates_a_store(location, tmp_path):
 # --- 7. the schema and its guards -----------------------------------------------------------------
 def test_a_fresh_database_has_the_whole_schema_at_the_head_revision(store, location):
     assert count(store, "SELECT count(*) FROM alembic_version") == 1
-    assert raw(store).execute("SELECT version_num FROM alembic_version").fetchone()[0] == "0005"
-    assert migrate_mod.HEAD == migrate_mod.script_head() == "0005" and SCHEMA_VERSION == 5
+    assert raw(store).execute("SELECT version_num FROM alembic_version").fetchone()[0] == "0006"
+    assert migrate_mod.HEAD == migrate_mod.script_head() == "0006" and SCHEMA_VERSION == 6
     with store.reading() as conn:
         inspector = inspect(conn)
         assert set(inspector.get_table_names()) == set(tb.metadata.tables) | {"alembic_version"}
@@ -476,7 +476,7 @@ def test_a_fresh_database_has_the_whole_schema_at_the_head_revision(store, locat
 def test_a_newer_database_is_refused(location):
     with Store.open(location) as s:
         raw(s).execute("UPDATE alembic_version SET version_num = '0099'")
-    with pytest.raises(InputError, match=r"schema revision 0099 is newer than this hil supports \(0005\)"):
+    with pytest.raises(InputError, match=r"schema revision 0099 is newer than this hil supports \(0006\)"):
         Store.open(location)
     with pytest.raises(InputError, match="newer"):
         Store.open(location, readonly=True)
@@ -505,7 +505,7 @@ def test_a_store_with_two_revisions_is_refused(location):
     with Store.open(location) as s:
         raw(s).execute("INSERT INTO alembic_version (version_num) VALUES ('0004')")
     for readonly in (False, True):
-        with pytest.raises(InputError, match=r"alembic_version holds 2 revisions \(000[45], 000[45]\)"):
+        with pytest.raises(InputError, match=r"alembic_version holds 2 revisions \(000[46], 000[46]\)"):
             Store.open(location, readonly=readonly)
 
 
@@ -556,10 +556,10 @@ def test_two_stores_opened_by_four_threads_at_once_upgrade_exactly_once(location
     try:
         assert not any(t.is_alive() for t in threads)
         assert errors == []
-        assert upgrades == ["0005"]
+        assert upgrades == ["0006"]
         cid = stores[0].create_campaign(cfg(), ROBOT)
         assert [c.id for c in stores[1].campaigns()] == [cid]
-        assert raw(stores[1]).execute("SELECT version_num FROM alembic_version").fetchall() == [("0005",)]
+        assert raw(stores[1]).execute("SELECT version_num FROM alembic_version").fetchall() == [("0006",)]
     finally:
         for s in stores:
             s.close()
@@ -928,9 +928,9 @@ def test_an_sqlite_store_from_before_alembic_upgrades_in_place(tmp_path, version
     path = tmp_path / "old.db"
     old = _legacy_store(path, version)
     with Store.open(path) as s:
-        assert upgrades == ["0005"]
-        assert raw(s).execute("SELECT version_num FROM alembic_version").fetchall() == [("0005",)]
-        assert count(s, "PRAGMA user_version") == SCHEMA_VERSION == 5
+        assert upgrades == ["0006"]
+        assert raw(s).execute("SELECT version_num FROM alembic_version").fetchall() == [("0006",)]
+        assert count(s, "PRAGMA user_version") == SCHEMA_VERSION == 6
         rec = s.campaign(LEGACY_ID)
         assert rec.config == old["config"] and rec.config_hash == config_hash(old["config"])
         assert rec.robot == ROBOT and rec.plan == {"method": "tabu"} and rec.software == "0.9"
@@ -961,7 +961,7 @@ def test_an_sqlite_store_from_before_alembic_upgrades_in_place(tmp_path, version
     with Store.open(path) as s:  # a second open: nothing to upgrade
         assert s.find_resumable(old["config"], ROBOT.serial) == LEGACY_ID
         assert sorted(s.measured_poses(LEGACY_ID)) == [0, 1, 3]
-    assert upgrades == ["0005"] and stamps == []
+    assert upgrades == ["0006"] and stamps == []
 
 
 def test_a_database_that_does_not_exist_is_bad_input_and_a_server_that_does_not_answer_a_fault(pg_url):

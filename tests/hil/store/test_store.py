@@ -125,8 +125,8 @@ def test_upgrade_from_v1(db):
     cid = _v1_database(db)
     with Store.open(db) as s:
         conn = raw(s)
-        assert conn.execute("PRAGMA user_version").fetchone()[0] == SCHEMA_VERSION == 5
-        assert conn.execute("SELECT version_num FROM alembic_version").fetchone()[0] == "0005"
+        assert conn.execute("PRAGMA user_version").fetchone()[0] == SCHEMA_VERSION == 6
+        assert conn.execute("SELECT version_num FROM alembic_version").fetchone()[0] == "0006"
         assert s.find_resumable(cfg("old")) == cid  # the backfilled config and measurement hashes
         assert s.campaign(cid).config_hash == config_hash(cfg("old"))
         indexes = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'index'")}

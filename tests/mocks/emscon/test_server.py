@@ -196,7 +196,8 @@ def test_continuous_stream_timestamps_batches_and_stop(client: Client) -> None:
     packets += [r for r in before if isinstance(r, MultiMeasResult)]
     samples = [s for p in packets for s in p.samples]
     times = np.array([s.seconds for s in samples])
-    # 5 ms on the tracker's clock, which runs at the wall's rate in fast time too: a wall second is
+    # 5 ms on the tracker's clock, which runs at the wall's rate while a fast-time station runs at its
+    # speed (the server's time_scale): a wall second is
     # 200 samples (not 20 simulated seconds' 4000), in packets about 0.1 s of wall time apart
     assert 75 < len(samples) <= 200 * wall + 10 and 3 <= len(packets) <= wall / 0.1 + 3
     np.testing.assert_allclose(np.diff(times), 0.005, atol=2e-6)

@@ -1,0 +1,258 @@
+"""The sweep campaign's own part of the plan: the tour, its check, its resume and the join.
+
+A sweep campaign (``campaign.mode = "sweep"``; docs/design.md, The calibration campaign) is the usual
+bootstrap (the tracker pose, the SMR, a first model from a few still poses) and warm-up, then one
+`hil.campaign.steps.Sweep` through the calibration poses the selection chose (the waypoints, in the
+tour's order) instead of a stop at each, then validation on still poses the fit never saw, exactly as
+stop-and-go's, so the verdict means the same.
+
+The tour is planned segment by segment, from one waypoint at rest to the next at rest
+(`hil.calibration.sweep_path.plan_sweep`, within ``robot.speed`` and ``robot.acceleration``): a
+segment is the unit a resumed campaign keeps or sweeps again, and its stops are reversals that make
+the clock offset observable. Every segment is checked before anything of the sweep moves
+(`check_sweep`): the keep-in box along it with the model the engine checks moves with, and the SMR in
+the tracker's view along it (facing the tracker within the acceptance angle, the beam clear of the
+arm) with the tracker where the bootstrap found it.
+
+Two poses the tracker sees do not make a straight joint path between them that it sees: the SMR turns
+with the wrist, and the tracker's emScon never re-locks by itself mid-stream, so a segment that leaves
+its view loses the rest of its samples (measured on the simulated station before this check: about
+half of each segment's tracker samples lost, beam broken once in 9 of 10 segments). So the tour's order
+is chosen for the segments that pass (`tour_segments`): from each waypoint, the nearest one not yet
+swept whose segment passes; where none does, the arm goes to the nearest by an ordinary move, not
+recorded (the engine's safe route; the tracker re-locks at the next segment's start). A tour with no
+segment that passes is bad input naming the first refused one and why.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from hil.arm.catalog import RobotSpec
+from hil.arm.geometry import Geometry
+from hil.calibration.stream_join import JointStream, TrackerStream
+from hil.campaign.acceptance import Verdict, class_bound
+from hil.campaign.steps import SegmentRecord, SweepSegment
+from hil.errors import InputError
+
+log = logging.getLogger(__name__)
+
+#: The campaign modes (`hil.station.config.MODES`).
+STOP_AND_GO, SWEEP = "stop-and-go", "sweep"
+
+#: Tracker samples a second while sweeping: emScon's continuous-time mode at its 1 ms separation, the
+#: AT960's 1000 Hz (docs/design.md, Facts: two clocks; Leica AT960 datasheet).
+TRACKER_RATE_HZ = 1000.0
+
+#: The controller period's rate the servo samples are planned at when the controller did not say
+#: (UR e-series RTDE, 500 Hz: docs/design.md, Facts: streaming on UR).
+CONTROLLER_RATE_HZ = 500.0
+
+
+#: How far (s) a later run's anchors may lie from the main run's first clock map and still be on the
+#: same clocks: the anchors are good to the links' latency, milliseconds, but a loaded host delivers
+#: RTDE frames in bursts tens of milliseconds late (times the speed in fast time: 50 ms was exceeded at
+#: speed 4, load 8-20); a restarted instrument's clock is off by its whole running time, the minutes
+#: a campaign ran at least. Half a second tells the two apart with room on both sides.
+CLOCK_AGREEMENT_S = 0.5
+
+
+def sweep_tour(waypoints: np.ndarray, config: Any, spec: RobotSpec, check_model: Geometry,
+               rate_hz: float = CONTROLLER_RATE_HZ, sight_model: Geometry | None = None
+               ) -> list[SweepSegment]:
+    """The tour through `waypoints` (m, 6) as segments rest to rest, each within the station's joint
+    speed and acceleration (and the arm's joint speed maxima), inside the keep-in box (`check_model`,
+    the arm the engine checks moves with) and, with `sight_model` (its tracker and SMR: the
+    bootstrap's), in the tracker's view within ``smr.acceptance_angle`` — all checked before anything
+    moves. The order is `tour_segments`'; InputError when no segment of the tour passes, naming the
+    first refused and its first offending sample."""
+    from hil.calibration.selection import aimed_vias
+    from hil.calibration.sweep_path import SweepRefused, check_sweep, plan_leg
+
+    keep_in = (np.asarray(config.keep_in["min"], float), np.asarray(config.keep_in["max"], float))
+    speed = np.minimum(float(config.robot["speed"]), np.asarray(spec.max_joint_speed, float))
+    accel = float(config.robot["acceleration"])
+    angle = float(config.smr["acceptance_angle"])
+    pts = np.asarray(waypoints, dtype=float)
+
+    def checked(a: int, through: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        knots = np.vstack([pts[a][None, :], through])
+        tour = plan_leg(knots, max_speed=speed, max_acceleration=accel, rate_hz=rate_hz)
+        check_sweep(tour, max_speed=speed, max_acceleration=accel, spec=spec, keep_in=keep_in,
+                    model=check_model)
+        if sight_model is not None:
+            check_sweep(tour, model=sight_model, acceptance_angle=angle)
+        return np.asarray(tour.q, float), knots
+
+    def segment(a: int, b: int) -> tuple[np.ndarray, np.ndarray]:
+        """The checked path from waypoint `a` to `b`: straight in joint space, else through vias that
+        turn the wrist toward the tracker (`aimed_vias`); SweepRefused (the straight one's) if neither
+        may be swept."""
+        try:
+            return checked(a, pts[b][None, :])
+        except SweepRefused:
+            if sight_model is None:
+                raise
+            vias = aimed_vias(sight_model.robot, sight_model.smr, sight_model.tracker.translation,
+                              pts[a], pts[b], angle)
+            try:
+                return checked(a, np.vstack([vias, pts[b][None, :]]))
+            except SweepRefused:
+                pass
+            raise
+
+    paths, refused = tour_segments(pts, segment, SweepRefused)
+    log.info("sweep tour: %d segments through %d waypoints (%d straight or aimed paths refused)",
+             len(paths), len(pts), len(refused))
+    if not paths:
+        (a, _), why = refused[0] if refused else ((0, 0), "fewer than two waypoints")
+        raise InputError(f"sweep segment {a + 1} of {len(pts) - 1} refused before the sweep moved: {why}")
+    return [SweepSegment(k, q, float(rate_hz), knots) for k, (q, knots) in enumerate(paths)]
+
+
+def stored_tour(segments: Sequence[dict[str, Any]], config: Any, spec: RobotSpec, check_model: Geometry,
+                rate_hz: float = CONTROLLER_RATE_HZ) -> list[SweepSegment]:
+    """The tour a campaign planned first (its stored `SweepPlanned` segments), planned again from
+    each segment's knots (its start and end for a tour stored without them) and checked again for the
+    limits, speed, acceleration and keep-in box. The sight check is not repeated: a resumed run knows
+    the tracker as stored but not the SMR the bootstrap located, and the tour must stay the one whose
+    segment numbers name what the store holds."""
+    from hil.calibration.sweep_path import SweepRefused, check_sweep, plan_leg
+
+    keep_in = (np.asarray(config.keep_in["min"], float), np.asarray(config.keep_in["max"], float))
+    speed = np.minimum(float(config.robot["speed"]), np.asarray(spec.max_joint_speed, float))
+    accel = float(config.robot["acceleration"])
+    out: list[SweepSegment] = []
+    for k, seg in enumerate(segments):
+        knots = np.asarray(seg.get("knots") or [seg["from"], seg["to"]], dtype=float)
+        try:
+            tour = plan_leg(knots, max_speed=speed, max_acceleration=accel, rate_hz=rate_hz)
+            check_sweep(tour, max_speed=speed, max_acceleration=accel, spec=spec, keep_in=keep_in,
+                        model=check_model)
+        except SweepRefused as exc:
+            raise InputError(f"stored sweep segment {k + 1} of {len(segments)} refused before the sweep "
+                             f"moved: {exc}") from None
+        out.append(SweepSegment(int(seg.get("index", k)), np.asarray(tour.q, float), float(rate_hz), knots))
+    return out
+
+
+def tour_segments(waypoints: np.ndarray, segment: Any, refusal: type[Exception] = InputError
+                  ) -> tuple[list[Any], list[tuple[tuple[int, int], str]]]:
+    """The tour's segments in order (what `segment(a, b)` returned for each), and the ones refused
+    ((from, to) waypoint indices, why).
+
+    From the first waypoint: to the nearest waypoint not yet visited (by the largest joint difference,
+    what a joint move's time follows) whose `segment(a, b)` passes (it raises `refusal` otherwise);
+    where none does, to the nearest by a move that is not swept. A nearest-neighbour order, written here
+    because the tour has an edge rule (a segment must pass its checks) that the library tour solvers
+    (scipy has none; the selection's own tour is over still poses) do not take."""
+    n = len(waypoints)
+    if n < 2:
+        return [], []
+    paths: list[Any] = []
+    refused: list[tuple[tuple[int, int], str]] = []
+    here, left = 0, set(range(1, n))
+    while left:
+        order = sorted(left, key=lambda j: (float(np.max(np.abs(waypoints[j] - waypoints[here]))), j))
+        for j in order:
+            try:
+                paths.append(segment(here, j))
+            except refusal as exc:
+                refused.append(((here, j), str(exc)))
+                continue
+            here = j
+            break
+        else:  # no segment from here passes: the next nearest by an ordinary move
+            here = order[0]
+        left.discard(here)
+    return paths, refused
+
+
+def sweep_verdict(after: float, before: float, robot: str, acceptance: float | None) -> Verdict:
+    """The sweep's verdict on its held-out still poses. Stop-and-go's automatic rule needs a
+    cross-validated RMS, and a sweep's fit is not cross-validated (refitting the streams fold by fold
+    costs a fit each): the sweep's model must predict the held-out poses better than the nominal arm
+    (located by the same bootstrap) does, and then their RMS must be within `acceptance` or, unset,
+    the robot class's bound (`hil.campaign.acceptance.class_bound`)."""
+    rms = f"validation RMS {after * 1e3:.4f} mm"
+    if acceptance is not None:
+        limit, rule, said = float(acceptance), "threshold", f"acceptance {float(acceptance) * 1e3:.4f} mm"
+    else:
+        limit, rule = class_bound(robot), "auto"
+        said = f"the {robot} class bound {limit * 1e3:.4f} mm"
+    if not after < before:
+        return Verdict(False, limit, f"{rms} is not better than the nominal arm's {before * 1e3:.4f} mm "
+                                     "on the held-out poses", rule)
+    passed = after <= limit
+    return Verdict(passed, limit, f"{rms} {'<=' if passed else '>'} {said}", rule)
+
+
+def streams_of(records: Sequence[SegmentRecord]
+               ) -> tuple[JointStream, TrackerStream, dict[str, int], list[SegmentRecord]]:
+    """The recorded segments as one joint stream and one tracker stream on the instruments' clocks,
+    the tracker samples left out by reason, and the segments joined.
+
+    Segments recorded by different runs of the campaign (`SegmentRecord.session`) may be on clocks
+    that restarted between them (a controller rebooted, a simulator started again): one clock map
+    cannot hold them. The session with the most segments (the latest on a tie) is joined, and with it
+    every other whose host-clock anchors lie on its first map within `CLOCK_AGREEMENT_S` (the
+    instruments' clocks went on); the rest's tracker samples are counted as left out
+    (``other session``)."""
+    if not records:
+        raise InputError("the sweep recorded no segment")
+    sessions: dict[str, int] = {}
+    for r in records:
+        sessions[r.session] = sessions.get(r.session, 0) + 1
+    ordered = list(dict.fromkeys(r.session for r in records))
+    keep = max(ordered, key=lambda s: (sessions[s], ordered.index(s)))
+    main = [r for r in records if r.session == keep]
+    offset, drift = first_clock(main)
+    joined = {keep}
+    for other in ordered:  # a run whose instruments' clocks went on (no restart) joins the main one
+        anchors = [r.anchor for r in records if r.session == other and r.anchor is not None]
+        if other != keep and offset is not None and anchors and all(
+                abs(c - (offset + (1.0 + drift) * t)) < CLOCK_AGREEMENT_S for t, c in anchors):
+            joined.add(other)
+    chosen = sorted((r for r in records if r.session in joined), key=lambda r: float(r.joint_t[0]))
+    left = {"other session": int(sum(len(r.tracker_t) for r in records if r.session not in joined))}
+    jt = np.concatenate([r.joint_t for r in chosen])
+    jq = np.concatenate([r.joint_q for r in chosen])
+    tt = np.concatenate([r.tracker_t for r in chosen])
+    tp = np.concatenate([r.tracker_p for r in chosen])
+    j_order, t_order = np.argsort(jt, kind="stable"), np.argsort(tt, kind="stable")
+    jt, jq, tt, tp = jt[j_order], jq[j_order], tt[t_order], tp[t_order]
+    jk = np.concatenate([[True], np.diff(jt) > 0])
+    tk = np.concatenate([[True], np.diff(tt) > 0])
+    if not tk.all():  # one instant twice (a segment's end, the next's start): counted once, left out
+        left["repeated stamp"] = int((~tk).sum())
+    return JointStream(jt[jk], jq[jk]), TrackerStream(tt[tk], tp[tk]), left, chosen
+
+
+def record_from_store(segment: int, session: str, joints: tuple[list[float], list[Any]],
+                      tracker: tuple[list[float], list[Any]], anchor: Sequence[float] | None = None
+                      ) -> SegmentRecord:
+    """A stored segment (`hil.store.queries.StoreQueries.stream_chunks` of its take) as a record."""
+    jt, jq = joints
+    tt, tp = tracker
+    points = np.array([(np.nan,) * 3 if v is None else v for v in tp], dtype=float).reshape(-1, 3)
+    return SegmentRecord(segment, session, np.asarray(jt, float), np.asarray(jq, float).reshape(-1, 6),
+                         np.asarray(tt, float), points,
+                         None if anchor is None else (float(anchor[0]), float(anchor[1])))
+
+
+def first_clock(records: Sequence[SegmentRecord]) -> tuple[float | None, float]:
+    """A first guess of the map t_ctrl = a + (1 + d)·t_trk from the segments' host-clock anchors
+    (`hil.campaign.sweep_recording.anchor`): a line through them (two or more segments: seconds to
+    minutes apart, so the drift is fixed to the anchors' milliseconds over that span), else drift 0
+    through the one anchor; (None, 0) without any (the join's own first guess then)."""
+    pts = np.array([r.anchor for r in records if r.anchor is not None], dtype=float).reshape(-1, 2)
+    if len(pts) == 0:
+        return None, 0.0
+    if len(pts) == 1 or np.ptp(pts[:, 0]) < 1.0:
+        return float(np.mean(pts[:, 1] - pts[:, 0])), 0.0
+    slope, offset = np.polyfit(pts[:, 0], pts[:, 1], 1)
+    return float(offset), float(slope - 1.0)

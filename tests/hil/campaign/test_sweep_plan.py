@@ -1,0 +1,115 @@
+"""The sweep's tour as the plan builds it: segments rest to rest between the waypoints, within the
+station's speed and acceleration, checked before anything moves; its verdict on still poses."""
+
+from __future__ import annotations
+
+from itertools import pairwise
+
+import numpy as np
+import pytest
+
+from hil.arm.catalog import get_robot
+from hil.arm.geometry import Geometry, look_at_tracker
+from hil.arm.kinematics import Kinematics
+from hil.calibration.sweep_path import SweepRefused, SweepTour, check_sweep
+from hil.campaign.sweep_plan import stored_tour, sweep_tour, sweep_verdict, tour_segments
+from hil.errors import InputError
+from hil.station.config import default_config
+
+POSE = np.array([0.0, -1.2, 1.4, -1.8, -1.57, 0.0])
+
+
+def swing(angle: float) -> np.ndarray:
+    q = POSE.copy()
+    q[0] = angle
+    return q
+
+
+def test_segments_run_rest_to_rest_through_the_waypoints_within_the_stations_limits():
+    config = default_config()
+    waypoints = np.array([swing(-0.3), swing(0.2), swing(0.5)])
+    segs = sweep_tour(waypoints, config, get_robot("ur5e"), Geometry.nominal("ur5e"))
+    assert [s.index for s in segs] == [0, 1]
+    for seg, (a, b) in zip(segs, pairwise(waypoints), strict=True):
+        assert np.allclose(seg.q[0], a) and np.allclose(seg.q[-1], b)
+        speed = np.abs(np.diff(seg.q, axis=0)) * seg.rate_hz
+        assert speed.max() <= config.robot["speed"] * (1 + 1e-9)
+        assert np.allclose(seg.q[1] - seg.q[0], 0, atol=1e-4)  # starts (and ends) at rest
+
+
+def test_a_tour_leaving_the_keep_in_box_is_refused_before_anything_moves():
+    """Joint 1 from -45° to +45°: both ends inside the box, the arc between them bulges out past its
+    x limit. The segment and the first sample outside are named; no segment is returned."""
+    model = Geometry.nominal("ur5e")
+    a, b = swing(-np.pi / 4), swing(np.pi / 4)
+    ends = Kinematics(model).points(np.array([a, b]), frame="base")
+    lo = ends.min(axis=0) - 0.02
+    hi = ends.max(axis=0) + 0.02
+    config = default_config().with_overrides(keep_in__min=list(map(float, lo)),
+                                             keep_in__max=list(map(float, hi)))
+    with pytest.raises(InputError, match=r"sweep segment 1 of 1 refused before the sweep moved: sweep "
+                                         r"sample \d+ .* outside the keep-in box"):
+        sweep_tour(np.array([a, b]), config, get_robot("ur5e"), model)
+
+
+def test_the_verdict_needs_the_model_better_than_the_nominal_arm_then_the_bound():
+    assert sweep_verdict(0.1e-3, 0.8e-3, "ur5e", None).passed
+    worse = sweep_verdict(0.9e-3, 0.8e-3, "ur5e", None)
+    assert not worse.passed and "not better than the nominal" in worse.reason
+    assert not sweep_verdict(0.2e-3, 0.8e-3, "ur5e", 0.1e-3).passed
+
+
+def test_a_segment_the_tracker_would_not_see_along_turns_the_wrist_toward_it():
+    """Both ends face the tracker, the straight joint line between them turns the SMR away (found by a
+    seeded search of nominal UR5e poses); the tour's segment goes through vias that aim the wrist and
+    is seen along its whole length, from the one waypoint to the other."""
+    tracker = look_at_tracker([2.5, 0.0, 0.5])
+    model = Geometry.nominal("ur5e", (0.0, 0.0, 0.045), tracker)
+    a = np.array([-0.499, -2.076, 1.33, -2.371, 2.147, 0.766])
+    b = np.array([-1.619, -1.082, 1.609, -2.236, 3.064, 1.076])
+    config, spec = default_config(), get_robot("ur5e")
+    (straight,) = sweep_tour(np.array([a, b]), config, spec, model)  # no sight model: not checked
+    with pytest.raises(SweepRefused, match="would not see the SMR"):
+        check_sweep(SweepTour(np.arange(len(straight.q)) / straight.rate_hz, straight.q, b[None],
+                              straight.rate_hz), model=model, acceptance_angle=config.smr["acceptance_angle"])
+    (aimed,) = sweep_tour(np.array([a, b]), config, spec, model, sight_model=model)
+    assert np.allclose(aimed.q[0], a) and np.allclose(aimed.q[-1], b)
+    check_sweep(SweepTour(np.arange(len(aimed.q)) / aimed.rate_hz, aimed.q, b[None], aimed.rate_hz),
+                model=model, acceptance_angle=config.smr["acceptance_angle"])
+
+
+def test_the_tour_takes_the_nearest_segment_that_passes_and_moves_on_where_none_does():
+    """Waypoints 0..4 on a line: the segment 0 → 1 is refused, so the tour sweeps 0 → 2; nothing from
+    2 passes, so the arm moves to 1 unswept (the nearest left), then sweeps 1 → 3 → 4."""
+    points = np.arange(5, dtype=float)[:, None] * np.ones((1, 6)) * 0.1
+    refused = {(0, 1), (2, 1), (2, 3), (2, 4)}
+
+    def segment(a, b):
+        if (a, b) in refused:
+            raise InputError(f"{a} to {b} refused")
+        return np.array([points[a], points[b]])
+
+    paths, why = tour_segments(points, segment)
+    assert [(round(p[0, 0] * 10), round(p[-1, 0] * 10)) for p in paths] == [(0, 2), (1, 3), (3, 4)]
+    assert [w for w, _ in why] == [(0, 1), (2, 1), (2, 3), (2, 4)]
+
+
+def test_a_resumed_campaign_plans_the_stored_tour_again_exactly():
+    """A resumed run does not know the SMR the bootstrap located, so it would check sight with another
+    model and could order the tour otherwise: it plans the tour it stored instead, from each segment's
+    knots (a tour stored without them: from its ends), and gets the same samples."""
+    tracker = look_at_tracker([2.5, 0.0, 0.5])
+    model = Geometry.nominal("ur5e", (0.0, 0.0, 0.045), tracker)
+    a = np.array([-0.499, -2.076, 1.33, -2.371, 2.147, 0.766])
+    b = np.array([-1.619, -1.082, 1.609, -2.236, 3.064, 1.076])
+    config, spec = default_config(), get_robot("ur5e")
+    planned = sweep_tour(np.array([a, b, swing(0.2)]), config, spec, model, sight_model=model)
+    stored = [{"index": g.index, "from": list(g.start), "to": g.q[-1].tolist(), "knots": g.knots.tolist()}
+              for g in planned]
+    again = stored_tour(stored, config, spec, model)
+    assert [g.index for g in again] == [g.index for g in planned]
+    for g, h in zip(planned, again, strict=True):
+        np.testing.assert_array_equal(g.q, h.q)
+    older = [{"index": 0, "from": list(swing(-0.3)), "to": list(swing(0.2))}]
+    (old,) = stored_tour(older, config, spec, model)
+    np.testing.assert_allclose(old.q[[0, -1]], [swing(-0.3), swing(0.2)])
