@@ -46,7 +46,10 @@ class SweepStation:
 
     def __init__(self, tmp_path: Path, seed: int = 5, mode: str = "sweep", speed: float = SPEED) -> None:
         self.speed, self.tmp = speed, tmp_path
-        self.sim = start_station(speed=speed, seed=seed, ideal=True)
+        # without thermal growth: the warm-up is off (the sweep, not the heating, is tested) and the
+        # arm's temperature would follow the campaign's duty, which at 40x follows the host's load (a
+        # stop-and-go reference on a heating arm was rejected once in a full-suite run)
+        self.sim = start_station(speed=speed, seed=seed, ideal=True, thermal=False)
         svc = self.sim.info["services"][0]
         self.clock_map = svc["clock_map"]
         self.config = station_config(self.sim.address, svc["tracker_emscon_url"], mode)
@@ -161,9 +164,10 @@ def test_a_sweep_campaign_is_accepted_and_finds_the_stations_clock(station):
     """Accepted on still validation poses, as a stop-and-go campaign on the same arm is; the clock map
     found near the station's truth.
 
-    Measured (seed 5, speed 4, two busy loops beside it on 2 cores): validation RMS 13.0 µm against
-    stop-and-go's 8.7 µm on the same arm (nominal: 3.6 mm); the map at the sweep's mean tracker time
-    129 µs from the station's stated truth, where the fit states σ = 10.4 µs. Not within 3σ: joined
+    Measured (seed 5, speed 4, the tour checked for the tracker's sight, alone on 2 cores): validation
+    RMS 13.6 µm against stop-and-go's 6.4 µm on the same arm (nominal: 3.6 mm); the map at the sweep's
+    mean tracker time 117 µs from the station's stated truth, where the fit states σ = 4.1 µs. Not
+    within 3σ: joined
     with the *true* arm and map, the samples the join keeps still sit 17 µm RMS from the truth (speed 1)
     — the simulated controller's cycle is speed × 2 ms and its thread, on a loaded machine, skips
     frames — so this checks the map to what the simulator supports: the fast-time drift (speed − 1 =
@@ -188,7 +192,7 @@ def test_a_sweep_campaign_is_accepted_and_finds_the_stations_clock(station):
         reference = stop_and_go.run()
     finally:
         stop_and_go.close()
-    assert reference.status == "accepted"
+    assert reference.status == "accepted", (reference.error, reference.result and reference.result.verdict)
     print(f"\nsweep {result.after.rms * 1e6:.1f} µm, stop-and-go {reference.result.after.rms * 1e6:.1f} µm, "
           f"clock {err * 1e6:.0f} µs from the stated truth (σ {fitted.sigma_at_ref_s * 1e6:.1f} µs)")
 
