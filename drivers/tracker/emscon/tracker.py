@@ -436,8 +436,8 @@ class EmsconTracker:
             self.client.request(Command.STOP_MEASUREMENT)
             self._stationary()
             self.client.multis.clear()
-        except TrackerError:
-            log.warning("could not return the tracker to stationary mode", exc_info=True)
+        except TrackerError as exc:  # one line: the stream's own failure is what the user is told
+            log.warning("could not return the tracker to stationary mode: %s", exc)
 
     def _start_measurement(self, search: bool = True) -> None:
         """ES_C_StartMeasurement once the tracker can measure.

@@ -35,10 +35,13 @@ from hil.station.paced_clock import PacedClock, simulator_pace
 from hil.store import Store
 from mocks.station import start_station
 from mocks.ur.control_channel import ControlClient
+from tests.heavy_lock import one_at_a_time
 
 ROOT = Path(__file__).resolve().parents[3]
 
 SPEED = 4.0
+#: The longest a sweep test waits for the others (`station`): two ahead of it, minutes each.
+WAIT_S = 900.0
 
 
 class SweepStation:
@@ -153,13 +156,15 @@ def run_in_child() -> None:
 
 
 @pytest.fixture
-def station(tmp_path):
-    st = SweepStation(tmp_path)
-    yield st
-    st.close()
+def station(tmp_path, tmp_path_factory):
+    # the sweep tests one at a time (`tests.heavy_lock`); the folder is the run's, shared by its workers
+    with one_at_a_time(tmp_path_factory.getbasetemp().parent / "locks", "sweep-campaign", WAIT_S):
+        st = SweepStation(tmp_path)
+        yield st
+        st.close()
 
 
-@pytest.mark.timeout(600)  # two campaigns (the sweep's and stop-and-go's): minutes on a loaded machine
+@pytest.mark.timeout(1500)  # two campaigns, and the wait for the other sweep tests (`station`)
 def test_a_sweep_campaign_is_accepted_and_finds_the_stations_clock(station):
     """Accepted on still validation poses, as a stop-and-go campaign on the same arm is; the clock map
     found near the station's truth.
@@ -197,7 +202,7 @@ def test_a_sweep_campaign_is_accepted_and_finds_the_stations_clock(station):
           f"clock {err * 1e6:.0f} µs from the stated truth (σ {fitted.sigma_at_ref_s * 1e6:.1f} µs)")
 
 
-@pytest.mark.timeout(600)  # two runs of one campaign: minutes on a loaded machine
+@pytest.mark.timeout(1500)  # two runs of one campaign, and the wait for the other sweep tests
 def test_an_interrupted_sweep_resumes_without_sweeping_again_what_it_has(station):
     first = station.run(interrupt_after=3)
     assert first.status == "interrupted"
@@ -212,7 +217,7 @@ def test_an_interrupted_sweep_resumes_without_sweeping_again_what_it_has(station
     station.check_every_sample_once()
 
 
-@pytest.mark.timeout(600)
+@pytest.mark.timeout(1500)
 def test_a_sweep_killed_mid_segment_resumes_and_counts_each_recorded_sample_once(station):
     """The hil process is killed (-9) while it sweeps its third segment; the station runs on, as a
     real one does. The campaign resumes in another process at the first segment not recorded whole,
