@@ -16,7 +16,6 @@ segment, which the resumed campaign sweeps again.
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Iterator
 from typing import Any
 
@@ -24,6 +23,7 @@ import numpy as np
 
 from drivers.robot.model import FollowsPaths
 from drivers.tracker.device import StreamSample, Tracker
+from drivers.tracker.during import stream_during
 from drivers.tracker.errors import TrackerError
 from hil.campaign.events import Event, SweepChunk, SweepSegmentDone
 from hil.campaign.steps import SegmentRecord, SweepSegment
@@ -60,26 +60,9 @@ def record_segment(robot: Any, tracker: Tracker, segment: SweepSegment, tracker_
         # the last segment lost the beam: emScon re-locks only when asked, so ask before streaming (a
         # failed search leaves the stream's start to fail as a lost target, which the engine suspends on)
         tracker.relock()
-    samples: list[StreamSample] = []
-    failure: list[BaseException] = []
-    stop = threading.Event()
-
-    def take() -> None:
-        try:
-            for sample in tracker.stream(tracker_rate_hz, stop=stop):
-                samples.append(sample)
-        except BaseException as exc:  # raised after the motion
-            failure.append(exc)
-
-    thread = threading.Thread(target=take, name="sweep-tracker-stream", daemon=True)
-    thread.start()
-    try:
-        result = robot.follow(segment.q, lookahead=LOOKAHEAD, gain=GAIN, settle=0.0)
-    finally:
-        stop.set()
-        thread.join(timeout=10.0)
-    if failure:
-        raise failure[0]
+    samples, result = stream_during(
+        tracker, tracker_rate_hz, lambda: robot.follow(segment.q, lookahead=LOOKAHEAD, gain=GAIN, settle=0.0),
+        name="sweep-tracker-stream")
     if result.controller_t is None or result.actual_q is None or len(result.controller_t) < 2:
         raise TrackerError("the robot driver reported no joint stream for the sweep")
     tracker_t, tracker_p = tracker_record(samples)

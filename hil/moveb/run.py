@@ -27,8 +27,6 @@
 
 from __future__ import annotations
 
-import threading
-import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,6 +34,7 @@ import numpy as np
 import pinocchio as pin
 from scipy.spatial import cKDTree
 
+from drivers.tracker.during import stream_during
 from hil.arm.controller_model import ControllerCalibration
 from hil.arm.geometry import Geometry
 from hil.arm.safety import check_target
@@ -259,29 +258,12 @@ def execute(devices: Any, plan: Plan, geometry: Geometry, limits: Limits, *, reg
     # the approach is a joint move: its path must stay in the keep-in box too (never clamped)
     check_target(Q[0], geometry.spec, keep_in, geometry, start=q_now)
     devices.robot.move_to(Q[0])
-    records: list[Any] = []
-    stop = threading.Event()
-    failure: list[BaseException] = []
-
-    def sample() -> None:
-        try:
-            for rec in devices.tracker.stream(tracker_rate, stop=stop):
-                records.append(rec)
-        except BaseException as exc:  # reported after the motion
-            failure.append(exc)
-
-    thread = threading.Thread(target=sample, name="tracker-stream", daemon=True)
-    thread.start()
-    try:
-        time.sleep(0.05)
-        res = devices.robot.follow(Q, lookahead=LOOKAHEAD, gain=GAIN, settle=settle)
-    finally:  # the sampling thread ends with the motion, failed or not
-        stop.set()
-        thread.join(timeout=5.0)
+    records, res = stream_during(
+        devices.tracker, tracker_rate,
+        lambda: devices.robot.follow(Q, lookahead=LOOKAHEAD, gain=GAIN, settle=settle),
+        lead_s=0.05, join_s=5.0)
     step_times = res.times  # send time of each sample (time.monotonic, as the tracker's records)
     timing = stream_timing(step_times, rate, LOOKAHEAD, samples.position)
-    if failure:
-        raise failure[0]
     t0, t1 = step_times[0], step_times[-1] + settle
     during = [r for r in records if t0 <= r.t <= t1]
     measured = np.array([r.position is not None for r in during], dtype=bool)
