@@ -11,7 +11,10 @@ robot, 1 m/s, the last waypoint count, a 2 s pose search). For each robot and st
   feasible candidates for the station, in a draw of their own (not the candidates the selectors choose
   from, so no fit ever sees them) (`hil.calibration.selection.design_space`: reach, the tracker's
   range, acceptance and line of sight, the keep-in box). Held-out poses are approached from below in
-  every joint, as the campaign engine approaches its poses.
+  every joint, as the campaign engine approaches its poses. The validation poses are a two-stage
+  cluster sample (`--clusters`, default 4: `campaign.validation_clusters`, as in the time-aware
+  campaign's 135 s figure that issue's target is a third of; `selector.cluster_sample` with the
+  chooser's weights), the held-out ones a simple random sample of the rest.
 * **Stop-and-go** (today's time-aware campaign): `hil.calibration.timed_selection.select_timed` chooses
   and orders the calibration poses for method 000's accuracy with `--poses` poses, the validation poses
   in the same tour; its robot time is the selector's own time model (the movej trapezoid at the
@@ -26,8 +29,10 @@ robot, 1 m/s, the last waypoint count, a 2 s pose search). For each robot and st
   poses, and whose waypoints are the rest of that choice's first `--waypoints` poses (0: none, the tour
   is its rests and the legs between them, all of it streamed). A validation rest is stop-and-go's pose:
   held for the campaign's dwell (approach leg included, so approached from below in every joint as the
-  engine does). A bootstrap rest is held for `--boot-readings` emScon readings and the overhead (no
-  approach leg: the fit takes it from the side the tour arrives from); its static rows' noise is
+  engine does), with `--val-readings` emScon readings (default 5, the campaign's; 1: what a rest in
+  a streaming tour needs, its stillness seen in the 1 kHz stream — `validation_dwell`). A bootstrap rest
+  is held for `--boot-readings` emScon readings and the overhead (no approach leg: the fit takes it from
+  the side the tour arrives from); its static rows' noise is
   scaled by √(5/readings) against the bench's 5-reading poses. Every joint's speed limit is the tool
   speed over the arm's reach, its acceleration limit `--acceleration` × the deflection model's
   quasi-static limit at the tour's poses (`DynamicsModel.acceleration_limit`), so the fit can trust the
@@ -76,6 +81,7 @@ from hil.calibration.timed_selection import select_timed
 from hil.campaign.chooser import DWELL_OVERHEAD
 from hil.campaign.steps import APPROACH, approach_seconds
 from selector.candidates import Constraints
+from selector.cluster_sample import cluster_sample
 from selector.motion_time import Dwell, MotionProfile
 from selector.order import order_poses
 
@@ -123,6 +129,16 @@ def boot_dwell(readings: int) -> float:
     return readings * READING_S + DWELL_OVERHEAD
 
 
+def validation_dwell(readings: int) -> float:
+    """Seconds a sweep's validation rest holds: `readings` emScon readings of 0.5 s, the overhead and the
+    approach leg from below (at the station's movej, as stop-and-go's). Five (the default) is the
+    campaign's `campaign.samples`, the same dwell as stop-and-go's poses; fewer is what a rest in a
+    streaming tour could hold, its stillness seen in the 1 kHz stream rather than in the spread of five
+    readings. The accuracy columns are truth errors, so the readings change the time alone; what one
+    reading costs the validation RMS a campaign reports is its noise, √5 × a 5-reading pose's."""
+    return readings * READING_S + DWELL.overhead
+
+
 def boot_noise(readings: int) -> Noise:
     """The static rows' noise for `readings` readings: this bench's static poses (5 readings) are drawn
     with one reading's σ (`Noise()`, both modes alike: pessimistic by √5 for both), so n readings get
@@ -155,9 +171,15 @@ def station(robot: str, seed: int, args: argparse.Namespace) -> list[dict]:
     _, cands, _ = design_space(robot, args.poses, candidates=args.candidates, seed=UNSEEN + seed,
                                scaling="expected", say=lambda *_: None, **common)
     pick = rng.permutation(len(cands.q))
-    validation = cands.q[pick[: args.validation]]
-    held_out = cands.q[pick[args.validation: args.validation + args.held_out]]
     movej = MotionProfile(SPEED, ACCELERATION, tuple(map(float, spec.max_joint_speed)))
+    if args.clusters:  # clustered validation (`campaign.validation_clusters`, the chooser's rule)
+        sample = cluster_sample(cands.q, args.validation, args.clusters, scale=1.0 / movej.joint_speeds,
+                                seed=UNSEEN + seed)
+        validation = cands.q[sample.indices]
+        rest = np.setdiff1d(pick, sample.indices, assume_unique=True)
+    else:
+        validation, rest = cands.q[pick[: args.validation]], pick[args.validation:]
+    held_out = cands.q[rest[: args.held_out]]
 
     def accuracy(geometry) -> tuple[float, float]:
         return truth_rms(truth, geometry, validation), truth_rms(truth, geometry, held_out)
@@ -201,6 +223,7 @@ def station(robot: str, seed: int, args: argparse.Namespace) -> list[dict]:
         limit = DynamicsModel(first).acceleration_limit(np.vstack([pool, validation])).min(axis=0)
         chose = time.perf_counter() - t0
         boot_s = boot_dwell(args.boot_readings)
+        val_s = validation_dwell(args.val_readings)
         for v in args.speeds:
             t0 = time.perf_counter()
             joint_speed = np.minimum(v / spec.reach, spec.max_joint_speed)
@@ -211,13 +234,12 @@ def station(robot: str, seed: int, args: argparse.Namespace) -> list[dict]:
             # from below in every joint as the engine does; a bootstrap rest is held for its readings and
             # measured from the side the tour arrives from (the fit is told which)
             stops = np.vstack([boot_q, validation])
-            dwell = np.r_[np.full(len(boot_q), boot_s), np.full(len(validation), DWELL.seconds)]
+            dwell = np.r_[np.full(len(boot_q), boot_s), np.full(len(validation), val_s)]
             tour = plan_sweep(ways, boot_q[0], stops=stops, dwell_s=dwell, **plan)
             # the calibration part alone: the same sweep without the validation rests
             cal_tour = plan_sweep(ways, boot_q[0], stops=boot_q, dwell_s=boot_s, **plan)
             # and the validation alone at the sweep's limits: what any tour measuring it costs at least
-            val_tour = plan_sweep(np.zeros((0, 6)), validation[0], stops=validation, dwell_s=DWELL.seconds,
-                                  **plan)
+            val_tour = plan_sweep(np.zeros((0, 6)), validation[0], stops=validation, dwell_s=val_s, **plan)
             directions = tour.approach_directions()
             is_boot = np.array([any(np.allclose(p, b) for b in boot_q) for p in tour.stops])
             q_read, p = measure(truth, tour.stops[is_boot], boot_noise(args.boot_readings), rng,
@@ -226,7 +248,7 @@ def station(robot: str, seed: int, args: argparse.Namespace) -> list[dict]:
             start = register(boot, robot, smr_guess=truth.smr + 0.002)
             start.payload, start.compliance = truth.payload, typical_compliance(robot)
             s = sweep_streams(truth, seed=seed, path=SplinePath(tour.t, tour.q))
-            tracker = without_intervals(s.tracker, rest_intervals(s.clocks, tour, ~is_boot, DWELL.seconds))
+            tracker = without_intervals(s.tracker, rest_intervals(s.clocks, tour, ~is_boot, val_s))
             fit = fit_sweep(start, s.joints, tracker, static=boot, joint_errors=HARMONICS + LOST_MOTION)
             want = s.clocks.controller_from_tracker()
             c = fit.clock
@@ -253,11 +275,16 @@ def main() -> None:
                         help="waypoint counts of the sweep (0: its rests alone; ≥ the time-aware pose "
                              "count: all of them)")
     parser.add_argument("--validation", type=int, default=20)
+    parser.add_argument("--clusters", type=int, default=4,
+                        help="validation poses in this many clusters (`campaign.validation_clusters`, "
+                             "the time-aware campaign's 135 s figure); 0: a simple random sample")
     parser.add_argument("--held-out", type=int, default=300)
     parser.add_argument("--bootstrap", default="8",
                         help="static rests the sweep's fit registers on (a comma list: one sweep each)")
     parser.add_argument("--boot-readings", type=int, default=1,
                         help="emScon stationary readings at each bootstrap rest (validation rests: always 5)")
+    parser.add_argument("--val-readings", type=int, default=READINGS,
+                        help="emScon readings at each validation rest of a sweep (stop-and-go: always 5)")
     parser.add_argument("--acceleration", type=float, default=0.9,
                         help="the sweep's joint acceleration limit × the deflection model's quasi-static one")
     parser.add_argument("--candidates", type=int, default=5000)

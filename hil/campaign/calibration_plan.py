@@ -569,10 +569,11 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     if sweeping:  # the tour through the calibration poses, checked whole before the sweep moves
         waypoints = np.array([q for _, r, q in planned if r == CALIBRATION])
         if resume.sweep_tour:  # the tour the campaign began: its segments' numbers name what is recorded
-            segments = stored_tour(resume.sweep_tour, config, get_robot(robot), keep_in_check or model)
+            segments = stored_tour(resume.sweep_tour, config, get_robot(robot), keep_in_check or model,
+                                   limit_model=model, waypoints=waypoints)
         else:
             segments = sweep_tour(waypoints, config, get_robot(robot), keep_in_check or model,
-                                  sight_model=model)
+                                  sight_model=model, limit_model=model)
     todo = [(i, r, q) for i, r, q in planned if (r, i) not in records
             and not (sweeping and r == CALIBRATION)]
     # the stopping rule (campaign.stop_early): a stop the store holds is kept as it was decided

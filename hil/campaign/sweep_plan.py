@@ -61,21 +61,53 @@ CONTROLLER_RATE_HZ = 500.0
 CLOCK_AGREEMENT_S = 0.5
 
 
+#: The share of the deflection model's quasi-static acceleration limit a sweep at ``campaign.sweep_speed``
+#: plans to (`sweep_limits`): the fit leaves out samples beyond the limit itself, so a tour planned at it
+#: would lose its fastest stretches to rounding; 10 % below keeps them (bench/sweep_time.py's default).
+SWEEP_ACCELERATION_SHARE = 0.9
+
+
+def sweep_limits(config: Any, spec: RobotSpec, waypoints: np.ndarray, limit_model: Geometry | None = None
+                 ) -> tuple[np.ndarray, float]:
+    """Each joint's speed limit (rad/s, (6,)) and the joint acceleration limit (rad/s²) of the sweep.
+
+    Unless ``campaign.sweep_speed`` is set, the station's movej limits: ``robot.speed`` (within the
+    arm's joint maxima) and ``robot.acceleration``. With it (a tool speed, m/s), the sweep's own: every
+    joint at most that speed over the arm's reach (so no point of the arm outruns it), and the
+    acceleration at most ``robot.acceleration`` and `SWEEP_ACCELERATION_SHARE` of the deflection
+    model's quasi-static limit at the waypoints (`hil.arm.dynamics.DynamicsModel.acceleration_limit`
+    of `limit_model`, the bootstrap's compliant arm): beyond it the joints ring by more than the
+    tracker sees and the fit leaves the samples out (`hil.calibration.stream_join`), so a tour planned
+    faster buys nothing."""
+    top = np.asarray(spec.max_joint_speed, float)
+    accel = float(config.robot["acceleration"])
+    tool = config.campaign.get("sweep_speed")
+    if tool is None:
+        return np.minimum(float(config.robot["speed"]), top), accel
+    speed = np.minimum(float(tool) / float(spec.reach), top)
+    if limit_model is not None and limit_model.compliant and len(waypoints):
+        from hil.arm.dynamics import DynamicsModel
+
+        quasi = float(DynamicsModel(limit_model).acceleration_limit(np.asarray(waypoints, float)).min())
+        accel = min(accel, SWEEP_ACCELERATION_SHARE * quasi)
+    return speed, accel
+
+
 def sweep_tour(waypoints: np.ndarray, config: Any, spec: RobotSpec, check_model: Geometry,
-               rate_hz: float = CONTROLLER_RATE_HZ, sight_model: Geometry | None = None
-               ) -> list[SweepSegment]:
+               rate_hz: float = CONTROLLER_RATE_HZ, sight_model: Geometry | None = None,
+               limit_model: Geometry | None = None) -> list[SweepSegment]:
     """The tour through `waypoints` (m, 6) as segments rest to rest, each within the station's joint
     speed and acceleration (and the arm's joint speed maxima), inside the keep-in box (`check_model`,
     the arm the engine checks moves with) and, with `sight_model` (its tracker and SMR: the
     bootstrap's), in the tracker's view within ``smr.acceptance_angle`` — all checked before anything
     moves. The order is `tour_segments`'; InputError when no segment of the tour passes, naming the
-    first refused and its first offending sample."""
+    first refused and its first offending sample. The limits are `sweep_limits`' (`limit_model`: the
+    arm whose deflection bounds the acceleration)."""
     from hil.calibration.selection import aimed_vias
     from hil.calibration.sweep_path import SweepRefused, check_sweep, plan_leg
 
     keep_in = (np.asarray(config.keep_in["min"], float), np.asarray(config.keep_in["max"], float))
-    speed = np.minimum(float(config.robot["speed"]), np.asarray(spec.max_joint_speed, float))
-    accel = float(config.robot["acceleration"])
+    speed, accel = sweep_limits(config, spec, waypoints, limit_model)
     angle = float(config.smr["acceptance_angle"])
     pts = np.asarray(waypoints, dtype=float)
 
@@ -115,17 +147,20 @@ def sweep_tour(waypoints: np.ndarray, config: Any, spec: RobotSpec, check_model:
 
 
 def stored_tour(segments: Sequence[dict[str, Any]], config: Any, spec: RobotSpec, check_model: Geometry,
-                rate_hz: float = CONTROLLER_RATE_HZ) -> list[SweepSegment]:
+                rate_hz: float = CONTROLLER_RATE_HZ, limit_model: Geometry | None = None,
+                waypoints: np.ndarray | None = None) -> list[SweepSegment]:
     """The tour a campaign planned first (its stored `SweepPlanned` segments), planned again from
     each segment's knots (its start and end for a tour stored without them) and checked again for the
     limits, speed, acceleration and keep-in box. The sight check is not repeated: a resumed run knows
     the tracker as stored but not the SMR the bootstrap located, and the tour must stay the one whose
-    segment numbers name what the store holds."""
+    segment numbers name what the store holds. The limits are `sweep_limits`' at `waypoints` (the
+    campaign's calibration poses, as the first run planned them; by default the stored segments' ends)."""
     from hil.calibration.sweep_path import SweepRefused, check_sweep, plan_leg
 
     keep_in = (np.asarray(config.keep_in["min"], float), np.asarray(config.keep_in["max"], float))
-    speed = np.minimum(float(config.robot["speed"]), np.asarray(spec.max_joint_speed, float))
-    accel = float(config.robot["acceleration"])
+    if waypoints is None:
+        waypoints = np.array([seg[k] for seg in segments for k in ("from", "to")], dtype=float).reshape(-1, 6)
+    speed, accel = sweep_limits(config, spec, waypoints, limit_model)
     out: list[SweepSegment] = []
     for k, seg in enumerate(segments):
         knots = np.asarray(seg.get("knots") or [seg["from"], seg["to"]], dtype=float)

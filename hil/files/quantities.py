@@ -232,6 +232,9 @@ QUANTITIES: dict[str, Quantity] = {q.name: q for q in (
     # --- motion
     Quantity("joint speed", "rad/s", 0.0, 3.14,
              "ur_rtde's moveJ: UR_JOINT_VELOCITY_MAX = 3.14 rad/s", low_open=True),
+    Quantity("sweep tool speed", "m/s", 0.0, 3.0,
+             "UR's datasheets: TCP speed 1 m/s typical, joint limits allow ~3 m/s at the reach's end",
+             low_open=True),
     Quantity("joint acceleration", "rad/s²", 0.0, 40.0,
              "ur_rtde's moveJ: UR_JOINT_ACCELERATION_MAX = 40 rad/s²", low_open=True),
     Quantity("approach distance", "rad", 0.0, 0.1,

@@ -370,6 +370,11 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # stop-and-go measures each pose standing still; sweep follows a smooth path through the
         # calibration poses while the tracker (emScon only) and the joints stream (hil.campaign.sweep)
         "mode": Key("str", "stop-and-go", _mode, "campaign mode: stop-and-go or sweep (emScon only)"),
+        # unset: a sweep moves within robot.speed and robot.acceleration, as stop-and-go's moves; set: at
+        # this tool speed (each joint at most it over the reach) and within the deflection model's
+        # quasi-static acceleration (hil.campaign.sweep_plan.sweep_limits; bench/sweep_time.py's rule)
+        "sweep_speed": Key("float?", None, _quantity("sweep tool speed"),
+                           "sweep: tool speed (m/s); unset: robot.speed and robot.acceleration"),
         # a campaign of 10 poses takes about a minute of robot time; a day is a value in milliseconds
         "time_budget": Key("float", 0.0, _quantity("time budget", off=0),
                            "time-aware: robot seconds for the calibration and validation tour "

@@ -113,3 +113,56 @@ def test_a_resumed_campaign_plans_the_stored_tour_again_exactly():
     older = [{"index": 0, "from": list(swing(-0.3)), "to": list(swing(0.2))}]
     (old,) = stored_tour(older, config, spec, model)
     np.testing.assert_allclose(old.q[[0, -1]], [swing(-0.3), swing(0.2)])
+
+
+def test_a_sweep_at_its_own_tool_speed_keeps_each_joint_within_it_and_the_deflection_models_acceleration():
+    """``campaign.sweep_speed`` (m/s at the tool) replaces robot.speed for the sweep: no joint faster than
+    it over the reach, so the tour moves faster than the station's movej allows; the acceleration
+    stays within robot.acceleration and 90 % of the compliant arm's quasi-static limit, which the fit
+    would otherwise leave out."""
+    from hil.arm.dynamics import DynamicsModel
+    from hil.arm.physical import typical_compliance
+    from hil.campaign.sweep_plan import SWEEP_ACCELERATION_SHARE, sweep_limits
+
+    spec = get_robot("ur5e")
+    model = Geometry.nominal("ur5e")
+    model.compliance = typical_compliance("ur5e")
+    waypoints = np.array([swing(-0.6), swing(0.4), swing(1.2)])
+    slow = default_config()
+    fast = slow.with_overrides(campaign__sweep_speed=0.85, robot__acceleration=4.0)
+    speed, accel = sweep_limits(fast, spec, waypoints, model)
+    quasi = DynamicsModel(model).acceleration_limit(waypoints).min()
+    np.testing.assert_allclose(speed, np.minimum(0.85 / spec.reach, spec.max_joint_speed))
+    assert accel == pytest.approx(SWEEP_ACCELERATION_SHARE * quasi) and accel < 4.0
+    assert sweep_limits(fast.with_overrides(robot__acceleration=0.2), spec, waypoints, model)[1] == 0.2
+    assert sweep_limits(fast, spec, waypoints, None)[1] == 4.0  # no compliance known: the station's
+    np.testing.assert_allclose(sweep_limits(slow, spec, waypoints, model)[0],
+                               np.minimum(0.5, spec.max_joint_speed))  # unset: today's movej limits
+
+    tours = {}
+    for name, config in (("slow", slow), ("fast", fast)):
+        tours[name] = sweep_tour(waypoints, config, spec, model, limit_model=model)
+        for seg in tours[name]:
+            v = np.diff(seg.q, axis=0) * seg.rate_hz
+            a = np.diff(v, axis=0) * seg.rate_hz
+            lim = sweep_limits(config, spec, waypoints, model)
+            assert np.abs(v).max() <= lim[0].max() * (1 + 1e-9)
+            assert np.abs(a).max() <= lim[1] * 1.02  # the planner's sampled acceleration
+    fast_s = sum(len(s.q) for s in tours["fast"]) / 500.0
+    slow_s = sum(len(s.q) for s in tours["slow"]) / 500.0
+    assert np.abs(np.diff(tours["fast"][0].q[:, 0])).max() * 500 > 0.5 * 1.4  # beyond robot.speed
+    assert fast_s < 0.8 * slow_s
+    stored = [{"index": g.index, "from": list(g.start), "to": g.q[-1].tolist(), "knots": g.knots.tolist()}
+              for g in tours["fast"]]
+    again = stored_tour(stored, fast, spec, model, limit_model=model, waypoints=waypoints)
+    for g, h in zip(tours["fast"], again, strict=True):
+        np.testing.assert_array_equal(g.q, h.q)
+
+
+def test_a_sweep_speed_out_of_range_is_refused_with_its_field(tmp_path):
+    from hil.station.config import load_config
+
+    text = (tmp_path / "station.toml")
+    text.write_text("[campaign]\nsweep_speed = 40.0\n")
+    with pytest.raises(InputError, match=r"campaign\.sweep_speed"):
+        load_config(text)
