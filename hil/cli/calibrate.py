@@ -62,6 +62,8 @@ STOP_MARGIN = option("fraction")
 TIME_BUDGET = option("time budget")
 #: --search-time: seconds (campaign.search_time's range)
 SEARCH_TIME = option("search time")
+#: --sweep-speed: metres a second at the tool (campaign.sweep_speed's range)
+SWEEP_SPEED = option("sweep tool speed")
 #: --selection: campaign.selection's values (hil.station.config.SELECTIONS)
 SELECTIONS = ("tabu", "time-aware")
 #: --mode: campaign.mode's values (hil.station.config.MODES)
@@ -103,6 +105,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="stop-and-go (measure each pose standing still) or sweep (follow a path through "
                         "the poses while emScon and the joints stream; emScon only); overrides "
                         "campaign.mode")
+    p.add_argument("--sweep-speed", type=SWEEP_SPEED, metavar="M/S",
+                   help="sweep: tool speed, each joint within it over the reach and accelerations within "
+                        "the deflection model's quasi-static limit; overrides campaign.sweep_speed")
     p.add_argument("--time-budget", type=TIME_BUDGET, metavar="SECONDS",
                    help="time-aware: the most accurate tour within this much robot time; overrides "
                         "campaign.time_budget")
@@ -144,6 +149,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--verify-cycles goes with --verify")
     _check_stop_margin(args)
     _check_time_budget(args)
+    _check_sweep_speed(args)
     _check_plan_cache(args)
     with interruptible():  # Ctrl-C, SIGTERM, SIGHUP: the arm stops, the campaign stays resumable
         return _run(args)
@@ -182,6 +188,18 @@ def _check_time_budget(args: argparse.Namespace) -> None:
         return
     raise InputError(f"{given[0]} goes with --selection time-aware (or campaign.selection = "
                      "\"time-aware\" in --config)")
+
+
+def _check_sweep_speed(args: argparse.Namespace) -> None:
+    """--sweep-speed without the sweep mode (--mode sweep, or the configuration's campaign.mode) would be
+    silently ignored: refused before the station starts."""
+    if args.sweep_speed is None or args.mode == "sweep":
+        return
+    from hil.station.config import load_config
+
+    if args.mode is None and args.config and load_config(args.config).campaign["mode"] == "sweep":
+        return
+    raise InputError("--sweep-speed goes with --mode sweep (or campaign.mode = \"sweep\" in --config)")
 
 
 def _check_plan_cache(args: argparse.Namespace) -> None:

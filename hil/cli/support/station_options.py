@@ -56,6 +56,8 @@ def config_overrides(args: argparse.Namespace) -> dict[str, Any]:
         out["campaign__time_budget"] = args.time_budget
     if getattr(args, "search_time", None) is not None:
         out["campaign__search_time"] = args.search_time
+    if getattr(args, "sweep_speed", None) is not None:
+        out["campaign__sweep_speed"] = args.sweep_speed
     if getattr(args, "plan_cache", None) is not None:
         out["campaign__plan_cache"] = args.plan_cache
     if getattr(args, "mode", None) is not None:  # hil calibrate: stop-and-go or sweep (wins over the config)

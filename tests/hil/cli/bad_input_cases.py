@@ -568,6 +568,9 @@ def _cases() -> list[Case]:
     numbers("calibrate", [*cal, "--selection", "time-aware"], "--search-time",
             ("0", "-1", "nan", "inf", "1e308", "abc"))
     add("calibrate", "--search-time-without-time-aware", [*cal, "--search-time", "5"], ["--search-time"])
+    numbers("calibrate", [*cal, "--mode", "sweep", "--tracker-protocol", "emscon"], "--sweep-speed",
+            ("0", "-1", "nan", "inf", "4", "abc"))
+    add("calibrate", "--sweep-speed-without-sweep", [*cal, "--sweep-speed", "1.0"], ["--sweep-speed"])
     add("calibrate", "--plan-cache=a-file", [*cal, "--plan-cache", f"{d}/afile"], ["plan_cache", "afile"],
         files={"afile": "not a directory"})
     add("calibrate", "--robot=ur99", [*cal, "--robot", "ur99"], ["ur99"])
