@@ -36,7 +36,9 @@ How (`StreamJoin`):
    joined with the true clock left 66 µm RMS with such samples and 17 µm without them; the cycle is
    the stream's 10th-percentile step, the controller's period where most frames arrive),
    ``acceleration`` (the joints' |q̈| beyond the quasi-static limit,
-   `hil.arm.dynamics.DynamicsModel.acceleration_limit`, at that time).
+   `hil.arm.dynamics.DynamicsModel.acceleration_limit`, at that time), ``validation pose`` (the
+   joints within `guard`'s radius of a pose the campaign validates on: a sweep that rests at its
+   validation poses passes through them, and a fit that saw them would be judged on what it fitted).
 3. A coarse scan of the offset (every `scan_step_s` over ±`scan_window_s` around a first guess: the
    streams' first stamps, i.e. recordings started together, unless given) finds the basin; then
    Gauss–Newton (``scipy.optimize.least_squares``, analytic Jacobian: ∂r/∂a = −ṗ, ∂r/∂d = −ṗ·(t_trk −
@@ -68,7 +70,7 @@ PointsFn = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 #: The largest |q̈| (rad/s², (N, 6)) the deflection model is trusted to at configurations (N, 6).
 AccelerationLimitFn = Callable[[np.ndarray], np.ndarray]
 
-REASONS = ("beam lost", "after a gap", "joint gap", "acceleration")
+REASONS = ("beam lost", "after a gap", "joint gap", "acceleration", "validation pose")
 
 
 @dataclass(frozen=True)
@@ -157,7 +159,9 @@ class StreamJoin:
     def __init__(self, joints: JointStream, tracker: TrackerStream, points: PointsFn,
                  acceleration_limit: AccelerationLimitFn | None = None, *, gap_factor: float = 2.5,
                  derivative_window_s: float = 0.05, relock_guard_s: float = 0.05,
-                 cycle_factor: float = 1.5) -> None:
+                 cycle_factor: float = 1.5, guard: tuple[np.ndarray, float] | None = None) -> None:
+        """`guard`: poses (V, 6) rad and a radius (rad, the largest joint difference) within which no
+        tracker sample is used (``validation pose``, module docstring)."""
         self.joints, self.tracker = joints, tracker
         steps = np.diff(joints.t)
         # the longest step between two joint frames a sample may be interpolated across (module docstring)
@@ -166,6 +170,7 @@ class StreamJoin:
         self._splines: list[CubicSpline] = []
         self._spans: list[tuple[float, float]] = []
         self._fast: list[np.ndarray] = []  # per segment: (n,) True where |q̈| exceeds the limit
+        self._near: list[np.ndarray] = []  # per segment: (n,) True within the guard of a validation pose
         self._seg_t: list[np.ndarray] = []
         for seg in _segments(joints.t, gap_factor):
             t, q = joints.t[seg], joints.q[seg]
@@ -183,6 +188,7 @@ class StreamJoin:
             if acceleration_limit is not None:
                 fast = (np.abs(qdd) > np.asarray(acceleration_limit(q), dtype=float)).any(axis=1)
             self._fast.append(fast)
+            self._near.append(_near(q, guard))
             self._seg_t.append(t)
         if not self._splines:
             raise InputError("joint stream: no stretch long enough to join (every segment shorter than "
@@ -197,26 +203,30 @@ class StreamJoin:
         self._lost, self._after = lost, after & ~lost
 
     # ------------------------------------------------------------------ evaluation
-    def _locate(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Segment index of each controller time (−1: in a gap or outside) and whether too fast."""
+    def _locate(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Segment index of each controller time (−1: in a gap or outside), whether too fast and
+        whether near a guarded pose."""
         seg = np.full(len(tau), -1)
         fast = np.zeros(len(tau), dtype=bool)
-        for k, ((a, b), ts, f) in enumerate(zip(self._spans, self._seg_t, self._fast, strict=True)):
+        near = np.zeros(len(tau), dtype=bool)
+        for k, ((a, b), ts, f, g) in enumerate(zip(self._spans, self._seg_t, self._fast, self._near,
+                                                   strict=True)):
             inside = (tau >= a) & (tau <= b)
             if inside.any():  # between two frames a missed one apart: a joint gap too
                 i = np.clip(np.searchsorted(ts, tau[inside], side="right") - 1, 0, len(ts) - 2)
                 spaced = np.flatnonzero(inside)[(ts[i + 1] - ts[i]) > self._longest_step]
                 inside[spaced] = False
             seg[inside] = k
-            if f.any() and inside.any():
+            if (f.any() or g.any()) and inside.any():
                 nearest = np.clip(np.searchsorted(ts, tau[inside]), 0, len(ts) - 1)
                 fast[inside] = f[nearest]
-        return seg, fast
+                near[inside] = g[nearest]
+        return seg, fast, near
 
     def trust(self, clock: ClockMap, among: np.ndarray | None = None) -> tuple[np.ndarray, dict[str, int]]:
         """(M,) which tracker samples the join may use under `clock`, and the others counted by reason
         (only those of `among`, (M,) bool, when given: the samples a fit did not use)."""
-        seg, fast = self._locate(clock(self.tracker.t))
+        seg, fast, near = self._locate(clock(self.tracker.t))
         counted = np.ones(len(seg), dtype=bool) if among is None else np.asarray(among, dtype=bool)
         reasons = Counter({r: 0 for r in REASONS})
         reasons["beam lost"] = int((self._lost & counted).sum())
@@ -225,6 +235,8 @@ class StreamJoin:
         rest &= ~self._after
         reasons["joint gap"] = int((rest & (seg < 0) & counted).sum())
         rest &= seg >= 0
+        reasons["validation pose"] = int((rest & near & counted).sum())
+        rest &= ~near
         reasons["acceleration"] = int((rest & fast & counted).sum())
         rest &= ~fast
         return rest, dict(reasons)
@@ -234,7 +246,7 @@ class StreamJoin:
         """(M, 3) the model's SMR position (or its time derivative) at each tracker sample mapped by
         `clock`; NaN where the mapped time is in no segment."""
         tau = clock(self.tracker.t if which is None else self.tracker.t[which])
-        seg, _ = self._locate(tau)
+        seg, _, _ = self._locate(tau)
         out = np.full((len(tau), 3), np.nan)
         for k, spline in enumerate(self._splines):
             m = seg == k
@@ -323,6 +335,17 @@ class StreamJoin:
         return ClockFit(clock.offset_s, clock.drift, T @ cov_ref @ T.T, t_ref,
                         float(np.sqrt(cov_ref[0, 0])), float(np.sqrt(np.mean(np.sum(r**2, axis=1)))),
                         len(idx), left)
+
+
+def _near(q: np.ndarray, guard: tuple[np.ndarray, float] | None) -> np.ndarray:
+    """(n,) True where joints `q` (n, 6) lie within the guard's radius of one of its poses."""
+    if guard is None or len(guard[0]) == 0:
+        return np.zeros(len(q), dtype=bool)
+    poses, radius = np.asarray(guard[0], dtype=float).reshape(-1, 6), float(guard[1])
+    out = np.zeros(len(q), dtype=bool)
+    for v in poses:  # a few validation poses: a loop keeps memory at (n, 6)
+        out |= np.max(np.abs(q - v), axis=1) < radius
+    return out
 
 
 def join_streams(joints: JointStream, tracker: TrackerStream, points: PointsFn,

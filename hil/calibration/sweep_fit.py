@@ -284,7 +284,8 @@ def fit_sweep(start: Geometry, joints: JointStream, tracker: TrackerStream, *,
               initial_offset_s: float | None = None, dynamics: bool = True,
               joint_errors: Sequence[int] = (), prior: bool = True, samples: int = SAMPLES,
               initial_drift: float = 0.0, max_iter: int = MAX_ITER,
-              acceleration_tolerance_rad: float | None = DEFAULT_TOLERANCE_RAD) -> SweepFit:
+              acceleration_tolerance_rad: float | None = DEFAULT_TOLERANCE_RAD,
+              guard: tuple[np.ndarray, float] | None = None) -> SweepFit:
     """Fit the kinematic parameters and the clock map together (module docstring).
 
     `start` is the first model (the static bootstrap's fit: tracker pose, SMR, payload, mounting);
@@ -295,7 +296,9 @@ def fit_sweep(start: Geometry, joints: JointStream, tracker: TrackerStream, *,
     static pose approached from below lags by it, the moving model has none), so they need `static`.
     `initial_offset_s`/`initial_drift` seed the join's coarse scan. `acceleration_tolerance_rad` is
     the ring the quasi-static deflection may leave out (`DynamicsModel.acceleration_limit`); None
-    trusts every acceleration (a benchmark's question, not a station's).
+    trusts every acceleration (a benchmark's question, not a station's). `guard` (poses (V, 6), a
+    radius in rad): no tracker sample whose joints lie that near one of the poses is used — the
+    validation poses a tour rests at (`hil.calibration.stream_join`, ``validation pose``).
     """
     robot = start.robot
     if not isinstance(robot, str):
@@ -316,7 +319,7 @@ def fit_sweep(start: Geometry, joints: JointStream, tracker: TrackerStream, *,
               else (lambda q, qd, qdd: MovingArm(geometry).points(q)))
     limits, ring = DynamicsModel(limit_model), acceleration_tolerance_rad
     join = StreamJoin(joints, tracker, points,
-                      None if ring is None else (lambda q: limits.acceleration_limit(q, ring)))
+                      None if ring is None else (lambda q: limits.acceleration_limit(q, ring)), guard=guard)
     first = join.fit(initial_offset_s, initial_drift=initial_drift)
     path = _JointPath(joints)
     clock_map = first.map

@@ -99,11 +99,13 @@ from hil.campaign.sweep_plan import (
     CONTROLLER_RATE_HZ,
     SWEEP,
     TRACKER_RATE_HZ,
+    VALIDATION_GUARD_RAD,
     first_clock,
     stored_tour,
     streams_of,
     sweep_tour,
     sweep_verdict,
+    tour_visits,
 )
 from hil.campaign.warmup import ReferenceWatch, reference_pose
 from hil.errors import HilError, InputError
@@ -404,8 +406,10 @@ def _sweep_finish(config: StationConfig, campaign: str, start: Geometry, static:
     joints, stream, other, joined = streams_of(segments)
     offset, drift = first_clock(joined)
     try:
+        validation_q = np.array([q for _, r, q in planned if r == VALIDATION], dtype=float).reshape(-1, 6)
         swept = fit_sweep(start, joints, stream, static=static if len(static) else None,
-                          compliance=camp["compliance"], initial_offset_s=offset, initial_drift=drift)
+                          compliance=camp["compliance"], initial_offset_s=offset, initial_drift=drift,
+                          guard=(validation_q, VALIDATION_GUARD_RAD))
     except InputError as exc:  # too little trusted data: the run failed, the input was fine
         raise IdentificationError(f"cannot identify from the sweep: {exc}") from None
     fit = swept.fit
@@ -566,16 +570,24 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     sweeping = camp["mode"] == SWEEP
     sweep_records = dict(resume.sweep)
     segments: list[SweepSegment] = []
+    # a sweep rests at the first cycle's validation poses along its tour: measured still there, as
+    # stop-and-go measures them, without a tour of their own (`hil.campaign.sweep_plan`)
+    rests: dict[int, np.ndarray] = {}
+    for i, r, q in planned if sweeping else ():
+        if r == VALIDATION and not any(np.array_equal(q, other) for other in rests.values()):
+            rests[i] = np.asarray(q, dtype=float)
     if sweeping:  # the tour through the calibration poses, checked whole before the sweep moves
-        waypoints = np.array([q for _, r, q in planned if r == CALIBRATION])
+        waypoints = np.array([q for _, r, q in planned if r == CALIBRATION] + list(rests.values()))
         if resume.sweep_tour:  # the tour the campaign began: its segments' numbers name what is recorded
             segments = stored_tour(resume.sweep_tour, config, get_robot(robot), keep_in_check or model,
                                    limit_model=model, waypoints=waypoints)
         else:
             segments = sweep_tour(waypoints, config, get_robot(robot), keep_in_check or model,
                                   sight_model=model, limit_model=model)
+    visits = tour_visits(segments, rests)
+    in_tour = {i for kind, i in visits if kind == "rest"}
     todo = [(i, r, q) for i, r, q in planned if (r, i) not in records
-            and not (sweeping and r == CALIBRATION)]
+            and not (sweeping and r == CALIBRATION) and i not in in_tour]
     # the stopping rule (campaign.stop_early): a stop the store holds is kept as it was decided
     stop = EarlyStop(StoppingRule(robot, smr_guess, np.array([q for _, r, q in planned if r == VALIDATION]),
                                   acceptance_threshold(camp["acceptance"], robot), camp["stop_margin"],
@@ -600,10 +612,37 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     watch = ReferenceWatch(config, campaign, reference, model, visit, resume.references,
                            located=config.tracker["position"] is None)
     sweep_left = [g for g in segments if g.index not in sweep_records]
-    if todo or sweep_left:  # warm (again, on a resume: the arm may have cooled) before measuring anything
+    rests_left = [i for i in in_tour if (VALIDATION, i) not in records]
+    if todo or sweep_left or rests_left:  # warm (again, on a resume: the arm may have cooled) first
         yield from watch.warm_up([q for _, r, q in planned if r == CALIBRATION])
+    sight = _SightCheck(robot, smr_guess, tracker.translation, config.smr["acceptance_angle"],
+                        getattr(choose, "hidden", None))
+    lost: list[Skipped] = []  # beam lost at each of these poses, one after another
+
+    def measure_still(i: int, role: str, q: np.ndarray) -> Plan:
+        """One still pose measured (`acquire`), unless predicted out of sight; True if recorded."""
+        sight.refine(list(records.values()))
+        reason = sight.hidden(q)
+        if reason is not None:  # don't drive there and wait for a beam that cannot come
+            yield Emit(PoseSkipped(campaign=campaign, index=i, role=role,
+                                   reason=f"predicted out of the tracker's sight: {reason}"))
+            return False
+        record = yield acquire(i, role, q, **visit)
+        if isinstance(record, PoseRecord):
+            records[(role, i)] = record
+            lost.clear()
+            yield from watch.after_pose()
+            return True
+        if isinstance(record, Skipped) and record.lost:
+            lost.append(record)
+            if len(lost) >= camp["max_consecutive_lost"]:
+                raise TrackerLooksWrong(_tracker_looks_wrong(
+                    config, lost, tracker, list(records.values()), smr_guess))
+        return False
+
     if segments:
-        yield Phase("sweep", f"{len(sweep_left)} of {len(segments)} sweep segments to record")
+        yield Phase("sweep", f"{len(sweep_left)} of {len(segments)} sweep segments to record"
+                    + (f", resting at {len(rests_left)} still validation poses" if rests_left else ""))
         yield Emit(SweepPlanned(
             campaign=campaign, segments=[{"index": g.index, "from": list(g.start),
                                           "to": [float(v) for v in g.q[-1]],
@@ -612,45 +651,40 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
                                           "knots": [] if g.knots is None else np.asarray(g.knots).tolist()}
                                          for g in segments],
             waypoints=[list(map(float, w)) for w in waypoints], rate_hz=CONTROLLER_RATE_HZ,
-            tracker_rate_hz=TRACKER_RATE_HZ, done=sorted(sweep_records)))
-        if sweep_left:
-            got = yield Sweep(tuple(sweep_left), len(segments), TRACKER_RATE_HZ, session)
-            if isinstance(got, SweepRecorded):
-                sweep_records.update({r.index: r for r in got.segments})
+            tracker_rate_hz=TRACKER_RATE_HZ, done=sorted(sweep_records),
+            rests=sorted(in_tour)))
+        if rests_left:
+            yield from watch.start()
+        by_index = {g.index: g for g in segments}
+        pending: list[SweepSegment] = []
+        for kind, ref in [*visits, ("end", -1)]:
+            if kind == "segment":
+                if ref not in sweep_records:
+                    pending.append(by_index[ref])
+                continue
+            if pending:  # the segments up to this rest, swept in one step
+                got = yield Sweep(tuple(pending), len(segments), TRACKER_RATE_HZ, session)
+                if isinstance(got, SweepRecorded):
+                    sweep_records.update({r.index: r for r in got.segments})
+                pending = []
+            if kind == "rest" and (VALIDATION, ref) not in records:
+                yield from measure_still(ref, VALIDATION, rests[ref])
     left = [(i, r) for i, r, _ in todo if not (r == CALIBRATION and stop.stopped)]
     if sweeping:  # the calibration poses were swept: the still ones left are the validation's
-        still = sum(1 for _, r, _ in planned if r != CALIBRATION)
+        still = sum(1 for _, r, _ in planned if r != CALIBRATION) - len(in_tour)
         yield Phase("measure", f"{len(left)} of {still} still validation poses to measure")
     else:
         yield Phase("measure", f"{len(left)} of {len(planned)} poses to measure")
     if todo:
         yield from watch.start()
-    sight = _SightCheck(robot, smr_guess, tracker.translation, config.smr["acceptance_angle"],
-                        getattr(choose, "hidden", None))
-    lost: list[Skipped] = []  # beam lost at each of these poses, one after another
     for k, (i, role, q) in enumerate(todo):
         if role == CALIBRATION and stop.stopped:  # the fit so far already predicts the acceptance
             continue
-        sight.refine(list(records.values()))
-        reason = sight.hidden(q)
-        if reason is not None:  # don't drive there and wait for a beam that cannot come
-            yield Emit(PoseSkipped(campaign=campaign, index=i, role=role,
-                                   reason=f"predicted out of the tracker's sight: {reason}"))
-            continue
-        record = yield acquire(i, role, q, **visit)
-        if isinstance(record, PoseRecord):
-            records[(role, i)] = record
-            lost = []
-            yield from watch.after_pose()
-            if role == CALIBRATION:
-                stopped = stop.consider(campaign, fitted(), measured_calibration(), calibration_left(k + 1))
-                if stopped is not None:
-                    yield Emit(stopped)
-        elif isinstance(record, Skipped) and record.lost:
-            lost.append(record)
-            if len(lost) >= camp["max_consecutive_lost"]:
-                raise TrackerLooksWrong(_tracker_looks_wrong(
-                    config, lost, tracker, list(records.values()), smr_guess))
+        measured = yield from measure_still(i, role, q)
+        if measured and role == CALIBRATION:
+            stopped = stop.consider(campaign, fitted(), measured_calibration(), calibration_left(k + 1))
+            if stopped is not None:
+                yield Emit(stopped)
 
     yield from watch.finish()
 

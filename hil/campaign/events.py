@@ -289,14 +289,16 @@ class ValidationDone(Event):
 @dataclass(frozen=True, kw_only=True)
 class SweepPlanned(Event):
     """The sweep's tour, checked before it moves: `segments` between the `waypoints` (the calibration
-    poses, in the tour's order), each ``{"index", "from", "to", "seconds", "samples"}``; `done`: the
-    segments a resumed campaign already has (not swept again)."""
+    poses and the validation poses it rests at), each ``{"index", "from", "to", "seconds", "samples",
+    "knots"}``; `done`: the segments a resumed campaign already has (not swept again); `rests`: the
+    validation poses (their plan indices) measured still where a segment starts or ends."""
 
     segments: list[dict[str, Any]]
     waypoints: list[list[float]]
     rate_hz: float  # the servo stream's rate (the controller period's)
     tracker_rate_hz: float
     done: list[int] = field(default_factory=list)
+    rests: list[int] = field(default_factory=list)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -3,8 +3,12 @@
 A sweep campaign (``campaign.mode = "sweep"``; docs/design.md, The calibration campaign) is the usual
 bootstrap (the tracker pose, the SMR, a first model from a few still poses) and warm-up, then one
 `hil.campaign.steps.Sweep` through the calibration poses the selection chose (the waypoints, in the
-tour's order) instead of a stop at each, then validation on still poses the fit never saw, exactly as
-stop-and-go's, so the verdict means the same.
+tour's order) instead of a stop at each. The validation poses are waypoints of the same tour where the
+arm rests (`tour_visits`): each is measured still there, approached from below as stop-and-go's poses
+are, and the fit leaves out every sample whose joints pass within `VALIDATION_GUARD_RAD` of one, so
+the verdict is on still poses the fit never saw and means what stop-and-go's means — without a second
+tour to reach them (bench/sweep_time.py: that tour alone cost about 0.4 of a stop-and-go campaign).
+A validation pose no segment reaches is measured after the sweep.
 
 The tour is planned segment by segment, from one waypoint at rest to the next at rest
 (`hil.calibration.sweep_path.plan_sweep`, within ``robot.speed`` and ``robot.acceleration``): a
@@ -27,7 +31,7 @@ segment that passes is bad input naming the first refused one and why.
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -60,6 +64,13 @@ CONTROLLER_RATE_HZ = 500.0
 #: a campaign ran at least. Half a second tells the two apart with room on both sides.
 CLOCK_AGREEMENT_S = 0.5
 
+
+#: rad: no tracker sample whose joints are within this (the largest joint difference) of a validation
+#: pose is fitted (`hil.calibration.stream_join`, ``validation pose``): a tour resting at a validation
+#: pose passes through it, and the verdict must be on poses the fit never saw. 0.05 rad is about 40 mm
+#: at a UR5e's reach, 50 ms of travel at 1 rad/s, the margin bench/sweep_time.py cuts around its rests;
+#: a choice of hil's, not a published figure.
+VALIDATION_GUARD_RAD = 0.05
 
 #: The share of the deflection model's quasi-static acceleration limit a sweep at ``campaign.sweep_speed``
 #: plans to (`sweep_limits`): the fit leaves out samples beyond the limit itself, so a tour planned at it
@@ -172,6 +183,29 @@ def stored_tour(segments: Sequence[dict[str, Any]], config: Any, spec: RobotSpec
             raise InputError(f"stored sweep segment {k + 1} of {len(segments)} refused before the sweep "
                              f"moved: {exc}") from None
         out.append(SweepSegment(int(seg.get("index", k)), np.asarray(tour.q, float), float(rate_hz), knots))
+    return out
+
+
+def tour_visits(segments: Sequence[SweepSegment], rests: Mapping[int, np.ndarray]) -> list[tuple[str, int]]:
+    """The tour as the engine takes it: ``("segment", index)`` in order, with ``("rest", i)`` where a
+    segment starts or ends at validation pose `i` of `rests` (plan index → joints), the first time
+    the tour reaches it. There the arm stops and the pose is measured still, approached from below
+    as stop-and-go's poses are, before the tour goes on; a validation pose no segment reaches is not
+    a rest (it is measured after the sweep)."""
+    out: list[tuple[str, int]] = []
+    reached: set[int] = set()
+
+    def rest_at(q: np.ndarray) -> None:
+        for i, v in rests.items():
+            if i not in reached and np.allclose(q, v, rtol=0.0, atol=1e-9):
+                reached.add(i)
+                out.append(("rest", i))
+                return
+
+    for g in segments:
+        rest_at(g.q[0])
+        out.append(("segment", g.index))
+        rest_at(g.q[-1])
     return out
 
 

@@ -114,3 +114,29 @@ def test_a_fast_time_station_is_joined_from_its_speed_as_first_drift(truth, arm)
     want = ClockMap(-50.0, 9.0)
     assert abs(fit.drift - want.drift) < 3 * fit.sigma_drift
     assert abs(_error_at(fit, want, fit.t_ref)) < 3 * fit.sigma_at_ref_s
+
+
+def test_samples_near_a_guarded_pose_are_left_out_with_their_reason():
+    """The validation poses a sweep rests at are guarded: no sample whose joints lie within the radius
+    of one is trusted, each counted once as ``validation pose``."""
+    t = np.arange(0.0, 2.0, 0.002)
+    q = np.zeros((len(t), 6))
+    q[:, 0] = np.sin(np.pi * t)  # 0 → 1 → 0 rad
+    joints = JointStream(t, q)
+    tt = np.arange(0.0, 2.0, 0.001)
+    tracker = TrackerStream(tt, np.zeros((len(tt), 3)))
+
+    def points(qq, qd, qdd):
+        return np.column_stack([qq[:, 0], np.zeros(len(qq)), np.zeros(len(qq))])
+
+    pose = np.zeros(6)
+    pose[0] = 1.0
+    plain = StreamJoin(joints, tracker, points)
+    guarded = StreamJoin(joints, tracker, points, guard=(pose[None, :], 0.05))
+    ident = ClockMap(0.0, 0.0)
+    use_plain, _ = plain.trust(ident)
+    use, left = guarded.trust(ident)
+    frame = np.clip(np.searchsorted(t, tt), 0, len(t) - 1)  # the joint frame a sample is judged by
+    near = np.abs(q[frame, 0] - 1.0) < 0.05
+    assert left["validation pose"] == int((near & use_plain).sum()) > 100
+    assert not (use & near).any() and (use | near).sum() == use_plain.sum() + (near & ~use_plain).sum()

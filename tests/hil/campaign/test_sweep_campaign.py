@@ -23,6 +23,7 @@ import pytest
 from hil.campaign.chooser import campaign_chooser
 from hil.campaign.events import (
     EventBus,
+    PointMeasured,
     Suspended,
     SweepFitted,
     SweepPlanned,
@@ -191,6 +192,16 @@ def test_a_sweep_campaign_is_accepted_and_finds_the_stations_clock(station):
     assert abs(fitted.drift - truth["drift"]) < 50e-6, (fitted.drift, truth)
     assert fitted.used >= 10 * 32  # ten tracker samples a fitted term (≈30 parameters and the clock's 2)
     assert result.after.rms < result.before.rms / 10 and result.after.rms < 52.5e-6  # bound / 10
+    # the validation poses are rests of the tour: measured still between its segments, never fitted
+    rests = station.of(SweepPlanned)[-1].rests
+    assert rests, "no validation pose is a rest of the tour"
+    order = [("rest", e.index) if isinstance(e, PointMeasured) else ("segment", e.segment)
+             for e in station.events if isinstance(e, SweepSegmentDone)
+             or (isinstance(e, PointMeasured) and e.role == "validation")]
+    swept = [k for k, (kind, _) in enumerate(order) if kind == "segment"]
+    assert all(("rest", i) in order for i in rests)
+    assert any(swept[0] < order.index(("rest", i)) < swept[-1] for i in rests)  # between segments
+    assert fitted.left_out.get("validation pose", 0) > 0  # the samples passing through them
     # the same arm (the station's seed) calibrated stop-and-go, in faster time (it streams nothing)
     stop_and_go = SweepStation(station.tmp, mode="stop-and-go", speed=40.0)
     try:

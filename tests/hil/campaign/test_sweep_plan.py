@@ -166,3 +166,20 @@ def test_a_sweep_speed_out_of_range_is_refused_with_its_field(tmp_path):
     text.write_text("[campaign]\nsweep_speed = 40.0\n")
     with pytest.raises(InputError, match=r"campaign\.sweep_speed"):
         load_config(text)
+
+
+def test_the_tour_rests_at_the_validation_poses_its_segments_reach_once_each():
+    """A validation pose among the waypoints is a rest where a segment starts or ends, the first time
+    the tour reaches it (the arm stops there and it is measured still); one no segment reaches is not."""
+    from hil.campaign.steps import SweepSegment
+    from hil.campaign.sweep_plan import tour_visits
+
+    a, b, c, d = swing(-0.3), swing(0.2), swing(0.5), swing(0.9)
+
+    def seg(k, p, q):
+        return SweepSegment(k, np.linspace(p, q, 5))
+
+    segments = [seg(0, a, b), seg(1, b, c), seg(2, c, b)]
+    visits = tour_visits(segments, {7: b, 8: d, 9: a})
+    assert visits == [("rest", 9), ("segment", 0), ("rest", 7), ("segment", 1), ("segment", 2)]
+    assert tour_visits(segments, {}) == [("segment", 0), ("segment", 1), ("segment", 2)]
