@@ -234,6 +234,9 @@ def station_service(controller: Any, truth: str | None = None, seed: int = 0,
         "clock_pair": clock_pair,
         "tracker_measurements": lambda: simulator.instrument.measurements,
         "tracker_measuring_seconds": lambda: simulator.instrument.measuring_seconds,
+        # emScon's: its stationary measurements and their measuring time (the sweep's stream is not one)
+        "emscon_measurements": lambda: emscon.instrument.stationary_measurements,
+        "emscon_measuring_seconds": lambda: emscon.instrument.stationary_seconds,
         # the arm's temperature rise now (K), for tests and benches that check what the arm went through
         "thermal_rise": lambda: 0.0 if heating is None else heating.rise(),
     })

@@ -103,6 +103,7 @@ from hil.campaign.sweep_plan import (
     first_clock,
     stored_tour,
     streams_of,
+    sweep_terms,
     sweep_tour,
     sweep_verdict,
     tour_visits,
@@ -385,6 +386,13 @@ def iso9283(records: list[PoseRecord], geometry: Geometry) -> dict[str, Any] | N
     return {"poses": rows, "AP_max": max(r["AP"] for r in rows), "RP_max": max(r["RP"] for r in rows)}
 
 
+def approached_from_below(meas: Measurements) -> Measurements:
+    """`meas` with every joint's approach direction +1: still poses a campaign approached from below."""
+    import dataclasses
+
+    return dataclasses.replace(meas, directions=np.ones((len(meas), 6)))
+
+
 def _sweep_finish(config: StationConfig, campaign: str, start: Geometry, static: Measurements,
                   segments: list[SegmentRecord], records: dict[tuple[str, int], PoseRecord],
                   tracker: pin.SE3, selection: dict[str, Any], watch: ReferenceWatch, stop: EarlyStop,
@@ -405,11 +413,18 @@ def _sweep_finish(config: StationConfig, campaign: str, start: Geometry, static:
         start = Geometry.nominal(robot, located_smr, located_tracker)
     joints, stream, other, joined = streams_of(segments)
     offset, drift = first_clock(joined)
+    # every still pose was approached from below in every joint (``campaign.approach``): it lags by
+    # the lost motion in +1 directions, which a moving arm does not, so the fit can tell the two apart
+    # and the validation's predictions lag as its poses do
+    from_below = float(camp["approach"]) > 0
+    static = approached_from_below(static) if from_below else static
     try:
         validation_q = np.array([q for _, r, q in planned if r == VALIDATION], dtype=float).reshape(-1, 6)
+        terms = sweep_terms(parse_request(camp["joint_errors"], "campaign.joint_errors"),
+                            len(static) if from_below else 0)
         swept = fit_sweep(start, joints, stream, static=static if len(static) else None,
                           compliance=camp["compliance"], initial_offset_s=offset, initial_drift=drift,
-                          guard=(validation_q, VALIDATION_GUARD_RAD))
+                          guard=(validation_q, VALIDATION_GUARD_RAD), joint_errors=terms)
     except InputError as exc:  # too little trusted data: the run failed, the input was fine
         raise IdentificationError(f"cannot identify from the sweep: {exc}") from None
     fit = swept.fit
@@ -431,6 +446,7 @@ def _sweep_finish(config: StationConfig, campaign: str, start: Geometry, static:
     yield Phase("validate")
     val_records = [r for (role, _), r in sorted(records.items()) if role == VALIDATION]
     held_out = measurements_of(val_records, f"campaign {campaign} validation")
+    held_out = approached_from_below(held_out) if from_below else held_out
     before = validate(start, held_out)
     after = validate(fit.geometry, held_out)
     try:

@@ -38,6 +38,7 @@ import numpy as np
 
 from hil.arm.catalog import RobotSpec
 from hil.arm.geometry import Geometry
+from hil.calibration.joint_error_request import JointErrorRequest
 from hil.calibration.stream_join import JointStream, TrackerStream
 from hil.campaign.acceptance import Verdict, class_bound
 from hil.campaign.steps import SegmentRecord, SweepSegment
@@ -184,6 +185,29 @@ def stored_tour(segments: Sequence[dict[str, Any]], config: Any, spec: RobotSpec
                              f"moved: {exc}") from None
         out.append(SweepSegment(int(seg.get("index", k)), np.asarray(tour.q, float), float(rate_hz), knots))
     return out
+
+
+#: The harmonic orders a sweep's fit takes for ``campaign.joint_errors = "auto"``: its fit is not
+#: cross-validated (each fold would be a joint fit of the streams), so "auto" cannot choose by it, and
+#: orders 1-2 of every joint with the lost motion are the class bench/sweep_time.py measured (held-out
+#: 0.67-1.00 of stop-and-go's error on realistic arms); without them a realistic arm's sweep fitted
+#: 5 x stop-and-go's truth error (bench/sweep_campaign.py, UR5e, 121 against 24 µm).
+AUTO_ORDERS = (1, 2)
+
+
+def sweep_terms(request: JointErrorRequest, static_rows: int) -> list[int]:
+    """The joint-error terms (indices of the extended vector) a sweep's fit identifies for the
+    campaign's ``campaign.joint_errors`` `request`: none, `AUTO_ORDERS` and the lost motion for
+    "auto", or the orders asked (and the lost motion if asked). The lost motion only with still rows
+    (`static_rows`): a moving arm shows none, so still poses against moving ones identify it."""
+    from hil.arm.joint_error_columns import harmonic_index, lost_motion_index
+
+    if request.mode == "none":
+        return []
+    orders = AUTO_ORDERS if request.mode == "auto" else request.orders
+    lost = (request.mode == "auto" or request.lost_motion) and static_rows > 0
+    out = [harmonic_index(j, k, kind) for j in range(6) for k in orders for kind in ("cos", "sin")]
+    return out + ([lost_motion_index(j) for j in range(6)] if lost else [])
 
 
 def tour_visits(segments: Sequence[SweepSegment], rests: Mapping[int, np.ndarray]) -> list[tuple[str, int]]:

@@ -309,6 +309,10 @@ class EmsconInstrument:
         self.locked = state.visible
         self._seen = state
         self.commands = 0
+        # the instrument's own account of its stationary measuring (simulated seconds over lMeasTime,
+        # for benches adding up robot time, as the GeoCOM instrument's `measuring_seconds`)
+        self.stationary_seconds = 0.0
+        self.stationary_measurements = 0
         # the source's time (`positions_at`, `known_until`) when this instrument's simulated time is 0:
         # the server's start on the clock both share
         self.source_epoch = 0.0
@@ -563,6 +567,8 @@ class EmsconInstrument:
         if now < m.end:
             return
         self._measurement = None
+        self.stationary_seconds += m.end - m.start
+        self.stationary_measurements += 1
         readings = np.vstack(m.taken)
         mean = readings.mean(axis=0)
         std = readings.std(axis=0, ddof=1) if len(readings) > 1 else np.zeros(3)
