@@ -103,6 +103,7 @@ from hil.campaign.sweep_plan import (
     first_clock,
     stored_tour,
     streams_of,
+    sweep_limits,
     sweep_terms,
     sweep_tour,
     sweep_verdict,
@@ -599,7 +600,8 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
                                    limit_model=model, waypoints=waypoints)
         else:
             segments = sweep_tour(waypoints, config, get_robot(robot), keep_in_check or model,
-                                  sight_model=model, limit_model=model)
+                                  sight_model=model, limit_model=model,
+                                  rests=np.array(list(rests.values())).reshape(-1, 6))
     visits = tour_visits(segments, rests)
     in_tour = {i for kind, i in visits if kind == "rest"}
     todo = [(i, r, q) for i, r, q in planned if (r, i) not in records
@@ -671,6 +673,11 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
             rests=sorted(in_tour)))
         if rests_left:
             yield from watch.start()
+        # the unswept moves between segments at the sweep's own limits when it has them
+        hop: tuple[float | None, float | None] = (None, None)
+        if camp.get("sweep_speed") is not None:
+            limit_speed, limit_accel = sweep_limits(config, get_robot(robot), waypoints, model)
+            hop = (float(np.min(limit_speed)), limit_accel)
         by_index = {g.index: g for g in segments}
         pending: list[SweepSegment] = []
         for kind, ref in [*visits, ("end", -1)]:
@@ -679,7 +686,7 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
                     pending.append(by_index[ref])
                 continue
             if pending:  # the segments up to this rest, swept in one step
-                got = yield Sweep(tuple(pending), len(segments), TRACKER_RATE_HZ, session)
+                got = yield Sweep(tuple(pending), len(segments), TRACKER_RATE_HZ, session, *hop)
                 if isinstance(got, SweepRecorded):
                     sweep_records.update({r.index: r for r in got.segments})
                 pending = []

@@ -481,7 +481,8 @@ class Engine:
     def _sweep_segment(self, segment: SweepSegment, step: Sweep) -> Any:
         from hil.campaign.sweep_recording import record_segment, segment_events
 
-        self._device_step(Move(segment.start))  # at rest at its start: by a safe route, as any move
+        # at rest at its start: by a safe route, as any move
+        self._device_step(Move(segment.start, speed=step.speed, acceleration=step.acceleration))
         t = self.clock.monotonic()
         record = record_segment(self.robot, self.tracker, segment, step.tracker_rate_hz, step.session)
         self._last_q = np.asarray(segment.q[-1], dtype=float)

@@ -194,6 +194,10 @@ class Sweep:
     total: int
     tracker_rate_hz: float
     session: str = ""
+    # the joint speed (rad/s) and acceleration (rad/s²) of the moves to a segment's start that are not
+    # swept (None: the station's movej): a sweep at its own limits (``campaign.sweep_speed``) hops at them
+    speed: float | None = None
+    acceleration: float | None = None
 
 
 @dataclass(frozen=True)

@@ -107,14 +107,15 @@ def sweep_limits(config: Any, spec: RobotSpec, waypoints: np.ndarray, limit_mode
 
 def sweep_tour(waypoints: np.ndarray, config: Any, spec: RobotSpec, check_model: Geometry,
                rate_hz: float = CONTROLLER_RATE_HZ, sight_model: Geometry | None = None,
-               limit_model: Geometry | None = None) -> list[SweepSegment]:
+               limit_model: Geometry | None = None, rests: np.ndarray | None = None) -> list[SweepSegment]:
     """The tour through `waypoints` (m, 6) as segments rest to rest, each within the station's joint
     speed and acceleration (and the arm's joint speed maxima), inside the keep-in box (`check_model`,
     the arm the engine checks moves with) and, with `sight_model` (its tracker and SMR: the
     bootstrap's), in the tracker's view within ``smr.acceptance_angle`` — all checked before anything
     moves. The order is `tour_segments`'; InputError when no segment of the tour passes, naming the
     first refused and its first offending sample. The limits are `sweep_limits`' (`limit_model`: the
-    arm whose deflection bounds the acceleration)."""
+    arm whose deflection bounds the acceleration). With `rests` (the poses the tour must stop at) the
+    arm passes through the other waypoints without stopping where it can (`pass_through`)."""
     from hil.calibration.selection import aimed_vias
     from hil.calibration.sweep_path import SweepRefused, check_sweep, plan_leg
 
@@ -124,7 +125,9 @@ def sweep_tour(waypoints: np.ndarray, config: Any, spec: RobotSpec, check_model:
     pts = np.asarray(waypoints, dtype=float)
 
     def checked(a: int, through: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        knots = np.vstack([pts[a][None, :], through])
+        return planned(np.vstack([pts[a][None, :], through]))
+
+    def planned(knots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         tour = plan_leg(knots, max_speed=speed, max_acceleration=accel, rate_hz=rate_hz)
         check_sweep(tour, max_speed=speed, max_acceleration=accel, spec=spec, keep_in=keep_in,
                     model=check_model)
@@ -155,7 +158,37 @@ def sweep_tour(waypoints: np.ndarray, config: Any, spec: RobotSpec, check_model:
     if not paths:
         (a, _), why = refused[0] if refused else ((0, 0), "fewer than two waypoints")
         raise InputError(f"sweep segment {a + 1} of {len(pts) - 1} refused before the sweep moved: {why}")
+    if rests is not None:
+        paths = pass_through(paths, np.asarray(rests, float).reshape(-1, 6), planned, SweepRefused)
     return [SweepSegment(k, q, float(rate_hz), knots) for k, (q, knots) in enumerate(paths)]
+
+
+def pass_through(paths: list[tuple[np.ndarray, np.ndarray]], rests: np.ndarray, plan: Any,
+                 refusal: type[Exception] = InputError) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The tour's paths with the arm passing through its calibration waypoints instead of stopping:
+    two paths in a row that meet at a waypoint which is not one of `rests` (the validation poses,
+    where it must stop) become one path through both's knots, planned and checked again by
+    `plan(knots)` → (q, knots), if it is the sooner; where that is refused (`refusal`: the smooth path
+    through them leaves the keep-in box or the tracker's view) or slower (a joint reversing there: the
+    path through overshoots) the two stay apart. A stop costs a deceleration and an
+    acceleration at the quasi-static limit (about 1 rad/s² in a UR5e's shoulder): bench/sweep_time.py
+    passes its waypoints the same way."""
+    out = list(paths[:1])
+    for q, knots in paths[1:]:
+        last_q, last_knots = out[-1]
+        meets = np.allclose(last_q[-1], q[0], rtol=0.0, atol=1e-9)
+        at_rest = any(np.allclose(q[0], r, rtol=0.0, atol=1e-9) for r in rests)
+        if meets and not at_rest:
+            try:
+                joined = plan(np.vstack([last_knots, knots[1:]]))
+            except refusal:
+                joined = None
+            # a joint reversing at the waypoint overshoots it on a path through it: sooner stopped
+            if joined is not None and len(joined[0]) < len(last_q) + len(q) - 1:
+                out[-1] = joined
+                continue
+        out.append((q, knots))
+    return out
 
 
 def stored_tour(segments: Sequence[dict[str, Any]], config: Any, spec: RobotSpec, check_model: Geometry,

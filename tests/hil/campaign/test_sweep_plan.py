@@ -183,3 +183,42 @@ def test_the_tour_rests_at_the_validation_poses_its_segments_reach_once_each():
     visits = tour_visits(segments, {7: b, 8: d, 9: a})
     assert visits == [("rest", 9), ("segment", 0), ("rest", 7), ("segment", 1), ("segment", 2)]
     assert tour_visits(segments, {}) == [("segment", 0), ("segment", 1), ("segment", 2)]
+
+
+def test_the_tour_passes_through_calibration_waypoints_and_stops_at_the_rests():
+    """With `rests` the arm passes a calibration waypoint without stopping (one segment through it,
+    sooner than two legs rest to rest: 10-20 % on such turns); at a rest the segments stay apart."""
+    config, spec, model = default_config(), get_robot("ur5e"), Geometry.nominal("ur5e")
+    a, b, c = POSE + np.array([[-0.4, -0.2, 0.1, 0.0, 0.0, 0.0], [0.0, 0.1, 0.3, 0.2, 0.1, 0.1],
+                               [0.4, 0.2, 0.35, 0.5, 0.3, 0.1]])
+    stopping = sweep_tour(np.array([a, b, c]), config, spec, model)
+    assert len(stopping) == 2
+    (passing,) = sweep_tour(np.array([a, b, c]), config, spec, model, rests=np.zeros((0, 6)))
+    np.testing.assert_allclose(passing.knots, [a, b, c])
+    at_b = int(np.argmin(np.max(np.abs(passing.q - b), axis=1)))
+    assert np.max(np.abs(passing.q[at_b] - b)) < 1e-2
+    assert np.max(np.abs(passing.q[at_b + 1] - passing.q[at_b - 1])) * 500 / 2 > 0.1  # moving at b
+    assert len(passing.q) < 0.95 * sum(len(s.q) for s in stopping)
+    resting = sweep_tour(np.array([a, b, c]), config, spec, model, rests=b[None, :])
+    assert [len(s.q) for s in resting] == [len(s.q) for s in stopping]
+
+
+def test_two_paths_are_joined_only_where_the_path_through_is_sooner_and_passes():
+    from hil.campaign.sweep_plan import pass_through
+
+    a, b, c = swing(0.0), swing(0.5), swing(1.0)
+    paths = [(np.linspace(a, b, 300), np.array([a, b])), (np.linspace(b, c, 300), np.array([b, c]))]
+    none = np.zeros((0, 6))
+
+    def through(n):
+        return lambda knots: (np.linspace(knots[0], knots[-1], n), knots)
+
+    (joined,) = pass_through(paths, none, through(500))
+    assert len(joined[0]) == 500 and len(joined[1]) == 3
+    assert len(pass_through(paths, none, through(700))) == 2  # a turn overshot: slower through
+    assert len(pass_through(paths, b[None, :], through(500))) == 2  # a rest: stopped at
+
+    def refused(knots):
+        raise InputError("leaves the keep-in box")
+
+    assert len(pass_through(paths, none, refused)) == 2
