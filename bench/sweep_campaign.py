@@ -18,15 +18,17 @@ SMR's payload; no thermal growth, so no warm-up, the same for both modes) with e
   held-out error), resting at the validation poses inside its tour, with `--sweep-samples` readings
   at each still pose.
 
-Both validate on 20 still poses drawn alike (the same rule and seed). **Robot time** is what the
-station did, by its own accounts: the controller's joint moves (``motion_seconds``: movej, routes,
-approach legs), emScon's stationary measuring (``emscon_measuring_seconds``, its lMeasTime per
-measurement), 10 RTDE frames per still pose (the driver's joint reading), and the sweep's segments at
-their planned duration (`SweepPlanned`: a real station follows the path as planned; the simulator in
-fast time follows it `--speed` times slower, an artefact of its servo loop keeping the wall's period,
-so its own clock would overstate it). **Accuracy**: the campaign's validation RMS, and the truth
-error of its model on `--held-out` poses no campaign visits (the station's candidates, a draw of its
-own, approached from below). Compute (selection, fits) is the cell's wall time, not robot time.
+Both validate on 20 still poses drawn alike (the same rule and seed). **Robot time** is what the station
+did, by its own accounts: the controller's joint moves (``motion_seconds``: movej, routes, approach
+legs), emScon's stationary measuring (``emscon_measuring_seconds``, its lMeasTime per measurement), 10
+RTDE frames per still pose (the driver's joint reading), and the sweep's segments at their planned
+duration (`SweepPlanned`: a real station follows the path as planned; the simulator in fast time follows
+it `--speed` times slower, an artefact of its servo loop keeping the wall's period, so its own clock
+would overstate it; `--sweep-sim-speed 1` runs the sweeps on a station of the same seed, the same arm,
+at the wall's pace, where the servo loop's period is the controller's). **Accuracy**: the campaign's
+validation RMS, and the truth error of its model on `--held-out` poses no campaign visits (the station's
+candidates, a draw of its own, approached from below). Compute (selection, fits) is the cell's wall
+time, not robot time.
 """
 
 from __future__ import annotations
@@ -120,6 +122,9 @@ def main() -> None:
     ap.add_argument("--robots", default="ur5e,ur10e")
     ap.add_argument("--seeds", type=int, default=1)
     ap.add_argument("--speed", type=float, default=8.0, help="simulator speed (fast time)")
+    ap.add_argument("--sweep-sim-speed", type=float,
+                    help="simulator speed of the sweeps (default --speed): a station of the same seed (the "
+                         "same arm) at this speed; 1 sweeps as a real station does (module docstring)")
     ap.add_argument("--poses", type=int, default=30, help="stop-and-go: method 000's pose count")
     ap.add_argument("--sweep-poses", type=int, default=12, help="sweep: the time-aware choice's pose count")
     ap.add_argument("--sweep-speeds", default="1.0,1.5", help="sweep tool speeds (m/s)")
@@ -134,6 +139,7 @@ def main() -> None:
     for robot in args.robots.split(","):
         for seed in range(args.seeds):
             sim = start_station(robot=robot, speed=args.speed, seed=seed, ideal=False, thermal=False)
+            other = None
             try:
                 with tempfile.TemporaryDirectory() as tmp:
                     path = Path(tmp) / "truth.json"
@@ -147,8 +153,17 @@ def main() -> None:
                                       campaign__samples=args.sweep_samples)) for v in speeds]
                 base = None
                 for name, config in cases:
+                    here, speed = sim, args.speed
+                    if name != "stop-and-go" and args.sweep_sim_speed not in (None, args.speed):
+                        if other is None:
+                            other = start_station(robot=robot, speed=args.sweep_sim_speed, seed=seed,
+                                                  ideal=False, thermal=False)
+                        here, speed = other, args.sweep_sim_speed
+                        svc = other.info["services"][0]
+                        config = config.with_overrides(robot__address=other.address,
+                                                       tracker__url=svc["tracker_emscon_url"])
                     try:
-                        row = run(sim, config, args.speed, truth, held)
+                        row = run(here, config, speed, truth, held)
                     except RuntimeError as exc:
                         print(f"{robot:6} {seed:4d} {name:16} FAILED: {exc}", flush=True)
                         continue
@@ -161,6 +176,8 @@ def main() -> None:
                           f"{row['used'] or 0:6d} {row['wall']:6.0f}  {row['status']}", flush=True)
             finally:
                 sim.stop()
+                if other is not None:
+                    other.stop()
 
 
 if __name__ == "__main__":
