@@ -222,3 +222,21 @@ def test_two_paths_are_joined_only_where_the_path_through_is_sooner_and_passes()
         raise InputError("leaves the keep-in box")
 
     assert len(pass_through(paths, none, refused)) == 2
+
+
+def test_the_sweeps_fit_takes_the_joint_errors_asked_and_the_lost_motion_only_with_still_rows():
+    """"auto" is orders 1-2 of every joint and the lost motion (the sweep's fit is not cross-validated,
+    so it cannot choose); the lost motion needs still rows, which lag by it where the moving ones do not."""
+    from hil.arm.joint_error_columns import harmonic_index, lost_motion_index
+    from hil.calibration.joint_error_request import parse_request
+    from hil.campaign.sweep_plan import sweep_terms
+
+    auto = sweep_terms(parse_request("auto"), static_rows=6)
+    assert len(auto) == 6 * 2 * 2 + 6
+    assert harmonic_index(1, 2, "sin") in auto and harmonic_index(1, 3, "cos") not in auto
+    assert lost_motion_index(5) in auto
+    assert not any(i >= lost_motion_index(0) for i in sweep_terms(parse_request("auto"), static_rows=0))
+    assert sweep_terms(parse_request("none"), static_rows=6) == []
+    asked = sweep_terms(parse_request("3"), static_rows=6)
+    assert asked == [harmonic_index(j, 3, k) for j in range(6) for k in ("cos", "sin")]
+    assert lost_motion_index(0) in sweep_terms(parse_request("1,lost"), static_rows=6)
