@@ -284,8 +284,8 @@ def test_simulated_campaign_stops_early_validates_and_resumes_after_an_interrupt
                 os.killpg(proc.pid, signal.SIGINT)
                 break
     finally:
-        proc.communicate(timeout=60)
-    assert proc.returncode == 130, [e["event"] for e in first][-5:]
+        _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, ([e["event"] for e in first][-5:], err[-2000:])
     (stop,) = [e for e in first if e["event"] == "AcquisitionStopped"]
     assert stop["poses_left"] > 0 and stop["poses_used"] + stop["poses_left"] == 30
 
