@@ -171,8 +171,9 @@ def test_a_sweep_campaign_is_accepted_and_finds_the_stations_clock(station):
     found near the station's truth.
 
     Measured (seed 5, speed 4, the tour checked for the tracker's sight, alone on 2 cores): validation
-    RMS 13.6 µm against stop-and-go's 6.4 µm on the same arm (nominal: 3.6 mm); the map at the sweep's
-    mean tracker time 117 µs from the station's stated truth, where the fit states σ = 4.1 µs. Not
+    RMS 13.2 µm against stop-and-go's 7.0 µm on the same arm (nominal: 3.6 mm), the validation poses
+    rests of the tour and the fit with joint-angle harmonics; the map at the sweep's mean tracker time
+    140 µs from the station's stated truth, where the fit states σ = 5.5 µs. Not
     within 3σ: joined
     with the *true* arm and map, the samples the join keeps still sit 17 µm RMS from the truth (speed 1)
     — the simulated controller's cycle is speed × 2 ms and its thread, on a loaded machine, skips
