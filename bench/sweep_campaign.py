@@ -117,6 +117,11 @@ def run(sim: Any, config: Any, speed: float, truth: Any, held: np.ndarray) -> di
             "rests": len(planned[-1].rests) if planned else 0}
 
 
+def ratio(row: dict[str, Any], base: dict[str, Any] | None, key: str) -> str:
+    """`row`'s `key` against this station's stop-and-go (`base`); none when that campaign failed."""
+    return f"{row[key] / base[key]:5.2f}" if base is not None else f"{'n/a':>5}"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--robots", default="ur5e,ur10e")
@@ -167,12 +172,13 @@ def main() -> None:
                     except RuntimeError as exc:
                         print(f"{robot:6} {seed:4d} {name:16} FAILED: {exc}", flush=True)
                         continue
-                    base = base or row
+                    if name == "stop-and-go":
+                        base = row
                     print(f"{robot:6} {seed:4d} {name:16} {row['robot_time']:7.1f} "
-                          f"{row['robot_time'] / base['robot_time']:5.2f} {row['moves']:6.1f} "
+                          f"{ratio(row, base, 'robot_time')} {row['moves']:6.1f} "
                           f"{row['measuring']:5.1f} {row['sweep']:6.1f} {row['still']:5d} {row['rests']:5d} "
                           f"{row['segments']:4d} {row['validation_rms'] * 1e6:7.1f} "
-                          f"{row['truth_rms'] * 1e6:8.1f} {row['truth_rms'] / base['truth_rms']:5.2f} "
+                          f"{row['truth_rms'] * 1e6:8.1f} {ratio(row, base, 'truth_rms')} "
                           f"{row['used'] or 0:6d} {row['wall']:6.0f}  {row['status']}", flush=True)
             finally:
                 sim.stop()
