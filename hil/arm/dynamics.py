@@ -140,8 +140,9 @@ def moving_link_angles(geometry: Geometry, q: JointArray, qd: JointArray | None 
 
 class MovingArm:
     """SMR positions of a compliant arm moving through (q, q̇, q̈): forward kinematics of the link
-    angles q − c ⊙ τ(q, q̇, q̈) + e(q) (the contract's terms at the encoder angles, the inertial torque
-    added to gravity's; no lost motion, as a prediction told nothing of the approach)."""
+    angles q − c ⊙ τ(q, q̇, q̈) + e(q) − b ⊙ s (the contract's terms at the encoder angles, the
+    inertial torque added to gravity's; the lost motion b to the side s each joint last moved, when
+    the caller knows it: `hil.arm.joint_directions`, else none)."""
 
     def __init__(self, geometry: Geometry) -> None:
         from hil.arm.kinematics import Kinematics  # kinematics imports gravity, not this module
@@ -152,15 +153,17 @@ class MovingArm:
         exact.compliance, exact.joint_errors, exact.lost_motion = None, None, None
         self._kinematics = Kinematics(exact)  # the link angles are given to it: nothing more applied
 
-    def link_angles(self, q: JointArray, qd: JointArray | None = None, qdd: JointArray | None = None
-                    ) -> np.ndarray:
-        """(N, 6) link angles of the moving arm."""
+    def link_angles(self, q: JointArray, qd: JointArray | None = None, qdd: JointArray | None = None,
+                    directions: np.ndarray | None = None) -> np.ndarray:
+        """(N, 6) link angles of the moving arm (`directions` (N, 6) or (6,): the lost motion's sides)."""
         Q = moving_link_angles(self.geometry, q, qd, qdd, self.dynamics)
         if self.geometry.has_joint_errors:
             Q = Q + self.geometry.joint_errors.offsets(_configurations(q))
+        if directions is not None and self.geometry.has_lost_motion:
+            Q = Q - self.geometry.lost_motion * np.broadcast_to(np.asarray(directions, float), Q.shape)
         return Q
 
     def points(self, q: JointArray, qd: JointArray | None = None, qdd: JointArray | None = None,
-               frame: str = "tracker") -> np.ndarray:
+               frame: str = "tracker", directions: np.ndarray | None = None) -> np.ndarray:
         """(N, 3) SMR centres in the tracker (or base) frame."""
-        return self._kinematics.points(self.link_angles(q, qd, qdd), frame=frame)
+        return self._kinematics.points(self.link_angles(q, qd, qdd, directions), frame=frame)

@@ -23,7 +23,8 @@ How (`StreamJoin`):
    period). In each segment q̇ and q̈ come from a Savitzky–Golay fit (``scipy.signal.savgol_filter``,
    cubic over `derivative_window_s`: the encoders' noise differentiated twice sample to sample would
    swamp q̈), the model's SMR position is evaluated at every joint sample (`points(q, q̇, q̈)`, e.g.
-   `hil.arm.dynamics.MovingArm.points`, whose deflection follows the inertial torques) and
+   `hil.arm.dynamics.MovingArm.points`, whose deflection follows the inertial torques, each joint
+   lagging by its lost motion to the side the stream shows it last moved) and
    interpolated in time by a cubic spline (``scipy.interpolate.CubicSpline``). Evaluating the model once
    per joint sample, not per trial of the map, keeps a fit over 10⁵ points to seconds.
 2. Tracker samples that cannot be trusted are left out, each with its reason counted (`ClockFit.left_out`):
@@ -62,11 +63,13 @@ from scipy.interpolate import CubicSpline
 from scipy.optimize import least_squares
 from scipy.signal import savgol_filter
 
+from hil.arm.joint_directions import directions_along
 from hil.calibration.stream_clocks import ClockMap
 from hil.errors import InputError
 
-#: Model of the SMR's position: (q, q̇, q̈), each (N, 6), → (N, 3) in the tracker's frame (metres).
-PointsFn = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+#: Model of the SMR's position: (q, q̇, q̈), each (N, 6), and the keyword ``directions`` (N, 6) (each
+#: joint's side of its lost motion, `hil.arm.joint_directions`) → (N, 3) in the tracker's frame (metres).
+PointsFn = Callable[..., np.ndarray]
 #: The largest |q̈| (rad/s², (N, 6)) the deflection model is trusted to at configurations (N, 6).
 AccelerationLimitFn = Callable[[np.ndarray], np.ndarray]
 
@@ -172,6 +175,8 @@ class StreamJoin:
         self._fast: list[np.ndarray] = []  # per segment: (n,) True where |q̈| exceeds the limit
         self._near: list[np.ndarray] = []  # per segment: (n,) True within the guard of a validation pose
         self._seg_t: list[np.ndarray] = []
+        # each joint's side of its lost motion, the stream read in order as one (`directions_along`)
+        signs = directions_along(joints.q)
         for seg in _segments(joints.t, gap_factor):
             t, q = joints.t[seg], joints.q[seg]
             period = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
@@ -182,7 +187,8 @@ class StreamJoin:
                 continue  # too short to differentiate: its tracker samples fall in a joint gap
             qd = savgol_filter(q, window, 3, deriv=1, delta=period, axis=0)
             qdd = savgol_filter(q, window, 3, deriv=2, delta=period, axis=0)
-            self._splines.append(CubicSpline(t, np.asarray(points(q, qd, qdd), dtype=float), axis=0))
+            p = np.asarray(points(q, qd, qdd, directions=signs[seg]), dtype=float)
+            self._splines.append(CubicSpline(t, p, axis=0))
             self._spans.append((float(t[0]), float(t[-1])))
             fast = np.zeros(len(t), dtype=bool)
             if acceleration_limit is not None:

@@ -21,7 +21,10 @@ The model of a moving arm deflects under the inertial torques (`hil.arm.dynamics
 c ⊙ τ(q, q̇, q̈), and the compliance columns are ∂p/∂q_j · (−τ_j) — the static columns with τ for g
 (`Kinematics.point_and_jacobian(..., torques=τ)`). τ is evaluated on the current geometry's dynamics
 at every evaluation. q̇ and q̈ come from a Savitzky–Golay fit of the joint stream (as the join's, cubic
-over 50 ms), q, q̇ and q̈ interpolated to τᵢ by a cubic spline per gap-free segment.
+over 50 ms), q, q̇ and q̈ interpolated to τᵢ by a cubic spline per gap-free segment. A moving joint
+lags by its lost motion as a standing one does, to the side it last moved (the contract's rule,
+`hil.arm.joint_directions`): each sample takes the directions the joint stream shows at τᵢ, so the
+lost-motion columns are the stream's own and its reversals identify them, still rows or none.
 
 Steps (`fit_sweep`):
 
@@ -61,6 +64,7 @@ from scipy.signal import savgol_filter
 
 from hil.arm.dynamics import DEFAULT_TOLERANCE_RAD, DynamicsModel, MovingArm
 from hil.arm.geometry import Geometry
+from hil.arm.joint_directions import directions_along
 from hil.arm.kinematics import N_ALL_PARAMETERS, Kinematics, apply_update, deviation_from
 from hil.calibration.identification import (
     PRIOR_PASSES,
@@ -126,6 +130,15 @@ class _JointPath:
             raise InputError("sweep fit: the joint stream has no gap-free stretch long enough to "
                              f"differentiate ({DERIVATIVE_WINDOW_S} s)")
         self.first = joints.q[0]
+        # each joint's side of its lost motion after each frame, the stream read in order as one
+        # (a jump across a gap turns a joint as the unrecorded move between did)
+        self._t = np.asarray(joints.t, float)
+        self._signs = directions_along(joints.q)
+
+    def directions(self, tau: np.ndarray) -> np.ndarray:
+        """(M, 6) each joint's direction of motion at controller times τ (the last frame's at or before)."""
+        k = np.clip(np.searchsorted(self._t, tau, side="right") - 1, 0, len(self._t) - 1)
+        return self._signs[k]
 
     def at(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(q, q̇, q̈, inside): each (M, 6), and (M,) whether τ fell in a segment (else zeros)."""
@@ -155,24 +168,26 @@ class _Problem:
     dynamics: bool
 
     def _state(self, geometry: Geometry, clock: np.ndarray
-               ) -> tuple[Kinematics, np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
-        """The kinematics, q, q̇, the deflecting torques (None: rigid) and which samples are inside."""
+               ) -> tuple[Kinematics, np.ndarray, np.ndarray, np.ndarray | None, np.ndarray, np.ndarray]:
+        """The kinematics, q, q̇, the deflecting torques (None: rigid), which samples are inside and
+        each joint's direction of motion (its lost motion's side)."""
         tau = clock[0] + (1.0 + clock[1]) * (self.t - self.t_ref)
         q, qd, qdd, inside = self.path.at(tau)
+        directions = self.path.directions(tau)
         q[~inside] = self.path.first  # a finite stand-in; the sample's rows are zeroed
         kin = Kinematics(geometry)
         torques = None
         if self.compliance or geometry.compliant:
             dyn = DynamicsModel(geometry, kin.gravity)
             torques = dyn.torques(q, qd, qdd) if self.dynamics else dyn.torques(q)
-        return kin, q, qd, torques, inside
+        return kin, q, qd, torques, inside, directions
 
     def residual(self, geometry: Geometry, clock: np.ndarray) -> np.ndarray:
         """(rows,) measured − model, static rows first: what an LM trial needs (no Jacobian)."""
-        kin, q, _, torques, inside = self._state(geometry, clock)
+        kin, q, _, torques, inside, directions = self._state(geometry, clock)
         exact = geometry.copy()
         exact.compliance, exact.joint_errors, exact.lost_motion = None, None, None
-        q_link = kin._link_angles(q, None, torques)
+        q_link = kin._link_angles(q, directions, torques)
         r = self.p - Kinematics(exact).points(q_link)
         r[~inside] = 0.0
         if self.static is None:
@@ -182,8 +197,8 @@ class _Problem:
 
     def evaluate(self, geometry: Geometry, clock: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(residual (rows,), Jacobian (rows, len(idx) + 2)) at `geometry` and clock (a_ref, d)."""
-        kin, q, qd, torques, inside = self._state(geometry, clock)
-        p, J = kin.point_and_jacobian(q, self.compliance, None, self.joint_errors, torques)
+        kin, q, qd, torques, inside, directions = self._state(geometry, clock)
+        p, J = kin.point_and_jacobian(q, self.compliance, directions, self.joint_errors, torques)
         rz = np.arange(6) * 6 + 5
         pdot = np.einsum("nij,nj->ni", J[:, :, rz], qd)  # ∂p/∂q_j · q̇_j
         n = len(self.t)
@@ -292,8 +307,8 @@ def fit_sweep(start: Geometry, joints: JointStream, tracker: TrackerStream, *,
     its compliance (or, when it has none and `compliance` is set, zero) is where the fit starts.
     `static` poses are added as ordinary rows. `dynamics` False deflects the moving arm by gravity
     alone (c ⊙ g(q), the static contract) — to show what the inertial torques are worth.
-    `joint_errors` as `identify`'s; lost-motion terms are identified by the static rows alone (a
-    static pose approached from below lags by it, the moving model has none), so they need `static`.
+    `joint_errors` as `identify`'s; the lost-motion terms are identified by the stream's reversals
+    (each sample lags to the side its joints last moved) and by any `static` rows' directions.
     `initial_offset_s`/`initial_drift` seed the join's coarse scan. `acceleration_tolerance_rad` is
     the ring the quasi-static deflection may leave out (`DynamicsModel.acceleration_limit`); None
     trusts every acceleration (a benchmark's question, not a station's). `guard` (poses (V, 6), a
@@ -316,7 +331,7 @@ def fit_sweep(start: Geometry, joints: JointStream, tracker: TrackerStream, *,
 
         limit_model.compliance = typical_compliance(robot)  # the limit needs a compliance's order
     points = (MovingArm(geometry).points if dynamics
-              else (lambda q, qd, qdd: MovingArm(geometry).points(q)))
+              else (lambda q, qd, qdd, directions=None: MovingArm(geometry).points(q, directions=directions)))
     limits, ring = DynamicsModel(limit_model), acceleration_tolerance_rad
     join = StreamJoin(joints, tracker, points,
                       None if ring is None else (lambda q: limits.acceleration_limit(q, ring)), guard=guard)

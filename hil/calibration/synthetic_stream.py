@@ -24,6 +24,7 @@ from scipy.interpolate import CubicSpline
 
 from hil.arm.dynamics import MovingArm
 from hil.arm.geometry import Geometry
+from hil.arm.joint_directions import directions_along
 from hil.calibration.stream_clocks import StationClocks
 from hil.calibration.stream_join import JointStream, TrackerStream
 from hil.calibration.synthetic import Noise
@@ -139,7 +140,10 @@ def sweep_streams(truth: Geometry, *, tool_speed: float = 0.25, duration: float 
     k_grid = trk.reading(0.0) + TRACKER_PERIOD_S * np.arange(int(duration / TRACKER_PERIOD_S) + 1)
     t_trk_true = trk.true_time(k_grid)
     t_k = trk.stamps(t_trk_true, rng)
-    p = MovingArm(truth).points(*path.at(t_trk_true))
+    # each joint lags by its lost motion to the side it last moved (the contract's rule), moving too
+    moving = path.at(t_trk_true)
+    p = MovingArm(truth).points(*moving, directions=directions_along(moving[0]) if truth.has_lost_motion
+                                else None)
     if noise.tracker_sigma is None or noise.tracker_sigma > 0:
         p = noise.perturb(p, rng)
     p[_inside(t_trk_true, beam_breaks)] = np.nan

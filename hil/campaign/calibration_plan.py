@@ -95,6 +95,7 @@ from hil.campaign.steps import (
     visit_settings,
 )
 from hil.campaign.stopping import EarlyStop, StoppingRule
+from hil.campaign.sweep_bootstrap import bootstrap_segments, is_bootstrap_segment
 from hil.campaign.sweep_plan import (
     CONTROLLER_RATE_HZ,
     SWEEP,
@@ -109,6 +110,7 @@ from hil.campaign.sweep_plan import (
     sweep_verdict,
     tour_visits,
 )
+from hil.campaign.sweep_rests import hold_point
 from hil.campaign.warmup import ReferenceWatch, reference_pose
 from hil.errors import HilError, InputError
 from hil.station.config import StationConfig
@@ -126,7 +128,9 @@ _BOOTSTRAP_DELTAS = np.array([
 ])
 # Turns of joint 6 (rad): the flange z axis, along which the SMR opens, does not move, so the SMR keeps
 # facing the tracker while its centre circles the axis and its offset becomes measurable.
-_WRIST_TURNS = np.array([0.7, -0.7, 1.4, -1.4])
+# In this order the wrist travels 4.2 rad in all (0.7, 1.4, -0.7, -1.4), not the 7 rad of alternating
+# signs: 5 s less of the bootstrap at a 0.5 rad/s movej.
+_WRIST_TURNS = np.array([0.7, 1.4, -0.7, -1.4])
 
 
 @dataclass(frozen=True)
@@ -415,14 +419,13 @@ def _sweep_finish(config: StationConfig, campaign: str, start: Geometry, static:
     joints, stream, other, joined = streams_of(segments)
     offset, drift = first_clock(joined)
     # every still pose was approached from below in every joint (``campaign.approach``): it lags by
-    # the lost motion in +1 directions, which a moving arm does not, so the fit can tell the two apart
-    # and the validation's predictions lag as its poses do
+    # the lost motion in +1 directions (the stream's samples to the side each joint last moved), and
+    # the validation's predictions lag as its poses do
     from_below = float(camp["approach"]) > 0
     static = approached_from_below(static) if from_below else static
     try:
         validation_q = np.array([q for _, r, q in planned if r == VALIDATION], dtype=float).reshape(-1, 6)
-        terms = sweep_terms(parse_request(camp["joint_errors"], "campaign.joint_errors"),
-                            len(static) if from_below else 0)
+        terms = sweep_terms(parse_request(camp["joint_errors"], "campaign.joint_errors"))
         swept = fit_sweep(start, joints, stream, static=static if len(static) else None,
                           compliance=camp["compliance"], initial_offset_s=offset, initial_drift=drift,
                           guard=(validation_q, VALIDATION_GUARD_RAD), joint_errors=terms)
@@ -486,6 +489,26 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
     keep_in = (np.array(config.keep_in["min"]), np.array(config.keep_in["max"]))
     visit = visit_settings(config)
     records = dict(resume.records)
+    sweeping = camp["mode"] == SWEEP
+    sweep_records = dict(resume.sweep)
+
+    def sweep_bootstrap(plan: list[tuple[int, np.ndarray]]) -> Plan:
+        """The bootstrap's segments (`bootstrap_segments`), those not recorded yet swept in one step;
+        returns the segment that holds at each bootstrap pose (None: none does)."""
+        located = Geometry.nominal(robot, smr_guess)  # keep-in and limits need no tracker
+        spec = get_robot(robot)
+        targets = np.array([q for _, q in plan], dtype=float).reshape(-1, 6)
+        segments = bootstrap_segments(targets, config, spec, keep_in_check or located, located)
+        todo = [g for g in segments if g is not None and g.index not in sweep_records]
+        if todo:
+            hop: tuple[float | None, float | None] = (None, None)
+            if camp.get("sweep_speed") is not None:
+                limit_speed, limit_accel = sweep_limits(config, spec, targets, located)
+                hop = (float(np.min(limit_speed)), limit_accel)
+            got = yield Sweep(tuple(todo), len(segments), TRACKER_RATE_HZ, session, *hop)
+            if isinstance(got, SweepRecorded):
+                sweep_records.update({r.index: r for r in got.segments})
+        return {i: g for (i, _), g in zip(plan, segments, strict=True)}
 
     # --- where is the tracker? -----------------------------------------------------------------
     tracker = resume.tracker
@@ -517,10 +540,20 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
             left = sum(1 for i, _ in boot_plan if (BOOTSTRAP, i) not in records)
             yield Phase("bootstrap", f"locating the tracker: {left} of {len(boot_plan)} bootstrap poses "
                                      "left to measure")
+        # a sweep campaign streams its bootstrap: each pose read off a hold of one swept path
+        # (`hil.campaign.sweep_bootstrap`); a pose it cannot read so is visited still, as here
+        held: dict[int, SweepSegment | None] = {}
+        if sweeping:
+            held = yield from sweep_bootstrap(boot_plan)
         for i, q in boot_plan:
             if (BOOTSTRAP, i) in records:  # measured before the run was interrupted
                 continue
-            record = yield acquire(i, BOOTSTRAP, q, **visit)
+            segment = held.get(i)
+            record = yield from hold_point(campaign, i, BOOTSTRAP, q, segment,
+                                           None if segment is None else sweep_records.get(segment.index),
+                                           float(camp["stability"]))
+            if record is None:
+                record = yield acquire(i, BOOTSTRAP, q, **visit)
             if isinstance(record, PoseRecord):  # else skipped (the engine said why)
                 records[(BOOTSTRAP, i)] = record
         boot = [r for (role, _), r in sorted(records.items()) if role == BOOTSTRAP]
@@ -584,8 +617,6 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
                          reference=[float(v) for v in reference]))
 
     # --- measure -------------------------------------------------------------------------------
-    sweeping = camp["mode"] == SWEEP
-    sweep_records = dict(resume.sweep)
     segments: list[SweepSegment] = []
     # a sweep rests at the first cycle's validation poses along its tour: measured still there, as
     # stop-and-go measures them, without a tour of their own (`hil.campaign.sweep_plan`)
@@ -658,6 +689,19 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
                     config, lost, tracker, list(records.values()), smr_guess))
         return False
 
+    def rest_from_stream(i: int, q: np.ndarray, arrived: SweepSegment | None) -> Plan:
+        """Validation pose `i` read off the hold of the segment that `arrived` there
+        (`hil.campaign.sweep_rests`); False when it cannot be, and the pose is visited."""
+        record = yield from hold_point(campaign, i, VALIDATION, q, arrived,
+                                       None if arrived is None else sweep_records.get(arrived.index),
+                                       float(camp["stability"]))
+        if record is None:
+            return False
+        records[(VALIDATION, i)] = record
+        lost.clear()
+        yield from watch.after_pose()
+        return True
+
     if segments:
         yield Phase("sweep", f"{len(sweep_left)} of {len(segments)} sweep segments to record"
                     + (f", resting at {len(rests_left)} still validation poses" if rests_left else ""))
@@ -666,10 +710,12 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
                                           "to": [float(v) for v in g.q[-1]],
                                           "seconds": (len(g.q) - 1) / CONTROLLER_RATE_HZ,
                                           "samples": len(g.q),
-                                          "knots": [] if g.knots is None else np.asarray(g.knots).tolist()}
+                                          "knots": [] if g.knots is None else np.asarray(g.knots).tolist(),
+                                          "dwell": int(g.dwell)}
                                          for g in segments],
             waypoints=[list(map(float, w)) for w in waypoints], rate_hz=CONTROLLER_RATE_HZ,
-            tracker_rate_hz=TRACKER_RATE_HZ, done=sorted(sweep_records),
+            tracker_rate_hz=TRACKER_RATE_HZ,
+            done=sorted(i for i in sweep_records if not is_bootstrap_segment(i)),
             rests=sorted(in_tour)))
         if rests_left:
             yield from watch.start()
@@ -680,8 +726,10 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
             hop = (float(np.min(limit_speed)), limit_accel)
         by_index = {g.index: g for g in segments}
         pending: list[SweepSegment] = []
+        last: SweepSegment | None = None  # the segment the tour arrived by
         for kind, ref in [*visits, ("end", -1)]:
             if kind == "segment":
+                last = by_index[ref]
                 if ref not in sweep_records:
                     pending.append(by_index[ref])
                 continue
@@ -691,7 +739,11 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
                     sweep_records.update({r.index: r for r in got.segments})
                 pending = []
             if kind == "rest" and (VALIDATION, ref) not in records:
-                yield from measure_still(ref, VALIDATION, rests[ref])
+                arrived = last if last is not None and np.allclose(
+                    last.q[-1], rests[ref], rtol=0.0, atol=1e-9) else None
+                read = yield from rest_from_stream(ref, rests[ref], arrived)
+                if not read:
+                    yield from measure_still(ref, VALIDATION, rests[ref])
     left = [(i, r) for i, r, _ in todo if not (r == CALIBRATION and stop.stopped)]
     if sweeping:  # the calibration poses were swept: the still ones left are the validation's
         still = sum(1 for _, r, _ in planned if r != CALIBRATION) - len(in_tour)

@@ -174,6 +174,9 @@ class SweepSegment:
     # the leg's knots in order (m, 6): its start, any vias, its end (`hil.campaign.sweep_plan`); a
     # resumed campaign plans the same segment again from them
     knots: np.ndarray | None = None
+    # samples of `q` at its end that hold the last pose: a rest read off the streams
+    # (`hil.campaign.sweep_rests`); 0: the segment ends as it arrives
+    dwell: int = 0
 
     @property
     def start(self) -> tuple[float, ...]:

@@ -9,6 +9,7 @@ samples used and those left out by reason). Short enough for an 80-column termin
 from __future__ import annotations
 
 from hil.campaign.events import Event, SweepFitted, SweepPlanned, SweepSegmentDone
+from hil.campaign.sweep_bootstrap import BOOTSTRAP_SEGMENTS, is_bootstrap_segment
 
 
 def describe(event: Event) -> str | None:
@@ -21,8 +22,10 @@ def describe(event: Event) -> str | None:
     if isinstance(event, SweepSegmentDone):
         health = f", {event.breaks} beam break{'s' if event.breaks != 1 else ''} ({event.lost} lost)" \
             if event.breaks or event.lost else ""
-        return (f"sweep segment {event.segment + 1}/{event.segments}: {event.joints} joint, "
-                f"{event.tracker} tracker samples{health}")
+        boot = is_bootstrap_segment(event.segment)
+        number = event.segment - BOOTSTRAP_SEGMENTS if boot else event.segment
+        return (f"{'bootstrap' if boot else 'sweep'} segment {number + 1}/{event.segments}: "
+                f"{event.joints} joint, {event.tracker} tracker samples{health}")
     if isinstance(event, SweepFitted):
         left = ", ".join(f"{k} {v}" for k, v in sorted(event.left_out.items()) if v) or "none"
         sigma = event.sigma_at_ref_s or event.sigma_offset_s

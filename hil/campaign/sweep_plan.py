@@ -42,6 +42,7 @@ from hil.calibration.joint_error_request import JointErrorRequest
 from hil.calibration.stream_join import JointStream, TrackerStream
 from hil.campaign.acceptance import Verdict, class_bound
 from hil.campaign.steps import SegmentRecord, SweepSegment
+from hil.campaign.sweep_rests import approach_knots, ends_from_below, with_dwell
 from hil.errors import InputError
 
 log = logging.getLogger(__name__)
@@ -123,9 +124,16 @@ def sweep_tour(waypoints: np.ndarray, config: Any, spec: RobotSpec, check_model:
     speed, accel = sweep_limits(config, spec, waypoints, limit_model)
     angle = float(config.smr["acceptance_angle"])
     pts = np.asarray(waypoints, dtype=float)
+    rest_at = np.zeros(len(pts), dtype=bool)
+    if rests is not None:
+        rest_at = np.array([any(np.allclose(p, r, rtol=0.0, atol=1e-9) for r in np.asarray(rests, float)
+                                .reshape(-1, 6)) for p in pts], dtype=bool).reshape(len(pts))
+    approach = float(config.campaign.get("approach", 0.0) or 0.0)
 
-    def checked(a: int, through: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return planned(np.vstack([pts[a][None, :], through]))
+    def checked(a: int, through: np.ndarray, b: int) -> tuple[np.ndarray, np.ndarray]:
+        knots = np.vstack([pts[a][None, :], through])
+        # a rest's path comes up to it from below in every joint, as a stop-and-go visit does
+        return planned(approach_knots(knots, approach) if rest_at[b] else knots)
 
     def planned(knots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         tour = plan_leg(knots, max_speed=speed, max_acceleration=accel, rate_hz=rate_hz)
@@ -140,14 +148,14 @@ def sweep_tour(waypoints: np.ndarray, config: Any, spec: RobotSpec, check_model:
         turn the wrist toward the tracker (`aimed_vias`); SweepRefused (the straight one's) if neither
         may be swept."""
         try:
-            return checked(a, pts[b][None, :])
+            return checked(a, pts[b][None, :], b)
         except SweepRefused:
             if sight_model is None:
                 raise
             vias = aimed_vias(sight_model.robot, sight_model.smr, sight_model.tracker.translation,
                               pts[a], pts[b], angle)
             try:
-                return checked(a, np.vstack([vias, pts[b][None, :]]))
+                return checked(a, np.vstack([vias, pts[b][None, :]]), b)
             except SweepRefused:
                 pass
             raise
@@ -158,9 +166,20 @@ def sweep_tour(waypoints: np.ndarray, config: Any, spec: RobotSpec, check_model:
     if not paths:
         (a, _), why = refused[0] if refused else ((0, 0), "fewer than two waypoints")
         raise InputError(f"sweep segment {a + 1} of {len(pts) - 1} refused before the sweep moved: {why}")
-    if rests is not None:
-        paths = pass_through(paths, np.asarray(rests, float).reshape(-1, 6), planned, SweepRefused)
-    return [SweepSegment(k, q, float(rate_hz), knots) for k, (q, knots) in enumerate(paths)]
+    if rests is None:
+        return [SweepSegment(k, q, float(rate_hz), knots) for k, (q, knots) in enumerate(paths)]
+    rest_poses = np.asarray(rests, float).reshape(-1, 6)
+    paths = pass_through(paths, rest_poses, planned, SweepRefused)
+    out = []
+    for k, (q, knots) in enumerate(paths):
+        # a path that ends at a rest coming up in every joint holds there: the rest is read off the
+        # streams (`hil.campaign.sweep_rests`); one that overshoots its end leaves it to a still visit
+        hold = 0
+        if any(np.allclose(q[-1], r, rtol=0.0, atol=1e-9) for r in rest_poses) and \
+                (approach <= 0 or ends_from_below(q)):
+            q, hold = with_dwell(q, rate_hz)
+        out.append(SweepSegment(k, q, float(rate_hz), knots, hold))
+    return out
 
 
 def pass_through(paths: list[tuple[np.ndarray, np.ndarray]], rests: np.ndarray, plan: Any,
@@ -216,7 +235,10 @@ def stored_tour(segments: Sequence[dict[str, Any]], config: Any, spec: RobotSpec
         except SweepRefused as exc:
             raise InputError(f"stored sweep segment {k + 1} of {len(segments)} refused before the sweep "
                              f"moved: {exc}") from None
-        out.append(SweepSegment(int(seg.get("index", k)), np.asarray(tour.q, float), float(rate_hz), knots))
+        q, hold = np.asarray(tour.q, float), int(seg.get("dwell", 0))
+        if hold > 0:  # the hold the first run planned at its end (`hil.campaign.sweep_rests`)
+            q = np.vstack([q, np.repeat(q[-1:], hold, axis=0)])
+        out.append(SweepSegment(int(seg.get("index", k)), q, float(rate_hz), knots, hold))
     return out
 
 
@@ -228,17 +250,18 @@ def stored_tour(segments: Sequence[dict[str, Any]], config: Any, spec: RobotSpec
 AUTO_ORDERS = (1, 2)
 
 
-def sweep_terms(request: JointErrorRequest, static_rows: int) -> list[int]:
+def sweep_terms(request: JointErrorRequest) -> list[int]:
     """The joint-error terms (indices of the extended vector) a sweep's fit identifies for the
     campaign's ``campaign.joint_errors`` `request`: none, `AUTO_ORDERS` and the lost motion for
-    "auto", or the orders asked (and the lost motion if asked). The lost motion only with still rows
-    (`static_rows`): a moving arm shows none, so still poses against moving ones identify it."""
+    "auto", or the orders asked (and the lost motion if asked). The stream's reversals identify the
+    lost motion: a moving joint lags to the side it last moved, as a still one does
+    (`hil.calibration.sweep_fit`)."""
     from hil.arm.joint_error_columns import harmonic_index, lost_motion_index
 
     if request.mode == "none":
         return []
     orders = AUTO_ORDERS if request.mode == "auto" else request.orders
-    lost = (request.mode == "auto" or request.lost_motion) and static_rows > 0
+    lost = request.mode == "auto" or request.lost_motion
     out = [harmonic_index(j, k, kind) for j in range(6) for k in orders for kind in ("cos", "sin")]
     return out + ([lost_motion_index(j) for j in range(6)] if lost else [])
 

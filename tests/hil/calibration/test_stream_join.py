@@ -126,7 +126,7 @@ def test_samples_near_a_guarded_pose_are_left_out_with_their_reason():
     tt = np.arange(0.0, 2.0, 0.001)
     tracker = TrackerStream(tt, np.zeros((len(tt), 3)))
 
-    def points(qq, qd, qdd):
+    def points(qq, qd, qdd, directions=None):
         return np.column_stack([qq[:, 0], np.zeros(len(qq)), np.zeros(len(qq))])
 
     pose = np.zeros(6)

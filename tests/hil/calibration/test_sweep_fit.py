@@ -57,7 +57,11 @@ def _static_error(truth, geometry, q) -> float:
     return _rms(Kinematics(geometry).points(q, directions=d) - true_points(truth, q, directions=d))
 
 
-def test_recovers_the_offset_where_the_join_against_the_bootstrap_model_does_not(station, joint_fit):
+def test_recovers_the_offset_within_its_sigma_where_the_joins_residual_is_model_error(station, joint_fit):
+    """The joint fit's offset is within 3 of its σ of the truth. The join against the bootstrap's model
+    leaves hundreds of micrometres of model error that follows the path, so its σ (white residual
+    assumed) means nothing, and its offset is biased by the model by as much as the data let it
+    (bench/stream_sync.py: 3-180 µs over models 40-170 µm off): the reason the fit is joint."""
     _, s, _, start, _, _ = station
     want = s.clocks.controller_from_tracker()
     c = joint_fit.clock
@@ -66,8 +70,7 @@ def test_recovers_the_offset_where_the_join_against_the_bootstrap_model_does_not
     assert abs(c.drift - want.drift) < 3 * c.sigma_drift
     assert c.sigma_at_ref_s < 1e-5  # a σ that means something: microseconds
     join = StreamJoin(s.joints, s.tracker, MovingArm(start).points).fit()
-    wrong = float(join.map(join.t_ref) - want(join.t_ref))
-    assert abs(wrong) > 3 * join.sigma_at_ref_s and abs(wrong) > 3 * abs(err), (wrong, join.sigma_at_ref_s)
+    assert join.rms_m > 5 * joint_fit.rms_m, (join.rms_m, joint_fit.rms_m)
     assert joint_fit.used == 1500 and joint_fit.trusted > 1500
     assert joint_fit.fit is not None and joint_fit.fit.with_compliance and joint_fit.fit.with_joint_errors
 
@@ -145,3 +148,18 @@ def test_a_validation_rest_left_out_is_never_seen_by_the_fit(station, joint_fit)
         without_intervals(s.tracker, [(3.0, 2.0)])
     with pytest.raises(InputError, match="whole tracker stream"):
         without_intervals(s.tracker, [(t[0] - 1.0, t[-1] + 1.0)])
+
+
+def test_the_streams_reversals_identify_the_lost_motion_without_still_rows(station):
+    """A moving joint lags to the side it last moved, as a still one does (the contract): the fit reads
+    each sample's sides off the joint stream, so the sweep alone tells the lost motion from the joint
+    offsets, and the static poses approached from below are predicted without any still row."""
+    truth, s, _, start, held_out, _ = station
+    fit = fit_sweep(start, s.joints, s.tracker, joint_errors=HARMONICS + LOST_MOTION, samples=1500)
+    found, true = fit.geometry.lost_motion, truth.lost_motion
+    # the arm's joints 1-4, whose lost motion moves the SMR by the arm's reach; the wrist's moves it by
+    # the SMR's few centimetres off their axes, micrometres, which the data cannot tell from noise
+    assert np.all(np.abs(found[:4] - true[:4]) < 0.25 * true[:4]), (found, true)
+    without = fit_sweep(start, s.joints, s.tracker, joint_errors=HARMONICS, samples=1500)
+    error, error_without = (_static_error(truth, g, held_out) for g in (fit.geometry, without.geometry))
+    assert error < 40e-6 and error < 0.7 * error_without, (error, error_without)

@@ -30,6 +30,7 @@ from hil.campaign.events import (
     SweepSegmentDone,
 )
 from hil.campaign.runner import resume_state, run_campaign, sweep_state
+from hil.campaign.sweep_bootstrap import is_bootstrap_segment
 from hil.station.config import default_config
 from hil.station.devices import open_devices
 from hil.station.paced_clock import PacedClock, simulator_pace
@@ -117,7 +118,7 @@ class SweepStation:
         """Each segment counts once (its last take), and the fit accounts for each of that take's
         tracker samples once: used, or left out for a reason."""
         counted = {e.segment: e for e in self.of(SweepSegmentDone)}  # a segment's last take counts
-        assert sorted(counted) == list(range(self.segments()))
+        assert tour(counted) == list(range(self.segments()))
         fitted = self.of(SweepFitted)[-1]
         recorded = sum(e.tracker + e.lost for e in counted.values())  # a lost sample is one too
         assert fitted.used + sum(fitted.left_out.values()) == recorded, (
@@ -127,6 +128,11 @@ class SweepStation:
     def close(self) -> None:
         self.sim.stop()
         self.store.close()
+
+
+def tour(segments) -> list[int]:
+    """The tour's segment numbers among `segments` (a swept bootstrap's are apart), sorted."""
+    return sorted(i for i in segments if not is_bootstrap_segment(i))
 
 
 def station_config(address: str, tracker_url: str, mode: str = "sweep") -> Any:
@@ -184,7 +190,13 @@ def test_a_sweep_campaign_is_accepted_and_finds_the_stations_clock(station):
     assert outcome.status == "accepted", (outcome.error, outcome.result and outcome.result.verdict)
     result = outcome.result
     done = station.of(SweepSegmentDone)
-    assert [e.segment for e in done] == list(range(station.segments())) and all(e.joints > 100 for e in done)
+    assert tour(e.segment for e in done) == list(range(station.segments()))
+    assert all(e.joints > 100 for e in done)
+    # the bootstrap swept too: each of its poses read off the hold of the segment into it, as are the
+    # validation rests (hundreds of stream samples, not a still visit's few readings)
+    booted = [e for e in station.of(PointMeasured) if e.role == "bootstrap"]
+    assert booted and all(e.samples >= 100 for e in booted), [e.samples for e in booted]
+    assert len([e for e in done if is_bootstrap_segment(e.segment)]) == len(booted)
     fitted = station.of(SweepFitted)[-1]
     truth = station.clock_map
     t = fitted.t_ref  # the map where the fit knows it best, against the station's truth
@@ -201,6 +213,8 @@ def test_a_sweep_campaign_is_accepted_and_finds_the_stations_clock(station):
              or (isinstance(e, PointMeasured) and e.role == "validation")]
     swept = [k for k, (kind, _) in enumerate(order) if kind == "segment"]
     assert all(("rest", i) in order for i in rests)
+    held = {e.index: e.samples for e in station.of(PointMeasured) if e.index in rests}
+    assert sum(n >= 100 for n in held.values()) >= len(rests) - 1, held  # read off the tour's holds
     assert any(swept[0] < order.index(("rest", i)) < swept[-1] for i in rests)  # between segments
     assert fitted.left_out.get("validation pose", 0) > 0  # the samples passing through them
     # the same arm (the station's seed) calibrated stop-and-go, in faster time (it streams nothing)
@@ -218,11 +232,12 @@ def test_a_sweep_campaign_is_accepted_and_finds_the_stations_clock(station):
 def test_an_interrupted_sweep_resumes_without_sweeping_again_what_it_has(station):
     first = station.run(interrupt_after=3)
     assert first.status == "interrupted"
-    kept = [e.segment for e in station.of(SweepSegmentDone)]
+    kept = tour(e.segment for e in station.of(SweepSegmentDone))
     assert kept[:4] == [0, 1, 2, 3]
-    before = len(kept)
+    before = len(station.of(SweepSegmentDone))
     second = station.run()
-    again = [e.segment for e in station.of(SweepSegmentDone)][before:]
+    again = [e.segment for e in station.of(SweepSegmentDone)[before:]]
+    assert tour(again) == again  # the bootstrap was done: the resumed run sweeps the tour's rest only
     assert again and min(again) == max(kept) + 1  # resumed at the first segment not recorded whole
     assert sorted(kept + again) == list(range(station.segments()))  # every segment once
     assert second.status == "accepted", (second.error, second.result and second.result.verdict)
@@ -244,14 +259,14 @@ def test_a_sweep_killed_mid_segment_resumes_and_counts_each_recorded_sample_once
         while True:  # until two segments are recorded whole and the third streams
             assert child.poll() is None, child.stderr.read()[-2000:] if child.stderr else ""
             assert time.monotonic() < deadline, "the child never recorded two segments"
-            if len(sweep_state(station.store, station.campaign)) >= 2:
+            if len(tour(sweep_state(station.store, station.campaign))) >= 2:
                 break
             time.sleep(0.2)
         time.sleep(1.0)
     finally:
         os.kill(child.pid, signal.SIGKILL)
         child.wait(30)
-    kept = sweep_state(station.store, station.campaign)
+    kept = tour(sweep_state(station.store, station.campaign))
     assert len(kept) >= 2
     station.on(SweepSegmentDone, lambda e: True, lambda e: station.later(0.3, "emscon_drop"))
     outcome = station.run()

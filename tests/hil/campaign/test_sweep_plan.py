@@ -10,9 +10,11 @@ import pytest
 
 from hil.arm.catalog import get_robot
 from hil.arm.geometry import Geometry, look_at_tracker
+from hil.arm.joint_directions import directions_along
 from hil.arm.kinematics import Kinematics
 from hil.calibration.sweep_path import SweepRefused, SweepTour, check_sweep
 from hil.campaign.sweep_plan import stored_tour, sweep_tour, sweep_verdict, tour_segments
+from hil.campaign.sweep_rests import REST_DWELL_S
 from hil.errors import InputError
 from hil.station.config import default_config
 
@@ -187,7 +189,8 @@ def test_the_tour_rests_at_the_validation_poses_its_segments_reach_once_each():
 
 def test_the_tour_passes_through_calibration_waypoints_and_stops_at_the_rests():
     """With `rests` the arm passes a calibration waypoint without stopping (one segment through it,
-    sooner than two legs rest to rest: 10-20 % on such turns); at a rest the segments stay apart."""
+    sooner than two legs rest to rest: 10-20 % on such turns); at a rest the segments stay apart, the
+    one arriving there coming up from below and holding."""
     config, spec, model = default_config(), get_robot("ur5e"), Geometry.nominal("ur5e")
     a, b, c = POSE + np.array([[-0.4, -0.2, 0.1, 0.0, 0.0, 0.0], [0.0, 0.1, 0.3, 0.2, 0.1, 0.1],
                                [0.4, 0.2, 0.35, 0.5, 0.3, 0.1]])
@@ -200,7 +203,15 @@ def test_the_tour_passes_through_calibration_waypoints_and_stops_at_the_rests():
     assert np.max(np.abs(passing.q[at_b + 1] - passing.q[at_b - 1])) * 500 / 2 > 0.1  # moving at b
     assert len(passing.q) < 0.95 * sum(len(s.q) for s in stopping)
     resting = sweep_tour(np.array([a, b, c]), config, spec, model, rests=b[None, :])
-    assert [len(s.q) for s in resting] == [len(s.q) for s in stopping]
+    assert len(resting) == 2 and len(resting[1].q) == len(stopping[1].q) and resting[1].dwell == 0
+    # the rest's segment comes up to it from below in every joint and holds there
+    # (`hil.campaign.sweep_rests`), its other end as the stopping tour's
+    into = resting[0]
+    approach = config.campaign["approach"]
+    np.testing.assert_allclose(into.knots, [a, b - approach, b])
+    assert into.dwell == round(REST_DWELL_S * 500)
+    np.testing.assert_allclose(into.q[-into.dwell - 1:], np.repeat(b[None, :], into.dwell + 1, axis=0))
+    assert np.all(directions_along(into.q)[-1] == 1.0)
 
 
 def test_two_paths_are_joined_only_where_the_path_through_is_sooner_and_passes():
@@ -224,19 +235,19 @@ def test_two_paths_are_joined_only_where_the_path_through_is_sooner_and_passes()
     assert len(pass_through(paths, none, refused)) == 2
 
 
-def test_the_sweeps_fit_takes_the_joint_errors_asked_and_the_lost_motion_only_with_still_rows():
+def test_the_sweeps_fit_takes_the_joint_errors_asked_with_the_lost_motion():
     """"auto" is orders 1-2 of every joint and the lost motion (the sweep's fit is not cross-validated,
-    so it cannot choose); the lost motion needs still rows, which lag by it where the moving ones do not."""
+    so it cannot choose); the lost motion with it, which the stream's reversals identify."""
     from hil.arm.joint_error_columns import harmonic_index, lost_motion_index
     from hil.calibration.joint_error_request import parse_request
     from hil.campaign.sweep_plan import sweep_terms
 
-    auto = sweep_terms(parse_request("auto"), static_rows=6)
+    auto = sweep_terms(parse_request("auto"))
     assert len(auto) == 6 * 2 * 2 + 6
     assert harmonic_index(1, 2, "sin") in auto and harmonic_index(1, 3, "cos") not in auto
     assert lost_motion_index(5) in auto
-    assert not any(i >= lost_motion_index(0) for i in sweep_terms(parse_request("auto"), static_rows=0))
-    assert sweep_terms(parse_request("none"), static_rows=6) == []
-    asked = sweep_terms(parse_request("3"), static_rows=6)
+    assert sweep_terms(parse_request("none")) == []
+    asked = sweep_terms(parse_request("3"))
     assert asked == [harmonic_index(j, 3, k) for j in range(6) for k in ("cos", "sin")]
-    assert lost_motion_index(0) in sweep_terms(parse_request("1,lost"), static_rows=6)
+    assert lost_motion_index(0) in sweep_terms(parse_request("1,lost"))
+    assert not any(i >= lost_motion_index(0) for i in asked)
