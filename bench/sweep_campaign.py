@@ -15,20 +15,21 @@ SMR's payload; no thermal growth, so no warm-up, the same for both modes) with e
   (0.5 rad/s, 1 rad/s²) and ``campaign.samples`` = 5;
 * **sweep** at each ``--sweep-speeds`` tool speed: ``campaign.mode = "sweep"`` through a time-aware
   choice for `--sweep-poses` poses (bench/sweep_time.py: fewer waypoints cost less time at the same
-  held-out error), resting at the validation poses inside its tour, with `--sweep-samples` readings
-  at each still pose.
+  held-out error), its bootstrap swept and resting at the validation poses inside its tour, each of
+  those read off the hold of its segment (`hil.campaign.sweep_rests`; "held" in the table), a pose
+  whose hold was not still visited with `--sweep-samples` readings ("still").
 
 Both validate on 20 still poses drawn alike (the same rule and seed). **Robot time** is what the station
 did, by its own accounts: the controller's joint moves (``motion_seconds``: movej, routes, approach
 legs), emScon's stationary measuring (``emscon_measuring_seconds``, its lMeasTime per measurement), 10
 RTDE frames per still pose (the driver's joint reading), and the sweep's segments at their planned
-duration (`SweepPlanned`: a real station follows the path as planned; the simulator in fast time follows
-it `--speed` times slower, an artefact of its servo loop keeping the wall's period, so its own clock
-would overstate it; `--sweep-sim-speed 1` runs the sweeps on a station of the same seed, the same arm,
-at the wall's pace, where the servo loop's period is the controller's). **Accuracy**: the campaign's
-validation RMS, and the truth error of its model on `--held-out` poses no campaign visits (the station's
-candidates, a draw of its own, approached from below). Compute (selection, fits) is the cell's wall
-time, not robot time.
+duration (`SweepSegmentDone.planned`: a real station follows the path as planned; the simulator in fast
+time follows it `--speed` times slower, an artefact of its servo loop keeping the wall's period, so its
+own clock would overstate it; `--sweep-sim-speed 1` runs the sweeps on a station of the same seed, the
+same arm, at the wall's pace, where the servo loop's period is the controller's). **Accuracy**: the
+campaign's validation RMS, and the truth error of its model on `--held-out` poses no campaign visits
+(the station's candidates, a draw of its own, approached from below). Compute (selection, fits) is the
+cell's wall time, not robot time.
 """
 
 from __future__ import annotations
@@ -48,7 +49,14 @@ from hil.calibration.selection import design_space
 from hil.calibration.synthetic import true_points
 from hil.campaign.chooser import campaign_chooser
 from hil.campaign.engine import RealClock
-from hil.campaign.events import EventBus, PointMeasured, SweepFitted, SweepPlanned, SweepSegmentDone
+from hil.campaign.events import (
+    EventBus,
+    PointMeasured,
+    PoseStarted,
+    SweepFitted,
+    SweepPlanned,
+    SweepSegmentDone,
+)
 from hil.campaign.runner import run_campaign
 from hil.station.config import default_config
 from hil.station.devices import open_devices
@@ -99,10 +107,15 @@ def run(sim: Any, config: Any, speed: float, truth: Any, held: np.ndarray) -> di
     after = sim.state()
     if out.result is None:
         raise RuntimeError(f"the campaign ended {out.status}: {out.error}")
-    still = [e for e in events if isinstance(e, PointMeasured)]
+    # the poses visited still (the engine's visits start with PoseStarted); the others were read off
+    # the holds of the sweep's streams (`hil.campaign.sweep_rests`), which take no joint reading
+    visited = {(e.role, e.index) for e in events if isinstance(e, PoseStarted)}
+    still = [e for e in events if isinstance(e, PointMeasured) and (e.role, e.index) in visited]
+    from_holds = [e for e in events if isinstance(e, PointMeasured) and (e.role, e.index) not in visited]
     planned = [e for e in events if isinstance(e, SweepPlanned)]
-    seconds = {s["index"]: float(s["seconds"]) for s in planned[-1].segments} if planned else {}
-    swept = {e.segment for e in events if isinstance(e, SweepSegmentDone)}
+    # each segment recorded at its planned duration (the tour's and a swept bootstrap's alike)
+    seconds = {e.segment: float(e.planned) for e in events if isinstance(e, SweepSegmentDone)}
+    swept = set(seconds)
     moves = after["motion_seconds"] - before["motion_seconds"]
     sb, sa = before["services"], after["services"]
     measuring = sa["emscon_measuring_seconds"] - sb["emscon_measuring_seconds"]
@@ -111,7 +124,8 @@ def run(sim: Any, config: Any, speed: float, truth: Any, held: np.ndarray) -> di
     fitted = [e for e in events if isinstance(e, SweepFitted)]
     r = out.result
     return {"robot_time": moves + measuring + joints + sweep, "moves": moves, "measuring": measuring,
-            "sweep": sweep, "still": len(still), "segments": len(swept), "status": out.status,
+            "sweep": sweep, "still": len(still), "held": len(from_holds), "segments": len(swept),
+            "status": out.status,
             "validation_rms": r.after.rms, "truth_rms": truth_rms(truth, r.fit.geometry, held),
             "used": fitted[-1].used if fitted else None, "wall": wall,
             "rests": len(planned[-1].rests) if planned else 0}
@@ -139,7 +153,8 @@ def main() -> None:
     limit_blas_threads()
     speeds = [float(v) for v in args.sweep_speeds.split(",")]
     print(f"{'robot':6} {'seed':>4} {'mode':16} {'robot s':>7} {'ratio':>5} {'moves':>6} {'meas':>5} "
-          f"{'sweep':>6} {'still':>5} {'rests':>5} {'segs':>4} {'val µm':>7} {'truth µm':>8} {'t/SG':>5} "
+          f"{'sweep':>6} {'still':>5} {'held':>4} {'rests':>5} {'segs':>4} {'val µm':>7} {'truth µm':>8} "
+          f"{'t/SG':>5} "
           f"{'used':>6} {'wall s':>6}")
     for robot in args.robots.split(","):
         for seed in range(args.seeds):
@@ -176,7 +191,8 @@ def main() -> None:
                         base = row
                     print(f"{robot:6} {seed:4d} {name:16} {row['robot_time']:7.1f} "
                           f"{ratio(row, base, 'robot_time')} {row['moves']:6.1f} "
-                          f"{row['measuring']:5.1f} {row['sweep']:6.1f} {row['still']:5d} {row['rests']:5d} "
+                          f"{row['measuring']:5.1f} {row['sweep']:6.1f} {row['still']:5d} {row['held']:4d} "
+                          f"{row['rests']:5d} "
                           f"{row['segments']:4d} {row['validation_rms'] * 1e6:7.1f} "
                           f"{row['truth_rms'] * 1e6:8.1f} {ratio(row, base, 'truth_rms')} "
                           f"{row['used'] or 0:6d} {row['wall']:6.0f}  {row['status']}", flush=True)

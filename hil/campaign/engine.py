@@ -490,7 +490,8 @@ class Engine:
         self.stats.motion += seconds
         take = secrets.token_hex(6)  # this attempt's: a segment cut short is never read back
         for event in segment_events(self.campaign, record, take, step.total,
-                                    seconds * float(getattr(self.clock, "speed", 1.0))):
+                                    seconds * float(getattr(self.clock, "speed", 1.0)),
+                                    (len(segment.q) - 1) / float(segment.rate_hz)):
             self.emit(event)
         return record
 

@@ -340,6 +340,8 @@ class SweepSegmentDone(Event):
     seconds: float
     # (tracker stamp, controller stamp) of one instant by the host's clock (`sweep_recording.anchor`)
     anchor: list[float] | None = None
+    # the segment's planned duration (s): its servo samples at the controller's rate (0: not said)
+    planned: float = 0.0
 
 
 @dataclass(frozen=True, kw_only=True)

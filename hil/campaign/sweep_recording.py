@@ -115,7 +115,7 @@ def breaks(p: np.ndarray) -> int:
 
 
 def segment_events(campaign: str, record: SegmentRecord, take: str, total: int,
-                   seconds: float) -> Iterator[Event]:
+                   seconds: float, planned: float = 0.0) -> Iterator[Event]:
     """The chunks of `record` (joints first, then the tracker's), then its `SweepSegmentDone`."""
     streams = (("joints", record.joint_t, [list(map(float, q)) for q in record.joint_q]),
                ("tracker", record.tracker_t,
@@ -131,5 +131,5 @@ def segment_events(campaign: str, record: SegmentRecord, take: str, total: int,
     yield SweepSegmentDone(campaign=campaign, segment=record.index, segments=total, take=take,
                            session=record.session, joints=len(record.joint_t),
                            tracker=len(record.tracker_t) - lost, lost=lost, breaks=breaks(record.tracker_p),
-                           seconds=float(seconds),
+                           seconds=float(seconds), planned=float(planned),
                            anchor=None if record.anchor is None else list(record.anchor))
