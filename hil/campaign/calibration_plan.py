@@ -630,6 +630,12 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
             segments = stored_tour(resume.sweep_tour, config, get_robot(robot), keep_in_check or model,
                                    limit_model=model, waypoints=waypoints)
         else:
+            # the tour starts at the calibration waypoint nearest the arm (the largest joint
+            # difference): the move there is not swept, and a rest it started at would be visited
+            here = np.asarray((yield ReadJoints(config.robot["joint_samples"])).q, dtype=float)
+            calibration = waypoints[: len(waypoints) - len(rests)]
+            first = int(np.argmin(np.max(np.abs(calibration - here), axis=1))) if len(calibration) else 0
+            waypoints = waypoints[[first, *(k for k in range(len(waypoints)) if k != first)]]
             segments = sweep_tour(waypoints, config, get_robot(robot), keep_in_check or model,
                                   sight_model=model, limit_model=model,
                                   rests=np.array(list(rests.values())).reshape(-1, 6))

@@ -18,11 +18,14 @@ import time
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 from hil.campaign.chooser import campaign_chooser
 from hil.campaign.events import (
     EventBus,
+    Message,
+    PlanReady,
     PointMeasured,
     Suspended,
     SweepFitted,
@@ -213,8 +216,16 @@ def test_a_sweep_campaign_is_accepted_and_finds_the_stations_clock(station):
              or (isinstance(e, PointMeasured) and e.role == "validation")]
     swept = [k for k, (kind, _) in enumerate(order) if kind == "segment"]
     assert all(("rest", i) in order for i in rests)
+    # each rest a segment arrives at holding is read off that hold, or said to be visited instead
+    pose = {p["index"]: p["q"] for p in station.of(PlanReady)[-1].poses}
+    planned = station.of(SweepPlanned)[-1].segments
+    arrived = [i for i in rests
+               if any(s["dwell"] and np.allclose(s["to"], pose[i], atol=1e-9) for s in planned)]
     held = {e.index: e.samples for e in station.of(PointMeasured) if e.index in rests}
-    assert sum(n >= 100 for n in held.values()) >= len(rests) - 1, held  # read off the tour's holds
+    said = " ".join(e.text for e in station.of(Message))
+    assert arrived and all(held[i] >= 100 or f"validation pose {i} measured with a stop" in said
+                           for i in arrived), (held, arrived, said)
+    assert sum(held[i] >= 100 for i in arrived) >= len(arrived) - 1, (held, arrived, said)
     assert any(swept[0] < order.index(("rest", i)) < swept[-1] for i in rests)  # between segments
     assert fitted.left_out.get("validation pose", 0) > 0  # the samples passing through them
     # the same arm (the station's seed) calibrated stop-and-go, in faster time (it streams nothing)
