@@ -9,6 +9,8 @@
   vector and its identifiable subset;
 * `joint_errors` — angle-dependent joint errors and lost motion (the model and its JSON blocks);
 * `joint_error_columns` — their low orders as identification parameters: names, columns, updates;
+* `joint_directions` — which way each joint last moved (the side its lost motion lags to), the rule
+  the simulated arm and the sweep's fit both follow;
 * `gravity`, `dynamics` — the torques a (moving) arm's joints hold and the link lag c ⊙ τ they cause
   (pinocchio's gravity and inverse dynamics on UR's published masses), and the joint modes that bound
   where that quasi-static lag holds;

@@ -15,13 +15,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from hil.calibration.synthetic import ENCODER_SIGMA
-
 #: Radians a joint must travel back from the extreme of its motion before its direction turns: ten
-#: standard deviations of a UR joint reading's noise (`ENCODER_SIGMA`), so reading jitter never turns
-#: it, and a hundredth of the 0.005 rad the campaign engine approaches every pose by
-#: (`hil.campaign.steps.APPROACH`).
-DIRECTION_THRESHOLD = 10 * ENCODER_SIGMA
+#: standard deviations of a UR joint reading's noise (5 µrad, `hil.calibration.synthetic.ENCODER_SIGMA`,
+#: which this package may not import), so reading jitter never turns it, and a hundredth of the
+#: 0.005 rad the campaign engine approaches every pose by (`hil.campaign.steps.APPROACH`).
+DIRECTION_THRESHOLD = 10 * 5e-6
 
 
 class JointDirections:

@@ -3,6 +3,9 @@
 * `steps` — the plain steps a plan yields (move, settle, read joints, measure, checkpoint), dry runs
   and a whole plan's motion laid out along the routes the run takes (`hil.arm.routes`);
 * `calibration_plan` — the calibration plan: bootstrap, select, warm up, measure, identify, validate;
+* `sweep_plan`, `sweep_recording`, `sweep_rests`, `sweep_bootstrap`, `sweep_lines` — the sweep mode's
+  tour and fit, a segment's recording, rests read off the streams' holds, the swept bootstrap, and
+  the operator's words for its events;
 * `warmup` — the warm-up before measuring and the drift watch of a reference pose while measuring;
   `reference_lines` — the operator's words for their events;
 * `controller` — the controller's own kinematic model: the record kept, its error on the validation poses;

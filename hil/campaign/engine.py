@@ -63,13 +63,14 @@ import numpy as np
 
 from drivers.robot.model import JointReading, ReadsJointTemperatures, Robot, SplitMoves
 from drivers.tracker.device import Tracker, TrackerPoint
-from drivers.tracker.errors import UnstablePoint
+from drivers.tracker.errors import TargetLost, UnstablePoint
 from hil.arm.catalog import RobotSpec
 from hil.arm.geometry import Geometry
 from hil.arm.routes import Router, UnsafePathError
 from hil.campaign.events import (
     Event,
     EventBus,
+    Message,
     PhaseChanged,
     PointMeasured,
     PoseReached,
@@ -471,11 +472,21 @@ class Engine:
     def _sweep(self, step: Sweep) -> SweepRecorded:
         """`Sweep`: each segment moved to, streamed and recorded (`hil.campaign.sweep_recording`), its
         chunks and `SweepSegmentDone` delivered (the store commits them) before the next segment; a
-        suspension sweeps the interrupted segment again whole, under a new take."""
+        suspension sweeps the interrupted segment again whole, under a new take. A segment whose
+        suspension ends in a skip (the beam not found again within the re-lock wait, or the operator's
+        skip, as a pose visit's), or that still loses the beam after its retries, is left out, said in
+        a message, and the sweep goes on, as a pose visit that cannot be measured is skipped: the plan
+        visits still what that segment would have read (`hil.campaign.sweep_rests`)."""
         records = []
         for segment in step.segments:
             self._between_steps()
-            records.append(self._with_suspenders(lambda s=segment: self._sweep_segment(s, step)))
+            try:
+                records.append(self._with_suspenders(lambda s=segment: self._sweep_segment(s, step)))
+            except (PoseSkippedError, UnsafePathError, TargetLost) as exc:
+                self._stop_arm()
+                self._last_q = None  # stopped wherever it was: check the next path from its target only
+                self.emit(Message(campaign=self.campaign, level="warning",
+                                  text=f"sweep segment {segment.index} left out: {exc}"))
         return SweepRecorded(tuple(records))
 
     def _sweep_segment(self, segment: SweepSegment, step: Sweep) -> Any:

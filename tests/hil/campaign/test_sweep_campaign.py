@@ -33,7 +33,7 @@ from hil.campaign.events import (
     SweepSegmentDone,
 )
 from hil.campaign.runner import resume_state, run_campaign, sweep_state
-from hil.campaign.sweep_bootstrap import is_bootstrap_segment
+from hil.campaign.sweep_bootstrap import BOOTSTRAP_SEGMENTS, is_bootstrap_segment
 from hil.station.config import default_config
 from hil.station.devices import open_devices
 from hil.station.paced_clock import PacedClock, simulator_pace
@@ -239,19 +239,32 @@ def test_a_sweep_campaign_is_accepted_and_finds_the_stations_clock(station):
           f"clock {err * 1e6:.0f} µs from the stated truth (σ {fitted.sigma_at_ref_s * 1e6:.1f} µs)")
 
 
-@pytest.mark.timeout(1500)  # two runs of one campaign, and the wait for the other sweep tests
+@pytest.mark.timeout(1500)  # three runs of one campaign, and the wait for the other sweep tests
 def test_an_interrupted_sweep_resumes_without_sweeping_again_what_it_has(station):
-    first = station.run(interrupt_after=3)
+    """Interrupted (the operator's stop, as Ctrl-C) in its swept bootstrap, then in its tour: each run
+    resumes at the first segment not recorded whole, and the bootstrap's poses are each read once,
+    from the segments of both runs."""
+    first = station.run(interrupt_after=BOOTSTRAP_SEGMENTS + 3)
     assert first.status == "interrupted"
-    kept = tour(e.segment for e in station.of(SweepSegmentDone))
+    booted = [e.segment for e in station.of(SweepSegmentDone)]
+    assert booted[:4] == [BOOTSTRAP_SEGMENTS + k for k in range(4)] and not tour(booted)
+    count = len(station.of(SweepSegmentDone))
+    second = station.run(interrupt_after=3)
+    assert second.status == "interrupted"
+    resumed = [e.segment for e in station.of(SweepSegmentDone)[count:]]
+    boot_again = [i for i in resumed if is_bootstrap_segment(i)]
+    assert boot_again and min(boot_again) == max(booted) + 1  # the bootstrap resumed where it stopped
+    points = [e.index for e in station.of(PointMeasured) if e.role == "bootstrap"]
+    assert len(points) == len(set(points)) == len(booted) + len(boot_again)  # each pose read once
+    kept = tour(resumed)
     assert kept[:4] == [0, 1, 2, 3]
     before = len(station.of(SweepSegmentDone))
-    second = station.run()
+    third = station.run()
     again = [e.segment for e in station.of(SweepSegmentDone)[before:]]
     assert tour(again) == again  # the bootstrap was done: the resumed run sweeps the tour's rest only
     assert again and min(again) == max(kept) + 1  # resumed at the first segment not recorded whole
     assert sorted(kept + again) == list(range(station.segments()))  # every segment once
-    assert second.status == "accepted", (second.error, second.result and second.result.verdict)
+    assert third.status == "accepted", (third.error, third.result and third.result.verdict)
     station.check_every_sample_once()
 
 

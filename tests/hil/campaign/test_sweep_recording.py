@@ -15,11 +15,12 @@ import pytest
 
 from drivers.robot.model import FollowResult, RobotIdentity
 from drivers.tracker.device import PointStatus, StreamSample
+from drivers.tracker.errors import TargetLost
 from hil.arm.catalog import get_robot
 from hil.arm.geometry import Geometry
 from hil.arm.kinematics import Kinematics
 from hil.campaign.engine import Engine, RealClock
-from hil.campaign.events import EventBus, SweepChunk, SweepSegmentDone
+from hil.campaign.events import EventBus, Message, SweepChunk, SweepSegmentDone
 from hil.campaign.runner import store_recorder, sweep_state
 from hil.campaign.steps import SegmentRecord, Sweep, SweepRecorded, SweepSegment
 from hil.campaign.sweep_plan import first_clock, streams_of
@@ -212,3 +213,30 @@ def test_a_later_run_on_the_same_clocks_is_joined_one_on_restarted_clocks_is_not
     assert streams_of(same)[2] == {"other session": 0}
     restarted = [rec(0, "a"), rec(1, "a"), rec(2, "b", shift=-700.0)]  # the controller rebooted
     assert streams_of(restarted)[2] == {"other session": 4}
+
+
+class LosingTracker(StreamTracker):
+    """A stream that cannot start on the arm's second segment: the reflector is not found there."""
+
+    def stream(self, rate_hz: float, **kw: Any) -> Iterator[StreamSample]:
+        if len(self.arm.streamed) == 1:
+            raise TargetLost("FindReflector found no reflector", 10004, 0)
+        yield from super().stream(rate_hz, **kw)
+
+
+def test_a_segment_that_keeps_losing_the_beam_is_left_out_and_the_sweep_goes_on(store):
+    """As a pose visit that cannot be measured is skipped: the segment is said left out, the arm is
+    stopped, and the next segments are swept and recorded (the plan visits still what it would have
+    read)."""
+    truth = Geometry.nominal("ur5e")
+    cid = store.create_campaign(default_config().as_dict(), RobotIdentity("ur5e", "9999001"))
+    arm = SweepArm(START)
+    said: list = []
+    engine = engine_for(store, cid, arm, LosingTracker(arm, truth))
+    engine.bus.subscribe(said.append)
+    got = engine.run(sweep_plan(Sweep(segments(3), 3, 1000.0, "run-1")))
+    assert isinstance(got, SweepRecorded) and [r.index for r in got.segments] == [0, 2]
+    assert sorted(sweep_state(store, cid)) == [0, 2]
+    (left,) = [e for e in said if isinstance(e, Message)]
+    assert "sweep segment 1 left out" in left.text and "no reflector" in left.text
+    assert arm.stops >= 1

@@ -34,3 +34,9 @@ def test_reading_jitter_never_turns_a_standing_joint(rng):
 def test_a_negative_threshold_is_refused():
     with pytest.raises(ValueError, match="threshold"):
         JointDirections(np.zeros(6), threshold=-1.0)
+
+
+def test_the_threshold_is_ten_encoder_sigmas():
+    from hil.calibration.synthetic import ENCODER_SIGMA
+
+    assert DIRECTION_THRESHOLD == 10 * ENCODER_SIGMA
