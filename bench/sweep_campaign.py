@@ -58,6 +58,7 @@ from hil.campaign.events import (
     SweepSegmentDone,
 )
 from hil.campaign.runner import run_campaign
+from hil.errors import HilError
 from hil.station.config import default_config
 from hil.station.devices import open_devices
 from mocks.station import start_station
@@ -139,7 +140,8 @@ def ratio(row: dict[str, Any], base: dict[str, Any] | None, key: str) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--robots", default="ur5e,ur10e")
-    ap.add_argument("--seeds", type=int, default=1)
+    ap.add_argument("--seeds", type=int, default=1, help="stations per robot")
+    ap.add_argument("--first-seed", type=int, default=0, help="the first station's seed")
     ap.add_argument("--speed", type=float, default=8.0, help="simulator speed (fast time)")
     ap.add_argument("--sweep-sim-speed", type=float,
                     help="simulator speed of the sweeps (default --speed): a station of the same seed (the "
@@ -157,7 +159,7 @@ def main() -> None:
           f"{'t/SG':>5} "
           f"{'used':>6} {'wall s':>6}")
     for robot in args.robots.split(","):
-        for seed in range(args.seeds):
+        for seed in range(args.first_seed, args.first_seed + args.seeds):
             sim = start_station(robot=robot, speed=args.speed, seed=seed, ideal=False, thermal=False)
             other = None
             try:
@@ -184,7 +186,7 @@ def main() -> None:
                                                        tracker__url=svc["tracker_emscon_url"])
                     try:
                         row = run(here, config, speed, truth, held)
-                    except RuntimeError as exc:
+                    except (RuntimeError, HilError) as exc:  # a failed campaign, or one refused
                         print(f"{robot:6} {seed:4d} {name:16} FAILED: {exc}", flush=True)
                         continue
                     if name == "stop-and-go":
