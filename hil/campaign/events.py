@@ -323,6 +323,16 @@ class SweepChunk(Event):
         return data
 
 
+#: The first number of a swept bootstrap's segments (`hil.campaign.sweep_bootstrap`): above any tour's
+#: (0, 1, …), so one campaign's sweep records hold both apart.
+BOOTSTRAP_SEGMENTS = 10_000
+
+
+def is_bootstrap_segment(index: int) -> bool:
+    """Whether a recorded segment's number is a swept bootstrap's."""
+    return index >= BOOTSTRAP_SEGMENTS
+
+
 @dataclass(frozen=True, kw_only=True)
 class SweepSegmentDone(Event):
     """Segment `segment` (of `segments`) is recorded whole under `take`: its chunks count; a resumed

@@ -27,18 +27,13 @@ import numpy as np
 
 from hil.arm.catalog import RobotSpec
 from hil.arm.geometry import Geometry
+from hil.campaign.events import BOOTSTRAP_SEGMENTS, is_bootstrap_segment
 from hil.campaign.steps import SweepSegment
 from hil.campaign.sweep_plan import CONTROLLER_RATE_HZ, sweep_limits
 from hil.campaign.sweep_rests import approach_knots, ends_from_below, with_dwell
 
-#: The first bootstrap segment's number (segment k arrives at bootstrap pose k): above any tour's.
-BOOTSTRAP_SEGMENTS = 10_000
-
-
-def is_bootstrap_segment(index: int) -> bool:
-    """Whether a recorded segment's number is a bootstrap segment's."""
-    return index >= BOOTSTRAP_SEGMENTS
-
+#: the segment numbering is the events' (`SweepSegmentDone`), kept there for the progress lines
+__all__ = ["BOOTSTRAP_SEGMENTS", "bootstrap_segments", "is_bootstrap_segment"]
 
 def bootstrap_segments(targets: np.ndarray, config: Any, spec: RobotSpec, check_model: Geometry,
                        limit_model: Geometry | None = None, rate_hz: float = CONTROLLER_RATE_HZ

@@ -8,8 +8,14 @@ samples used and those left out by reason). Short enough for an 80-column termin
 
 from __future__ import annotations
 
-from hil.campaign.events import Event, SweepFitted, SweepPlanned, SweepSegmentDone
-from hil.campaign.sweep_bootstrap import BOOTSTRAP_SEGMENTS, is_bootstrap_segment
+from hil.campaign.events import (
+    BOOTSTRAP_SEGMENTS,
+    Event,
+    SweepFitted,
+    SweepPlanned,
+    SweepSegmentDone,
+    is_bootstrap_segment,
+)
 
 
 def describe(event: Event) -> str | None:
