@@ -175,8 +175,9 @@ class StreamJoin:
         self._fast: list[np.ndarray] = []  # per segment: (n,) True where |q̈| exceeds the limit
         self._near: list[np.ndarray] = []  # per segment: (n,) True within the guard of a validation pose
         self._seg_t: list[np.ndarray] = []
-        # each joint's side of its lost motion, the stream read in order as one (`directions_along`)
-        signs = directions_along(joints.q)
+        # each joint's side of its lost motion, the stream read in order as one (`directions_along`),
+        # kept for a fit that evaluates the stream again (`hil.calibration.sweep_fit`)
+        self.signs = signs = directions_along(joints.q)
         for seg in _segments(joints.t, gap_factor):
             t, q = joints.t[seg], joints.q[seg]
             period = float(np.median(np.diff(t))) if len(t) > 1 else 0.0

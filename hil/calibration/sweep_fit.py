@@ -111,7 +111,8 @@ class SweepFit:
 class _JointPath:
     """q, q̇, q̈ of the joint stream at any controller time inside a gap-free segment."""
 
-    def __init__(self, joints: JointStream) -> None:
+    def __init__(self, joints: JointStream, signs: np.ndarray | None = None) -> None:
+        """`signs`: the stream's directions of motion (`directions_along(joints.q)`) when known."""
         self._splines: list[CubicSpline] = []
         self._spans: list[tuple[float, float]] = []
         for seg in _segments(joints.t, GAP_FACTOR):
@@ -133,7 +134,7 @@ class _JointPath:
         # each joint's side of its lost motion after each frame, the stream read in order as one
         # (a jump across a gap turns a joint as the unrecorded move between did)
         self._t = np.asarray(joints.t, float)
-        self._signs = directions_along(joints.q)
+        self._signs = directions_along(joints.q) if signs is None else np.asarray(signs, float)
 
     def directions(self, tau: np.ndarray) -> np.ndarray:
         """(M, 6) each joint's direction of motion at controller times τ (the last frame's at or before)."""
@@ -336,7 +337,7 @@ def fit_sweep(start: Geometry, joints: JointStream, tracker: TrackerStream, *,
     join = StreamJoin(joints, tracker, points,
                       None if ring is None else (lambda q: limits.acceleration_limit(q, ring)), guard=guard)
     first = join.fit(initial_offset_s, initial_drift=initial_drift)
-    path = _JointPath(joints)
+    path = _JointPath(joints, join.signs)
     clock_map = first.map
     iterations = 0
     trusted, left = join.trust(clock_map)

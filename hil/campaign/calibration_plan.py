@@ -79,6 +79,7 @@ from hil.campaign.events import (
     SweepFitted,
     SweepPlanned,
     ValidationDone,
+    is_bootstrap_segment,
 )
 from hil.campaign.steps import (
     Emit,
@@ -95,16 +96,16 @@ from hil.campaign.steps import (
     visit_settings,
 )
 from hil.campaign.stopping import EarlyStop, StoppingRule
-from hil.campaign.sweep_bootstrap import bootstrap_segments, is_bootstrap_segment
+from hil.campaign.sweep_bootstrap import bootstrap_segments
 from hil.campaign.sweep_plan import (
     CONTROLLER_RATE_HZ,
     SWEEP,
     TRACKER_RATE_HZ,
     VALIDATION_GUARD_RAD,
     first_clock,
+    hop_limits,
     stored_tour,
     streams_of,
-    sweep_limits,
     sweep_terms,
     sweep_tour,
     sweep_verdict,
@@ -501,10 +502,7 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
         segments = bootstrap_segments(targets, config, spec, keep_in_check or located, located)
         todo = [g for g in segments if g is not None and g.index not in sweep_records]
         if todo:
-            hop: tuple[float | None, float | None] = (None, None)
-            if camp.get("sweep_speed") is not None:
-                limit_speed, limit_accel = sweep_limits(config, spec, targets, located)
-                hop = (float(np.min(limit_speed)), limit_accel)
+            hop = hop_limits(config, spec, targets, located)
             got = yield Sweep(tuple(todo), len(segments), TRACKER_RATE_HZ, session, *hop)
             if isinstance(got, SweepRecorded):
                 sweep_records.update({r.index: r for r in got.segments})
@@ -618,8 +616,9 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
 
     # --- measure -------------------------------------------------------------------------------
     segments: list[SweepSegment] = []
-    # a sweep rests at the first cycle's validation poses along its tour: measured still there, as
-    # stop-and-go measures them, without a tour of their own (`hil.campaign.sweep_plan`)
+    # a sweep rests at the first cycle's validation poses along its tour: measured still there (read
+    # off the hold of the segment arriving, else visited as stop-and-go visits them), without a tour
+    # of their own (`hil.campaign.sweep_plan`, `hil.campaign.sweep_rests`)
     rests: dict[int, np.ndarray] = {}
     for i, r, q in planned if sweeping else ():
         if r == VALIDATION and not any(np.array_equal(q, other) for other in rests.values()):
@@ -726,10 +725,7 @@ def calibration_plan(config: StationConfig, choose: ChoosePoses, campaign: str,
         if rests_left:
             yield from watch.start()
         # the unswept moves between segments at the sweep's own limits when it has them
-        hop: tuple[float | None, float | None] = (None, None)
-        if camp.get("sweep_speed") is not None:
-            limit_speed, limit_accel = sweep_limits(config, get_robot(robot), waypoints, model)
-            hop = (float(np.min(limit_speed)), limit_accel)
+        hop = hop_limits(config, get_robot(robot), waypoints, model)
         by_index = {g.index: g for g in segments}
         pending: list[SweepSegment] = []
         last: SweepSegment | None = None  # the segment the tour arrived by

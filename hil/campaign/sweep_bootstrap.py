@@ -27,13 +27,11 @@ import numpy as np
 
 from hil.arm.catalog import RobotSpec
 from hil.arm.geometry import Geometry
-from hil.campaign.events import BOOTSTRAP_SEGMENTS, is_bootstrap_segment
+from hil.campaign.events import BOOTSTRAP_SEGMENTS
 from hil.campaign.steps import SweepSegment
 from hil.campaign.sweep_plan import CONTROLLER_RATE_HZ, sweep_limits
 from hil.campaign.sweep_rests import approach_knots, ends_from_below, with_dwell
 
-#: the segment numbering is the events' (`SweepSegmentDone`), kept there for the progress lines
-__all__ = ["BOOTSTRAP_SEGMENTS", "bootstrap_segments", "is_bootstrap_segment"]
 
 def bootstrap_segments(targets: np.ndarray, config: Any, spec: RobotSpec, check_model: Geometry,
                        limit_model: Geometry | None = None, rate_hz: float = CONTROLLER_RATE_HZ

@@ -1,14 +1,16 @@
 """The sweep campaign's own part of the plan: the tour, its check, its resume and the join.
 
-A sweep campaign (``campaign.mode = "sweep"``; docs/design.md, The calibration campaign) is the usual
-bootstrap (the tracker pose, the SMR, a first model from a few still poses) and warm-up, then one
+A sweep campaign (``campaign.mode = "sweep"``; docs/design.md, The calibration campaign) is the
+bootstrap (the tracker pose, the SMR, a first model from a few still poses, swept:
+`hil.campaign.sweep_bootstrap`) and warm-up, then one
 `hil.campaign.steps.Sweep` through the calibration poses the selection chose (the waypoints, in the
 tour's order) instead of a stop at each. The validation poses are waypoints of the same tour where the
 arm rests (`tour_visits`): each is measured still there, approached from below as stop-and-go's poses
-are, and the fit leaves out every sample whose joints pass within `VALIDATION_GUARD_RAD` of one, so
-the verdict is on still poses the fit never saw and means what stop-and-go's means — without a second
-tour to reach them (bench/sweep_time.py: that tour alone cost about 0.4 of a stop-and-go campaign).
-A validation pose no segment reaches is measured after the sweep.
+are (read off the hold of the segment arriving there, `hil.campaign.sweep_rests`), and the fit leaves
+out every sample whose joints pass within `VALIDATION_GUARD_RAD` of one, so the verdict is on still
+poses the fit never saw and means what stop-and-go's means — without a second tour to reach them
+(bench/sweep_time.py: that tour alone cost about 0.4 of a stop-and-go campaign). A validation pose no
+segment reaches is measured after the sweep.
 
 The tour is planned segment by segment, from one waypoint at rest to the next at rest
 (`hil.calibration.sweep_path.plan_sweep`, within ``robot.speed`` and ``robot.acceleration``): a
@@ -104,6 +106,17 @@ def sweep_limits(config: Any, spec: RobotSpec, waypoints: np.ndarray, limit_mode
         quasi = float(DynamicsModel(limit_model).acceleration_limit(np.asarray(waypoints, float)).min())
         accel = min(accel, SWEEP_ACCELERATION_SHARE * quasi)
     return speed, accel
+
+
+def hop_limits(config: Any, spec: RobotSpec, waypoints: np.ndarray, limit_model: Geometry | None
+               ) -> tuple[float | None, float | None]:
+    """Joint speed (rad/s) and acceleration (rad/s²) of the unswept moves between a sweep's segments
+    (`Sweep.speed`, `Sweep.acceleration`): the sweep's own limits (`sweep_limits`) when
+    ``campaign.sweep_speed`` is set, else (None, None), the station's movej."""
+    if config.campaign.get("sweep_speed") is None:
+        return None, None
+    speed, accel = sweep_limits(config, spec, waypoints, limit_model)
+    return float(np.min(speed)), accel
 
 
 def sweep_tour(waypoints: np.ndarray, config: Any, spec: RobotSpec, check_model: Geometry,

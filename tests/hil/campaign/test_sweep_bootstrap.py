@@ -10,7 +10,8 @@ from hil.arm.geometry import Geometry
 from hil.arm.joint_directions import directions_along
 from hil.arm.kinematics import Kinematics
 from hil.campaign.calibration_plan import bootstrap_targets
-from hil.campaign.sweep_bootstrap import BOOTSTRAP_SEGMENTS, bootstrap_segments, is_bootstrap_segment
+from hil.campaign.events import BOOTSTRAP_SEGMENTS, is_bootstrap_segment
+from hil.campaign.sweep_bootstrap import bootstrap_segments
 from hil.station.config import default_config
 
 START = np.array([0.0, -1.2, 1.4, -1.8, -1.5708, 0.0])

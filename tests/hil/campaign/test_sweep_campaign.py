@@ -23,6 +23,7 @@ import pytest
 
 from hil.campaign.chooser import campaign_chooser
 from hil.campaign.events import (
+    BOOTSTRAP_SEGMENTS,
     EventBus,
     Message,
     PlanReady,
@@ -31,9 +32,9 @@ from hil.campaign.events import (
     SweepFitted,
     SweepPlanned,
     SweepSegmentDone,
+    is_bootstrap_segment,
 )
 from hil.campaign.runner import resume_state, run_campaign, sweep_state
-from hil.campaign.sweep_bootstrap import BOOTSTRAP_SEGMENTS, is_bootstrap_segment
 from hil.station.config import default_config
 from hil.station.devices import open_devices
 from hil.station.paced_clock import PacedClock, simulator_pace
